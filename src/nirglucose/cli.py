@@ -1,0 +1,157 @@
+"""Command-line interface: parses into a config, calls the library, maps errors to exit 2.
+
+Every error a user can cause (bad option, unknown preset or key, malformed data file)
+ends the program with exit status 2 and one line on stderr saying what is wrong and
+how to fix it; no traceback.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from typer.exceptions import TyperException
+from rich.console import Console
+from rich.table import Table
+
+from .exceptions import NirGlucoseError
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="nirglucose",
+    help="Simulate a noise-stressed NIR glucose sensor and benchmark estimators on it.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+
+
+@app.callback()
+def _root() -> None:
+    """Simulate a noise-stressed NIR glucose sensor and benchmark estimators on it."""
+
+out_console = Console()
+
+
+class UserError(NirGlucoseError, ValueError):
+    """A problem with the command line itself (exit status 2)."""
+
+
+def _parse_sets(values: list[str] | None) -> dict:
+    from .config import parse_override
+
+    return dict(parse_override(v) for v in (values or []))
+
+
+def _positive(name: str, value: int) -> None:
+    if value < 1:
+        raise UserError(f"{name} must be a positive integer, got {value}")
+
+
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option("--set", help="Config override KEY=VALUE (dotted key), repeatable."),
+]
+
+
+@app.command()
+def simulate(
+    out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
+    preset: Annotated[str, typer.Option(help="Scenario preset: paper, physical, lab, field.")] = "paper",
+    subjects: Annotated[int, typer.Option(help="Number of subjects.")] = 80,
+    per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
+    seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
+    jobs: Annotated[int, typer.Option(help="Worker processes (same result for any value).")] = 1,
+    set_: SetOption = None,
+) -> None:
+    """Generate a dataset and print a summary of it."""
+    from .config import resolve_config
+    from .dataset import Dataset
+
+    _positive("--subjects", subjects)
+    _positive("--per-subject", per_subject)
+    _positive("--jobs", jobs)
+    if seed < 0:
+        raise UserError(f"--seed must be non-negative, got {seed}")
+    cfg = resolve_config(preset, _parse_sets(set_))
+    if out.suffix and out.suffix not in (".parquet", ".csv"):
+        raise UserError(f"--out {str(out)!r}: use a .parquet or .csv file, or a directory")
+    if not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    if not out.suffix:
+        from .simulate.partitioned import write_partitioned
+
+        n = write_partitioned(cfg, out, subjects, per_subject, seed, n_jobs=jobs)
+        out_console.print(f"wrote {n} snapshots to {out}/ (partitioned Parquet)")
+        return
+    from .simulate.simulator import simulate_frame
+
+    frame = simulate_frame(cfg, subjects, per_subject, seed, n_jobs=jobs)
+    ds = Dataset(frame, config=cfg, seed=seed)
+    ds.save(out)
+    _print_summary(ds)
+    out_console.print(f"wrote {len(ds)} snapshots to {out}")
+
+
+@app.command()
+def keys() -> None:
+    """List every config key accepted by --set, with its default on the paper preset."""
+    from .config import resolve_config, valid_keys
+
+    data = resolve_config("paper").model_dump(mode="json")
+    for key in valid_keys():
+        node = data
+        for part in key.split("."):
+            node = node[part]
+        out_console.print(f"{key} = {node}", highlight=False, soft_wrap=True)
+
+
+def _print_summary(ds) -> None:
+    import numpy as np
+
+    frame = ds.frame
+    table = Table(title=f"{ds!r}")
+    for col in ("column", "mean", "sd", "min", "max", "r(glucose, log ADC)"):
+        table.add_column(col, justify="right" if col != "column" else "left")
+    g = frame["glucose_mgdl"].to_numpy(float)
+    for c in ["glucose_mgdl"] + [c for c in frame.columns if c.startswith("adc_")]:
+        v = frame[c].to_numpy(float)
+        r = ""
+        if c.startswith("adc_") and not c.startswith("adc_ref") and np.std(v) > 0:
+            r = f"{np.corrcoef(g, np.log(v))[0, 1]:+.3f}"
+        table.add_row(c, f"{v.mean():.1f}", f"{v.std(ddof=1):.1f}", f"{v.min():.0f}",
+                      f"{v.max():.0f}", r)
+    out_console.print(table)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``nirglucose`` console script."""
+    try:
+        app(args=argv, standalone_mode=False)
+    except typer.Exit as exc:
+        return int(getattr(exc, "exit_code", 0) or 0)
+    except typer.Abort:
+        console.print("error: aborted")
+        return 130
+    except TyperException as exc:
+        fmt = getattr(exc, "format_message", None)
+        msg = (fmt() if fmt else str(exc)).replace("\n", " ").strip()
+        if not msg:  # help was shown for a bare command
+            return 2
+        console.print(f"error: {msg} (see `nirglucose --help`)", highlight=False, soft_wrap=True)
+        return 2
+    except NirGlucoseError as exc:
+        console.print(f"error: {exc}", highlight=False, soft_wrap=True)
+        return 2
+    except KeyboardInterrupt:
+        console.print("error: interrupted; finished results were kept, rerun to resume")
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

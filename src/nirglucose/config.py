@@ -1,0 +1,606 @@
+"""Scenario configuration: one pydantic model per simulator layer, presets, overrides.
+
+A scenario is fully described by a :class:`ScenarioConfig`. It is built from a named
+preset (:data:`PRESETS`) plus dotted overrides such as ``{"hardware.adc_bits": 14}``
+and recorded, resolved, in every dataset and result the package writes.
+
+Every numeric default names its source in the field description; a value that is an
+assumption of this package (there is no published number for it) says so. The
+``noise`` section has one switch and one scale per noise source (:data:`NOISE_SOURCES`);
+the global ``noise_scale`` multiplies them all, for sweeps.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .constants import DEFAULT_LED_WAVELENGTHS_NM
+from .exceptions import ConfigError
+
+__all__ = [
+    "ScenarioConfig",
+    "LEDConfig",
+    "PhysiologyConfig",
+    "GlucoseConfig",
+    "EnvironmentConfig",
+    "OpticsConfig",
+    "HardwareConfig",
+    "MeasurementConfig",
+    "NoiseSource",
+    "NoiseConfig",
+    "NOISE_SOURCES",
+    "PRESETS",
+    "PAPER_SIGNAL_GAIN",
+    "FORWARD_MODELS",
+    "resolve_config",
+    "apply_overrides",
+    "parse_override",
+    "valid_keys",
+]
+
+#: Forward optical models selectable by name (``optics.model``).
+FORWARD_MODELS = ("beer-lambert", "diffusion")
+
+#: Noise sources, each with an on/off switch and a scale in ``noise.<name>``.
+NOISE_SOURCES = (
+    "led_thermal_drift",
+    "led_ageing",
+    "led_flicker",
+    "led_wavelength_shift",
+    "dark_current",
+    "shot",
+    "johnson",
+    "adc_inl",
+    "adc_offset_drift",
+    "ambient_light",
+    "humidity_coupling",
+    "contact_pressure",
+    "pulsation",
+    "pmf_measurement",
+)
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+
+
+def _check_range(value: tuple[float, float], name: str) -> tuple[float, float]:
+    low, high = value
+    if not low < high:
+        raise ValueError(f"{name} range must have low < high, got ({low}, {high})")
+    return value
+
+
+class LEDConfig(_Model):
+    """The LED set: centre wavelengths and emission bandwidths."""
+
+    wavelengths_nm: tuple[float, ...] = Field(
+        DEFAULT_LED_WAVELENGTHS_NM, description="LED centre wavelengths (the study's four). [nm]"
+    )
+    fwhm_nm: tuple[float, ...] = Field(
+        (40.0, 45.0, 50.0, 60.0),
+        description="Emission full width at half maximum, typical of IR LEDs "
+        "(e.g. Vishay VSLY5850 30 nm, TSAL6200 40 nm at 940 nm; longer wavelengths wider). [nm]",
+    )
+    band_points: int = Field(
+        5, ge=1, le=31, description="Gauss-Hermite points integrating each LED band. [-]"
+    )
+
+    @model_validator(mode="after")
+    def _same_length(self) -> LEDConfig:
+        if len(self.wavelengths_nm) != len(self.fwhm_nm):
+            raise ValueError(
+                f"leds.wavelengths_nm has {len(self.wavelengths_nm)} entries but leds.fwhm_nm "
+                f"has {len(self.fwhm_nm)}; give one bandwidth per LED"
+            )
+        if len(set(self.wavelengths_nm)) != len(self.wavelengths_nm):
+            raise ValueError("leds.wavelengths_nm must not repeat a wavelength")
+        for wl in self.wavelengths_nm:
+            if not 700.0 <= wl <= 1300.0:
+                raise ValueError(
+                    f"LED wavelength {wl} nm is outside the optics tables' 700-1300 nm range"
+                )
+        if any(f <= 0 for f in self.fwhm_nm):
+            raise ValueError("leds.fwhm_nm must be positive")
+        return self
+
+
+class PhysiologyConfig(_Model):
+    """Cohort traits (fixed per subject) and state (varying per measurement)."""
+
+    age_yr: tuple[float, float] = Field((18.0, 80.0), description="Age range. [yr]")
+    bmi_kgm2_mean: float = Field(
+        28.0, gt=0, description="Mean BMI, near the NHANES 2017-2020 adult mean (29.6). [kg/m^2]"
+    )
+    bmi_kgm2_sd: float = Field(5.0, ge=0, description="BMI standard deviation. [kg/m^2]")
+    bmi_kgm2: tuple[float, float] = Field((18.0, 40.0), description="BMI range. [kg/m^2]")
+    fitzpatrick_probs: tuple[float, ...] = Field(
+        (1 / 6,) * 6, description="Probability of Fitzpatrick types I-VI. [-]"
+    )
+    skin_thickness_mm: tuple[float, float] = Field(
+        (0.5, 4.0), description="Epidermis + dermis thickness range. [mm]"
+    )
+    skin_thickness_mm_mean: float = Field(
+        1.8, gt=0, description="Mean skin thickness (dermis about 1-2 mm, Meglinski 2002). [mm]"
+    )
+    skin_thickness_mm_sd: float = Field(0.6, ge=0, description="Between-subject SD. [mm]")
+    hydration_pct_sd_subject: float = Field(
+        4.0, ge=0, description="Between-subject SD of dermal water, % of nominal. [%]"
+    )
+    hydration_pct_sd_state: float = Field(
+        3.0, ge=0, description="Within-subject SD of dermal water, % of nominal. [%]"
+    )
+    hydration_pct_limit: float = Field(
+        10.0, gt=0, description="Hydration stays within +/- this of nominal (issue spec). [%]"
+    )
+    blood_fraction_median: float = Field(
+        0.02,
+        gt=0,
+        lt=0.2,
+        description="Median dermal blood volume fraction (0.002-0.05, Meglinski 2002). [-]",
+    )
+    blood_fraction_log_sd_subject: float = Field(
+        0.35, ge=0, description="Between-subject SD of ln(blood fraction). [-]"
+    )
+    blood_fraction_log_sd_state: float = Field(
+        0.15, ge=0, description="Within-subject SD of ln(blood fraction). [-]"
+    )
+    saturation_mean: float = Field(
+        0.7, gt=0, lt=1, description="Dermal mixed SO2, 0.6-0.8 (SOURCES.md layer table). [-]"
+    )
+    saturation_sd: float = Field(0.05, ge=0, description="SD of dermal SO2. [-]")
+    systolic_bp_mmhg: tuple[float, float] = Field((90.0, 180.0), description="Range. [mmHg]")
+    heart_rate_bpm: tuple[float, float] = Field((50.0, 120.0), description="Range. [1/min]")
+    resp_rate_bpm: tuple[float, float] = Field((12.0, 20.0), description="Range. [1/min]")
+    variation_scale: float = Field(
+        1.0,
+        ge=0,
+        description="Multiplies every between- and within-subject spread (0: all subjects "
+        "nominal, a cuvette-like phantom). [-]",
+    )
+
+    _ranges = field_validator(
+        "age_yr", "bmi_kgm2", "skin_thickness_mm", "systolic_bp_mmhg", "heart_rate_bpm",
+        "resp_rate_bpm",
+    )(lambda v, info: _check_range(v, info.field_name))
+
+    @field_validator("fitzpatrick_probs")
+    @classmethod
+    def _probs(cls, v: tuple[float, ...]) -> tuple[float, ...]:
+        if len(v) != 6 or any(p < 0 for p in v) or abs(sum(v) - 1.0) > 1e-6:
+            raise ValueError("fitzpatrick_probs needs 6 non-negative probabilities summing to 1")
+        return v
+
+    @field_validator("skin_thickness_mm")
+    @classmethod
+    def _thickness(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if v[0] < 0.5 or v[1] > 4.0:
+            raise ValueError(f"skin_thickness_mm must lie within 0.5-4 mm, got {v}")
+        return v
+
+
+class GlucoseConfig(_Model):
+    """Glucose snapshots by diabetes status, and the glucose signal's optical magnitudes."""
+
+    status_probs: dict[str, float] = Field(
+        {"normal": 0.35, "prediabetes": 0.2, "type1": 0.15, "type2": 0.3},
+        description="Cohort share of each diabetes status (an assumption; a clinic-like mix). [-]",
+    )
+    fasting_mgdl: dict[str, tuple[float, float]] = Field(
+        {"normal": (88.0, 8.0), "prediabetes": (112.0, 8.0), "type1": (150.0, 40.0),
+         "type2": (145.0, 30.0)},
+        description="(mean, SD) of fasting glucose per status; ADA thresholds: normal < 100, "
+        "prediabetes 100-125, diabetes >= 126 mg/dL (ADA Standards of Care 2024, 2.1). [mg/dL]",
+    )
+    meal_peak_mgdl: dict[str, float] = Field(
+        {"normal": 35.0, "prediabetes": 60.0, "type1": 130.0, "type2": 95.0},
+        description="Mean postprandial excursion at its peak, about 1 h after a meal "
+        "(normal < 140 mg/dL at 2 h, ADA; diabetic excursions larger). [mg/dL]",
+    )
+    meal_peak_h: float = Field(1.0, gt=0, description="Time of the postprandial peak. [h]")
+    stress_prob: float = Field(0.15, ge=0, le=1, description="Share of stressed snapshots. [-]")
+    stress_mgdl: tuple[float, float] = Field(
+        (10.0, 35.0), description="Stress (cortisol) rise range (an assumption). [mg/dL]"
+    )
+    dawn_mgdl: dict[str, float] = Field(
+        {"normal": 5.0, "prediabetes": 10.0, "type1": 25.0, "type2": 20.0},
+        description="Dawn-phenomenon rise, peaking about 06:00 (an assumption of size). [mg/dL]",
+    )
+    range_mgdl: tuple[float, float] = Field(
+        (60.0, 400.0), description="Snapshots are reflected into this range. [mg/dL]"
+    )
+    # --- optical magnitudes (SOURCES.md, Glucose section: weakly sourced) -------------
+    water_displacement_per_mm: float = Field(
+        1.1e-4,
+        ge=0,
+        description="Fraction of water displaced per mM glucose (partial molar volume 112 "
+        "mL/mol). [1/mM]",
+    )
+    absorptivity_per_cm_per_mm: float = Field(
+        1.0e-4,
+        ge=0,
+        description="Glucose's own absorption at the 2nd C-H overtone peak (about 1150 nm), "
+        "order-of-magnitude estimate (SOURCES.md: <= 1e-4 of water's mua per mM). [1/(cm mM)]",
+    )
+    scattering_rel_per_mm: float = Field(
+        -1.25e-3,
+        le=0,
+        description="Relative change of mus' per mM from refractive-index matching: "
+        "-2 (dn/dC)/(n_s - n_ecf) with dn/dC = 2.5e-5/mM and n_s - n_ecf = 0.04 "
+        "(Maier et al. 1994). [1/mM]",
+    )
+    signal_gain: float = Field(
+        1.0,
+        gt=0,
+        description="Multiplies all three glucose optical effects. 1 keeps literature "
+        "magnitudes; the paper preset raises it to reach the study's correlation. [-]",
+    )
+
+    @model_validator(mode="after")
+    def _statuses(self) -> GlucoseConfig:
+        names = set(self.status_probs)
+        valid = {"normal", "prediabetes", "type1", "type2"}
+        if not names <= valid:
+            raise ValueError(f"unknown diabetes status {sorted(names - valid)}; valid: {sorted(valid)}")
+        for table in ("fasting_mgdl", "meal_peak_mgdl", "dawn_mgdl"):
+            missing = names - set(getattr(self, table))
+            if missing:
+                raise ValueError(f"glucose.{table} lacks statuses {sorted(missing)}")
+        if any(p < 0 for p in self.status_probs.values()) or abs(
+            sum(self.status_probs.values()) - 1
+        ) > 1e-6:
+            raise ValueError("glucose.status_probs must be non-negative and sum to 1")
+        lo, hi = _check_range(self.range_mgdl, "glucose.range_mgdl")
+        if lo < 20 or hi > 600:
+            raise ValueError(f"glucose.range_mgdl must lie within 20-600 mg/dL, got {self.range_mgdl}")
+        return self
+
+
+class EnvironmentConfig(_Model):
+    """Ambient temperature, humidity, pressure and light."""
+
+    temperature_c: tuple[float, float] = Field((18.0, 30.0), description="Ambient range. [degC]")
+    humidity_pct: tuple[float, float] = Field((30.0, 90.0), description="RH range. [%]")
+    humidity_coupling_loss: float = Field(
+        0.03, ge=0, le=0.5,
+        description="Coupling-efficiency loss at the top of the RH range (issue: up to 3 %). [-]",
+    )
+    pressure_mbar_mean: float = Field(1013.25, description="Mean barometric pressure. [mbar]")
+    pressure_mbar_sd: float = Field(12.0, ge=0, description="SD of pressure. [mbar]")
+    pressure_mbar: tuple[float, float] = Field((950.0, 1050.0), description="Range. [mbar]")
+    perfusion_per_mbar: float = Field(
+        1.0e-3, description="Relative blood-volume change per mbar above 1013 (an assumption). [1/mbar]"
+    )
+    ambient_lux: tuple[float, float] = Field(
+        (10.0, 1000.0), description="Illuminance range, drawn log-uniformly. [lx]"
+    )
+    light_source_probs: dict[str, float] = Field(
+        {"sun": 0.1, "fluorescent": 0.45, "led": 0.45}, description="Ambient spectrum mix. [-]"
+    )
+    baffle_optical_density: float = Field(2.0, ge=0, description="Baffle OD (issue). [-]")
+
+    _ranges = field_validator("temperature_c", "humidity_pct", "pressure_mbar", "ambient_lux")(
+        lambda v, info: _check_range(v, info.field_name)
+    )
+
+    @model_validator(mode="after")
+    def _limits(self) -> EnvironmentConfig:
+        if self.humidity_pct[0] < 0 or self.humidity_pct[1] > 100:
+            raise ValueError(f"humidity_pct must lie within 0-100 %, got {self.humidity_pct}")
+        if self.ambient_lux[0] < 0.1 or self.ambient_lux[1] > 100_000:
+            raise ValueError(f"ambient_lux must lie within 0.1-100000 lx, got {self.ambient_lux}")
+        if self.temperature_c[0] < -20 or self.temperature_c[1] > 50:
+            raise ValueError(f"temperature_c must lie within -20-50 degC, got {self.temperature_c}")
+        valid = {"sun", "fluorescent", "led"}
+        if not set(self.light_source_probs) <= valid:
+            raise ValueError(f"light_source_probs keys must be among {sorted(valid)}")
+        if abs(sum(self.light_source_probs.values()) - 1) > 1e-6:
+            raise ValueError("light_source_probs must sum to 1")
+        return self
+
+
+class OpticsConfig(_Model):
+    """Forward optical model and probe geometry."""
+
+    model: Literal["beer-lambert", "diffusion"] = Field(
+        "beer-lambert", description=f"Forward model, one of {FORWARD_MODELS}."
+    )
+    source_detector_mm: float = Field(
+        3.0, gt=0.5, le=20, description="Source-detector separation (a wrist-probe value). [mm]"
+    )
+    detector_area_mm2: float = Field(
+        6.6, gt=0, description="Photodiode active area (Hamamatsu S1223: 2.4 x 2.8 mm). [mm^2]"
+    )
+    water_source: Literal["kou1993", "segelstein1981", "hale_querry1973"] = "kou1993"
+    epidermis_thickness_mm: float = Field(
+        0.08, gt=0, le=0.3, description="Living epidermis 50-100 um (SOURCES.md). [mm]"
+    )
+    tissue_refractive_index: float = Field(1.4, ge=1.3, le=1.6, description="Dermis n. [-]")
+
+
+class HardwareConfig(_Model):
+    """LEDs, photodiode, transimpedance amplifier and ADC."""
+
+    led_power_mw: tuple[float, ...] = Field(
+        (2.0, 2.0, 2.7, 10.0),
+        description="LED optical power at 25 degC as driven (IR LEDs give 5-40 mW at "
+        "20-100 mA; chosen per channel so tissue codes sit mid-scale). [mW]",
+    )
+    led_self_heating_c: float = Field(
+        8.0, ge=0, description="Junction temperature above ambient while pulsed. [degC]"
+    )
+    led_self_heating_sd_c: float = Field(2.0, ge=0, description="Its SD per reading. [degC]")
+    led_age_h: tuple[float, float] = Field((0.0, 5000.0), description="Device age range. [h]")
+    led_flicker_rel: float = Field(
+        0.001, ge=0, description="Relative flicker SD, N(0, 0.1 %) (DESIGN.md). [-]"
+    )
+    led_wavelength_shift_nm_per_c: float = Field(
+        0.25, ge=0, description="Peak shift with junction temperature, 0.2-0.3 nm/K "
+        "(Vishay TSAL6200 / VSLY5850 datasheets). [nm/degC]"
+    )
+    responsivity_a_per_w: tuple[float, ...] = Field(
+        (0.58, 0.62, 0.40, 0.15),
+        description="Si PIN photodiode responsivity at each LED (Hamamatsu S1336 typical "
+        "spectral response, read at 850/940/1050/1150 nm). [A/W]",
+    )
+    dark_current_25c_na: float = Field(
+        0.1, ge=0, description="Dark current at 25 degC (S1223: 0.1 nA typ at 10 V). [nA]"
+    )
+    bandwidth_hz: float = Field(
+        10.0, gt=0, description="Equivalent noise bandwidth after in-device averaging. [Hz]"
+    )
+    tia_gain_ohm: float = Field(
+        1.0e5, gt=0, description="Transimpedance (feedback resistor); also the Johnson-noise "
+        "resistor. [Ohm]"
+    )
+    adc_bits: int = Field(12, ge=8, le=24, description="ADC resolution (the study's 12). [bit]")
+    adc_vref_v: float = Field(3.3, gt=0, description="ADC full-scale voltage. [V]")
+    adc_inl_lsb: float = Field(
+        2.0, ge=0, description="Peak integral non-linearity (ESP32 SAR ADC class: several LSB). [LSB]"
+    )
+    adc_offset_drift_lsb_per_c: float = Field(
+        0.1, ge=0, description="Offset drift with board temperature. [LSB/degC]"
+    )
+    reference_transmission: float = Field(
+        0.02, gt=0, le=1,
+        description="Transmission of the start-up reference path (a neutral attenuator), "
+        "setting reference codes at 65-90 % of full scale. [-]",
+    )
+    ambient_rejection: float = Field(
+        0.99, ge=0, le=1,
+        description="Fraction of ambient photocurrent removed by the LED-off subtraction. [-]",
+    )
+    calibration_temperature_sd_c: float = Field(
+        0.0, ge=0, description="Extra SD of the device temperature at start-up. [degC]"
+    )
+
+
+class MeasurementConfig(_Model):
+    """Standard deviations of the measured physiological vector (what a device knows)."""
+
+    age_yr: float = Field(0.5, ge=0, description="Age recorded in whole years. [yr]")
+    bmi_kgm2: float = Field(0.5, ge=0, description="Scale + tape measure. [kg/m^2]")
+    fitzpatrick_misclass: float = Field(
+        0.2, ge=0, le=1, description="Probability a self-reported type is off by one. [-]"
+    )
+    melanin_fraction: float = Field(0.01, ge=0, description="Reflectance melanin meter. [-]")
+    skin_thickness_mm: float = Field(0.15, ge=0, description="Ultrasound estimate. [mm]")
+    hydration_pct: float = Field(2.0, ge=0, description="Corneometer-type estimate. [%]")
+    systolic_bp_mmhg: float = Field(5.0, ge=0, description="Cuff (AAMI: SD <= 8). [mmHg]")
+    heart_rate_bpm: float = Field(2.0, ge=0, description="PPG estimate. [1/min]")
+    resp_rate_bpm: float = Field(1.0, ge=0, description="Estimate. [1/min]")
+    skin_temp_c: float = Field(0.2, ge=0, description="Thermistor. [degC]")
+    humidity_pct: float = Field(2.0, ge=0, description="RH sensor (e.g. SHT3x +/- 2 %). [%]")
+    pressure_mbar: float = Field(1.0, ge=0, description="Barometer (e.g. BMP280 +/- 1 hPa). [mbar]")
+
+
+class NoiseSource(_Model):
+    """One noise source's switch and scale."""
+
+    enabled: bool = True
+    scale: float = Field(1.0, ge=0)
+
+
+class NoiseConfig(_Model):
+    """A switch and a scale for every noise source in :data:`NOISE_SOURCES`."""
+
+    led_thermal_drift: NoiseSource = NoiseSource()
+    led_ageing: NoiseSource = NoiseSource()
+    led_flicker: NoiseSource = NoiseSource()
+    led_wavelength_shift: NoiseSource = NoiseSource()
+    dark_current: NoiseSource = NoiseSource()
+    shot: NoiseSource = NoiseSource()
+    johnson: NoiseSource = NoiseSource()
+    adc_inl: NoiseSource = NoiseSource()
+    adc_offset_drift: NoiseSource = NoiseSource()
+    ambient_light: NoiseSource = NoiseSource()
+    humidity_coupling: NoiseSource = NoiseSource()
+    contact_pressure: NoiseSource = NoiseSource()
+    pulsation: NoiseSource = NoiseSource()
+    pmf_measurement: NoiseSource = NoiseSource()
+
+
+class ContactConfig(_Model):
+    """Probe contact pressure: changes coupling, blood content and optical path."""
+
+    coupling_sd: float = Field(
+        0.03, ge=0, description="Relative SD of optical coupling between placements. [-]"
+    )
+    blanching: float = Field(
+        0.3, ge=0, le=1, description="Blood-volume loss at full contact pressure (assumption). [-]"
+    )
+    compression: float = Field(
+        0.1, ge=0, le=0.5, description="Skin-thickness loss at full contact pressure (assumption). [-]"
+    )
+
+
+class ScenarioConfig(_Model):
+    """A complete, resolved simulation scenario."""
+
+    preset: str = "paper"
+    noise_scale: float = Field(1.0, ge=0, description="Multiplies every noise source. [-]")
+    leds: LEDConfig = LEDConfig()
+    physiology: PhysiologyConfig = PhysiologyConfig()
+    glucose: GlucoseConfig = GlucoseConfig()
+    environment: EnvironmentConfig = EnvironmentConfig()
+    optics: OpticsConfig = OpticsConfig()
+    hardware: HardwareConfig = HardwareConfig()
+    contact: ContactConfig = ContactConfig()
+    measurement: MeasurementConfig = MeasurementConfig()
+    noise: NoiseConfig = NoiseConfig()
+
+    @model_validator(mode="after")
+    def _per_led(self) -> ScenarioConfig:
+        n = len(self.leds.wavelengths_nm)
+        for name in ("led_power_mw", "responsivity_a_per_w"):
+            if len(getattr(self.hardware, name)) != n:
+                raise ValueError(
+                    f"hardware.{name} needs one value per LED ({n}), "
+                    f"got {len(getattr(self.hardware, name))}"
+                )
+        return self
+
+    def noise_factor(self, source: str) -> float:
+        """Effective multiplier of a noise source: enabled x scale x ``noise_scale``."""
+        if source not in NOISE_SOURCES:
+            raise ConfigError(f"unknown noise source {source!r}; valid: {', '.join(NOISE_SOURCES)}")
+        ns: NoiseSource = getattr(self.noise, source)
+        return float(ns.enabled) * ns.scale * self.noise_scale
+
+    def to_json(self) -> str:
+        """The resolved configuration as canonical JSON (sorted keys)."""
+        return json.dumps(self.model_dump(mode="json"), sort_keys=True)
+
+
+# --- presets -----------------------------------------------------------------------------
+
+#: Glucose-signal gain of the study's regime: with literature noise and physiology, the
+#: raw glucose-NIR correlation reaches the study's 0.21 only when glucose's optical
+#: effects are 13.5 times the literature magnitudes (calibrated on 20,000 snapshots;
+#: README, "Presets").
+PAPER_SIGNAL_GAIN = 13.5
+
+#: Preset name -> overrides on the defaults. ``paper`` is the study's low-SNR regime.
+PRESETS: dict[str, dict[str, Any]] = {
+    "paper": {"glucose.signal_gain": PAPER_SIGNAL_GAIN},
+    # Literature glucose magnitudes everywhere, whatever correlation they give.
+    "physical": {"glucose.signal_gain": 1.0},
+    # Cuvette-like: one nominal 'subject', no ambient light, a quiet instrument.
+    "lab": {
+        "glucose.signal_gain": PAPER_SIGNAL_GAIN,
+        "physiology.variation_scale": 0.0,
+        "environment.temperature_c": (24.5, 25.5),
+        "environment.ambient_lux": (0.1, 0.2),
+        "environment.pressure_mbar_sd": 0.0,
+        "noise.contact_pressure.enabled": False,
+        "noise.pulsation.enabled": False,
+        "noise.humidity_coupling.enabled": False,
+        "noise.led_thermal_drift.scale": 0.1,
+    },
+    # Harsher than paper: outdoor light, wide temperatures, motion and contact.
+    "field": {
+        "glucose.signal_gain": PAPER_SIGNAL_GAIN,
+        "environment.temperature_c": (5.0, 35.0),
+        "environment.ambient_lux": (1.0, 100000.0),
+        "environment.light_source_probs": {"sun": 0.5, "fluorescent": 0.25, "led": 0.25},
+        "contact.coupling_sd": 0.08,
+        "noise_scale": 2.0,
+    },
+}
+
+
+def valid_keys(model: type[BaseModel] = ScenarioConfig, prefix: str = "") -> list[str]:
+    """Every dotted key accepted by :func:`apply_overrides`."""
+    keys = []
+    for name, field in model.model_fields.items():
+        ann = field.annotation
+        if isinstance(ann, type) and issubclass(ann, BaseModel):
+            keys.extend(valid_keys(ann, f"{prefix}{name}."))
+        else:
+            keys.append(f"{prefix}{name}")
+    return keys
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """Parse ``"key=value"`` from the command line; the value is read as JSON if it can be.
+
+    Examples
+    --------
+    >>> parse_override("hardware.adc_bits=14")
+    ('hardware.adc_bits', 14)
+    >>> parse_override("environment.temperature_c=[5, 35]")
+    ('environment.temperature_c', [5, 35])
+    """
+    if "=" not in text:
+        raise ConfigError(f"override {text!r} must look like key=value, e.g. hardware.adc_bits=14")
+    key, raw = text.split("=", 1)
+    key, raw = key.strip(), raw.strip()
+    if not key:
+        raise ConfigError(f"override {text!r} has an empty key")
+    try:
+        value = json.loads(raw)
+    except json.JSONDecodeError:
+        lowered = raw.lower()
+        value = {"true": True, "false": False}.get(lowered, raw)
+    return key, value
+
+
+def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    """Return a copy of a config dict with dotted overrides set; unknown keys raise."""
+    out = json.loads(json.dumps(data))
+    keys = set(valid_keys())
+    for dotted, value in overrides.items():
+        if dotted not in keys:
+            close = [k for k in keys if k.split(".")[-1] == dotted.split(".")[-1]]
+            hint = f"; did you mean {', '.join(sorted(close))}?" if close else ""
+            raise ConfigError(
+                f"unknown config key {dotted!r}{hint} (run `nirglucose keys` for the valid keys)"
+            )
+        node = out
+        parts = dotted.split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def resolve_config(
+    preset: str | ScenarioConfig = "paper", overrides: dict[str, Any] | None = None
+) -> ScenarioConfig:
+    """Build the scenario of a preset with dotted overrides, validated.
+
+    Parameters
+    ----------
+    preset : str or ScenarioConfig
+        A name of :data:`PRESETS`, or a config to start from.
+    overrides : dict, optional
+        Dotted keys (``"hardware.adc_bits"``) to values.
+
+    Raises
+    ------
+    ConfigError
+        Unknown preset or key, or a value outside its valid range.
+
+    Examples
+    --------
+    >>> resolve_config("paper", {"hardware.adc_bits": 14}).hardware.adc_bits
+    14
+    """
+    if isinstance(preset, ScenarioConfig):
+        base = preset.model_dump(mode="json")
+        all_overrides = dict(overrides or {})
+    else:
+        if preset not in PRESETS:
+            raise ConfigError(f"unknown preset {preset!r}; valid: {', '.join(PRESETS)}")
+        base = ScenarioConfig(preset=preset).model_dump(mode="json")
+        all_overrides = {**PRESETS[preset], **(overrides or {})}
+    data = apply_overrides(base, all_overrides)
+    try:
+        return ScenarioConfig.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = ".".join(str(p) for p in err["loc"]) or "config"
+        raise ConfigError(f"invalid value for {loc}: {err['msg']} (got {err.get('input')!r})") from None

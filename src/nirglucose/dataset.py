@@ -1,0 +1,330 @@
+"""The Dataset container: column registry with units, Parquet/CSV IO, validation.
+
+One row per snapshot measurement (DESIGN.md, "Dataset schema"):
+
+* identity: ``subject_id``, ``measurement_id``
+* reference: ``glucose_mgdl``
+* sensor: ``adc_<nm>`` and the start-up reference ``adc_ref_<nm>`` (integer codes)
+* the measured physiological vector (:data:`PMF_COLUMNS`), ``ambient_lux``
+* ground truth for analysis only, prefixed ``true_``
+* file metadata: package version, resolved config (JSON), seed.
+
+Writes are atomic: the file is written beside its destination under a temporary name
+and renamed into place, so an interrupted write never leaves a file that looks complete.
+Loading never executes code from the file (Parquet and CSV only; no pickle).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .config import ScenarioConfig
+from .constants import DEFAULT_LED_WAVELENGTHS_NM
+from .exceptions import DataError
+from .simulate.measurement import PMF_COLUMNS
+
+__all__ = [
+    "Dataset",
+    "load_dataset",
+    "PMF_COLUMNS",
+    "COLUMN_UNITS",
+    "adc_columns",
+    "ref_columns",
+    "measured_columns",
+    "validate_measurements",
+    "atomic_write",
+    "SUFFIXES",
+]
+
+#: File suffixes :meth:`Dataset.save` and :func:`load_dataset` understand.
+SUFFIXES = (".parquet", ".csv")
+_META_KEY = b"nirglucose"
+
+
+def _wl_label(wavelength_nm: float) -> str:
+    return f"{wavelength_nm:g}"
+
+
+def adc_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) -> list[str]:
+    """``adc_<nm>`` column names.
+
+    Examples
+    --------
+    >>> adc_columns()
+    ['adc_850', 'adc_940', 'adc_1050', 'adc_1150']
+    """
+    return [f"adc_{_wl_label(w)}" for w in wavelengths_nm]
+
+
+def ref_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) -> list[str]:
+    """``adc_ref_<nm>`` column names."""
+    return [f"adc_ref_{_wl_label(w)}" for w in wavelengths_nm]
+
+
+def measured_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) -> list[str]:
+    """Every column an estimator may read: ADC codes, references, physiological vector."""
+    wl = list(wavelengths_nm)
+    return adc_columns(wl) + ref_columns(wl) + list(PMF_COLUMNS)
+
+
+#: Units of the schema's named columns (``true_*`` columns carry theirs in the name).
+COLUMN_UNITS = {
+    "subject_id": "-",
+    "measurement_id": "-",
+    "glucose_mgdl": "mg/dL",
+    "diabetes_status": "-",
+    "age_yr": "yr",
+    "bmi_kgm2": "kg/m^2",
+    "fitzpatrick_type": "I-VI as 1-6",
+    "melanin_fraction": "volume fraction",
+    "skin_thickness_mm": "mm",
+    "hydration_pct": "% of nominal dermal water",
+    "systolic_bp_mmhg": "mmHg",
+    "heart_rate_bpm": "1/min",
+    "resp_rate_bpm": "1/min",
+    "skin_temp_c": "degC",
+    "humidity_pct": "% RH",
+    "pressure_mbar": "mbar",
+    "ambient_lux": "lx",
+    **{c: "ADC code" for c in adc_columns() + ref_columns()},
+}
+
+
+def atomic_write(path: str | os.PathLike, write) -> Path:
+    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``.
+
+    The parent directory must exist (a missing one is an error, not created silently).
+    """
+    path = Path(path)
+    if not path.parent.exists():
+        raise DataError(f"output directory {str(path.parent)!r} does not exist; create it first")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _first_rows(mask: np.ndarray, limit: int = 5) -> str:
+    rows = np.flatnonzero(mask)
+    shown = ", ".join(str(int(r)) for r in rows[:limit])
+    more = f" and {len(rows) - limit} more" if len(rows) > limit else ""
+    return f"rows {shown}{more}"
+
+
+def validate_measurements(
+    frame: pd.DataFrame,
+    *,
+    wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM,
+    require_target: bool = False,
+    adc_bits: int = 12,
+) -> pd.DataFrame:
+    """Check a frame of measurements and return its measured columns as float64.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Measurements (a user's own, or a simulated dataset).
+    wavelengths_nm : iterable of float
+        LED wavelengths whose ``adc_*`` / ``adc_ref_*`` columns are required. [nm]
+    require_target : bool
+        Also require a valid ``glucose_mgdl`` column (for fitting).
+    adc_bits : int
+        ADC resolution; codes must lie in [1, 2^bits - 1] (a zero code has no
+        absorbance). [bit]
+
+    Returns
+    -------
+    pandas.DataFrame
+        The measured columns (and ``glucose_mgdl`` when required), float64.
+
+    Raises
+    ------
+    DataError
+        Missing columns, non-numeric cells, NaN or infinite values, ADC codes out of
+        range, non-positive glucose; the message lists the offending columns and rows.
+    """
+    if not isinstance(frame, pd.DataFrame):
+        raise DataError(f"expected a pandas DataFrame, got {type(frame).__name__}")
+    cols = measured_columns(wavelengths_nm) + (["glucose_mgdl"] if require_target else [])
+    missing = [c for c in cols if c not in frame.columns]
+    if missing:
+        raise DataError(
+            f"missing columns {missing}; required: {cols} (see README, 'Your own measurements')"
+        )
+    if len(frame) == 0:
+        raise DataError("no rows: the data holds no measurements")
+    out = {}
+    for c in cols:
+        numeric = pd.to_numeric(frame[c], errors="coerce")
+        bad = numeric.isna().to_numpy() & frame[c].notna().to_numpy()
+        if bad.any():
+            raise DataError(f"column {c!r} has non-numeric cells at {_first_rows(bad)}")
+        values = numeric.to_numpy(dtype=float)
+        bad = ~np.isfinite(values)
+        if bad.any():
+            raise DataError(f"column {c!r} has NaN or infinite values at {_first_rows(bad)}")
+        out[c] = values
+    full = 2**adc_bits - 1
+    for c in adc_columns(wavelengths_nm) + ref_columns(wavelengths_nm):
+        bad = (out[c] < 1) | (out[c] > full)
+        if bad.any():
+            raise DataError(
+                f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}"
+            )
+    if require_target:
+        bad = out["glucose_mgdl"] <= 0
+        if bad.any():
+            raise DataError(f"column 'glucose_mgdl' must be positive [mg/dL]; see {_first_rows(bad)}")
+    return pd.DataFrame(out, index=frame.index)
+
+
+class Dataset:
+    """Simulated or measured snapshots with the scenario that produced them.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        One row per measurement (schema in the module docstring).
+    config : ScenarioConfig, optional
+        The resolved scenario (``None`` for a user's own measurements).
+    seed : int, optional
+        The seed that generated it.
+    metadata : dict, optional
+        Extra metadata (package version, source file).
+
+    Attributes
+    ----------
+    frame, config, seed, metadata
+    """
+
+    def __init__(
+        self,
+        frame: pd.DataFrame,
+        config: ScenarioConfig | None = None,
+        seed: int | None = None,
+        metadata: dict[str, Any] | None = None,
+    ) -> None:
+        from . import __version__
+
+        self.frame = frame
+        self.config = config
+        self.seed = seed
+        self.metadata = {"nirglucose_version": __version__, **(metadata or {})}
+
+    def __len__(self) -> int:
+        return len(self.frame)
+
+    def __repr__(self) -> str:
+        preset = self.config.preset if self.config is not None else "user data"
+        n_sub = self.frame["subject_id"].nunique() if "subject_id" in self.frame else "?"
+        return f"Dataset({len(self)} snapshots, {n_sub} subjects, preset={preset!r}, seed={self.seed})"
+
+    @property
+    def wavelengths_nm(self) -> tuple[float, ...]:
+        """LED wavelengths of the dataset. [nm]"""
+        if self.config is not None:
+            return tuple(self.config.leds.wavelengths_nm)
+        return tuple(
+            float(c[4:]) for c in self.frame.columns if c.startswith("adc_") and c[4:].isdigit()
+        )
+
+    def _meta(self) -> dict[str, Any]:
+        return {
+            **self.metadata,
+            "seed": self.seed,
+            "config": None if self.config is None else json.loads(self.config.to_json()),
+        }
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write to ``.parquet`` (with metadata) or ``.csv``, atomically.
+
+        Returns
+        -------
+        pathlib.Path
+            The written path.
+        """
+        path = Path(path)
+        if path.suffix not in SUFFIXES:
+            raise DataError(f"unknown file type {path.suffix!r} for {str(path)!r}; use one of {SUFFIXES}")
+        if path.suffix == ".parquet":
+            table = pa.Table.from_pandas(self.frame, preserve_index=False)
+            meta = dict(table.schema.metadata or {})
+            meta[_META_KEY] = json.dumps(self._meta(), sort_keys=True).encode()
+            table = table.replace_schema_metadata(meta)
+            return atomic_write(path, lambda tmp: pq.write_table(table, tmp))
+        return atomic_write(path, lambda tmp: self.frame.to_csv(tmp, index=False))
+
+    def content_hash(self) -> str:
+        """SHA-256 of the frame's contents (stable across file formats), 16 hex digits."""
+        import hashlib
+
+        h = hashlib.sha256()
+        h.update(",".join(self.frame.columns).encode())
+        h.update(pd.util.hash_pandas_object(self.frame, index=False).to_numpy().tobytes())
+        return h.hexdigest()[:16]
+
+
+def load_dataset(path: str | os.PathLike) -> Dataset:
+    """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
+
+    A directory is read as a partitioned Parquet dataset (all ``*.parquet`` files in
+    name order).
+
+    Raises
+    ------
+    DataError
+        Missing file, unknown suffix, unreadable content or malformed metadata.
+    """
+    from .config import resolve_config
+
+    path = Path(path)
+    if not path.exists():
+        raise DataError(f"no such file {str(path)!r}")
+    meta: dict[str, Any] = {}
+    try:
+        if path.is_dir():
+            parts = sorted(path.glob("*.parquet"))
+            if not parts:
+                raise DataError(f"directory {str(path)!r} holds no .parquet files")
+            tables = [pq.read_table(p) for p in parts]
+            raw = tables[0].schema.metadata or {}
+            frame = pd.concat([t.to_pandas() for t in tables], ignore_index=True)
+        elif path.suffix == ".parquet":
+            table = pq.read_table(path)
+            raw = table.schema.metadata or {}
+            frame = table.to_pandas()
+        elif path.suffix == ".csv":
+            raw = {}
+            frame = pd.read_csv(path)
+        else:
+            raise DataError(f"unknown file type {path.suffix!r}; use one of {SUFFIXES}")
+    except DataError:
+        raise
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        raise DataError(f"cannot read {str(path)!r}: {exc}") from None
+    if _META_KEY in raw:
+        try:
+            meta = json.loads(raw[_META_KEY])
+        except json.JSONDecodeError:
+            raise DataError(f"{str(path)!r} has malformed nirglucose metadata") from None
+    config = None
+    if meta.get("config"):
+        cfg = meta["config"]
+        config = resolve_config(ScenarioConfig.model_validate(cfg)) if isinstance(cfg, dict) else None
+    extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
+    return Dataset(frame, config=config, seed=meta.get("seed"), metadata={**extra, "source": str(path)})

@@ -1,0 +1,173 @@
+"""Chromophore spectra over each LED's emission band, and tissue optical properties.
+
+An LED emits a band, not a line: the detected power integrates the tissue's response
+over the emission spectrum, modelled as a Gaussian of the LED's FWHM and integrated
+with Gauss-Hermite quadrature. The chromophore spectra at the quadrature nodes (and
+their wavelength derivatives, for the thermal shift of the LED's peak) are computed
+once per scenario; the per-sample work is arithmetic on those small tables.
+
+Tissue composition (Jacques 2013, Eq. 12; volume fractions from SOURCES.md):
+mua = B [S mua_oxy + (1 - S) mua_deoxy] + W mua_water + F mua_fat
+      + (1 - B - W - F) mua_baseline,
+with glucose displacing water (-x_disp C of W), absorbing (W C eps_glc) and lowering
+mus' (factor exp(k C)).
+
+References
+----------
+.. [1] S. L. Jacques, "Optical properties of biological tissues: a review",
+   Phys. Med. Biol. 58, R37-R61 (2013), doi:10.1088/0031-9155/58/11/R37
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import absorption, scattering
+
+__all__ = ["BandSpectra", "band_spectra", "TissueState", "tissue_optics", "SUBCUTIS"]
+
+#: Subcutis composition besides fat: water 0.1-0.3 and blood 0.01-0.05 (SOURCES.md
+#: layer table); blood is taken as half the dermal fraction (an assumption).
+SUBCUTIS = {"water_fraction": 0.2, "blood_ratio_to_dermis": 0.5}
+
+_CHROMOPHORES = ("water", "blood_oxy", "blood_deoxy", "fat", "melanosome", "baseline",
+                 "glucose", "musp_skin", "musp_fat")
+
+
+@dataclass(frozen=True)
+class BandSpectra:
+    """Chromophore spectra at the quadrature nodes of each LED band, shape (n_led, n_pts).
+
+    ``weights`` sum to 1 over each LED's nodes; ``d_<name>`` is the derivative of
+    ``<name>`` with respect to wavelength [per nm].
+    """
+
+    centre_nm: np.ndarray
+    nodes_nm: np.ndarray
+    weights: np.ndarray
+    spectra: dict
+    derivatives: dict
+
+
+def band_spectra(
+    centre_nm, fwhm_nm, n_points: int = 5, water_source: str = "kou1993",
+    glucose_peak_per_cm_per_mm: float = 1.0e-4,
+) -> BandSpectra:
+    """Tabulate every chromophore over the LED bands.
+
+    Parameters
+    ----------
+    centre_nm, fwhm_nm : sequence of float
+        LED peak wavelengths and emission FWHM. [nm]
+    n_points : int
+        Gauss-Hermite nodes per LED. [-]
+    water_source : str
+        Water table (see :data:`absorption.WATER_SOURCES`).
+    glucose_peak_per_cm_per_mm : float
+        Glucose absorption at its 1150 nm band peak. [1/(cm mM)]
+
+    Returns
+    -------
+    BandSpectra
+    """
+    centre = np.asarray(centre_nm, dtype=float)[:, None]
+    sigma = np.asarray(fwhm_nm, dtype=float)[:, None] / (2.0 * np.sqrt(2.0 * np.log(2.0)))
+    x, w = np.polynomial.hermite.hermgauss(n_points)
+    nodes = centre + np.sqrt(2.0) * sigma * x[None, :]
+    weights = np.broadcast_to(w / np.sqrt(np.pi), nodes.shape).copy()
+    lo, hi = absorption.WAVELENGTH_RANGE_NM
+    nodes = np.clip(nodes, lo + 1.0, hi - 1.0)  # tails of the band beyond the tables
+
+    def table(wl):
+        return {
+            "water": absorption.water_mua_per_cm(wl, water_source),
+            "blood_oxy": absorption.blood_mua_per_cm(wl, 1.0),
+            "blood_deoxy": absorption.blood_mua_per_cm(wl, 0.0),
+            "fat": absorption.lipid_mua_per_cm(wl),
+            "melanosome": absorption.melanosome_mua_per_cm(wl),
+            "baseline": absorption.skin_baseline_mua_per_cm(wl),
+            "glucose": absorption.glucose_mua_per_cm_per_mm(wl, glucose_peak_per_cm_per_mm),
+            "musp_skin": scattering.power_law_musp_per_cm(wl, *scattering.SKIN_MUSP),
+            "musp_fat": scattering.power_law_musp_per_cm(wl, *scattering.FAT_MUSP),
+        }
+
+    here, plus, minus = table(nodes), table(nodes + 1.0), table(nodes - 1.0)
+    deriv = {k: 0.5 * (plus[k] - minus[k]) for k in _CHROMOPHORES}
+    return BandSpectra(np.asarray(centre_nm, float), nodes, weights, here, deriv)
+
+
+@dataclass(frozen=True)
+class TissueState:
+    """Per-sample tissue composition, each an array of shape (n,)."""
+
+    blood_fraction: np.ndarray
+    saturation: np.ndarray
+    water_fraction: np.ndarray
+    subcutis_fat_fraction: np.ndarray
+    glucose_mm: np.ndarray
+
+
+def tissue_optics(
+    spectra: BandSpectra,
+    state: TissueState,
+    *,
+    water_displacement_per_mm: float,
+    scattering_rel_per_mm: float,
+    shift_nm: np.ndarray | float = 0.0,
+) -> dict:
+    """Absorption and reduced scattering of dermis and subcutis over the LED bands.
+
+    Parameters
+    ----------
+    spectra : BandSpectra
+        Tables from :func:`band_spectra`.
+    state : TissueState
+        Composition per sample.
+    water_displacement_per_mm : float
+        Fraction of water displaced per mM of glucose. [1/mM]
+    scattering_rel_per_mm : float
+        Relative change of mus' per mM of glucose. [1/mM]
+    shift_nm : array_like
+        Shift of each sample's LED peaks, shape (n,) or (n, n_led). [nm]
+
+    Returns
+    -------
+    dict
+        ``mua_dermis``, ``musp_dermis``, ``mua_subcutis``, ``musp_subcutis``, each
+        (n, n_led, n_pts) [1/cm], and ``melanosome`` (n, n_led, n_pts) [1/cm].
+    """
+    shift = np.asarray(shift_nm, dtype=float)
+    if shift.ndim == 1:
+        shift = shift[:, None]
+    shift = shift[..., None] if shift.ndim == 2 else shift
+
+    def spec(name):
+        return spectra.spectra[name][None] + shift * spectra.derivatives[name][None]
+
+    c = state.glucose_mm[:, None, None]
+    b = state.blood_fraction[:, None, None]
+    s = state.saturation[:, None, None]
+    w = state.water_fraction[:, None, None]
+    f_sub = state.subcutis_fat_fraction[:, None, None]
+    blood = s * spec("blood_oxy") + (1.0 - s) * spec("blood_deoxy")
+    water = spec("water")
+    baseline = spec("baseline")
+    fluid = water * np.maximum(1.0 - water_displacement_per_mm * c, 0.0) + c * spec("glucose")
+    mua_dermis = b * blood + w * fluid + (1.0 - b - w) * baseline
+    b_sub = SUBCUTIS["blood_ratio_to_dermis"] * b
+    w_sub = SUBCUTIS["water_fraction"]
+    mua_sub = (
+        b_sub * blood + w_sub * fluid + f_sub * spec("fat")
+        + np.maximum(1.0 - b_sub - w_sub - f_sub, 0.0) * baseline
+    )
+    glc_scatter = scattering.glucose_scattering_factor(c, scattering_rel_per_mm)
+    return {
+        "mua_dermis": mua_dermis,
+        "musp_dermis": spec("musp_skin") * glc_scatter,
+        "mua_subcutis": mua_sub,
+        "musp_subcutis": spec("musp_fat") * glc_scatter,
+        "melanosome": spec("melanosome") + 0.0 * c,
+        "baseline": baseline + 0.0 * c,
+    }

@@ -1,0 +1,284 @@
+"""Hardware layer: LEDs, photodiode, transimpedance amplifier and ADC.
+
+Physics (DESIGN.md physics notes):
+
+* LED: P = P0 [1 - 0.002 (T - 25) - 0.001 t/1000 h + N(0, 0.1 %)]; the peak shifts
+  0.2-0.3 nm/degC with junction temperature.
+* Photodiode: I_sig = R(lambda) P_opt; I_dark = I25 e^{0.1 (T - 25)};
+  shot noise sqrt(2 e I BW); Johnson noise sqrt(4 k T BW / R).
+* TIA: V = I R_f. ADC: round(V / Vref (2^bits - 1)) + INL + offset drift, clipped to
+  the code range (saturation of a real converter).
+
+The device takes a reference reading of each LED at start-up (the subject's session),
+through a neutral attenuator of known transmission, and an offset-cancellation current
+that nulls the dark current at that temperature. Drift between then and each
+measurement (LED temperature, ageing, dark current) is what the reference cannot
+remove. Ambient light is removed by an LED-off reading; its flicker between the two
+readings and its shot noise remain.
+
+References
+----------
+.. [1] Hamamatsu Photonics, "Si photodiodes" technical information (dark current,
+   shot and thermal noise), and S1223/S1336 datasheets.
+.. [2] P. Horowitz, W. Hill, "The Art of Electronics", 3rd ed., sec. 8.1 (Johnson and
+   shot noise).
+.. [3] Vishay TSAL6200 / VSLY5850 IR-LED datasheets (thermal coefficients).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..constants import (
+    BOLTZMANN_J_PER_K,
+    DARK_CURRENT_DOUBLING_COEFF_PER_C,
+    ELEMENTARY_CHARGE_C,
+    LED_AGEING_PER_1000H,
+    LED_REFERENCE_TEMPERATURE_C,
+    LED_THERMAL_COEFF_PER_C,
+    ZERO_CELSIUS_K,
+)
+
+__all__ = [
+    "led_power_w",
+    "led_peak_shift_nm",
+    "dark_current_a",
+    "shot_noise_sd_a",
+    "johnson_noise_sd_a",
+    "adc_inl_lsb",
+    "adc_convert",
+]
+
+
+def led_power_w(
+    p0_w,
+    led_temperature_c,
+    age_h,
+    flicker_rel,
+    *,
+    thermal_coeff_per_c: float = LED_THERMAL_COEFF_PER_C,
+    ageing_per_1000h: float = LED_AGEING_PER_1000H,
+) -> np.ndarray:
+    """LED optical power P = P0 [1 - a (T - 25) - b t / 1000 h + n].
+
+    Parameters
+    ----------
+    p0_w : array_like
+        Power at 25 degC when new. [W]
+    led_temperature_c : array_like
+        Junction temperature. [degC]
+    age_h : array_like
+        Hours of operation. [h]
+    flicker_rel : array_like
+        Relative flicker draw n (N(0, 0.1 %) in DESIGN.md). [-]
+    thermal_coeff_per_c : float
+        a. [1/degC]
+    ageing_per_1000h : float
+        b. [1/(1000 h)]
+
+    Returns
+    -------
+    numpy.ndarray
+        Optical power. [W]
+
+    References
+    ----------
+    DESIGN.md physics notes; Vishay IR-LED datasheets [3]_.
+
+    Examples
+    --------
+    >>> float(led_power_w(1e-3, 35.0, 0.0, 0.0))
+    0.00098
+    """
+    t = np.asarray(led_temperature_c, dtype=float) - LED_REFERENCE_TEMPERATURE_C
+    return np.asarray(p0_w) * (
+        1.0
+        - thermal_coeff_per_c * t
+        - ageing_per_1000h * np.asarray(age_h) / 1000.0
+        + np.asarray(flicker_rel)
+    )
+
+
+def led_peak_shift_nm(led_temperature_c, nm_per_c: float) -> np.ndarray:
+    """Shift of the LED's peak wavelength from its 25 degC value [3]_. [nm]
+
+    Examples
+    --------
+    >>> float(led_peak_shift_nm(45.0, 0.25))
+    5.0
+    """
+    return nm_per_c * (np.asarray(led_temperature_c, dtype=float) - LED_REFERENCE_TEMPERATURE_C)
+
+
+def dark_current_a(i25_a, temperature_c) -> np.ndarray:
+    """Photodiode dark current I25 exp(0.1 (T - 25)) (Hamamatsu [1]_). [A]
+
+    Examples
+    --------
+    >>> round(float(dark_current_a(1e-10, 35.0)) * 1e10, 4)
+    2.7183
+    """
+    t = np.asarray(temperature_c, dtype=float) - 25.0
+    return np.asarray(i25_a) * np.exp(DARK_CURRENT_DOUBLING_COEFF_PER_C * t)
+
+
+def shot_noise_sd_a(current_a, bandwidth_hz: float) -> np.ndarray:
+    """Shot-noise standard deviation sqrt(2 e I BW) [2]_. [A]
+
+    Examples
+    --------
+    >>> round(float(shot_noise_sd_a(1e-6, 10.0)) * 1e12, 3)
+    1.79
+    """
+    return np.sqrt(2.0 * ELEMENTARY_CHARGE_C * np.abs(np.asarray(current_a)) * bandwidth_hz)
+
+
+def johnson_noise_sd_a(temperature_c, bandwidth_hz: float, resistance_ohm: float) -> np.ndarray:
+    """Johnson (thermal) noise current of a resistor, sqrt(4 k T BW / R) [2]_. [A]
+
+    Examples
+    --------
+    >>> round(float(johnson_noise_sd_a(25.0, 10.0, 1e5)) * 1e12, 3)
+    1.283
+    """
+    t_k = np.asarray(temperature_c, dtype=float) + ZERO_CELSIUS_K
+    return np.sqrt(4.0 * BOLTZMANN_J_PER_K * t_k * bandwidth_hz / resistance_ohm)
+
+
+def adc_inl_lsb(code, full_scale: int, inl_peak_lsb: float) -> np.ndarray:
+    """Integral non-linearity as a bow, INL_peak sin(pi code / full scale). [LSB]
+
+    A single bow with zero error at both ends is the classic INL shape of SAR
+    converters after end-point calibration (Analog Devices MT-010).
+
+    Examples
+    --------
+    >>> float(adc_inl_lsb(2047.5, 4095, 2.0))
+    2.0
+    """
+    return inl_peak_lsb * np.sin(np.pi * np.asarray(code, dtype=float) / full_scale)
+
+
+def adc_convert(voltage_v, vref_v: float, bits: int, inl_peak_lsb: float, offset_lsb) -> np.ndarray:
+    """Convert voltages to integer codes: round(V / Vref FS + INL + offset), clipped.
+
+    Parameters
+    ----------
+    voltage_v : array_like
+        Input voltage. [V]
+    vref_v : float
+        Full-scale voltage. [V]
+    bits : int
+        Resolution. [bit]
+    inl_peak_lsb : float
+        Peak INL. [LSB]
+    offset_lsb : array_like
+        Offset (drift). [LSB]
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        Codes in [0, 2^bits - 1] (saturated outside, as a converter does).
+
+    Examples
+    --------
+    >>> adc_convert(np.array([0.0, 1.65, 5.0]), 3.3, 12, 0.0, 0.0)
+    array([   0, 2048, 4095])
+    """
+    full = 2**bits - 1
+    ideal = np.asarray(voltage_v, dtype=float) / vref_v * full
+    code = ideal + adc_inl_lsb(ideal, full, inl_peak_lsb) + np.asarray(offset_lsb)
+    return np.clip(np.rint(code), 0, full).astype(np.int64)
+
+
+def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, streams) -> dict:
+    """Hardware layer entry: ADC codes of each measurement and of the start-up reference.
+
+    Parameters
+    ----------
+    cfg : ScenarioConfig
+        Scenario.
+    detected_fraction_led : numpy.ndarray
+        Per-LED band-averaged detected fraction of the LED power at 25 degC, with the
+        band already weighted by the (temperature-shifted) emission, (n, n_led). [-]
+    temps : dict
+        ``led_c`` (n, n_led), ``board_c`` (n,), ``age_h`` (n,), and per subject
+        ``led_cal_c`` (n_sub, n_led), ``board_cal_c`` (n_sub,), ``age_cal_h`` (n_sub,);
+        ``ambient_a`` (n,), ``ambient_flicker`` (n,): temperatures [degC], ages [h],
+        ambient photocurrent [A] and its relative flicker [-].
+    subject_index : numpy.ndarray
+        Row -> subject within the block, (n,).
+    streams : RandomStreams
+        Random generators of the block.
+
+    Returns
+    -------
+    dict
+        ``adc`` and ``adc_ref`` (n, n_led) int64 codes, ``signal_v`` (n, n_led) the
+        noise-free analog voltage, ``detected_power_w`` (n, n_led).
+    """
+    hw = cfg.hardware
+    n, n_led = detected_fraction_led.shape
+    p0 = np.asarray(hw.led_power_mw)[None, :] * 1e-3
+    resp = np.asarray(hw.responsivity_a_per_w)[None, :]
+    f_thermal = cfg.noise_factor("led_thermal_drift")
+    f_age = cfg.noise_factor("led_ageing")
+    f_flicker = cfg.noise_factor("led_flicker")
+    thermal = LED_THERMAL_COEFF_PER_C * f_thermal
+    ageing = LED_AGEING_PER_1000H * f_age
+    n_sub = int(subject_index.max()) + 1 if n else 0
+    flicker = hw.led_flicker_rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
+    flicker_cal = hw.led_flicker_rel * f_flicker * streams("led_flicker.cal").normal(
+        size=(n_sub, n_led)
+    )
+
+    # Measurement: LED power, optics, photocurrent.
+    p_led = led_power_w(p0, temps["led_c"], temps["age_h"][:, None], flicker,
+                        thermal_coeff_per_c=thermal, ageing_per_1000h=ageing)
+    detected_power_w = p_led * detected_fraction_led
+    i_sig = resp * detected_power_w
+    f_dark = cfg.noise_factor("dark_current")
+    i25 = hw.dark_current_25c_na * 1e-9
+    dark_now = dark_current_a(i25, temps["board_c"])[:, None]
+    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index])[:, None]
+    i_dark_residual = f_dark * (dark_now - dark_cal)
+    f_amb = cfg.noise_factor("ambient_light")
+    i_amb = f_amb * temps["ambient_a"][:, None]
+    amb_residual = (
+        i_amb * (1.0 - hw.ambient_rejection) * temps["ambient_flicker"][:, None]
+        * streams("ambient_light").normal(size=(n, n_led))
+    )
+    i_total_shot = i_sig + dark_now + i_amb
+    shot = cfg.noise_factor("shot") * shot_noise_sd_a(i_total_shot, hw.bandwidth_hz)
+    shot = shot * streams("shot").normal(size=(n, n_led))
+    johnson = cfg.noise_factor("johnson") * johnson_noise_sd_a(
+        temps["board_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm
+    ) * streams("johnson").normal(size=(n, n_led))
+    voltage = (i_sig + i_dark_residual + amb_residual + shot + johnson) * hw.tia_gain_ohm
+    offset = (
+        cfg.noise_factor("adc_offset_drift") * hw.adc_offset_drift_lsb_per_c
+        * (temps["board_c"][:, None] - 25.0)
+    )
+    inl = cfg.noise_factor("adc_inl") * hw.adc_inl_lsb
+    adc = adc_convert(voltage, hw.adc_vref_v, hw.adc_bits, inl, offset)
+
+    # Reference at start-up, once per subject: the same LED through a neutral
+    # attenuator, no tissue; ``*_cal_*`` temperatures and ages are per subject.
+    p_cal = led_power_w(p0, temps["led_cal_c"], temps["age_cal_h"][:, None], flicker_cal,
+                        thermal_coeff_per_c=thermal, ageing_per_1000h=ageing)
+    i_ref = resp * p_cal * hw.reference_transmission
+    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"])[:, None]
+    shot_ref = cfg.noise_factor("shot") * shot_noise_sd_a(i_ref + dark_cal_sub, hw.bandwidth_hz)
+    shot_ref = shot_ref * streams("shot.cal").normal(size=(n_sub, n_led))
+    johnson_ref = cfg.noise_factor("johnson") * johnson_noise_sd_a(
+        temps["board_cal_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm
+    ) * streams("johnson.cal").normal(size=(n_sub, n_led))
+    v_ref = (i_ref + shot_ref + johnson_ref) * hw.tia_gain_ohm
+    offset_ref = (
+        cfg.noise_factor("adc_offset_drift") * hw.adc_offset_drift_lsb_per_c
+        * (temps["board_cal_c"][:, None] - 25.0)
+    )
+    adc_ref = adc_convert(v_ref, hw.adc_vref_v, hw.adc_bits, inl, offset_ref)[subject_index]
+    signal_v = resp * (p0 * detected_fraction_led) * hw.tia_gain_ohm
+    return {"adc": adc, "adc_ref": adc_ref, "signal_v": signal_v, "voltage_v": voltage,
+            "detected_power_w": detected_power_w}

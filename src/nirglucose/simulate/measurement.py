@@ -1,0 +1,72 @@
+"""What the device knows: the physiological vector as it would be measured.
+
+Each entry of the 12-dimensional physiological vector (the study's PMF input) is the
+true value plus the measurement error of the instrument that would provide it
+(standard deviations in :class:`nirglucose.config.MeasurementConfig`), scaled by the
+``pmf_measurement`` noise source.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import ScenarioConfig
+from ._random import RandomStreams
+
+__all__ = ["PMF_COLUMNS", "measure_physiology"]
+
+#: The measured physiological vector, in the order models and the C export use.
+PMF_COLUMNS = (
+    "age_yr",
+    "bmi_kgm2",
+    "fitzpatrick_type",
+    "melanin_fraction",
+    "skin_thickness_mm",
+    "hydration_pct",
+    "systolic_bp_mmhg",
+    "heart_rate_bpm",
+    "resp_rate_bpm",
+    "skin_temp_c",
+    "humidity_pct",
+    "pressure_mbar",
+)
+
+#: Measured column -> the truth it measures.
+_TRUTH = {
+    "age_yr": "true_age_yr",
+    "bmi_kgm2": "true_bmi_kgm2",
+    "melanin_fraction": "true_melanin_fraction",
+    "skin_thickness_mm": "true_skin_thickness_mm",
+    "hydration_pct": "true_hydration_pct",
+    "systolic_bp_mmhg": "true_systolic_bp_mmhg",
+    "heart_rate_bpm": "true_heart_rate_bpm",
+    "resp_rate_bpm": "true_resp_rate_bpm",
+    "skin_temp_c": "true_skin_temp_c",
+    "humidity_pct": "true_humidity_pct",
+    "pressure_mbar": "true_pressure_mbar",
+}
+
+#: Bounds that keep a measured value physically meaningful (a device reports none
+#: outside them). [column unit]
+_FLOORS = {"melanin_fraction": 0.0, "skin_thickness_mm": 0.1, "bmi_kgm2": 10.0}
+
+
+def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams) -> dict:
+    """Return the measured physiological vector (:data:`PMF_COLUMNS`) from the truth."""
+    m = cfg.measurement
+    f = cfg.noise_factor("pmf_measurement")
+    rng = streams("pmf_measurement")
+    n = len(truth["true_age_yr"])
+    out = {}
+    draws = rng.normal(size=(len(_TRUTH), n))
+    for i, (col, true_col) in enumerate(_TRUTH.items()):
+        value = truth[true_col] + f * getattr(m, col) * draws[i]
+        if col in _FLOORS:
+            value = np.maximum(value, _FLOORS[col])
+        out[col] = value
+    out["age_yr"] = np.floor(out["age_yr"])  # recorded in whole years
+    off = rng.random(size=n) < f * m.fitzpatrick_misclass
+    step = np.where(rng.random(size=n) < 0.5, -1, 1)
+    fitz = truth["true_fitzpatrick_type"] + np.where(off, step, 0)
+    out["fitzpatrick_type"] = np.clip(fitz, 1, 6).astype(np.int64)
+    return {col: out[col] for col in PMF_COLUMNS}

@@ -1,0 +1,308 @@
+"""The simulator facade: the only place that knows the order of the layers.
+
+environment -> glucose -> physiology (traits, state) -> contact -> optics -> hardware
+-> measurement. Work is done per block of subjects (:data:`BLOCK_SUBJECTS`) with its
+own random streams, so the output is the same whatever the chunking or the number of
+workers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..config import ScenarioConfig
+from ..constants import MGDL_PER_MMOLL_GLUCOSE
+from ..optics import forward, tissue
+from . import environment, hardware, measurement, physiology
+from ._random import BLOCK_SUBJECTS, RandomStreams
+from .glucose import sample_glucose
+
+__all__ = [
+    "block_ranges",
+    "simulate_block",
+    "iter_blocks",
+    "simulate_frame",
+    "nominal_tissue",
+    "detected_fraction_given_glucose",
+]
+
+#: Nominal skin (the centre of the default cohort): used to fix the Beer-Lambert
+#: geometry factor and as the operating point of the 'lab' preset. [SI-like units below]
+NOMINAL = {
+    "blood_fraction": 0.02,
+    "saturation": 0.7,
+    "water_fraction": 0.65,
+    "subcutis_fat_fraction": 0.8,
+    "glucose_mm": 100.0 / MGDL_PER_MMOLL_GLUCOSE,
+    "skin_thickness_mm": 1.8,
+}
+#: Hours between a subject's start-up reference and each measurement (snapshots taken
+#: over up to three days). [h]
+HOURS_SINCE_REFERENCE = (0.0, 72.0)
+
+
+@dataclass(frozen=True)
+class _Tables:
+    spectra: tissue.BandSpectra
+    geometry: np.ndarray
+    ambient: tuple[np.ndarray, np.ndarray, np.ndarray]
+    light_names: tuple[str, ...]
+
+
+def _tables(cfg: ScenarioConfig) -> _Tables:
+    spectra = tissue.band_spectra(
+        cfg.leds.wavelengths_nm, cfg.leds.fwhm_nm, cfg.leds.band_points,
+        cfg.optics.water_source, cfg.glucose.absorptivity_per_cm_per_mm,
+    )
+    optics = tissue.tissue_optics(
+        spectra, nominal_tissue(1),
+        water_displacement_per_mm=0.0, scattering_rel_per_mm=0.0,
+    )
+    sep_cm = cfg.optics.source_detector_mm / 10.0
+    mua, musp, _ = forward.mixed_optics(
+        optics, np.array([NOMINAL["skin_thickness_mm"] / 10.0]), sep_cm
+    )
+    geometry = forward.geometry_factor(
+        mua[0], musp[0], sep_cm, cfg.optics.detector_area_mm2 / 100.0,
+        cfg.optics.tissue_refractive_index,
+    )
+    names = tuple(environment.LIGHT_SOURCES)
+    table = np.array([environment.LIGHT_SOURCES[k] for k in names])
+    return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names)
+
+
+def nominal_tissue(n: int) -> tissue.TissueState:
+    """The nominal tissue composition repeated ``n`` times."""
+    return tissue.TissueState(
+        *(np.full(n, NOMINAL[k]) for k in (
+            "blood_fraction", "saturation", "water_fraction", "subcutis_fat_fraction",
+            "glucose_mm"))
+    )
+
+
+def block_ranges(n_subjects: int, block_subjects: int = BLOCK_SUBJECTS):
+    """``(block, first_subject, n_subjects_in_block)`` for every block."""
+    return [
+        (b, start, min(block_subjects, n_subjects - start))
+        for b, start in enumerate(range(0, n_subjects, block_subjects))
+    ]
+
+
+def simulate_block(
+    cfg: ScenarioConfig,
+    seed: int,
+    block: int,
+    first_subject: int,
+    n_sub: int,
+    per_subject: int,
+    tables: _Tables | None = None,
+) -> tuple[dict, int]:
+    """Simulate one block of subjects; returns ``(columns, n_random_variates)``."""
+    tables = tables or _tables(cfg)
+    streams = RandomStreams(seed, block)
+    n = n_sub * per_subject
+    rep = np.repeat(np.arange(n_sub), per_subject)
+    first = np.arange(0, n, per_subject)
+    hw = cfg.hardware
+
+    glucose = sample_glucose(cfg, n_sub, per_subject, streams)
+    env = environment.apply_environment(cfg, n, streams)
+    traits = physiology.sample_traits(cfg, n_sub, streams)
+    traits_rows = {k: v[rep] for k, v in traits.items()}
+    phys = physiology.apply_physiology(cfg, traits_rows, env, glucose, n, streams)
+
+    # Contact pressure and humidity change the optical coupling and the path.
+    f_contact = cfg.noise_factor("contact_pressure")
+    rng_contact = streams("contact_pressure")
+    contact = rng_contact.beta(2.0, 2.0, size=n)
+    coupling_z = rng_contact.normal(size=n)
+    lo, hi = cfg.environment.humidity_pct
+    wet = (env["true_humidity_pct"] - lo) / (hi - lo)
+    coupling = np.exp(
+        f_contact * cfg.contact.coupling_sd * coupling_z
+        - cfg.noise_factor("humidity_coupling") * cfg.environment.humidity_coupling_loss * wet
+    )
+    blood = phys["true_blood_fraction"] * np.exp(-f_contact * cfg.contact.blanching * contact)
+    thickness_mm = phys["true_skin_thickness_mm"] * np.exp(
+        -f_contact * cfg.contact.compression * contact
+    )
+
+    # Temperatures: LED junctions, the board (between air and skin), the start-up reference.
+    n_led = len(cfg.leds.wavelengths_nm)
+    f_thermal = cfg.noise_factor("led_thermal_drift")
+    rng_t = streams("led_thermal_drift")
+    heat = hw.led_self_heating_c + f_thermal * hw.led_self_heating_sd_c * rng_t.normal(
+        size=(n + n_sub, n_led)
+    )
+    t_amb = env["true_ambient_temperature_c"]
+    led_c = t_amb[:, None] + heat[:n]
+    board_c = 0.5 * (t_amb + phys["true_skin_temp_c"])
+    led_cal_c = t_amb[first][:, None] + heat[n:]
+    board_cal_c = board_c[first]
+    rng_age = streams("led_ageing")
+    age_cal_h = rng_age.uniform(*hw.led_age_h, size=n_sub)
+    age_h = age_cal_h[rep] + rng_age.uniform(*HOURS_SINCE_REFERENCE, size=n)
+    shift_nm = cfg.noise_factor("led_wavelength_shift") * hardware.led_peak_shift_nm(
+        led_c, hw.led_wavelength_shift_nm_per_c
+    )
+
+    # Optics: detected fraction per band node, weighted by the LED emission.
+    gain = cfg.glucose.signal_gain
+    state = tissue.TissueState(
+        blood, phys["true_saturation"], phys["true_water_fraction"],
+        phys["true_subcutis_fat_fraction"],
+        gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
+    )
+    optics = tissue.tissue_optics(
+        tables.spectra, state,
+        water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+        scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm, shift_nm=shift_nm,
+    )
+    fraction_nodes = forward.detected_fraction(
+        cfg.optics.model, optics,
+        melanin_fraction=phys["true_melanin_fraction"],
+        skin_thickness_cm=thickness_mm / 10.0,
+        epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
+        separation_cm=cfg.optics.source_detector_mm / 10.0,
+        detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
+        n_tissue=cfg.optics.tissue_refractive_index,
+        geometry_factor=tables.geometry,
+    )
+    fraction = (fraction_nodes * tables.spectra.weights[None]).sum(axis=-1) * coupling[:, None]
+
+    # Ambient light through the baffle.
+    uniq, inverse = np.unique(env["true_light_source"].astype(str), return_inverse=True)
+    idx = np.array([tables.light_names.index(u) for u in uniq], dtype=int)[inverse]
+    w_per_lux, resp_amb, flick = (t[idx] for t in tables.ambient)
+    ambient_a = environment.ambient_photocurrent_a(
+        env["true_ambient_lux"], w_per_lux, resp_amb, cfg.optics.detector_area_mm2 * 1e-6,
+        cfg.environment.baffle_optical_density,
+    )
+    temps = {
+        "led_c": led_c, "board_c": board_c, "age_h": age_h, "led_cal_c": led_cal_c,
+        "board_cal_c": board_cal_c, "age_cal_h": age_cal_h, "ambient_a": ambient_a,
+        "ambient_flicker": flick,
+    }
+    hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
+    truth = {**phys, **env}
+    truth["true_skin_thickness_mm"] = phys["true_skin_thickness_mm"]
+    pmf = measurement.measure_physiology(cfg, truth, streams)
+
+    wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
+    cols: dict[str, np.ndarray] = {
+        "subject_id": (first_subject + rep).astype(np.int64),
+        "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
+        "glucose_mgdl": glucose["glucose_mgdl"],
+        "diabetes_status": glucose["diabetes_status"].astype(str),
+    }
+    for i, w in enumerate(wl):
+        cols[f"adc_{w}"] = hwout["adc"][:, i]
+    for i, w in enumerate(wl):
+        cols[f"adc_ref_{w}"] = hwout["adc_ref"][:, i]
+    cols.update(pmf)
+    cols["ambient_lux"] = env["true_ambient_lux"]
+    truth_out = {k: v for k, v in phys.items()}
+    truth_out.update({k: v for k, v in env.items()})
+    truth_out.update({
+        "true_blood_fraction_detected": blood,
+        "true_skin_thickness_probe_mm": thickness_mm,
+        "true_contact_pressure": contact,
+        "true_coupling": coupling,
+        "true_led_temperature_c": led_c.mean(axis=1),
+        "true_board_temperature_c": board_c,
+        "true_hours_since_meal": glucose["true_hours_since_meal"],
+        "true_stress": glucose["true_stress"],
+        "true_hour_of_day": glucose["true_hour_of_day"],
+    })
+    for i, w in enumerate(wl):
+        truth_out[f"true_detected_fraction_{w}"] = fraction[:, i]
+        truth_out[f"true_led_shift_nm_{w}"] = np.broadcast_to(shift_nm, (n, n_led))[:, i]
+        truth_out[f"true_signal_v_{w}"] = hwout["signal_v"][:, i]
+        truth_out[f"true_voltage_v_{w}"] = hwout["voltage_v"][:, i]
+    truth_out["true_light_source"] = truth_out["true_light_source"].astype(str)
+    cols.update(dict(sorted(truth_out.items())))
+    return cols, streams.n_variates
+
+
+def iter_blocks(
+    cfg: ScenarioConfig, n_subjects: int, per_subject: int, seed: int
+) -> Iterator[pd.DataFrame]:
+    """Yield the dataset block by block (bounded memory)."""
+    tables = _tables(cfg)
+    for block, start, n_sub in block_ranges(n_subjects):
+        cols, _ = simulate_block(cfg, seed, block, start, n_sub, per_subject, tables)
+        yield pd.DataFrame(cols)
+
+
+def simulate_frame(
+    cfg: ScenarioConfig, n_subjects: int, per_subject: int, seed: int, n_jobs: int = 1
+) -> pd.DataFrame:
+    """The whole dataset as one DataFrame; ``n_jobs`` > 1 simulates blocks in parallel."""
+    blocks = block_ranges(n_subjects)
+    if n_jobs == 1 or len(blocks) == 1:
+        frames = list(iter_blocks(cfg, n_subjects, per_subject, seed))
+    else:
+        from joblib import Parallel, delayed
+
+        tables = _tables(cfg)
+        results = Parallel(n_jobs=n_jobs)(
+            delayed(simulate_block)(cfg, seed, b, s, k, per_subject, tables) for b, s, k in blocks
+        )
+        frames = [pd.DataFrame(cols) for cols, _ in results]
+    return pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
+
+
+def detected_fraction_given_glucose(
+    cfg: ScenarioConfig, frame: pd.DataFrame, glucose_mgdl: np.ndarray
+) -> np.ndarray:
+    """Noise-free detected fraction for each row's true nuisance state and any glucose.
+
+    Re-runs the optical forward model with the row's ``true_*`` tissue composition,
+    probe thickness, LED shift and coupling, but with ``glucose_mgdl`` in place of the
+    row's glucose. Used by the oracle estimator; it reads ``true_*`` columns.
+
+    Parameters
+    ----------
+    cfg : ScenarioConfig
+        The scenario that generated ``frame``.
+    frame : pandas.DataFrame
+        Rows with the ``true_*`` columns of a simulated dataset.
+    glucose_mgdl : numpy.ndarray
+        Glucose per row, (n,). [mg/dL]
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, n_led) fraction of LED power detected. [-]
+    """
+    tables = _tables(cfg)
+    wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
+    state = tissue.TissueState(
+        frame["true_blood_fraction_detected"].to_numpy(float),
+        frame["true_saturation"].to_numpy(float),
+        frame["true_water_fraction"].to_numpy(float),
+        frame["true_subcutis_fat_fraction"].to_numpy(float),
+        cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
+    )
+    shift = frame[[f"true_led_shift_nm_{w}" for w in wl]].to_numpy(float)
+    optics = tissue.tissue_optics(
+        tables.spectra, state,
+        water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+        scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm, shift_nm=shift,
+    )
+    nodes = forward.detected_fraction(
+        cfg.optics.model, optics,
+        melanin_fraction=frame["true_melanin_fraction"].to_numpy(float),
+        skin_thickness_cm=frame["true_skin_thickness_probe_mm"].to_numpy(float) / 10.0,
+        epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
+        separation_cm=cfg.optics.source_detector_mm / 10.0,
+        detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
+        n_tissue=cfg.optics.tissue_refractive_index,
+        geometry_factor=tables.geometry,
+    )
+    coupling = frame["true_coupling"].to_numpy(float)[:, None]
+    return (nodes * tables.spectra.weights[None]).sum(axis=-1) * coupling
