@@ -1,0 +1,43 @@
+"""Estimators: EBL, PLS, the oracle bound, four PINNs and a shallow DNN, by name.
+
+Classes are imported lazily (torch loads only when a network is used).
+"""
+
+from __future__ import annotations
+
+from .registry import available_models, get_model_class, load_model, make_model, register
+
+__all__ = [
+    "available_models",
+    "get_model_class",
+    "load_model",
+    "make_model",
+    "register",
+    "EnhancedBeerLambert",
+    "PLSBaseline",
+    "Oracle",
+    "OriginalPINN",
+    "OptimizedPINN",
+    "RTEPINN",
+    "SelectiveRTEPINN",
+    "SDNN",
+]
+
+_LAZY = {
+    "EnhancedBeerLambert": "nirglucose.models.linear",
+    "PLSBaseline": "nirglucose.models.linear",
+    "Oracle": "nirglucose.models.oracle",
+    "OriginalPINN": "nirglucose.models.pinn",
+    "OptimizedPINN": "nirglucose.models.pinn",
+    "RTEPINN": "nirglucose.models.pinn",
+    "SelectiveRTEPINN": "nirglucose.models.pinn",
+    "SDNN": "nirglucose.models.sdnn",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'nirglucose.models' has no attribute {name!r}")

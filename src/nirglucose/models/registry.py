@@ -1,0 +1,90 @@
+"""Estimators by name: ``make_model("ebl")``, ``load_model("model.json")``.
+
+Modules register their classes with :func:`register`; the registry imports them
+lazily so that ``import nirglucose`` stays light (torch is imported only when a
+network is asked for).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+from pathlib import Path
+from typing import Any
+
+from ..exceptions import ConfigError, DataError
+
+__all__ = ["register", "get_model_class", "make_model", "available_models", "load_model",
+           "MODEL_MODULES"]
+
+#: Modules that define registered estimators (imported on first use).
+MODEL_MODULES = (
+    "nirglucose.models.linear",
+    "nirglucose.models.oracle",
+    "nirglucose.models.pinn",
+    "nirglucose.models.sdnn",
+)
+
+_REGISTRY: dict[str, type] = {}
+_loaded = False
+
+
+def register(name: str):
+    """Class decorator registering an estimator under ``name``."""
+
+    def deco(cls):
+        _REGISTRY[name] = cls
+        cls.registry_name = name
+        return cls
+
+    return deco
+
+
+def _load_all() -> None:
+    global _loaded
+    if _loaded:
+        return
+    for mod in MODEL_MODULES:
+        try:
+            importlib.import_module(mod)
+        except ModuleNotFoundError as exc:  # a module not written yet
+            if exc.name != mod:
+                raise
+    _loaded = True
+
+
+def available_models() -> list[str]:
+    """Names of every registered estimator."""
+    _load_all()
+    return sorted(_REGISTRY)
+
+
+def get_model_class(name: str) -> type:
+    """The estimator class registered under ``name``; unknown names raise ConfigError."""
+    _load_all()
+    if name not in _REGISTRY:
+        raise ConfigError(f"unknown model {name!r}; valid: {', '.join(sorted(_REGISTRY))}")
+    return _REGISTRY[name]
+
+
+def make_model(name: str, **params: Any):
+    """A new, unfitted estimator of the registered ``name``."""
+    return get_model_class(name)(**params)
+
+
+def load_model(path: str | Path):
+    """Load a model saved with ``model.save(path)`` (a JSON document naming its class).
+
+    Never executes code from the file: JSON, plus safetensors / ``weights_only`` torch
+    weights for networks.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataError(f"no such model file {str(path)!r}")
+    try:
+        doc = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
+    if not isinstance(doc, dict) or doc.get("format") != "nirglucose-model" or "model" not in doc:
+        raise DataError(f"{str(path)!r} is not a nirglucose model file (no 'format'/'model' keys)")
+    return get_model_class(doc["model"]).load(path)
