@@ -17,8 +17,8 @@ import pandas as pd
 from ..config import ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import forward, tissue
-from . import environment, hardware, measurement, physiology
-from ._random import BLOCK_SUBJECTS, RandomStreams
+from . import _random, environment, hardware, measurement, physiology
+from ._random import RandomStreams
 from .glucose import sample_glucose
 
 __all__ = [
@@ -84,8 +84,9 @@ def nominal_tissue(n: int) -> tissue.TissueState:
     )
 
 
-def block_ranges(n_subjects: int, block_subjects: int = BLOCK_SUBJECTS):
+def block_ranges(n_subjects: int, block_subjects: int | None = None):
     """``(block, first_subject, n_subjects_in_block)`` for every block."""
+    block_subjects = block_subjects or _random.BLOCK_SUBJECTS
     return [
         (b, start, min(block_subjects, n_subjects - start))
         for b, start in enumerate(range(0, n_subjects, block_subjects))
