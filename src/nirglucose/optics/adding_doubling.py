@@ -10,6 +10,8 @@ function, so it stays off the hot path.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -46,6 +48,20 @@ def _check(
             f"{name} = {bad!r} is out of range; valid range is {lb}{low:g}, {high:g}{hb} "
             f"(finite) [{unit}]"
         )
+
+
+def _single_threaded_blas() -> contextlib.AbstractContextManager[object]:
+    """Limit BLAS to one thread for the duration of a ``with`` block.
+
+    The adding-doubling matrices are at most 24 x 24: a multi-threaded BLAS only adds
+    synchronisation, and on a loaded machine it makes each solve ~10x slower. The
+    previous limits are restored on exit (threadpoolctl comes with scikit-learn).
+    """
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - optional
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def slab_rt(
@@ -176,18 +192,19 @@ def slab_rt(
     keys = np.stack([n_flat, g_flat], axis=1)
     uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
     inverse = inverse.ravel()
-    for k, (n_k, g_k) in enumerate(uniq):
-        idx = np.flatnonzero(inverse == k)
-        sample = iadpython.Sample(
-            a=albedo[idx],
-            b=tau[idx],
-            g=float(g_k),
-            n=float(n_k),
-            n_above=1.0,
-            n_below=1.0,
-            quad_pts=int(quad_pts),
-        )
-        ur1, ut1, _uru, _utu = sample.rt()
-        reflectance[idx] = ur1
-        transmittance[idx] = ut1
+    with _single_threaded_blas():
+        for k, (n_k, g_k) in enumerate(uniq):
+            idx = np.flatnonzero(inverse == k)
+            sample = iadpython.Sample(
+                a=albedo[idx],
+                b=tau[idx],
+                g=float(g_k),
+                n=float(n_k),
+                n_above=1.0,
+                n_below=1.0,
+                quad_pts=int(quad_pts),
+            )
+            ur1, ut1, _uru, _utu = sample.rt()
+            reflectance[idx] = ur1
+            transmittance[idx] = ut1
     return reflectance.reshape(shape), transmittance.reshape(shape)

@@ -387,7 +387,7 @@ def mc_layers(
                 bot = ~top
                 tt_ph[pid[ob[bot]]] += esc[bot]
                 tu_total += float(np.sum(esc[bot & ~scattered[ob]]))
-                path_w += esc[top] @ path[ob[top]]
+                path_w += (esc[top, None] * path[ob[top]]).sum(axis=0)
                 if edges is not None and np.any(top):
                     ot = ob[top]
                     rr = np.hypot(x[ot], y[ot])
