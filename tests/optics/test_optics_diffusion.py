@@ -191,6 +191,9 @@ def test_validate_does_not_break_autograd():
     assert g < 0
     r2 = farrell_reflectance(1.0, mua, 10.0, validate=False)
     assert r2.item() == pytest.approx(r.item())
+    # validate=False skips every check, the relative index included
+    r3 = farrell_reflectance(1.0, mua, 10.0, 1.3, 1.33, validate=False)
+    assert torch.isfinite(r3)
 
 
 # ----------------------------------------------------------------- bad input

@@ -121,6 +121,12 @@ def _check_optics(mua: Any, musp: Any, *, mua_strictly_positive: bool = False) -
 # --------------------------------------------------------------------------- physics
 
 
+def _groenhuis_a(n_rel: Any) -> Any:
+    """Boundary coefficient A of a relative index (no validation)."""
+    r_id = -1.440 / n_rel**2 + 0.710 / n_rel + 0.668 + 0.0636 * n_rel
+    return (1.0 + r_id) / (1.0 - r_id)
+
+
 def boundary_coefficient(n_tissue: Any = 1.4, n_ambient: Any = 1.0) -> Any:
     r"""Internal-reflection boundary coefficient A of the extrapolated boundary.
 
@@ -169,8 +175,7 @@ def boundary_coefficient(n_tissue: Any = 1.4, n_ambient: Any = 1.0) -> Any:
     xp, (nt, na) = _as_arrays(n_tissue, n_ambient)
     n_rel = nt / na
     _check("n_tissue / n_ambient", n_rel, "-", low=_N_REL_RANGE[0], high=_N_REL_RANGE[1])
-    r_id = -1.440 / n_rel**2 + 0.710 / n_rel + 0.668 + 0.0636 * n_rel
-    return (1.0 + r_id) / (1.0 - r_id)
+    return _groenhuis_a(n_rel)
 
 
 def effective_attenuation_per_cm(
@@ -249,8 +254,9 @@ def farrell_reflectance(
         Refractive index above the surface; ``n_tissue / n_ambient`` must lie in
         [1, 2]. Default 1.0 (air). [-]
     validate : bool, optional
-        Check the ranges. For tensors the check uses ``detach()`` (autograd is not
-        affected) but synchronises the device; pass False on a hot path. [-]
+        Check the ranges (index included). For tensors the check uses ``detach()``
+        (autograd is not affected) but synchronises the device; False skips every
+        check, for a hot path whose inputs are valid by construction. Default True. [-]
 
     Returns
     -------
@@ -307,10 +313,12 @@ def farrell_reflectance(
     array([0.1149, 0.0156, 0.0007])
     """
     xp, (rho, mua, musp, nt, na) = _as_arrays(rho_cm, mua_per_cm, musp_per_cm, n_tissue, n_ambient)
+    n_rel = nt / na
     if validate:
         _check("rho_cm", rho, "cm", low=0.0, low_inclusive=False)
         _check_optics(mua, musp)
-    a_coef = boundary_coefficient(nt, na)
+        _check("n_tissue / n_ambient", n_rel, "-", low=_N_REL_RANGE[0], high=_N_REL_RANGE[1])
+    a_coef = _groenhuis_a(n_rel)
     mutp = mua + musp
     albedo_p = musp / mutp
     z0 = 1.0 / mutp
