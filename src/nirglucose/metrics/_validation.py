@@ -103,26 +103,23 @@ def _validate_pairs(
             raise DataError("y_true and y_pred are empty; at least one pair is needed")
         raise DataError(f"at least {min_size} pairs are needed, got {ref.shape[0]}")
     for name, arr in (("y_true", ref), ("y_pred", pred)):
+        if np.isfinite(arr).all():  # fast path: details only when something is wrong
+            continue
         nan = np.isnan(arr)
         if nan.any():
             raise DataError(f"{name} contains NaN: {_describe_bad(nan)}")
-        inf = np.isinf(arr)
-        if inf.any():
-            raise DataError(f"{name} contains infinite values: {_describe_bad(inf)}")
-    non_positive = ref <= 0.0
-    if non_positive.any():
+        raise DataError(f"{name} contains infinite values: {_describe_bad(np.isinf(arr))}")
+    if ref.min() <= 0.0:
         raise DataError(
             f"y_true must be strictly positive (a reference glucose of 0 or below is not "
-            f"physical): {_describe_bad(non_positive)}"
+            f"physical): {_describe_bad(ref <= 0.0)}"
         )
-    if not allow_negative_pred:
-        negative = pred < 0.0
-        if negative.any():
-            raise DataError(
-                f"y_pred must be non-negative for an error grid (a negative glucose is not "
-                f"physical; clip explicitly with np.clip(y_pred, 0, None) if intended): "
-                f"{_describe_bad(negative)}"
-            )
+    if not allow_negative_pred and pred.min() < 0.0:
+        raise DataError(
+            f"y_pred must be non-negative for an error grid (a negative glucose is not "
+            f"physical; clip explicitly with np.clip(y_pred, 0, None) if intended): "
+            f"{_describe_bad(pred < 0.0)}"
+        )
     return ref, pred
 
 

@@ -90,25 +90,32 @@ class _Polyline:
     are evaluated as ``predicted = f(reference)``; "lower" lines start with a vertical
     run at predicted 0 and are evaluated as ``reference = g(predicted)``. Both are
     non-decreasing, so :func:`numpy.interp` evaluates them; past the last vertex the
-    last segment is extended linearly.
+    last segment is extended linearly (through an extra far vertex, so that the common
+    case needs a single ``np.interp`` call).
     """
 
-    __slots__ = ("t", "v", "slope_end")
+    __slots__ = ("t", "v", "t_last", "v_last", "slope_end")
+
+    #: Coordinate of the extra vertex placed on the extended last segment. [mg/dL]
+    _FAR = 1.0e7
 
     def __init__(self, vertices: tuple[tuple[float, float], ...], upper: bool) -> None:
         pts = np.asarray(vertices, dtype=np.float64)
         t, v = (pts[:, 0], pts[:, 1]) if upper else (pts[:, 1], pts[:, 0])
         if t[0] != 0.0 or np.any(np.diff(t) <= 0.0) or np.any(np.diff(v) < 0.0):
             raise ValueError(f"boundary vertices are not a monotone polyline: {vertices}")
-        self.t = t
-        self.v = v
+        self.t_last = float(t[-1])
+        self.v_last = float(v[-1])
         self.slope_end = float((v[-1] - v[-2]) / (t[-1] - t[-2]))
+        far_v = self.v_last + self.slope_end * (self._FAR - self.t_last)
+        self.t = np.append(t, self._FAR)
+        self.v = np.append(v, far_v)
 
     def __call__(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         out = np.interp(x, self.t, self.v)
-        beyond = x > self.t[-1]
-        if beyond.any():
-            out[beyond] = self.v[-1] + self.slope_end * (x[beyond] - self.t[-1])
+        if x.shape[0] and x.max() > self._FAR:  # absurd glucose, but stay exact
+            beyond = x > self._FAR
+            out[beyond] = self.v_last + self.slope_end * (x[beyond] - self.t_last)
         return out
 
 
@@ -149,18 +156,39 @@ def _clarke_codes(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> NDArra
     return codes
 
 
+def _add_crossings(
+    lines: tuple[_Polyline, ...],
+    coord: NDArray[np.float64],
+    other: NDArray[np.float64],
+    codes: NDArray[np.int8],
+) -> None:
+    """Add to ``codes`` the number of nested ``lines`` with ``other > line(coord)``.
+
+    The lines are nested (each lies beyond the previous one), so a pair beyond line k
+    is beyond lines 0..k-1 too; only the pairs beyond line k are tested against line
+    k+1, which keeps the work close to one pass for mostly accurate data.
+    """
+    idx: NDArray[np.intp] | None = None
+    for line in lines:
+        beyond = other > line(coord)
+        idx = np.flatnonzero(beyond) if idx is None else idx[beyond]
+        if idx.shape[0] == 0:
+            return
+        codes[idx] += 1
+        coord = coord[beyond]
+        other = other[beyond]
+
+
 def _parkes_codes(
     ref: NDArray[np.float64], pred: NDArray[np.float64], diabetes_type: int
 ) -> NDArray[np.int8]:
     uppers, lowers = _PARKES_COMPILED[diabetes_type]
-    # The lines are nested, so the zone index is the number of lines the pair lies
-    # strictly beyond: above the upper lines or right of the lower lines (a pair cannot
-    # be both, the upper A/B line lies above the diagonal and the lower one below it).
+    # The zone index is the number of lines the pair lies strictly beyond: above the
+    # upper lines (pred > f(ref)) or right of the lower lines (ref > g(pred)). A pair
+    # cannot be both: the upper A/B line lies above the diagonal, the lower one below.
     codes = np.zeros(ref.shape[0], dtype=np.int8)
-    for line in uppers:
-        codes += pred > line(ref)
-    for line in lowers:
-        codes += ref > line(pred)
+    _add_crossings(uppers, ref, pred, codes)
+    _add_crossings(lowers, pred, ref, codes)
     return codes
 
 

@@ -44,13 +44,14 @@ ISO15197_2013_REQUIRED_WITHIN_PCT: Final[float] = 95.0
 ISO15197_2013_REQUIRED_ZONE_AB_PCT: Final[float] = 99.0
 
 
-def _iso_within_count(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> int:
+def _iso_within_count(absdiff: NDArray[np.float64], ref: NDArray[np.float64]) -> int:
     # Below 100 mg/dL: |d| <= 15 mg/dL; at and above: |d| <= 15 % of the reference.
     # 15 % of the reference is < 15 mg/dL exactly when the reference is < 100 mg/dL, so
     # the limit is max(15 mg/dL, 15 % ref) and "within" is the OR of the two tests
     # (written 100 |d| <= 15 ref to compare integer inputs exactly).
-    d = np.abs(pred - ref)
-    mask = (d <= ISO15197_2013_LIMIT_MGDL) | (100.0 * d <= ISO15197_2013_LIMIT_PCT * ref)
+    mask = (absdiff <= ISO15197_2013_LIMIT_MGDL) | (
+        100.0 * absdiff <= ISO15197_2013_LIMIT_PCT * ref
+    )
     return int(np.count_nonzero(mask))
 
 
@@ -108,7 +109,7 @@ def iso15197_2013(y_true: ArrayLike, y_pred: ArrayLike, *, units: str = "mg/dL")
     0.5
     """
     ref, pred = _prepare(y_true, y_pred, units, allow_negative_pred=True)
-    return _iso_within_count(ref, pred) / ref.shape[0]
+    return _iso_within_count(np.abs(pred - ref), ref) / ref.shape[0]
 
 
 def iso15197_2013_zone_ab(y_true: ArrayLike, y_pred: ArrayLike, *, units: str = "mg/dL") -> float:
@@ -200,6 +201,7 @@ def iso15197_2013_passes(y_true: ArrayLike, y_pred: ArrayLike, *, units: str = "
     """
     ref, pred = _prepare(y_true, y_pred, units, allow_negative_pred=False)
     n = ref.shape[0]
-    within_ok = 100 * _iso_within_count(ref, pred) >= ISO15197_2013_REQUIRED_WITHIN_PCT * n
+    n_within = _iso_within_count(np.abs(pred - ref), ref)
+    within_ok = 100 * n_within >= ISO15197_2013_REQUIRED_WITHIN_PCT * n
     zone_ok = 100 * _zone_ab_count(ref, pred) >= ISO15197_2013_REQUIRED_ZONE_AB_PCT * n
     return bool(within_ok and zone_ok)

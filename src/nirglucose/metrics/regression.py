@@ -41,36 +41,34 @@ class BlandAltmanResult(NamedTuple):
 # --- kernels on validated float arrays (shared with :mod:`summary`) -----------------
 
 
-def _rmse(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> float:
-    diff = pred - ref
+def _rmse(diff: NDArray[np.float64]) -> float:
     return float(np.sqrt(np.dot(diff, diff) / diff.shape[0]))
 
 
-def _mard(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> float:
-    return float(100.0 * np.mean(np.abs(pred - ref) / ref))
+def _mard(absdiff: NDArray[np.float64], ref: NDArray[np.float64]) -> float:
+    return float(100.0 * np.mean(absdiff / ref))
 
 
-def _mean_bias(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> float:
-    return float(np.mean(pred - ref))
+def _mean_bias(diff: NDArray[np.float64]) -> float:
+    return float(np.mean(diff))
 
 
 def _within_mask(
-    ref: NDArray[np.float64], pred: NDArray[np.float64], pct: float
+    absdiff: NDArray[np.float64], ref: NDArray[np.float64], pct: float
 ) -> NDArray[np.bool_]:
     # |pred - ref| <= pct/100 * ref, written as 100 |d| <= pct * ref so that integer
     # glucose values on the boundary compare exactly (0.15 * 200 is not 30 in binary).
-    return 100.0 * np.abs(pred - ref) <= pct * ref
+    return 100.0 * absdiff <= pct * ref
 
 
-def _bland_altman(
-    ref: NDArray[np.float64], pred: NDArray[np.float64], relative: bool
-) -> BlandAltmanResult:
-    diff = pred - ref
-    if relative:
-        diff = 100.0 * diff / (0.5 * (pred + ref))
+def _bland_altman_from_diff(diff: NDArray[np.float64]) -> BlandAltmanResult:
     bias = float(np.mean(diff))
     sd = float(np.std(diff, ddof=1)) if diff.shape[0] > 1 else float("nan")
     return BlandAltmanResult(bias, bias - _LOA_Z * sd, bias + _LOA_Z * sd)
+
+
+def _relative_diff(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> NDArray[np.float64]:
+    return 100.0 * (pred - ref) / (0.5 * (pred + ref))
 
 
 # --- public API ------------------------------------------------------------------------
@@ -111,7 +109,7 @@ def rmse(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     10.0
     """
     ref, pred = _validate_pairs(y_true, y_pred)
-    return _rmse(ref, pred)
+    return _rmse(pred - ref)
 
 
 def mard(y_true: ArrayLike, y_pred: ArrayLike) -> float:
@@ -150,7 +148,7 @@ def mard(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     10.0
     """
     ref, pred = _validate_pairs(y_true, y_pred)
-    return _mard(ref, pred)
+    return _mard(np.abs(pred - ref), ref)
 
 
 def mean_bias(y_true: ArrayLike, y_pred: ArrayLike) -> float:
@@ -189,7 +187,7 @@ def mean_bias(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     3.0
     """
     ref, pred = _validate_pairs(y_true, y_pred)
-    return _mean_bias(ref, pred)
+    return _mean_bias(pred - ref)
 
 
 def within_percent(y_true: ArrayLike, y_pred: ArrayLike, pct: float) -> float:
@@ -233,7 +231,7 @@ def within_percent(y_true: ArrayLike, y_pred: ArrayLike, pct: float) -> float:
     if not np.isfinite(pct_f) or pct_f < 0.0:
         raise DataError(f"pct must be a finite, non-negative percentage, got {pct!r}")
     ref, pred = _validate_pairs(y_true, y_pred)
-    return float(np.count_nonzero(_within_mask(ref, pred, pct_f)) / ref.shape[0])
+    return float(np.count_nonzero(_within_mask(np.abs(pred - ref), ref, pct_f)) / ref.shape[0])
 
 
 def bland_altman(
@@ -285,4 +283,5 @@ def bland_altman(
     (0.0, -5.5437, 5.5437)
     """
     ref, pred = _validate_pairs(y_true, y_pred, allow_negative_pred=not relative, min_size=2)
-    return _bland_altman(ref, pred, relative)
+    diff = _relative_diff(ref, pred) if relative else pred - ref
+    return _bland_altman_from_diff(diff)

@@ -14,7 +14,7 @@ from nirglucose.metrics.error_grids import (
 )
 from nirglucose.metrics.iso15197 import _iso_within_count
 from nirglucose.metrics.regression import (
-    _bland_altman,
+    _bland_altman_from_diff,
     _mard,
     _mean_bias,
     _rmse,
@@ -124,6 +124,8 @@ def summary(
     ref, pred = _validate_pairs(y_true, y_pred, allow_negative_pred=False)
     ref, pred = _to_mgdl(ref, pred, units)
     n = ref.shape[0]
+    diff = pred - ref
+    absdiff = np.abs(diff)
 
     clarke_codes = _clarke_codes(ref, pred)
     clarke = _percentages_from_codes(clarke_codes)
@@ -131,13 +133,13 @@ def summary(
     parkes = parkes_type1 if dtype == 1 else _parkes_codes(ref, pred, dtype)
     parkes_a = 100.0 * np.count_nonzero(parkes == 0) / n
     zone_ab_type1 = 100.0 * np.count_nonzero(parkes_type1 <= 1) / n
-    ba = _bland_altman(ref, pred, relative=False)
+    ba = _bland_altman_from_diff(diff)
 
     values = (
         n,
-        _rmse(ref, pred),
-        _mard(ref, pred),
-        _mean_bias(ref, pred),
+        _rmse(diff),
+        _mard(absdiff, ref),
+        _mean_bias(diff),
         clarke["A"],
         100.0 * np.count_nonzero(clarke_codes <= 1) / n,
         clarke["B"],
@@ -146,9 +148,9 @@ def summary(
         clarke["E"],
         parkes_a,
         100.0 * np.count_nonzero(parkes <= 1) / n,
-        100.0 * np.count_nonzero(_within_mask(ref, pred, 15.0)) / n,
-        100.0 * np.count_nonzero(_within_mask(ref, pred, 20.0)) / n,
-        100.0 * _iso_within_count(ref, pred) / n,
+        100.0 * np.count_nonzero(_within_mask(absdiff, ref, 15.0)) / n,
+        100.0 * np.count_nonzero(_within_mask(absdiff, ref, 20.0)) / n,
+        100.0 * _iso_within_count(absdiff, ref) / n,
         zone_ab_type1,
         ba.lower_loa,
         ba.upper_loa,
