@@ -136,38 +136,40 @@ def tissue_optics(
     -------
     dict
         ``mua_dermis``, ``musp_dermis``, ``mua_subcutis``, ``musp_subcutis``, each
-        (n, n_led, n_pts) [1/cm], and ``melanosome`` (n, n_led, n_pts) [1/cm].
+        (n, n_led, n_pts) [1/cm], ``melanosome`` (n, n_led, n_pts) and the flat
+        ``baseline`` (1, n_led, n_pts) [1/cm].
     """
     shift = np.asarray(shift_nm, dtype=float)
     if shift.ndim == 1:
         shift = shift[:, None]
     shift = shift[..., None] if shift.ndim == 2 else shift
+    tab, der = spectra.spectra, spectra.derivatives
 
     def spec(name):
-        return spectra.spectra[name][None] + shift * spectra.derivatives[name][None]
+        # first-order Taylor in the LED's thermal shift (a few nm at most)
+        return tab[name][None] + shift * der[name][None]
 
     c = state.glucose_mm[:, None, None]
     b = state.blood_fraction[:, None, None]
     s = state.saturation[:, None, None]
     w = state.water_fraction[:, None, None]
     f_sub = state.subcutis_fat_fraction[:, None, None]
-    blood = s * spec("blood_oxy") + (1.0 - s) * spec("blood_deoxy")
-    water = spec("water")
-    baseline = spec("baseline")
-    fluid = water * np.maximum(1.0 - water_displacement_per_mm * c, 0.0) + c * spec("glucose")
-    mua_dermis = b * blood + w * fluid + (1.0 - b - w) * baseline
+    oxy, deoxy = spec("blood_oxy"), spec("blood_deoxy")
+    blood = deoxy + s * (oxy - deoxy)
+    fluid = spec("water") * np.maximum(1.0 - water_displacement_per_mm * c, 0.0)
+    fluid += c * spec("glucose")
+    baseline = tab["baseline"][None]  # flat in the NIR: no shift needed
+    mua_dermis = b * (blood - baseline) + w * (fluid - baseline) + baseline
     b_sub = SUBCUTIS["blood_ratio_to_dermis"] * b
     w_sub = SUBCUTIS["water_fraction"]
-    mua_sub = (
-        b_sub * blood + w_sub * fluid + f_sub * spec("fat")
-        + np.maximum(1.0 - b_sub - w_sub - f_sub, 0.0) * baseline
-    )
+    rest = np.maximum(1.0 - b_sub - w_sub - f_sub, 0.0)
+    mua_sub = b_sub * blood + w_sub * fluid + f_sub * spec("fat") + rest * baseline
     glc_scatter = scattering.glucose_scattering_factor(c, scattering_rel_per_mm)
     return {
         "mua_dermis": mua_dermis,
         "musp_dermis": spec("musp_skin") * glc_scatter,
         "mua_subcutis": mua_sub,
         "musp_subcutis": spec("musp_fat") * glc_scatter,
-        "melanosome": spec("melanosome") + 0.0 * c,
-        "baseline": baseline + 0.0 * c,
+        "melanosome": spec("melanosome"),
+        "baseline": baseline,
     }

@@ -10,6 +10,7 @@ two readings (the source's flicker) times (1 - rejection), plus its shot noise.
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ..config import EnvironmentConfig, ScenarioConfig
 from ._random import RandomStreams, truncated_normal
@@ -105,7 +106,7 @@ def sample_environment(cfg: EnvironmentConfig, n: int, streams: RandomStreams) -
         "humidity_pct": humidity_pct,
         "pressure_mbar": pressure_mbar,
         "ambient_lux": ambient_lux,
-        "light_source": np.asarray(names, dtype=object)[source_idx],
+        "light_source": pd.Categorical.from_codes(source_idx, categories=names),
     }
 
 

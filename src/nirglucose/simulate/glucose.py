@@ -17,6 +17,7 @@ References
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ..config import ScenarioConfig
 from ._random import RandomStreams
@@ -60,7 +61,7 @@ def sample_glucose(
     names = list(g.status_probs)
     probs = np.array([g.status_probs[k] for k in names])
     status_idx = rng.choice(len(names), p=probs, size=n_subjects)
-    status = np.asarray(names, dtype=object)[status_idx]
+    status_codes = status_idx
     fasting_mean = np.array([g.fasting_mgdl[k][0] for k in names])[status_idx]
     fasting_sd = np.array([g.fasting_mgdl[k][1] for k in names])[status_idx]
     baseline = fasting_mean + fasting_sd * rng.normal(size=n_subjects)
@@ -84,7 +85,7 @@ def sample_glucose(
     glucose = reflect_into_range(raw, *g.range_mgdl)
     return {
         "glucose_mgdl": glucose,
-        "diabetes_status": status[rep],
+        "diabetes_status": pd.Categorical.from_codes(status_codes[rep], categories=names),
         "true_hours_since_meal": hours_since_meal,
         "true_stress": stressed.astype(np.int64),
         "true_hour_of_day": hour,

@@ -75,6 +75,41 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
     return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names)
 
 
+#: Rows per optics slice: the (rows, n_led, n_points) temporaries then fit in the
+#: CPU cache, which makes the memory-bound array arithmetic several times faster.
+_OPTICS_SLICE_ROWS = 1024
+
+
+def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm) -> np.ndarray:
+    """Detected fraction per LED, integrated over each emission band, (n, n_led)."""
+    n = len(melanin)
+    n_led = len(cfg.leds.wavelengths_nm)
+    shift = np.broadcast_to(np.asarray(shift_nm, dtype=float), (n, n_led))
+    out = np.empty((n, n_led))
+    for lo in range(0, n, _OPTICS_SLICE_ROWS):
+        sl = slice(lo, min(lo + _OPTICS_SLICE_ROWS, n))
+        part = tissue.TissueState(*(np.asarray(getattr(state, f))[sl] for f in (
+            "blood_fraction", "saturation", "water_fraction", "subcutis_fat_fraction",
+            "glucose_mm")))
+        optics = tissue.tissue_optics(
+            tables.spectra, part,
+            water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm, shift_nm=shift[sl],
+        )
+        nodes = forward.detected_fraction(
+            cfg.optics.model, optics,
+            melanin_fraction=melanin[sl],
+            skin_thickness_cm=thickness_mm[sl] / 10.0,
+            epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
+            separation_cm=cfg.optics.source_detector_mm / 10.0,
+            detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
+            n_tissue=cfg.optics.tissue_refractive_index,
+            geometry_factor=tables.geometry,
+        )
+        out[sl] = np.einsum("nlp,lp->nl", nodes, tables.spectra.weights)
+    return out
+
+
 def nominal_tissue(n: int) -> tissue.TissueState:
     """The nominal tissue composition repeated ``n`` times."""
     return tissue.TissueState(
@@ -152,32 +187,18 @@ def simulate_block(
     )
 
     # Optics: detected fraction per band node, weighted by the LED emission.
-    gain = cfg.glucose.signal_gain
     state = tissue.TissueState(
         blood, phys["true_saturation"], phys["true_water_fraction"],
         phys["true_subcutis_fat_fraction"],
-        gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
+        cfg.glucose.signal_gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
     )
-    optics = tissue.tissue_optics(
-        tables.spectra, state,
-        water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
-        scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm, shift_nm=shift_nm,
-    )
-    fraction_nodes = forward.detected_fraction(
-        cfg.optics.model, optics,
-        melanin_fraction=phys["true_melanin_fraction"],
-        skin_thickness_cm=thickness_mm / 10.0,
-        epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
-        separation_cm=cfg.optics.source_detector_mm / 10.0,
-        detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
-        n_tissue=cfg.optics.tissue_refractive_index,
-        geometry_factor=tables.geometry,
-    )
-    fraction = (fraction_nodes * tables.spectra.weights[None]).sum(axis=-1) * coupling[:, None]
+    fraction = _band_detected_fraction(
+        cfg, tables, state, phys["true_melanin_fraction"], thickness_mm, shift_nm
+    ) * coupling[:, None]
 
     # Ambient light through the baffle.
-    uniq, inverse = np.unique(env["true_light_source"].astype(str), return_inverse=True)
-    idx = np.array([tables.light_names.index(u) for u in uniq], dtype=int)[inverse]
+    light = env["true_light_source"]
+    idx = np.array([tables.light_names.index(c) for c in light.categories], dtype=int)[light.codes]
     w_per_lux, resp_amb, flick = (t[idx] for t in tables.ambient)
     ambient_a = environment.ambient_photocurrent_a(
         env["true_ambient_lux"], w_per_lux, resp_amb, cfg.optics.detector_area_mm2 * 1e-6,
@@ -198,7 +219,7 @@ def simulate_block(
         "subject_id": (first_subject + rep).astype(np.int64),
         "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
         "glucose_mgdl": glucose["glucose_mgdl"],
-        "diabetes_status": glucose["diabetes_status"].astype(str),
+        "diabetes_status": glucose["diabetes_status"],
     }
     for i, w in enumerate(wl):
         cols[f"adc_{w}"] = hwout["adc"][:, i]
@@ -224,7 +245,6 @@ def simulate_block(
         truth_out[f"true_led_shift_nm_{w}"] = np.broadcast_to(shift_nm, (n, n_led))[:, i]
         truth_out[f"true_signal_v_{w}"] = hwout["signal_v"][:, i]
         truth_out[f"true_voltage_v_{w}"] = hwout["voltage_v"][:, i]
-    truth_out["true_light_source"] = truth_out["true_light_source"].astype(str)
     cols.update(dict(sorted(truth_out.items())))
     return cols, streams.n_variates
 
@@ -290,20 +310,8 @@ def detected_fraction_given_glucose(
         cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
     )
     shift = frame[[f"true_led_shift_nm_{w}" for w in wl]].to_numpy(float)
-    optics = tissue.tissue_optics(
-        tables.spectra, state,
-        water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
-        scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm, shift_nm=shift,
+    fraction = _band_detected_fraction(
+        cfg, tables, state, frame["true_melanin_fraction"].to_numpy(float),
+        frame["true_skin_thickness_probe_mm"].to_numpy(float), shift,
     )
-    nodes = forward.detected_fraction(
-        cfg.optics.model, optics,
-        melanin_fraction=frame["true_melanin_fraction"].to_numpy(float),
-        skin_thickness_cm=frame["true_skin_thickness_probe_mm"].to_numpy(float) / 10.0,
-        epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
-        separation_cm=cfg.optics.source_detector_mm / 10.0,
-        detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
-        n_tissue=cfg.optics.tissue_refractive_index,
-        geometry_factor=tables.geometry,
-    )
-    coupling = frame["true_coupling"].to_numpy(float)[:, None]
-    return (nodes * tables.spectra.weights[None]).sum(axis=-1) * coupling
+    return fraction * frame["true_coupling"].to_numpy(float)[:, None]
