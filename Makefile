@@ -20,7 +20,8 @@ $(STAMP): $(BIN)/python pyproject.toml requirements.lock
 install: $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/nirglucose run --preset $(PRESET) --seed $(SEED) --out $(OUT)
+	mkdir -p $(OUT)
+	$(BIN)/nirglucose simulate --preset $(PRESET) --seed $(SEED) --out $(OUT)/dataset.parquet
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile

@@ -479,9 +479,9 @@ class ScenarioConfig(_Model):
 
 #: Glucose-signal gain of the study's regime: with literature noise and physiology, the
 #: raw glucose-NIR correlation reaches the study's 0.21 only when glucose's optical
-#: effects are 13.5 times the literature magnitudes (calibrated on 20,000 snapshots;
+#: effects are 13 times the literature magnitudes (calibrated on 20,000 snapshots;
 #: README, "Presets").
-PAPER_SIGNAL_GAIN = 13.5
+PAPER_SIGNAL_GAIN = 13.0
 
 #: Preset name -> overrides on the defaults. ``paper`` is the study's low-SNR regime.
 PRESETS: dict[str, dict[str, Any]] = {
