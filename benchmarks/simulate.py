@@ -60,8 +60,10 @@ def _peak_memory_mb() -> float:
 
 def main() -> dict:
     result = {"n_snapshots": N_SNAPSHOTS}
-    for label, preset, over in (("paper", "paper", None),
-                                ("paper_diffusion", "paper", {"optics.model": "diffusion"})):
+    for label, preset, over in (
+        ("paper", "paper", None),
+        ("paper_diffusion", "paper", {"optics.model": "diffusion"}),
+    ):
         _simulate(preset, over)  # warm caches (tables, imports)
         elapsed, n_rows, sizes = _simulate(preset, over)
         floor = _rng_floor(sizes)

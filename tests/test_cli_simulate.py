@@ -17,8 +17,23 @@ def run(args, capsys):
 def test_simulate_writes_parquet(tmp_path, capsys):
     out = tmp_path / "d.parquet"
     code, stdout, _ = run(
-        ["simulate", "--preset", "paper", "--subjects", "10", "--per-subject", "3", "--seed", "0",
-         "--out", str(out), "--set", "hardware.adc_bits=14"], capsys)
+        [
+            "simulate",
+            "--preset",
+            "paper",
+            "--subjects",
+            "10",
+            "--per-subject",
+            "3",
+            "--seed",
+            "0",
+            "--out",
+            str(out),
+            "--set",
+            "hardware.adc_bits=14",
+        ],
+        capsys,
+    )
     assert code == 0
     ds = ng.load_dataset(out)
     assert len(ds) == 30 and ds.config.hardware.adc_bits == 14

@@ -163,7 +163,11 @@ class PhysiologyConfig(_Model):
     )
 
     _ranges = field_validator(
-        "age_yr", "bmi_kgm2", "skin_thickness_mm", "systolic_bp_mmhg", "heart_rate_bpm",
+        "age_yr",
+        "bmi_kgm2",
+        "skin_thickness_mm",
+        "systolic_bp_mmhg",
+        "heart_rate_bpm",
         "resp_rate_bpm",
     )(lambda v, info: _check_range(v, info.field_name))
 
@@ -190,8 +194,12 @@ class GlucoseConfig(_Model):
         description="Cohort share of each diabetes status (an assumption; a clinic-like mix). [-]",
     )
     fasting_mgdl: dict[str, tuple[float, float]] = Field(
-        {"normal": (88.0, 8.0), "prediabetes": (112.0, 8.0), "type1": (150.0, 40.0),
-         "type2": (145.0, 30.0)},
+        {
+            "normal": (88.0, 8.0),
+            "prediabetes": (112.0, 8.0),
+            "type1": (150.0, 40.0),
+            "type2": (145.0, 30.0),
+        },
         description="(mean, SD) of fasting glucose per status; ADA thresholds: normal < 100, "
         "prediabetes 100-125, diabetes >= 126 mg/dL (ADA Standards of Care 2024, 2.1). [mg/dL]",
     )
@@ -244,18 +252,23 @@ class GlucoseConfig(_Model):
         names = set(self.status_probs)
         valid = {"normal", "prediabetes", "type1", "type2"}
         if not names <= valid:
-            raise ValueError(f"unknown diabetes status {sorted(names - valid)}; valid: {sorted(valid)}")
+            raise ValueError(
+                f"unknown diabetes status {sorted(names - valid)}; valid: {sorted(valid)}"
+            )
         for table in ("fasting_mgdl", "meal_peak_mgdl", "dawn_mgdl"):
             missing = names - set(getattr(self, table))
             if missing:
                 raise ValueError(f"glucose.{table} lacks statuses {sorted(missing)}")
-        if any(p < 0 for p in self.status_probs.values()) or abs(
-            sum(self.status_probs.values()) - 1
-        ) > 1e-6:
+        if (
+            any(p < 0 for p in self.status_probs.values())
+            or abs(sum(self.status_probs.values()) - 1) > 1e-6
+        ):
             raise ValueError("glucose.status_probs must be non-negative and sum to 1")
         lo, hi = _check_range(self.range_mgdl, "glucose.range_mgdl")
         if lo < 20 or hi > 600:
-            raise ValueError(f"glucose.range_mgdl must lie within 20-600 mg/dL, got {self.range_mgdl}")
+            raise ValueError(
+                f"glucose.range_mgdl must lie within 20-600 mg/dL, got {self.range_mgdl}"
+            )
         return self
 
 
@@ -265,14 +278,17 @@ class EnvironmentConfig(_Model):
     temperature_c: tuple[float, float] = Field((18.0, 30.0), description="Ambient range. [degC]")
     humidity_pct: tuple[float, float] = Field((30.0, 90.0), description="RH range. [%]")
     humidity_coupling_loss: float = Field(
-        0.03, ge=0, le=0.5,
+        0.03,
+        ge=0,
+        le=0.5,
         description="Coupling-efficiency loss at the top of the RH range (issue: up to 3 %). [-]",
     )
     pressure_mbar_mean: float = Field(1013.25, description="Mean barometric pressure. [mbar]")
     pressure_mbar_sd: float = Field(12.0, ge=0, description="SD of pressure. [mbar]")
     pressure_mbar: tuple[float, float] = Field((950.0, 1050.0), description="Range. [mbar]")
     perfusion_per_mbar: float = Field(
-        1.0e-3, description="Relative blood-volume change per mbar above 1013 (an assumption). [1/mbar]"
+        1.0e-3,
+        description="Relative blood-volume change per mbar above 1013 (an assumption). [1/mbar]",
     )
     ambient_lux: tuple[float, float] = Field(
         (10.0, 1000.0), description="Illuminance range, drawn log-uniformly. [lx]"
@@ -338,8 +354,10 @@ class HardwareConfig(_Model):
         0.001, ge=0, description="Relative flicker SD, N(0, 0.1 %) (DESIGN.md). [-]"
     )
     led_wavelength_shift_nm_per_c: float = Field(
-        0.25, ge=0, description="Peak shift with junction temperature, 0.2-0.3 nm/K "
-        "(Vishay TSAL6200 / VSLY5850 datasheets). [nm/degC]"
+        0.25,
+        ge=0,
+        description="Peak shift with junction temperature, 0.2-0.3 nm/K "
+        "(Vishay TSAL6200 / VSLY5850 datasheets). [nm/degC]",
     )
     responsivity_a_per_w: tuple[float, ...] = Field(
         (0.58, 0.62, 0.40, 0.15),
@@ -353,24 +371,31 @@ class HardwareConfig(_Model):
         10.0, gt=0, description="Equivalent noise bandwidth after in-device averaging. [Hz]"
     )
     tia_gain_ohm: float = Field(
-        1.0e5, gt=0, description="Transimpedance (feedback resistor); also the Johnson-noise "
-        "resistor. [Ohm]"
+        1.0e5,
+        gt=0,
+        description="Transimpedance (feedback resistor); also the Johnson-noise resistor. [Ohm]",
     )
     adc_bits: int = Field(12, ge=8, le=24, description="ADC resolution (the study's 12). [bit]")
     adc_vref_v: float = Field(3.3, gt=0, description="ADC full-scale voltage. [V]")
     adc_inl_lsb: float = Field(
-        2.0, ge=0, description="Peak integral non-linearity (ESP32 SAR ADC class: several LSB). [LSB]"
+        2.0,
+        ge=0,
+        description="Peak integral non-linearity (ESP32 SAR ADC class: several LSB). [LSB]",
     )
     adc_offset_drift_lsb_per_c: float = Field(
         0.1, ge=0, description="Offset drift with board temperature. [LSB/degC]"
     )
     reference_transmission: float = Field(
-        0.02, gt=0, le=1,
+        0.02,
+        gt=0,
+        le=1,
         description="Transmission of the start-up reference path (a neutral attenuator), "
         "setting reference codes at 65-90 % of full scale. [-]",
     )
     ambient_rejection: float = Field(
-        0.99, ge=0, le=1,
+        0.99,
+        ge=0,
+        le=1,
         description="Fraction of ambient photocurrent removed by the LED-off subtraction. [-]",
     )
     calibration_temperature_sd_c: float = Field(
@@ -433,7 +458,10 @@ class ContactConfig(_Model):
         0.3, ge=0, le=1, description="Blood-volume loss at full contact pressure (assumption). [-]"
     )
     compression: float = Field(
-        0.1, ge=0, le=0.5, description="Skin-thickness loss at full contact pressure (assumption). [-]"
+        0.1,
+        ge=0,
+        le=0.5,
+        description="Skin-thickness loss at full contact pressure (assumption). [-]",
     )
 
 
@@ -603,4 +631,6 @@ def resolve_config(
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = ".".join(str(p) for p in err["loc"]) or "config"
-        raise ConfigError(f"invalid value for {loc}: {err['msg']} (got {err.get('input')!r})") from None
+        raise ConfigError(
+            f"invalid value for {loc}: {err['msg']} (got {err.get('input')!r})"
+        ) from None

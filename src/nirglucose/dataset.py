@@ -183,13 +183,13 @@ def validate_measurements(
     for c in adc_columns(wavelengths_nm) + ref_columns(wavelengths_nm):
         bad = (out[c] < 1) | (out[c] > full)
         if bad.any():
-            raise DataError(
-                f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}"
-            )
+            raise DataError(f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}")
     if require_target:
         bad = out["glucose_mgdl"] <= 0
         if bad.any():
-            raise DataError(f"column 'glucose_mgdl' must be positive [mg/dL]; see {_first_rows(bad)}")
+            raise DataError(
+                f"column 'glucose_mgdl' must be positive [mg/dL]; see {_first_rows(bad)}"
+            )
     return pd.DataFrame(out, index=frame.index)
 
 
@@ -232,7 +232,9 @@ class Dataset:
     def __repr__(self) -> str:
         preset = self.config.preset if self.config is not None else "user data"
         n_sub = self.frame["subject_id"].nunique() if "subject_id" in self.frame else "?"
-        return f"Dataset({len(self)} snapshots, {n_sub} subjects, preset={preset!r}, seed={self.seed})"
+        return (
+            f"Dataset({len(self)} snapshots, {n_sub} subjects, preset={preset!r}, seed={self.seed})"
+        )
 
     @property
     def wavelengths_nm(self) -> tuple[float, ...]:
@@ -260,7 +262,9 @@ class Dataset:
         """
         path = Path(path)
         if path.suffix not in SUFFIXES:
-            raise DataError(f"unknown file type {path.suffix!r} for {str(path)!r}; use one of {SUFFIXES}")
+            raise DataError(
+                f"unknown file type {path.suffix!r} for {str(path)!r}; use one of {SUFFIXES}"
+            )
         if path.suffix == ".parquet":
             table = pa.Table.from_pandas(self.frame, preserve_index=False)
             meta = dict(table.schema.metadata or {})
@@ -325,6 +329,10 @@ def load_dataset(path: str | os.PathLike) -> Dataset:
     config = None
     if meta.get("config"):
         cfg = meta["config"]
-        config = resolve_config(ScenarioConfig.model_validate(cfg)) if isinstance(cfg, dict) else None
+        config = (
+            resolve_config(ScenarioConfig.model_validate(cfg)) if isinstance(cfg, dict) else None
+        )
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
-    return Dataset(frame, config=config, seed=meta.get("seed"), metadata={**extra, "source": str(path)})
+    return Dataset(
+        frame, config=config, seed=meta.get("seed"), metadata={**extra, "source": str(path)}
+    )

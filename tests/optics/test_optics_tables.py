@@ -12,12 +12,18 @@ from nirglucose.optics import absorption, beer_lambert, scattering, skin, tissue
 def test_values_at_leds_match_sources_md():
     # SOURCES.md "Key values at the LED wavelengths"
     wl = np.array([850.0, 940.0, 1050.0, 1150.0])
-    np.testing.assert_allclose(absorption.water_mua_per_cm(wl), [0.042, 0.18, 0.166, 0.98], atol=0.01)
+    np.testing.assert_allclose(
+        absorption.water_mua_per_cm(wl), [0.042, 0.18, 0.166, 0.98], atol=0.01
+    )
     np.testing.assert_allclose(absorption.blood_mua_per_cm(wl, 1.0), [4.9, 6.5, 4.9, 3.0], atol=0.1)
     np.testing.assert_allclose(absorption.blood_mua_per_cm(wl, 0.0), [4.2, 4.3, 2.2, 1.9], atol=0.1)
     np.testing.assert_allclose(absorption.melanosome_mua_per_cm(wl), [116, 83, 57, 42], atol=1)
-    np.testing.assert_allclose(scattering.power_law_musp_per_cm(wl), [21.6, 18.8, 16.0, 14.1], atol=0.1)
-    np.testing.assert_allclose(absorption.lipid_mua_per_cm(wl[:3]), [0.0064, 0.088, 0.065], atol=0.002)
+    np.testing.assert_allclose(
+        scattering.power_law_musp_per_cm(wl), [21.6, 18.8, 16.0, 14.1], atol=0.1
+    )
+    np.testing.assert_allclose(
+        absorption.lipid_mua_per_cm(wl[:3]), [0.0064, 0.088, 0.065], atol=0.002
+    )
     assert absorption.lipid_mua_per_cm(1150.0) == pytest.approx(0.22, abs=0.03)
 
 
@@ -51,7 +57,9 @@ def test_glucose_absorption_peaks_at_1150():
 
 def test_glucose_scattering_factor_first_order():
     # exp(kC) = 1 + kC + O((kC)^2): at C = 5 mM, k = -1.25e-3: 0.99377...
-    assert scattering.glucose_scattering_factor(5.0, -1.25e-3) == pytest.approx(1 - 6.25e-3, abs=2e-5)
+    assert scattering.glucose_scattering_factor(5.0, -1.25e-3) == pytest.approx(
+        1 - 6.25e-3, abs=2e-5
+    )
 
 
 def test_mbll_and_absorbance():

@@ -24,7 +24,9 @@ def _voltages(ds):
 
 def _pair(source, preset="paper", **extra):
     on = ng.simulate(preset, N_SUBJECTS, PER, 11, overrides=extra)
-    off = ng.simulate(preset, N_SUBJECTS, PER, 11, overrides={**extra, f"noise.{source}.enabled": False})
+    off = ng.simulate(
+        preset, N_SUBJECTS, PER, 11, overrides={**extra, f"noise.{source}.enabled": False}
+    )
     return on, off
 
 

@@ -92,9 +92,7 @@ def test_more_melanin_lowers_detected_power_at_850(quiet_paper, extra):
 
 
 def test_thicker_skin_lowers_signal_at_1150_with_diffusion_model():
-    ds = ng.simulate(
-        "paper", 30, 1, 0, overrides={**QUIET, "optics.model": "diffusion"}
-    )
+    ds = ng.simulate("paper", 30, 1, 0, overrides={**QUIET, "optics.model": "diffusion"})
     frame = ds.frame
     thick = frame.copy()
     thick["true_skin_thickness_probe_mm"] = frame["true_skin_thickness_probe_mm"] * 1.5

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import csv
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 
 import numpy as np
@@ -26,7 +26,7 @@ OPTICS_TABLES = {
 }
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_spectrum(name: str) -> tuple[np.ndarray, np.ndarray]:
     """Return ``(wavelength_nm, value)`` of a packaged optical table.
 

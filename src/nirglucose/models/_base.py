@@ -63,7 +63,9 @@ def as_measurements(X, y=None, *, require_target: bool = False):
             )
         if not np.all(np.isfinite(Xa)):
             bad = np.flatnonzero(~np.isfinite(Xa).all(axis=1))
-            raise DataError(f"input has NaN or infinite values in {len(bad)} rows, first row {bad[0]}")
+            raise DataError(
+                f"input has NaN or infinite values in {len(bad)} rows, first row {bad[0]}"
+            )
     if y is not None:
         y = np.asarray(y, dtype=float).ravel()
         if len(y) != len(Xa):

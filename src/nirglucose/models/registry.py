@@ -14,8 +14,14 @@ from typing import Any
 
 from ..exceptions import ConfigError, DataError
 
-__all__ = ["register", "get_model_class", "make_model", "available_models", "load_model",
-           "MODEL_MODULES"]
+__all__ = [
+    "register",
+    "get_model_class",
+    "make_model",
+    "available_models",
+    "load_model",
+    "MODEL_MODULES",
+]
 
 #: Modules that define registered estimators (imported on first use).
 MODEL_MODULES = (

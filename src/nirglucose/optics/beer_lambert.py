@@ -20,7 +20,10 @@ LN10 = float(np.log(10.0))
 
 
 def mbll_transmittance(
-    mua_per_cm: ArrayLike, dpf: ArrayLike, separation_cm: ArrayLike, geometry_factor: ArrayLike = 1.0
+    mua_per_cm: ArrayLike,
+    dpf: ArrayLike,
+    separation_cm: ArrayLike,
+    geometry_factor: ArrayLike = 1.0,
 ) -> np.ndarray:
     """Detected fraction I/I0 = G exp(-mua DPF rho) (modified Beer-Lambert law).
 

@@ -21,7 +21,11 @@ import numpy as np
 from ..exceptions import ConfigError
 from . import skin
 from .beer_lambert import mbll_transmittance
-from .diffusion import differential_pathlength_factor, effective_attenuation_per_cm, farrell_reflectance
+from .diffusion import (
+    differential_pathlength_factor,
+    effective_attenuation_per_cm,
+    farrell_reflectance,
+)
 
 __all__ = ["FORWARD_MODELS", "detected_fraction", "geometry_factor", "mixed_optics"]
 
@@ -33,7 +37,9 @@ def mixed_optics(optics: dict, skin_thickness_cm: np.ndarray, separation_cm: flo
 
     Returns ``(mua, musp, dermis_share)``, each (n, n_led, n_pts).
     """
-    mu_eff = effective_attenuation_per_cm(optics["mua_dermis"], optics["musp_dermis"], validate=False)
+    mu_eff = effective_attenuation_per_cm(
+        optics["mua_dermis"], optics["musp_dermis"], validate=False
+    )
     depth = skin.mean_penetration_depth_cm(separation_cm, mu_eff)
     share = skin.dermis_path_fraction(np.asarray(skin_thickness_cm)[:, None, None], depth)
     mua = share * optics["mua_dermis"] + (1.0 - share) * optics["mua_subcutis"]
@@ -100,8 +106,11 @@ def detected_fraction(
 
 
 def geometry_factor(
-    mua_per_cm: np.ndarray, musp_per_cm: np.ndarray, separation_cm: float,
-    detector_area_cm2: float, n_tissue: float,
+    mua_per_cm: np.ndarray,
+    musp_per_cm: np.ndarray,
+    separation_cm: float,
+    detector_area_cm2: float,
+    n_tissue: float,
 ) -> np.ndarray:
     """G that makes the Beer-Lambert model equal the diffusion model at given optics.
 

@@ -32,8 +32,17 @@ __all__ = ["BandSpectra", "band_spectra", "TissueState", "tissue_optics", "SUBCU
 #: layer table); blood is taken as half the dermal fraction (an assumption).
 SUBCUTIS = {"water_fraction": 0.2, "blood_ratio_to_dermis": 0.5}
 
-_CHROMOPHORES = ("water", "blood_oxy", "blood_deoxy", "fat", "melanosome", "baseline",
-                 "glucose", "musp_skin", "musp_fat")
+_CHROMOPHORES = (
+    "water",
+    "blood_oxy",
+    "blood_deoxy",
+    "fat",
+    "melanosome",
+    "baseline",
+    "glucose",
+    "musp_skin",
+    "musp_fat",
+)
 
 
 @dataclass(frozen=True)
@@ -52,7 +61,10 @@ class BandSpectra:
 
 
 def band_spectra(
-    centre_nm, fwhm_nm, n_points: int = 5, water_source: str = "kou1993",
+    centre_nm,
+    fwhm_nm,
+    n_points: int = 5,
+    water_source: str = "kou1993",
     glucose_peak_per_cm_per_mm: float = 1.0e-4,
 ) -> BandSpectra:
     """Tabulate every chromophore over the LED bands.

@@ -228,13 +228,19 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
     ageing = LED_AGEING_PER_1000H * f_age
     n_sub = int(subject_index.max()) + 1 if n else 0
     flicker = hw.led_flicker_rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
-    flicker_cal = hw.led_flicker_rel * f_flicker * streams("led_flicker.cal").normal(
-        size=(n_sub, n_led)
+    flicker_cal = (
+        hw.led_flicker_rel * f_flicker * streams("led_flicker.cal").normal(size=(n_sub, n_led))
     )
 
     # Measurement: LED power, optics, photocurrent.
-    p_led = led_power_w(p0, temps["led_c"], temps["age_h"][:, None], flicker,
-                        thermal_coeff_per_c=thermal, ageing_per_1000h=ageing)
+    p_led = led_power_w(
+        p0,
+        temps["led_c"],
+        temps["age_h"][:, None],
+        flicker,
+        thermal_coeff_per_c=thermal,
+        ageing_per_1000h=ageing,
+    )
     detected_power_w = p_led * detected_fraction_led
     i_sig = resp * detected_power_w
     f_dark = cfg.noise_factor("dark_current")
@@ -245,18 +251,23 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
     f_amb = cfg.noise_factor("ambient_light")
     i_amb = f_amb * temps["ambient_a"][:, None]
     amb_residual = (
-        i_amb * (1.0 - hw.ambient_rejection) * temps["ambient_flicker"][:, None]
+        i_amb
+        * (1.0 - hw.ambient_rejection)
+        * temps["ambient_flicker"][:, None]
         * streams("ambient_light").normal(size=(n, n_led))
     )
     i_total_shot = i_sig + dark_now + i_amb
     shot = cfg.noise_factor("shot") * shot_noise_sd_a(i_total_shot, hw.bandwidth_hz)
     shot = shot * streams("shot").normal(size=(n, n_led))
-    johnson = cfg.noise_factor("johnson") * johnson_noise_sd_a(
-        temps["board_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm
-    ) * streams("johnson").normal(size=(n, n_led))
+    johnson = (
+        cfg.noise_factor("johnson")
+        * johnson_noise_sd_a(temps["board_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
+        * streams("johnson").normal(size=(n, n_led))
+    )
     voltage = (i_sig + i_dark_residual + amb_residual + shot + johnson) * hw.tia_gain_ohm
     offset = (
-        cfg.noise_factor("adc_offset_drift") * hw.adc_offset_drift_lsb_per_c
+        cfg.noise_factor("adc_offset_drift")
+        * hw.adc_offset_drift_lsb_per_c
         * (temps["board_c"][:, None] - 25.0)
     )
     inl = cfg.noise_factor("adc_inl") * hw.adc_inl_lsb
@@ -264,21 +275,35 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
 
     # Reference at start-up, once per subject: the same LED through a neutral
     # attenuator, no tissue; ``*_cal_*`` temperatures and ages are per subject.
-    p_cal = led_power_w(p0, temps["led_cal_c"], temps["age_cal_h"][:, None], flicker_cal,
-                        thermal_coeff_per_c=thermal, ageing_per_1000h=ageing)
+    p_cal = led_power_w(
+        p0,
+        temps["led_cal_c"],
+        temps["age_cal_h"][:, None],
+        flicker_cal,
+        thermal_coeff_per_c=thermal,
+        ageing_per_1000h=ageing,
+    )
     i_ref = resp * p_cal * hw.reference_transmission
     dark_cal_sub = dark_current_a(i25, temps["board_cal_c"])[:, None]
     shot_ref = cfg.noise_factor("shot") * shot_noise_sd_a(i_ref + dark_cal_sub, hw.bandwidth_hz)
     shot_ref = shot_ref * streams("shot.cal").normal(size=(n_sub, n_led))
-    johnson_ref = cfg.noise_factor("johnson") * johnson_noise_sd_a(
-        temps["board_cal_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm
-    ) * streams("johnson.cal").normal(size=(n_sub, n_led))
+    johnson_ref = (
+        cfg.noise_factor("johnson")
+        * johnson_noise_sd_a(temps["board_cal_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
+        * streams("johnson.cal").normal(size=(n_sub, n_led))
+    )
     v_ref = (i_ref + shot_ref + johnson_ref) * hw.tia_gain_ohm
     offset_ref = (
-        cfg.noise_factor("adc_offset_drift") * hw.adc_offset_drift_lsb_per_c
+        cfg.noise_factor("adc_offset_drift")
+        * hw.adc_offset_drift_lsb_per_c
         * (temps["board_cal_c"][:, None] - 25.0)
     )
     adc_ref = adc_convert(v_ref, hw.adc_vref_v, hw.adc_bits, inl, offset_ref)[subject_index]
     signal_v = resp * (p0 * detected_fraction_led) * hw.tia_gain_ohm
-    return {"adc": adc, "adc_ref": adc_ref, "signal_v": signal_v, "voltage_v": voltage,
-            "detected_power_w": detected_power_w}
+    return {
+        "adc": adc,
+        "adc_ref": adc_ref,
+        "signal_v": signal_v,
+        "voltage_v": voltage,
+        "detected_power_w": detected_power_w,
+    }

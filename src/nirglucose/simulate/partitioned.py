@@ -15,7 +15,9 @@ from .simulator import _tables, block_ranges, simulate_block
 __all__ = ["write_partitioned"]
 
 
-def _write_block(cfg, seed, block, start, n_sub, per_subject, tables, out: Path, meta: bytes) -> int:
+def _write_block(
+    cfg, seed, block, start, n_sub, per_subject, tables, out: Path, meta: bytes
+) -> int:
     import pandas as pd
 
     cols, _ = simulate_block(cfg, seed, block, start, n_sub, per_subject, tables)
@@ -26,7 +28,11 @@ def _write_block(cfg, seed, block, start, n_sub, per_subject, tables, out: Path,
 
 
 def write_partitioned(
-    cfg: ScenarioConfig, out: str | Path, n_subjects: int, per_subject: int, seed: int,
+    cfg: ScenarioConfig,
+    out: str | Path,
+    n_subjects: int,
+    per_subject: int,
+    seed: int,
     n_jobs: int = 1,
 ) -> int:
     """Write ``part-NNNNNN.parquet`` files, one per block of subjects; returns the row count.

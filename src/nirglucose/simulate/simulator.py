@@ -55,19 +55,27 @@ class _Tables:
 
 def _tables(cfg: ScenarioConfig) -> _Tables:
     spectra = tissue.band_spectra(
-        cfg.leds.wavelengths_nm, cfg.leds.fwhm_nm, cfg.leds.band_points,
-        cfg.optics.water_source, cfg.glucose.absorptivity_per_cm_per_mm,
+        cfg.leds.wavelengths_nm,
+        cfg.leds.fwhm_nm,
+        cfg.leds.band_points,
+        cfg.optics.water_source,
+        cfg.glucose.absorptivity_per_cm_per_mm,
     )
     optics = tissue.tissue_optics(
-        spectra, nominal_tissue(1),
-        water_displacement_per_mm=0.0, scattering_rel_per_mm=0.0,
+        spectra,
+        nominal_tissue(1),
+        water_displacement_per_mm=0.0,
+        scattering_rel_per_mm=0.0,
     )
     sep_cm = cfg.optics.source_detector_mm / 10.0
     mua, musp, _ = forward.mixed_optics(
         optics, np.array([NOMINAL["skin_thickness_mm"] / 10.0]), sep_cm
     )
     geometry = forward.geometry_factor(
-        mua[0], musp[0], sep_cm, cfg.optics.detector_area_mm2 / 100.0,
+        mua[0],
+        musp[0],
+        sep_cm,
+        cfg.optics.detector_area_mm2 / 100.0,
         cfg.optics.tissue_refractive_index,
     )
     names = tuple(environment.LIGHT_SOURCES)
@@ -88,16 +96,28 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
     out = np.empty((n, n_led))
     for lo in range(0, n, _OPTICS_SLICE_ROWS):
         sl = slice(lo, min(lo + _OPTICS_SLICE_ROWS, n))
-        part = tissue.TissueState(*(np.asarray(getattr(state, f))[sl] for f in (
-            "blood_fraction", "saturation", "water_fraction", "subcutis_fat_fraction",
-            "glucose_mm")))
+        part = tissue.TissueState(
+            *(
+                np.asarray(getattr(state, f))[sl]
+                for f in (
+                    "blood_fraction",
+                    "saturation",
+                    "water_fraction",
+                    "subcutis_fat_fraction",
+                    "glucose_mm",
+                )
+            )
+        )
         optics = tissue.tissue_optics(
-            tables.spectra, part,
+            tables.spectra,
+            part,
             water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
-            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm, shift_nm=shift[sl],
+            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
+            shift_nm=shift[sl],
         )
         nodes = forward.detected_fraction(
-            cfg.optics.model, optics,
+            cfg.optics.model,
+            optics,
             melanin_fraction=melanin[sl],
             skin_thickness_cm=thickness_mm[sl] / 10.0,
             epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
@@ -113,9 +133,16 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
 def nominal_tissue(n: int) -> tissue.TissueState:
     """The nominal tissue composition repeated ``n`` times."""
     return tissue.TissueState(
-        *(np.full(n, NOMINAL[k]) for k in (
-            "blood_fraction", "saturation", "water_fraction", "subcutis_fat_fraction",
-            "glucose_mm"))
+        *(
+            np.full(n, NOMINAL[k])
+            for k in (
+                "blood_fraction",
+                "saturation",
+                "water_fraction",
+                "subcutis_fat_fraction",
+                "glucose_mm",
+            )
+        )
     )
 
 
@@ -188,25 +215,38 @@ def simulate_block(
 
     # Optics: detected fraction per band node, weighted by the LED emission.
     state = tissue.TissueState(
-        blood, phys["true_saturation"], phys["true_water_fraction"],
+        blood,
+        phys["true_saturation"],
+        phys["true_water_fraction"],
         phys["true_subcutis_fat_fraction"],
         cfg.glucose.signal_gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
     )
-    fraction = _band_detected_fraction(
-        cfg, tables, state, phys["true_melanin_fraction"], thickness_mm, shift_nm
-    ) * coupling[:, None]
+    fraction = (
+        _band_detected_fraction(
+            cfg, tables, state, phys["true_melanin_fraction"], thickness_mm, shift_nm
+        )
+        * coupling[:, None]
+    )
 
     # Ambient light through the baffle.
     light = env["true_light_source"]
     idx = np.array([tables.light_names.index(c) for c in light.categories], dtype=int)[light.codes]
     w_per_lux, resp_amb, flick = (t[idx] for t in tables.ambient)
     ambient_a = environment.ambient_photocurrent_a(
-        env["true_ambient_lux"], w_per_lux, resp_amb, cfg.optics.detector_area_mm2 * 1e-6,
+        env["true_ambient_lux"],
+        w_per_lux,
+        resp_amb,
+        cfg.optics.detector_area_mm2 * 1e-6,
         cfg.environment.baffle_optical_density,
     )
     temps = {
-        "led_c": led_c, "board_c": board_c, "age_h": age_h, "led_cal_c": led_cal_c,
-        "board_cal_c": board_cal_c, "age_cal_h": age_cal_h, "ambient_a": ambient_a,
+        "led_c": led_c,
+        "board_c": board_c,
+        "age_h": age_h,
+        "led_cal_c": led_cal_c,
+        "board_cal_c": board_cal_c,
+        "age_cal_h": age_cal_h,
+        "ambient_a": ambient_a,
         "ambient_flicker": flick,
     }
     hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
@@ -229,17 +269,19 @@ def simulate_block(
     cols["ambient_lux"] = env["true_ambient_lux"]
     truth_out = {k: v for k, v in phys.items()}
     truth_out.update({k: v for k, v in env.items()})
-    truth_out.update({
-        "true_blood_fraction_detected": blood,
-        "true_skin_thickness_probe_mm": thickness_mm,
-        "true_contact_pressure": contact,
-        "true_coupling": coupling,
-        "true_led_temperature_c": led_c.mean(axis=1),
-        "true_board_temperature_c": board_c,
-        "true_hours_since_meal": glucose["true_hours_since_meal"],
-        "true_stress": glucose["true_stress"],
-        "true_hour_of_day": glucose["true_hour_of_day"],
-    })
+    truth_out.update(
+        {
+            "true_blood_fraction_detected": blood,
+            "true_skin_thickness_probe_mm": thickness_mm,
+            "true_contact_pressure": contact,
+            "true_coupling": coupling,
+            "true_led_temperature_c": led_c.mean(axis=1),
+            "true_board_temperature_c": board_c,
+            "true_hours_since_meal": glucose["true_hours_since_meal"],
+            "true_stress": glucose["true_stress"],
+            "true_hour_of_day": glucose["true_hour_of_day"],
+        }
+    )
     for i, w in enumerate(wl):
         truth_out[f"true_detected_fraction_{w}"] = fraction[:, i]
         truth_out[f"true_led_shift_nm_{w}"] = np.broadcast_to(shift_nm, (n, n_led))[:, i]
@@ -311,7 +353,11 @@ def detected_fraction_given_glucose(
     )
     shift = frame[[f"true_led_shift_nm_{w}" for w in wl]].to_numpy(float)
     fraction = _band_detected_fraction(
-        cfg, tables, state, frame["true_melanin_fraction"].to_numpy(float),
-        frame["true_skin_thickness_probe_mm"].to_numpy(float), shift,
+        cfg,
+        tables,
+        state,
+        frame["true_melanin_fraction"].to_numpy(float),
+        frame["true_skin_thickness_probe_mm"].to_numpy(float),
+        shift,
     )
     return fraction * frame["true_coupling"].to_numpy(float)[:, None]
