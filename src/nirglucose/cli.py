@@ -12,9 +12,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from typer.exceptions import TyperException
 from rich.console import Console
 from rich.table import Table
+from typer.exceptions import TyperException
 
 from .exceptions import NirGlucoseError
 
@@ -33,6 +33,7 @@ console = Console(stderr=True)
 @app.callback()
 def _root() -> None:
     """Simulate a noise-stressed NIR glucose sensor and benchmark estimators on it."""
+
 
 out_console = Console()
 
@@ -61,7 +62,9 @@ SetOption = Annotated[
 @app.command()
 def simulate(
     out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
-    preset: Annotated[str, typer.Option(help="Scenario preset: paper, physical, lab, field.")] = "paper",
+    preset: Annotated[
+        str, typer.Option(help="Scenario preset: paper, physical, lab, field.")
+    ] = "paper",
     subjects: Annotated[int, typer.Option(help="Number of subjects.")] = 80,
     per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
@@ -110,6 +113,104 @@ def keys() -> None:
         out_console.print(f"{key} = {node}", highlight=False, soft_wrap=True)
 
 
+@app.command()
+def benchmark(
+    out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
+    preset: Annotated[str, typer.Option(help="Scenario preset to simulate.")] = "paper",
+    data: Annotated[
+        Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
+    ] = None,
+    models: Annotated[
+        str | None, typer.Option(help="Comma-separated model names (default: all registered).")
+    ] = None,
+    protocol: Annotated[str, typer.Option(help="grouped-cv or paper-split.")] = "grouped-cv",
+    subjects: Annotated[int, typer.Option(help="Number of subjects to simulate.")] = 80,
+    per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
+    folds: Annotated[int, typer.Option(help="Folds of grouped-cv.")] = 5,
+    repeats: Annotated[int, typer.Option(help="Repeats of grouped-cv.")] = 3,
+    seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
+    jobs: Annotated[int, typer.Option(help="Worker processes (same result for any value).")] = 1,
+    resamples: Annotated[int, typer.Option(help="Bootstrap resamples for the CIs.")] = 2000,
+    set_: SetOption = None,
+) -> None:
+    """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
+    import warnings
+
+    from .evaluation.benchmark import run_benchmark
+    from .evaluation.splits import check_protocol
+    from .models.registry import get_model_class
+
+    for name, value in (
+        ("--subjects", subjects),
+        ("--per-subject", per_subject),
+        ("--folds", folds),
+        ("--repeats", repeats),
+        ("--jobs", jobs),
+        ("--resamples", resamples),
+    ):
+        _positive(name, value)
+    if seed < 0:
+        raise UserError(f"--seed must be non-negative, got {seed}")
+    check_protocol(protocol)
+    names = None
+    if models is not None:
+        names = [m.strip() for m in models.split(",") if m.strip()]
+        if not names:
+            raise UserError(f"--models {models!r} names no model")
+        for name in names:
+            get_model_class(name)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {str(out)!r} exists and is not a directory")
+    if not out.exists() and not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    if data is not None:
+        from .dataset import load_dataset
+
+        if set_:
+            raise UserError("--set changes the simulation; it cannot apply to --data")
+        ds = load_dataset(data)
+    else:
+        from .api import simulate as _simulate
+
+        ds = _simulate(preset, subjects, per_subject, seed, overrides=_parse_sets(set_))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = run_benchmark(
+            ds,
+            names,
+            protocol=protocol,
+            n_splits=folds,
+            repeats=repeats,
+            seed=seed,
+            out=out,
+            jobs=jobs,
+            progress=sys.stderr.isatty(),
+            n_boot=resamples,
+        )
+    for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
+        console.print(f"warning: {msg}", highlight=False, soft_wrap=True)
+    table = Table(title=f"benchmark: {res.meta['protocol']}, {ds!r}")
+    for col in ("model", "RMSE mg/dL [95 % CI]", "MARD %", "Clarke A %", "params", "ms/sample"):
+        table.add_column(col, justify="left" if col == "model" else "right")
+    for _, r in res.metrics.iterrows():
+        table.add_row(
+            r["model"],
+            f"{r['rmse_mgdl']:.1f} [{r['rmse_ci_low']:.1f}, {r['rmse_ci_high']:.1f}]",
+            f"{r['mard_pct']:.1f}",
+            f"{r['clarke_a_pct']:.1f}",
+            f"{int(r['n_parameters']):,}",
+            f"{r['latency_single_ms']:.3f}",
+        )
+    out_console.print(table)
+    m = res.meta
+    out_console.print(
+        f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "
+        f"{m['tasks_cached']} reused, {m['wall_time_s']:.0f} s)",
+        highlight=False,
+        soft_wrap=True,
+    )
+
+
 def _print_summary(ds) -> None:
     import numpy as np
 
@@ -123,8 +224,9 @@ def _print_summary(ds) -> None:
         r = ""
         if c.startswith("adc_") and not c.startswith("adc_ref") and np.std(v) > 0:
             r = f"{np.corrcoef(g, np.log(v))[0, 1]:+.3f}"
-        table.add_row(c, f"{v.mean():.1f}", f"{v.std(ddof=1):.1f}", f"{v.min():.0f}",
-                      f"{v.max():.0f}", r)
+        table.add_row(
+            c, f"{v.mean():.1f}", f"{v.std(ddof=1):.1f}", f"{v.min():.0f}", f"{v.max():.0f}", r
+        )
     out_console.print(table)
 
 

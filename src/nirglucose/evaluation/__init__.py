@@ -1,0 +1,40 @@
+"""Evaluation: subject-grouped splits, the benchmark, statistics, timing, importance.
+
+The benchmark computes and returns tidy DataFrames; plotting and reporting read them.
+Submodules are imported on first attribute access so that ``import nirglucose`` stays
+light.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+__all__ = [
+    "PROTOCOLS",
+    "STUDY_TABLE",
+    "BenchmarkResult",
+    "run_benchmark",
+    "make_splits",
+    "cluster_bootstrap_metrics",
+    "compare_models",
+    "measure_latency",
+    "permutation_importance",
+]
+
+_LAZY = {
+    "PROTOCOLS": "nirglucose.evaluation.splits",
+    "make_splits": "nirglucose.evaluation.splits",
+    "STUDY_TABLE": "nirglucose.evaluation.reference",
+    "BenchmarkResult": "nirglucose.evaluation.benchmark",
+    "run_benchmark": "nirglucose.evaluation.benchmark",
+    "cluster_bootstrap_metrics": "nirglucose.evaluation.stats",
+    "compare_models": "nirglucose.evaluation.stats",
+    "measure_latency": "nirglucose.evaluation.timing",
+    "permutation_importance": "nirglucose.evaluation.importance",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'nirglucose.evaluation' has no attribute {name!r}")

@@ -1,0 +1,97 @@
+"""Latency is measured the same way for every model: warm-up, median, batch throughput."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+import nirglucose as ng
+from nirglucose.evaluation.importance import permutation_importance
+from nirglucose.evaluation.timing import measure_latency, tile_rows, timing_inputs
+from nirglucose.models._base import MEASURED_COLUMNS, as_measurements
+
+
+class _Counting:
+    """Predicts a constant; counts calls and rows; optionally sleeps per call."""
+
+    def __init__(self, sleep_s: float = 0.0, arrays: bool = True):
+        self.sleep_s, self.arrays, self.calls, self.rows = sleep_s, arrays, [], 0
+
+    def predict(self, X):
+        if not self.arrays and not isinstance(X, ng.Dataset):
+            raise TypeError("needs a Dataset")
+        if self.sleep_s:
+            time.sleep(self.sleep_s)
+        self.calls.append(len(X))
+        return np.full(len(X), 100.0)
+
+
+@pytest.fixture(scope="module")
+def small():
+    return ng.simulate("paper", n_subjects=6, per_subject=2, seed=0)
+
+
+def test_latency_keys_and_counts(small):
+    model = _Counting()
+    X = small.frame[list(MEASURED_COLUMNS)].to_numpy(float)
+    out = measure_latency(model, X, n_single=50, warmup=3, batch_rows=1000, batch_repeats=2)
+    assert set(out) == {
+        "latency_single_ms",
+        "latency_single_p90_ms",
+        "n_single",
+        "throughput_per_s",
+        "batch_rows",
+    }
+    assert out["n_single"] == 50 and out["batch_rows"] == 1000
+    assert 0 < out["latency_single_ms"] <= out["latency_single_p90_ms"]
+    assert out["throughput_per_s"] > 0
+    # warm-up + singles of one row, then batches of 1000 rows (one warm-up + 2 timed)
+    assert model.calls.count(1) == 53 and model.calls.count(1000) == 3
+
+
+def test_time_budget_bounds_the_single_sample_loop(small):
+    model = _Counting(sleep_s=0.004)
+    out = measure_latency(
+        model,
+        small,
+        n_single=200,
+        min_single=5,
+        time_budget_s=0.03,
+        warmup=1,
+        batch_rows=20,
+        batch_repeats=1,
+    )
+    assert 5 <= out["n_single"] < 20
+    assert out["latency_single_ms"] >= 4.0
+
+
+def test_timing_inputs_prefers_arrays_and_falls_back_to_the_dataset(small):
+    form, X = timing_inputs(_Counting(), small)
+    assert form == "array" and X.shape == (len(small), len(MEASURED_COLUMNS))
+    form, data = timing_inputs(_Counting(arrays=False), small)
+    assert form == "dataset" and data is small
+
+
+def test_tile_rows_keeps_the_type(small):
+    assert len(tile_rows(small, 25)) == 25 and isinstance(tile_rows(small, 25), ng.Dataset)
+    assert tile_rows(np.arange(3), 7).tolist() == [0, 1, 2, 0, 1, 2, 0]
+
+
+class _OneChannel:
+    """Uses only the 1050 nm absorbance."""
+
+    def predict(self, X):
+        Xa, _, _ = as_measurements(X)
+        k = MEASURED_COLUMNS.index("adc_1050")
+        r = MEASURED_COLUMNS.index("adc_ref_1050")
+        return 100.0 + 500.0 * np.log(Xa[:, r] / Xa[:, k])
+
+
+def test_permutation_importance_finds_the_only_channel_used(small):
+    imp = permutation_importance(_OneChannel(), small, n_repeats=3, seed=0)
+    assert imp["wavelength_nm"].tolist() == [850.0, 940.0, 1050.0, 1150.0]
+    by_wl = imp.set_index("wavelength_nm")["rmse_increase_mgdl"]
+    assert by_wl[1050.0] > 1.0
+    assert by_wl.drop(1050.0).abs().max() == 0.0
