@@ -1,0 +1,179 @@
+"""JSON save/load shared by the models whose state is a few arrays (no pickle).
+
+A model file is one JSON document::
+
+    {"format": "nirglucose-model", "format_version": 1, "model": "ebl",
+     "nirglucose_version": "0.1.0", "params": {...}, "state": {...}}
+
+``params`` are the constructor's keyword arguments (``get_params()``); ``state`` holds
+the learned attributes as numbers and lists. Loading validates the schema, the model
+name and the format version and never executes anything from the file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..dataset import atomic_write
+from ..exceptions import DataError
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "JsonModelMixin"]
+
+FORMAT = "nirglucose-model"
+FORMAT_VERSION = 1
+
+
+def _to_json(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, tuple | list):
+        return [_to_json(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _to_json(v) for k, v in value.items()}
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    raise DataError(f"cannot store a {type(value).__name__} in a JSON model file")
+
+
+def _check_finite(name: str, value: Any) -> None:
+    arr = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise DataError(f"model state {name!r} has NaN or infinite values; refit the model")
+
+
+class JsonModelMixin:
+    """``save(path)`` / ``Cls.load(path)`` for estimators whose state is plain arrays.
+
+    Subclasses define ``_STATE``: a dict mapping each learned attribute to the
+    expected shape of its array (``None`` for a scalar, ``"json"`` for any JSON value,
+    or a tuple with ``-1`` for a free dimension).
+    """
+
+    _STATE: dict[str, Any] = {}
+
+    def _state_dict(self) -> dict[str, Any]:
+        out = {}
+        for name, shape in self._STATE.items():
+            value = getattr(self, name)
+            if shape != "json":
+                _check_finite(name, value)
+            out[name] = _to_json(value)
+        return out
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the fitted model as JSON, atomically.
+
+        Parameters
+        ----------
+        path : str or path-like
+            Destination ``.json`` file; its directory must exist.
+
+        Returns
+        -------
+        pathlib.Path
+            The written path.
+        """
+        from .. import __version__
+
+        self._require_fitted()
+        doc = {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "model": type(self).registry_name,
+            "nirglucose_version": __version__,
+            "params": _to_json(self.get_params(deep=False)),
+            "state": self._state_dict(),
+        }
+        text = json.dumps(doc, indent=1, allow_nan=False)
+
+        def write(tmp: str) -> None:
+            Path(tmp).write_text(text)
+
+        return atomic_write(path, write)
+
+    @classmethod
+    def _params_from_json(cls, params: dict[str, Any]) -> dict[str, Any]:
+        return params
+
+    @classmethod
+    def load(cls, path: str | os.PathLike):
+        """Restore a model written by :meth:`save`.
+
+        Raises
+        ------
+        DataError
+            Missing file, not JSON, wrong format or version, another model's file, or
+            a malformed state.
+        """
+        path = Path(path)
+        name = cls.registry_name
+        if not path.is_file():
+            raise DataError(f"no such model file {str(path)!r}")
+        try:
+            doc = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
+        if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+            raise DataError(
+                f"{str(path)!r} is not a nirglucose model file (format is not {FORMAT!r})"
+            )
+        if doc.get("format_version") != FORMAT_VERSION:
+            raise DataError(
+                f"{str(path)!r} has format_version {doc.get('format_version')!r}; this "
+                f"nirglucose reads version {FORMAT_VERSION}"
+            )
+        if doc.get("model") != name:
+            raise DataError(
+                f"{str(path)!r} holds a {doc.get('model')!r} model, not {name!r}; load it "
+                "with nirglucose.models.load_model"
+            )
+        params, state = doc.get("params"), doc.get("state")
+        if not isinstance(params, dict) or not isinstance(state, dict):
+            raise DataError(f"{str(path)!r} lacks the 'params' and 'state' objects")
+        valid = set(cls().get_params(deep=False))
+        unknown = sorted(set(params) - valid)
+        if unknown:
+            raise DataError(
+                f"{str(path)!r} has unknown parameters {unknown}; valid: {sorted(valid)}"
+            )
+        model = cls(**cls._params_from_json(params))
+        for key, shape in cls._STATE.items():
+            if key not in state:
+                raise DataError(f"{str(path)!r} lacks state {key!r}")
+            value = state[key]
+            if shape == "json":
+                setattr(model, key, value)
+                continue
+            try:
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise DataError(f"{str(path)!r}: state {key!r} is not numeric") from None
+            if shape is None:
+                ok = arr.ndim == 0 and math.isfinite(float(arr))
+                value = float(arr) if ok else None
+            else:
+                ok = (
+                    arr.ndim == len(shape)
+                    and all(s == -1 or s == d for s, d in zip(shape, arr.shape, strict=True))
+                    and bool(np.all(np.isfinite(arr)))
+                )
+                value = arr
+            if not ok:
+                raise DataError(
+                    f"{str(path)!r}: state {key!r} has the wrong shape or non-finite values "
+                    f"(expected shape {shape})"
+                )
+            setattr(model, key, value)
+        model._restore()
+        return model
+
+    def _restore(self) -> None:
+        """Rebuild derived attributes after :meth:`load` (override)."""
