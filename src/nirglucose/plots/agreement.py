@@ -1,0 +1,259 @@
+"""Figures 5 and 6: agreement with the reference (Bland–Altman) and linearity.
+
+Both take precomputed numbers: the Bland–Altman bias, limits of agreement and their
+confidence intervals, and the fitted regression line, all from the report layer.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike
+
+from .style import GREY, OKABE_ITO, model_colors, model_label, new_axes, plot_style, styled
+
+__all__ = [
+    "plot_bland_altman",
+    "plot_linearity",
+    "figure_bland_altman",
+    "figure_linearity",
+]
+
+Interval = tuple[float, float]
+
+
+def _xy(x: ArrayLike, y: ArrayLike, names: str) -> tuple[np.ndarray, np.ndarray]:
+    a = np.asarray(x, dtype=float).ravel()
+    b = np.asarray(y, dtype=float).ravel()
+    if a.shape != b.shape:
+        raise ValueError(f"{names} differ in length: {a.size} vs {b.size}")
+    return a, b
+
+
+@styled
+def plot_bland_altman(
+    mean_mgdl: ArrayLike,
+    difference_mgdl: ArrayLike,
+    *,
+    bias: float,
+    loa_low: float,
+    loa_high: float,
+    bias_ci: Interval | None = None,
+    loa_low_ci: Interval | None = None,
+    loa_high_ci: Interval | None = None,
+    color: str | None = None,
+    title: str | None = None,
+    ax: Axes | None = None,
+) -> Axes:
+    """Bland–Altman plot: difference against mean, bias and 95 % limits of agreement.
+
+    Parameters
+    ----------
+    mean_mgdl : array_like
+        Mean of reference and prediction of each pair, ``(ref + pred) / 2``. [mg/dL]
+    difference_mgdl : array_like
+        Difference of each pair, ``pred - ref``. [mg/dL]
+    bias, loa_low, loa_high : float
+        Mean difference and the 95 % limits of agreement (bias ∓ 1.96 SD). [mg/dL]
+    bias_ci, loa_low_ci, loa_high_ci : (float, float), optional
+        95 % confidence intervals of the three lines, drawn as shaded bands. [mg/dL]
+    color : str, optional
+        Point colour.
+    title : str, optional
+        Axes title.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure's by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes: one PathCollection (one point per pair), the zero line, the bias
+        and both limits (four lines) and one band per interval given.
+
+    References
+    ----------
+    .. [1] Bland JM, Altman DG. Statistical methods for assessing agreement between two
+       methods of clinical measurement. Lancet 327(8476):307-310, 1986.
+       doi:10.1016/S0140-6736(86)90837-8
+    """
+    ax = new_axes(ax, figsize=(5.0, 3.6))
+    m, d = _xy(mean_mgdl, difference_mgdl, "mean_mgdl and difference_mgdl")
+    color = color or OKABE_ITO["blue"]
+    ax.scatter(m, d, s=8, color=color, alpha=0.55, linewidths=0, zorder=3)
+    ax.axhline(0.0, color=GREY, lw=0.7, ls=":")
+    lines = (
+        ("bias", bias, bias_ci, "-"),
+        ("+1.96 SD", loa_high, loa_high_ci, "--"),
+        ("−1.96 SD", loa_low, loa_low_ci, "--"),
+    )
+    for name, value, ci, ls in lines:
+        ax.axhline(value, color="black", lw=1.0, ls=ls)
+        if ci is not None and np.all(np.isfinite(ci)):
+            ax.axhspan(ci[0], ci[1], color=color, alpha=0.15, lw=0)
+        txt = f"{name} {value:+.1f}"
+        if ci is not None and np.all(np.isfinite(ci)):
+            txt += f" [{ci[0]:+.1f}, {ci[1]:+.1f}]"
+        ax.annotate(txt, xy=(1.0, value), xycoords=("axes fraction", "data"),
+                    xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom",
+                    fontsize=7, color="black",
+                    bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none",
+                          "alpha": 0.75})
+    span = max(abs(loa_low), abs(loa_high), float(np.nanmax(np.abs(d))) if d.size else 1.0)
+    if np.isfinite(span) and span > 0:
+        ax.set_ylim(-1.2 * span, 1.2 * span)
+    ax.set_xlabel("mean of reference and prediction [mg/dL]")
+    ax.set_ylabel("prediction − reference [mg/dL]")
+    ax.set_title(title if title is not None else "Bland–Altman")
+    return ax
+
+
+@styled
+def plot_linearity(
+    reference: ArrayLike,
+    predicted: ArrayLike,
+    *,
+    slope: float,
+    intercept: float,
+    r_squared: float | None = None,
+    slope_ci: Interval | None = None,
+    color: str | None = None,
+    title: str | None = None,
+    ax: Axes | None = None,
+) -> Axes:
+    """Predicted against reference glucose, the unity line and the fitted line.
+
+    Parameters
+    ----------
+    reference, predicted : array_like
+        Reference and predicted glucose, same length. [mg/dL]
+    slope : float
+        Slope of the regression of predicted on reference, fitted by the caller. [-]
+    intercept : float
+        Its intercept. [mg/dL]
+    r_squared : float, optional
+        Coefficient of determination of that fit. [-]
+    slope_ci : (float, float), optional
+        95 % confidence interval of the slope. [-]
+    color : str, optional
+        Point and line colour.
+    title : str, optional
+        Axes title.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure's by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes: one PathCollection (one point per pair), the unity line and the
+        regression line.
+    """
+    ax = new_axes(ax, figsize=(4.4, 4.2))
+    ref, pred = _xy(reference, predicted, "reference and predicted")
+    color = color or OKABE_ITO["blue"]
+    ax.scatter(ref, pred, s=8, color=color, alpha=0.55, linewidths=0, zorder=3)
+    both = np.concatenate([ref, pred])
+    both = both[np.isfinite(both)]
+    lo = float(np.floor(min(both.min(), 0.9 * ref.min()) / 25) * 25) if both.size else 0.0
+    hi = float(np.ceil(1.03 * both.max() / 25) * 25) if both.size else 400.0
+    lo = max(lo, 0.0) if both.size and both.min() >= 0 else lo
+    grid = np.array([lo, hi])
+    ax.plot(grid, grid, color=GREY, ls=":", lw=1.0, label="unity (y = x)")
+    ax.plot(grid, intercept + slope * grid, color="black", lw=1.2,
+            label="least-squares fit")
+    text = f"slope {slope:.2f}"
+    if slope_ci is not None and np.all(np.isfinite(slope_ci)):
+        text += f" [{slope_ci[0]:.2f}, {slope_ci[1]:.2f}]"
+    text += f"\nintercept {intercept:+.1f} mg/dL"
+    if r_squared is not None and np.isfinite(r_squared):
+        text += f"\nR² = {r_squared:.2f}"
+    ax.text(0.97, 0.03, text, transform=ax.transAxes, ha="right", va="bottom", fontsize=7.5,
+            bbox={"boxstyle": "round,pad=0.3", "fc": "white", "ec": GREY, "lw": 0.5})
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(lo, hi)
+    ax.set_aspect("equal")
+    ax.legend(loc="upper left", fontsize=7.5)
+    ax.set_xlabel("reference glucose [mg/dL]")
+    ax.set_ylabel("predicted glucose [mg/dL]")
+    ax.set_title(title if title is not None else "Linearity")
+    return ax
+
+
+def _per_model_figure(
+    panels: Mapping[str, Mapping[str, object]],
+    draw: Callable[..., Axes],
+    panel_size: tuple[float, float],
+    ncols: int,
+    layout: str = "constrained",
+) -> Figure:
+    models = list(panels)
+    n = max(1, len(models))
+    ncols = min(ncols, n)
+    nrows = -(-n // ncols)
+    colors = model_colors(models)
+    with plot_style():
+        fig = Figure(figsize=(panel_size[0] * ncols, panel_size[1] * nrows), layout=layout)
+        fig.get_layout_engine().set(h_pad=0.1)  # room between a title and the row above
+        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+        for ax, model in zip(axes, models, strict=False):
+            draw(ax, dict(panels[model]), colors[model], model_label(model))
+        for k, ax in enumerate(axes):
+            if k >= len(models):
+                ax.set_axis_off()
+            elif k < len(models) - ncols:
+                ax.set_xlabel("")
+        if not models:
+            axes[0].text(0.5, 0.5, "no predictions", ha="center", va="center",
+                         transform=axes[0].transAxes)
+    return fig
+
+
+def figure_bland_altman(panels: Mapping[str, Mapping[str, object]], *, ncols: int = 4) -> Figure:
+    """One Bland–Altman panel per model.
+
+    Parameters
+    ----------
+    panels : mapping of str to mapping
+        Model -> keyword arguments of :func:`plot_bland_altman` (``mean_mgdl``,
+        ``difference_mgdl``, ``bias``, ``loa_low``, ``loa_high`` and the optional
+        intervals).
+    ncols : int
+        Panels per row. [-]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+
+    def draw(ax: Axes, p: dict, color: str, title: str) -> Axes:
+        return plot_bland_altman(p.pop("mean_mgdl"), p.pop("difference_mgdl"), color=color,
+                                 title=title, ax=ax, **p)
+
+    return _per_model_figure(panels, draw, (3.7, 3.0), ncols)
+
+
+def figure_linearity(panels: Mapping[str, Mapping[str, object]], *, ncols: int = 4) -> Figure:
+    """One linearity panel per model.
+
+    Parameters
+    ----------
+    panels : mapping of str to mapping
+        Model -> keyword arguments of :func:`plot_linearity` (``reference``,
+        ``predicted``, ``slope``, ``intercept`` and optionally ``r_squared``,
+        ``slope_ci``).
+    ncols : int
+        Panels per row. [-]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+
+    def draw(ax: Axes, p: dict, color: str, title: str) -> Axes:
+        return plot_linearity(p.pop("reference"), p.pop("predicted"), color=color,
+                              title=title, ax=ax, **p)
+
+    # "compressed" keeps equal-aspect panels packed without overlaps
+    return _per_model_figure(panels, draw, (3.5, 3.5), ncols, layout="compressed")

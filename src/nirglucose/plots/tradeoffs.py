@@ -1,0 +1,309 @@
+"""Figures 8-10: trade-offs between accuracy, physics depth, size and speed.
+
+* radar of normalised scores per model (figure 8);
+* accuracy against physics depth, bubble area proportional to the parameter count
+  (figure 9);
+* the efficiency landscape: parameters, latency and a combined cost index against
+  RMSE, the Pareto front marked (figure 10).
+
+Scores, indices and Pareto fronts are computed by the report layer and passed in.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from numpy.typing import ArrayLike
+
+from .style import (
+    GREY,
+    model_colors,
+    model_label,
+    model_marker,
+    new_axes,
+    plain_log_ticks,
+    plot_style,
+    styled,
+)
+
+__all__ = [
+    "plot_radar",
+    "plot_physics_depth",
+    "plot_efficiency",
+    "figure_efficiency_landscape",
+    "bubble_area",
+]
+
+#: Largest bubble area of :func:`plot_physics_depth`. [pt^2]
+MAX_BUBBLE_PT2 = 2200.0
+#: Smallest bubble area drawn (smaller ones are enlarged to stay visible). [pt^2]
+MIN_BUBBLE_PT2 = 14.0
+
+
+def bubble_area(n_parameters: ArrayLike, max_parameters: float) -> np.ndarray:
+    """Marker area proportional to the parameter count, floored at :data:`MIN_BUBBLE_PT2`.
+
+    Examples
+    --------
+    >>> bubble_area([1000, 500, 1], 1000).tolist()
+    [2200.0, 1100.0, 14.0]
+    """
+    p = np.asarray(n_parameters, dtype=float)
+    area = MAX_BUBBLE_PT2 * p / float(max_parameters) if max_parameters > 0 else p * 0
+    return np.maximum(area, MIN_BUBBLE_PT2)
+
+
+@styled
+def plot_radar(scores: pd.DataFrame, *, title: str | None = None, ax: Axes | None = None) -> Axes:
+    """Radar (spider) chart of normalised scores, one polygon per model.
+
+    Parameters
+    ----------
+    scores : pandas.DataFrame
+        Index: model names; columns: the axes (e.g. ``RMSE``, ``MARD``, ``Clarke A``,
+        ``±15 %``, ``parameters``, ``latency``); values in [0, 1] with 1 the best model
+        on that axis, normalised by the caller. NaN values are drawn at 0. [-]
+    title : str, optional
+        Axes title.
+    ax : matplotlib.axes.Axes, optional
+        A *polar* Axes to draw on; a new figure's by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The polar Axes, with one outline (a Line2D) and one fill per model.
+    """
+    ax = new_axes(ax, figsize=(5.6, 4.6), projection="polar")
+    if getattr(ax, "name", "") != "polar":
+        raise ValueError("plot_radar needs a polar Axes (projection='polar')")
+    axes_names = [str(c) for c in scores.columns]
+    n = len(axes_names)
+    angles = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    closed = np.append(angles, angles[:1])
+    colors = model_colors(scores.index)
+    for model, row in scores.iterrows():
+        r = np.nan_to_num(row.to_numpy(float), nan=0.0)
+        r = np.append(r, r[:1])
+        ax.plot(closed, r, color=colors[model], lw=1.4, marker=model_marker(str(model)),
+                ms=4, label=model_label(str(model)))
+        ax.fill(closed, r, color=colors[model], alpha=0.08)
+    ax.set_theta_offset(np.pi / 2.0)
+    ax.set_theta_direction(-1)
+    ax.set_xticks(angles)
+    ax.set_xticklabels(axes_names)
+    ax.tick_params(axis="x", pad=11)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_yticks([0.25, 0.5, 0.75, 1.0])
+    ax.set_yticklabels(["0.25", "0.5", "0.75", "1"], fontsize=7, color=GREY)
+    ax.set_rlabel_position(90.0 / max(n, 1))
+    ax.legend(loc="upper left", bbox_to_anchor=(1.08, 1.02), fontsize=7.5)
+    ax.set_title(title if title is not None else "Normalised scores (1 = best on each axis)",
+                 pad=18)
+    return ax
+
+
+@styled
+def plot_physics_depth(
+    table: pd.DataFrame,
+    *,
+    depth_labels: Mapping[int, str] | None = None,
+    title: str | None = None,
+    ax: Axes | None = None,
+) -> Axes:
+    """Accuracy against physics depth, bubble area proportional to parameters.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        One row per model with ``model``, ``physics_depth`` (ordinal level, int),
+        ``rmse_mgdl`` and ``n_parameters``; optionally ``on_front`` (bool: on the
+        parameters–RMSE Pareto front, computed by the caller) and ``x_offset`` (a
+        horizontal nudge separating models of the same depth). [-, -, mg/dL, -]
+    depth_labels : mapping of int to str, optional
+        Tick label of each depth level.
+    title : str, optional
+        Axes title.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure's by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes, with one PathCollection (a bubble) per model.
+    """
+    ax = new_axes(ax, figsize=(7.0, 4.4))
+    t = table.reset_index(drop=True)
+    colors = model_colors(t["model"])
+    pmax = float(np.nanmax(t["n_parameters"].to_numpy(float))) if len(t) else 1.0
+    areas = bubble_area(t["n_parameters"].to_numpy(float), pmax)
+    offset = t["x_offset"].to_numpy(float) if "x_offset" in t else np.zeros(len(t))
+    front = t["on_front"].to_numpy(bool) if "on_front" in t else np.zeros(len(t), bool)
+    x = t["physics_depth"].to_numpy(float) + offset
+    for k, row in t.iterrows():
+        ax.scatter([x[k]], [row["rmse_mgdl"]], s=areas[k], color=colors[row["model"]],
+                   alpha=0.45, edgecolors="black" if front[k] else colors[row["model"]],
+                   linewidths=1.6 if front[k] else 0.8, zorder=3)
+        ax.annotate(f"{model_label(row['model'])}\n{int(row['n_parameters']):,} params",
+                    (x[k], row["rmse_mgdl"]), xytext=(0, -np.sqrt(areas[k]) / 2 - 3),
+                    textcoords="offset points", ha="center", va="top", fontsize=7, zorder=4,
+                    bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none",
+                          "alpha": 0.75})
+    levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
+    ax.set_xticks(levels)
+    ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
+    if levels:
+        ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
+    y = t["rmse_mgdl"].to_numpy(float)
+    if y.size:
+        span = max(float(np.nanmax(y) - np.nanmin(y)), 1.0)
+        ax.set_ylim(max(0.0, np.nanmin(y) - 0.45 * span), np.nanmax(y) + 0.3 * span)
+    refs = [v for v in (1e2, 1e4, 1e6) if v <= 1.5 * pmax] or [pmax]
+    handles = [Line2D([], [], ls="none", marker="o", ms=np.sqrt(bubble_area([v], pmax)[0]),
+                      mfc="none", mec=GREY) for v in refs]
+    labels = [f"{v:,.0f} parameters" for v in refs]
+    if front.any():
+        handles.append(Line2D([], [], ls="none", marker="o", ms=8, mfc="none", mec="black",
+                              mew=1.6))
+        labels.append("Pareto-optimal (parameters vs RMSE)")
+    biggest = float(np.sqrt(bubble_area([max(refs)], pmax)[0]))
+    ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7,
+              labelspacing=max(1.0, biggest / 14.0), borderpad=0.9,
+              handlelength=max(2.0, biggest / 7.0), handletextpad=0.8,
+              title="bubble area ∝ parameters", title_fontsize=7, frameon=False)
+    ax.set_xlabel("physics depth (how much of the forward model a method uses)")
+    ax.set_ylabel("RMSE [mg/dL]")
+    ax.set_title(title if title is not None else "Accuracy vs physics depth")
+    return ax
+
+
+@styled
+def plot_efficiency(
+    x: ArrayLike,
+    rmse_mgdl: ArrayLike,
+    models: Sequence[str],
+    *,
+    on_front: ArrayLike | None = None,
+    xlabel: str,
+    log_x: bool = False,
+    title: str | None = None,
+    ax: Axes | None = None,
+) -> Axes:
+    """RMSE against a cost (parameters, latency, ...), the Pareto front marked.
+
+    Parameters
+    ----------
+    x : array_like
+        The cost of each model (lower is better). [unit in ``xlabel``]
+    rmse_mgdl : array_like
+        RMSE of each model. [mg/dL]
+    models : sequence of str
+        Model names, same order. [-]
+    on_front : array_like of bool, optional
+        Whether each model is on the Pareto front (no other model has both lower
+        cost and lower RMSE), computed by the caller; those are joined by a step line.
+    xlabel : str
+        Axis label with unit.
+    log_x : bool
+        Logarithmic cost axis. [-]
+    title : str, optional
+        Axes title.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure's by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes, with one PathCollection per model and, when a front is given, one
+        line through it.
+    """
+    ax = new_axes(ax, figsize=(4.4, 3.6))
+    xv = np.asarray(x, dtype=float)
+    yv = np.asarray(rmse_mgdl, dtype=float)
+    names = list(models)
+    if not (xv.shape == yv.shape == (len(names),)):
+        raise ValueError(f"x, rmse_mgdl and models differ in length: {xv.size}, {yv.size}, "
+                         f"{len(names)}")
+    colors = model_colors(names)
+    front = np.zeros(len(names), bool) if on_front is None else np.asarray(on_front, bool)
+    tx = np.log10(np.maximum(xv, 1e-12)) if log_x else xv
+    finite = tx[np.isfinite(tx)]
+    span = float(np.ptp(finite)) if finite.size else 0.0
+    for k, m in enumerate(names):
+        ax.scatter([xv[k]], [yv[k]], s=55, color=colors[m], marker=model_marker(m),
+                   edgecolors="black" if front[k] else "white", linewidths=1.0, zorder=3,
+                   label=model_label(m))
+        # label on the side away from the nearer edge, so it stays inside the panel
+        right_half = span > 0 and (tx[k] - finite.min()) / span > 0.6
+        ax.annotate(model_label(m), (xv[k], yv[k]), xytext=(-6 if right_half else 6, 5),
+                    textcoords="offset points", ha="right" if right_half else "left",
+                    fontsize=6.5, color="#333333")
+    if front.any():
+        order = np.argsort(xv[front])
+        fx, fy = xv[front][order], yv[front][order]
+        ax.step(fx, fy, where="post", color="black", lw=0.9, ls="--", zorder=2,
+                label="Pareto front")
+    if log_x:
+        ax.set_xscale("log")
+        plain_log_ticks(ax.xaxis, xv)
+    ax.margins(x=0.12)
+    if xv.size:
+        pad = 0.12 * max(float(np.nanmax(yv) - np.nanmin(yv)), 1.0)
+        ax.set_ylim(max(0.0, float(np.nanmin(yv)) - pad), float(np.nanmax(yv)) + 2 * pad)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("RMSE [mg/dL]")
+    ax.set_title(title if title is not None else "Efficiency")
+    return ax
+
+
+def figure_efficiency_landscape(table: pd.DataFrame) -> Figure:
+    """Parameters, latency and a combined cost index against RMSE, fronts marked.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        One row per model with ``model``, ``rmse_mgdl``, ``n_parameters``,
+        ``latency_single_ms``, ``combined_index`` (0 = smallest and fastest, 1 =
+        largest and slowest) and the boolean fronts ``front_parameters``,
+        ``front_latency``, ``front_combined``, all computed by the caller.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    panels = (
+        ("n_parameters", "front_parameters", "trainable parameters [-]", True,
+         "Size vs accuracy"),
+        ("latency_single_ms", "front_latency", "single-sample latency [ms]", True,
+         "Speed vs accuracy"),
+        ("combined_index", "front_combined", "combined cost index [-] (0 = small and fast)",
+         False, "Combined efficiency"),
+    )
+    with plot_style():
+        fig = Figure(figsize=(13.0, 3.9), layout="constrained")
+        axes = fig.subplots(1, 3)
+        models = list(table["model"])
+        for ax, (col, front, xlabel, log_x, title) in zip(axes, panels, strict=True):
+            x = table[col].to_numpy(float)
+            ok = np.isfinite(x) & (x > 0 if log_x else True)
+            plot_efficiency(x[ok], table["rmse_mgdl"].to_numpy(float)[ok],
+                            [m for m, o in zip(models, ok, strict=True) if o],
+                            on_front=table[front].to_numpy(bool)[ok] if front in table else None,
+                            xlabel=xlabel, log_x=log_x, title=title, ax=ax)
+            if not ok.all():
+                ax.text(0.98, 0.02, f"{int((~ok).sum())} model(s) without {xlabel.split(' [')[0]}",
+                        transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color=GREY)
+        seen: dict[str, object] = {}
+        for ax in axes:
+            for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+                seen.setdefault(lab, h)
+        labels = [lab for lab in seen if lab != "Pareto front"]
+        labels += ["Pareto front"] if "Pareto front" in seen else []
+        handles = [seen[lab] for lab in labels]
+        if handles:
+            fig.legend(handles, labels, loc="outside right center", fontsize=7.5)
+    return fig

@@ -1,0 +1,171 @@
+"""Figure 7: training dynamics of the networks.
+
+Training and validation loss per epoch for each network and, for the physics-informed
+ones, each term of the loss (``train_mse``, ``train_physics``, ...), as recorded in the
+benchmark's ``histories.json``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.transforms import offset_copy
+
+from .style import (
+    GREY,
+    OKABE_ITO,
+    model_color,
+    model_label,
+    new_axes,
+    plain_log_ticks,
+    plot_style,
+    styled,
+)
+
+__all__ = ["TOTAL_LOSS_COLUMNS", "loss_term_columns", "plot_training_history",
+           "figure_training_dynamics", "NO_NETWORKS_TEXT"]
+
+#: Columns of a history holding the total losses.
+TOTAL_LOSS_COLUMNS: tuple[str, str] = ("train_loss", "val_loss")
+
+_METRIC_SUFFIXES = ("_mgdl", "_pct")
+
+#: Text of the panel drawn when a run has no networks.
+NO_NETWORKS_TEXT = "no networks in this run"
+
+_TERM_COLORS = (
+    OKABE_ITO["vermillion"],
+    OKABE_ITO["bluish_green"],
+    OKABE_ITO["reddish_purple"],
+    OKABE_ITO["orange"],
+    OKABE_ITO["sky_blue"],
+)
+
+
+def loss_term_columns(history: pd.DataFrame) -> list[str]:
+    """Per-term loss columns of a history (``train_*`` / ``val_*`` besides the totals).
+
+    Examples
+    --------
+    Columns with a unit suffix (``val_rmse_mgdl``) are metrics, not loss terms.
+
+    >>> h = pd.DataFrame({"epoch": [1], "train_loss": [1.0], "val_loss": [1.0],
+    ...                   "train_mse": [1.0], "val_rmse_mgdl": [20.0], "lr": [1e-3]})
+    >>> loss_term_columns(h)
+    ['train_mse']
+    """
+    return [
+        c for c in history.columns
+        if c.startswith(("train_", "val_")) and c not in TOTAL_LOSS_COLUMNS
+        and not c.endswith(_METRIC_SUFFIXES) and pd.api.types.is_numeric_dtype(history[c])
+    ]
+
+
+@styled
+def plot_training_history(
+    history: pd.DataFrame,
+    *,
+    color: str | None = None,
+    title: str | None = None,
+    log_scale: bool = True,
+    ax: Axes | None = None,
+) -> Axes:
+    """Loss per epoch: training and validation totals and each loss term.
+
+    Parameters
+    ----------
+    history : pandas.DataFrame
+        One row per epoch with ``epoch``, ``train_loss``, optionally ``val_loss`` and
+        per-term columns (``train_mse``, ``train_physics``, ...). [loss units of the
+        network: MSE on standardised glucose unless the model says otherwise]
+    color : str, optional
+        Colour of the total-loss lines.
+    title : str, optional
+        Axes title.
+    log_scale : bool
+        Logarithmic loss axis (when every value is positive). [-]
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure's by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes, with one line per total-loss column present and one per loss term.
+    """
+    ax = new_axes(ax, figsize=(4.6, 3.4))
+    if "epoch" in history.columns:
+        epoch = history["epoch"].to_numpy(float)
+    else:
+        epoch = np.arange(1, len(history) + 1, dtype=float)
+    color = color or OKABE_ITO["blue"]
+    values = []
+    for col, ls, lab in (("train_loss", "-", "train (total)"),
+                         ("val_loss", "--", "validation (total)")):
+        if col in history.columns:
+            y = history[col].to_numpy(float)
+            ax.plot(epoch, y, color=color, ls=ls, lw=1.6, label=lab, zorder=3)
+            values.append(y)
+    term_colors = [c for c in _TERM_COLORS if c.lower() != color.lower()]
+    terms: dict[str, str] = {}  # term -> colour, shared by its train and val curves
+    for col in loss_term_columns(history):
+        split, term = col.split("_", 1)
+        c = terms.setdefault(term, term_colors[len(terms) % len(term_colors)])
+        y = history[col].to_numpy(float)
+        ax.plot(epoch, y, color=c, ls="--" if split == "val" else "-", lw=0.9,
+                label=f"{'validation' if split == 'val' else 'train'} {term}")
+        values.append(y)
+    finite = np.concatenate(values) if values else np.array([])
+    finite = finite[np.isfinite(finite)]
+    if log_scale and finite.size and finite.min() > 0:
+        ax.set_yscale("log")
+        plain_log_ticks(ax.yaxis, finite)
+    if not values:
+        ax.text(0.5, 0.5, "no loss columns recorded", ha="center", va="center",
+                transform=ax.transAxes, color=GREY)
+    else:  # below the panel, so that no curve is hidden
+        below = offset_copy(ax.transAxes, fig=ax.figure, y=-30, units="points")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  bbox_transform=below, ncol=2, frameon=False)
+    ax.set_xlabel("epoch [-]")
+    ax.set_ylabel("loss [model units]")
+    ax.set_title(title if title is not None else "Training dynamics")
+    return ax
+
+
+def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: int = 3) -> Figure:
+    """One training-history panel per network, or a panel saying there is none.
+
+    Parameters
+    ----------
+    histories : mapping of str to pandas.DataFrame
+        Model -> per-epoch history (see :func:`plot_training_history`).
+    ncols : int
+        Panels per row. [-]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    models = list(histories)
+    with plot_style():
+        if not models:
+            fig = Figure(figsize=(6.0, 1.6), layout="constrained")
+            ax = fig.add_subplot()
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, NO_NETWORKS_TEXT, ha="center", va="center", fontsize=12,
+                    color=GREY, transform=ax.transAxes)
+            return fig
+        ncols = min(ncols, len(models))
+        nrows = -(-len(models) // ncols)
+        fig = Figure(figsize=(4.2 * ncols, 3.2 * nrows), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+        for ax, model in zip(axes, models, strict=False):
+            plot_training_history(histories[model], color=model_color(model),
+                                  title=model_label(model), ax=ax)
+        for ax in axes[len(models):]:
+            ax.set_axis_off()
+    return fig

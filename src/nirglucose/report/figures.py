@@ -1,0 +1,1030 @@
+"""Per-figure inputs computed from a benchmark results directory, and the figures.
+
+This is the computing half of the report: it reads what ``nirglucose benchmark``
+wrote (:func:`load_results`), computes what each figure shows (correlations, zone
+percentages, Bland–Altman limits and their confidence intervals, regression lines,
+normalised scores, Pareto fronts) with :mod:`nirglucose.metrics` and numpy, and hands
+plain numbers to :mod:`nirglucose.plots` (:func:`render_figures`).
+
+Required inputs: ``metrics.csv`` (or ``metrics.json``) and ``predictions.parquet``.
+Everything else (``meta.json``, ``table.md``, ``comparisons.csv``, ``histories.json``,
+``importance.csv``, ``dataset.parquet``) is optional; what is missing is listed in
+:attr:`Results.notes` and the figures that need it say so instead of drawing nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+import pandas as pd
+
+from ..exceptions import DataError
+
+__all__ = [
+    "REQUIRED_METRIC_COLUMNS",
+    "REQUIRED_PREDICTION_COLUMNS",
+    "PHYSICS_DEPTH",
+    "PHYSICS_DEPTH_LABELS",
+    "NOISE_LAYER",
+    "RADAR_AXES",
+    "RADAR_COST_DECADES",
+    "Results",
+    "RenderedFigure",
+    "load_results",
+    "model_order",
+    "first_repeat",
+    "scored_column",
+    "channel_correlations",
+    "error_grid_inputs",
+    "bland_altman_inputs",
+    "linearity_inputs",
+    "radar_scores",
+    "pareto_front",
+    "combined_cost_index",
+    "efficiency_table",
+    "physics_depth_table",
+    "importance_matrix",
+    "forest_table",
+    "pipeline_columns",
+    "environment_panels",
+    "physiology_panels",
+    "render_figures",
+]
+
+logger = logging.getLogger(__name__)
+
+#: Columns ``metrics.csv`` must have.
+REQUIRED_METRIC_COLUMNS: Final = ("model", "rmse_mgdl")
+#: Columns ``predictions.parquet`` must have.
+REQUIRED_PREDICTION_COLUMNS: Final = ("model", "reference_mgdl", "predicted_mgdl")
+
+#: Physics depth of each registered model: how much of the forward model it uses, as
+#: an ordinal level (figure 9). A presentation choice, documented here.
+PHYSICS_DEPTH: Final[dict[str, int]] = {
+    "sdnn": 0,
+    "pls": 0,
+    "original-pinn": 1,
+    "optimized-pinn": 1,
+    "selective-rte-pinn": 2,
+    "rte-pinn": 3,
+    "ebl": 4,
+    "oracle": 5,
+}
+#: Tick labels of the physics-depth levels.
+PHYSICS_DEPTH_LABELS: Final[dict[int, str]] = {
+    0: "none\n(data-driven)",
+    1: "Beer–Lambert\nloss term",
+    2: "RTE regulariser\n(2 wavelengths)",
+    3: "RTE regulariser\n(all wavelengths)",
+    4: "Beer–Lambert\nfeatures + PMF",
+    5: "exact forward\nmodel (oracle)",
+}
+
+#: Simulator layer in which each noise source acts (for the pipeline diagram).
+NOISE_LAYER: Final[dict[str, str]] = {
+    "ambient_light": "environment",
+    "humidity_coupling": "environment",
+    "pulsation": "physiology",
+    "contact_pressure": "contact",
+    "led_thermal_drift": "hardware",
+    "led_ageing": "hardware",
+    "led_flicker": "hardware",
+    "led_wavelength_shift": "hardware",
+    "dark_current": "hardware",
+    "shot": "hardware",
+    "johnson": "hardware",
+    "adc_inl": "hardware",
+    "adc_offset_drift": "hardware",
+    "pmf_measurement": "measurement",
+}
+
+#: Axes of the radar chart: (label, metrics column, higher is better, log scale).
+RADAR_AXES: Final[tuple[tuple[str, str, bool, bool], ...]] = (
+    ("RMSE", "rmse_mgdl", False, False),
+    ("MARD", "mard_pct", False, False),
+    ("Clarke A", "clarke_a_pct", True, False),
+    ("±15 %", "within15_pct", True, False),
+    ("parameters", "n_parameters", False, True),
+    ("latency", "latency_single_ms", False, True),
+)
+
+_OPTIONAL_FILES: Final = {
+    "meta.json": "run metadata (taken from metrics.json where present)",
+    "table.md": "the benchmark's table and significance statements",
+    "comparisons.csv": "paired model comparisons",
+    "histories.json": "training histories (figure 7)",
+    "importance.csv": "permutation importance (figure 11)",
+    "dataset.parquet": "the simulated dataset (figure 1)",
+}
+
+
+@dataclass
+class Results:
+    """What a benchmark results directory holds, loaded.
+
+    Attributes
+    ----------
+    directory : pathlib.Path
+        The results directory.
+    metrics : pandas.DataFrame
+        One row per model (``metrics.csv``).
+    predictions : pandas.DataFrame
+        Out-of-fold predictions (``predictions.parquet``).
+    meta : dict
+        Run metadata (``meta.json``, else the ``meta`` of ``metrics.json``).
+    table_md : str or None
+        ``table.md`` text.
+    comparisons : pandas.DataFrame or None
+        ``comparisons.csv``.
+    histories : dict of str to pandas.DataFrame, or None
+        Per-epoch histories of the networks (models with an empty history left out);
+        None when ``histories.json`` is absent.
+    importance : pandas.DataFrame or None
+        ``importance.csv``.
+    dataset : nirglucose.Dataset or None
+        ``dataset.parquet``.
+    notes : list of str
+        What is missing or was adapted, in words, for the page.
+    """
+
+    directory: Path
+    metrics: pd.DataFrame
+    predictions: pd.DataFrame
+    meta: dict[str, Any] = field(default_factory=dict)
+    table_md: str | None = None
+    comparisons: pd.DataFrame | None = None
+    histories: dict[str, pd.DataFrame] | None = None
+    importance: pd.DataFrame | None = None
+    dataset: Any = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def models(self) -> list[str]:
+        """Models in display order (:func:`model_order`)."""
+        return model_order(self.metrics["model"])
+
+    @property
+    def config(self):
+        """The resolved scenario configuration (dataset's, else the metadata's), or None."""
+        if self.dataset is not None and getattr(self.dataset, "config", None) is not None:
+            return self.dataset.config
+        cfg = self.meta.get("config")
+        if isinstance(cfg, str):
+            try:
+                cfg = json.loads(cfg)
+            except json.JSONDecodeError:
+                return None
+        if isinstance(cfg, dict):
+            from ..config import ScenarioConfig
+
+            try:
+                return ScenarioConfig.model_validate(cfg)
+            except ValueError:
+                logger.warning("meta config does not validate as a ScenarioConfig")
+        return None
+
+
+@dataclass
+class RenderedFigure:
+    """One figure of the report.
+
+    Attributes
+    ----------
+    key : str
+        Stable identifier (HTML anchor, file stem).
+    number : str
+        Figure number as printed (``"1a"``, ``"12"``).
+    title : str
+        Short title.
+    caption : str
+        One sentence stating what the figure shows.
+    png : bytes
+        The figure as PNG (embedded in the page).
+    files : list of pathlib.Path
+        PNG/SVG files written, if a figure directory was given.
+    note : str or None
+        Why the figure is reduced or missing, when it is.
+    """
+
+    key: str
+    number: str
+    title: str
+    caption: str
+    png: bytes = b""
+    files: list[Path] = field(default_factory=list)
+    note: str | None = None
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DataError(f"{path.name} in {str(path.parent)!r} is not valid JSON: {exc}") from exc
+
+
+def _read_csv(path: Path) -> pd.DataFrame:
+    try:
+        if path.stat().st_size == 0 or not path.read_text(encoding="utf-8").strip():
+            return pd.DataFrame()  # e.g. no comparisons in a one-model run
+        return pd.read_csv(path)
+    except (OSError, ValueError, pd.errors.ParserError) as exc:
+        raise DataError(
+            f"{path.name} in {str(path.parent)!r} is not a readable CSV: {exc}") from exc
+
+
+def _require_columns(frame: pd.DataFrame, required: Iterable[str], what: str) -> None:
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise DataError(f"{what} lacks column(s) {missing}; it has {list(frame.columns)}")
+
+
+def load_results(results_dir: str | Path) -> Results:
+    """Load a benchmark results directory.
+
+    Parameters
+    ----------
+    results_dir : str or path
+        Directory written by ``nirglucose benchmark --out``.
+
+    Returns
+    -------
+    Results
+
+    Raises
+    ------
+    DataError
+        If the directory is missing, or lacks ``metrics.csv``/``metrics.json`` or
+        ``predictions.parquet``, or one of them is unreadable or lacks required columns.
+    """
+    d = Path(results_dir)
+    if not d.is_dir():
+        raise DataError(f"results directory {str(d)!r} does not exist; run `nirglucose "
+                        f"benchmark --out {d}` first")
+    notes: list[str] = []
+    meta: dict[str, Any] = {}
+    metrics: pd.DataFrame | None = None
+    if (d / "metrics.json").is_file():
+        data = _read_json(d / "metrics.json")
+        if isinstance(data, dict):
+            meta = dict(data.get("meta") or {})
+            if isinstance(data.get("metrics"), list):
+                metrics = pd.DataFrame(data["metrics"])
+        elif isinstance(data, list):
+            metrics = pd.DataFrame(data)
+    if (d / "metrics.csv").is_file():
+        metrics = _read_csv(d / "metrics.csv")
+    if metrics is None:
+        raise DataError(f"results directory {str(d)!r} is incomplete: no metrics.csv or "
+                        f"metrics.json (rerun `nirglucose benchmark --out {d}`)")
+    _require_columns(metrics, REQUIRED_METRIC_COLUMNS, "metrics.csv")
+    if metrics.empty:
+        raise DataError(f"metrics.csv in {str(d)!r} has no rows")
+    metrics = metrics.assign(model=metrics["model"].astype(str))
+
+    pred_path = d / "predictions.parquet"
+    if not pred_path.is_file():
+        raise DataError(f"results directory {str(d)!r} is incomplete: no predictions.parquet "
+                        f"(rerun `nirglucose benchmark --out {d}`)")
+    try:
+        predictions = pd.read_parquet(pred_path)
+    except (OSError, ValueError) as exc:
+        raise DataError(f"predictions.parquet in {str(d)!r} is unreadable: {exc}") from exc
+    _require_columns(predictions, REQUIRED_PREDICTION_COLUMNS, "predictions.parquet")
+    predictions = predictions.assign(model=predictions["model"].astype(str))
+
+    if (d / "meta.json").is_file():
+        meta = {**meta, **(_read_json(d / "meta.json") or {})}
+    elif not meta:
+        notes.append("No run metadata (meta.json, or meta in metrics.json): configuration, "
+                     "seed, dataset hash and version are unknown.")
+
+    res = Results(directory=d, metrics=metrics, predictions=predictions, meta=meta, notes=notes)
+    if (d / "table.md").is_file():
+        res.table_md = (d / "table.md").read_text(encoding="utf-8")
+    else:
+        notes.append("No table.md: the significance statements are derived from "
+                     "comparisons.csv.")
+    if (d / "comparisons.csv").is_file():
+        res.comparisons = _read_csv(d / "comparisons.csv")
+    else:
+        notes.append("No comparisons.csv: no paired model comparisons to report.")
+    if (d / "histories.json").is_file():
+        raw = _read_json(d / "histories.json")
+        res.histories = {
+            str(m): pd.DataFrame(h) for m, h in (raw or {}).items()
+            if isinstance(h, list) and h
+        }
+    else:
+        notes.append("No histories.json: the training-dynamics figure is left out.")
+    if (d / "importance.csv").is_file():
+        imp = _read_csv(d / "importance.csv")
+        _require_columns(imp, ("model", "wavelength_nm", "rmse_increase_mgdl"), "importance.csv")
+        res.importance = imp
+    else:
+        notes.append("No importance.csv: the wavelength-utilisation figure is left out.")
+    if (d / "dataset.parquet").is_file():
+        from ..dataset import load_dataset
+
+        res.dataset = load_dataset(d / "dataset.parquet")
+    else:
+        notes.append("No dataset.parquet: the data-characteristics figures are left out.")
+    missing_pred = sorted(set(metrics["model"]) - set(predictions["model"]))
+    if missing_pred:
+        notes.append(f"No predictions for {', '.join(missing_pred)}: they are left out of the "
+                     f"per-prediction figures (3-6).")
+    return res
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def model_order(models: Iterable[str]) -> list[str]:
+    """Models in display order: registered models in the study's order, then the rest.
+
+    Examples
+    --------
+    >>> model_order(["sdnn", "mine", "ebl"])
+    ['ebl', 'sdnn', 'mine']
+    """
+    from ..plots.style import MODEL_COLORS
+
+    names = list(dict.fromkeys(str(m) for m in models))
+    known = [m for m in MODEL_COLORS if m in names]
+    return known + [m for m in names if m not in MODEL_COLORS]
+
+
+def scored_column(predictions: pd.DataFrame) -> str:
+    """Prediction column the metrics were computed on (``scored_mgdl`` if present)."""
+    return "scored_mgdl" if "scored_mgdl" in predictions.columns else "predicted_mgdl"
+
+
+def first_repeat(predictions: pd.DataFrame, model: str) -> pd.DataFrame:
+    """One model's out-of-fold predictions of the first repeat (each snapshot once)."""
+    p = predictions[predictions["model"] == model]
+    if "repeat" in p.columns and len(p):
+        p = p[p["repeat"] == p["repeat"].min()]
+    return p
+
+
+def _finite_pairs(p: pd.DataFrame, col: str) -> tuple[np.ndarray, np.ndarray, int]:
+    ref = p["reference_mgdl"].to_numpy(float)
+    pred = p[col].to_numpy(float)
+    ok = np.isfinite(ref) & np.isfinite(pred) & (ref > 0)
+    return ref[ok], pred[ok], int(np.count_nonzero(~ok))
+
+
+def channel_correlations(glucose_mgdl: np.ndarray, adc: Mapping[float, np.ndarray]
+                         ) -> dict[float, float]:
+    """Pearson r between glucose and ln(ADC code) of each channel.
+
+    Examples
+    --------
+    >>> g = np.array([80.0, 120.0, 160.0]); a = {850.0: np.array([100, 90, 80])}
+    >>> round(channel_correlations(g, a)[850.0], 3)
+    -0.999
+    """
+    out = {}
+    for wl, codes in adc.items():
+        x = np.log(np.asarray(codes, dtype=float))
+        ok = np.isfinite(x) & np.isfinite(glucose_mgdl)
+        if ok.sum() > 2 and np.ptp(x[ok]) > 0 and np.ptp(glucose_mgdl[ok]) > 0:
+            out[wl] = float(np.corrcoef(glucose_mgdl[ok], x[ok])[0, 1])
+        else:
+            out[wl] = float("nan")
+    return out
+
+
+def error_grid_inputs(predictions: pd.DataFrame, models: Sequence[str], *, kind: str = "clarke",
+                      diabetes_type: int = 1) -> tuple[dict[str, dict[str, Any]], int]:
+    """Points and zone percentages of the Clarke or Parkes grid of each model.
+
+    Uses the first repeat (each snapshot once) and the scored predictions (negative
+    ones are placed at 0 mg/dL by the benchmark, as the grids require; if only raw
+    predictions exist, negatives are placed at 0 here and counted).
+
+    Returns
+    -------
+    grids : dict
+        Model -> ``{"reference", "predicted", "zone_pct"}``.
+    n_clipped : int
+        Raw predictions below 0 placed at 0 here.
+    """
+    from ..metrics import clarke_zones, parkes_zones, zone_percentages
+
+    col = scored_column(predictions)
+    grids: dict[str, dict[str, Any]] = {}
+    clipped = 0
+    for m in models:
+        ref, pred, _ = _finite_pairs(first_repeat(predictions, m), col)
+        if ref.size == 0:
+            continue
+        neg = pred < 0
+        clipped += int(neg.sum())
+        pred = np.where(neg, 0.0, pred)
+        zones = (clarke_zones(ref, pred) if kind == "clarke"
+                 else parkes_zones(ref, pred, diabetes_type=diabetes_type))
+        grids[m] = {"reference": ref, "predicted": pred, "zone_pct": zone_percentages(zones)}
+    return grids, clipped
+
+
+def _t_quantile(level: float, dof: int) -> float:
+    from scipy.stats import t
+
+    return float(t.ppf(0.5 + level / 2.0, dof))
+
+
+def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
+                        level: float = 0.95) -> dict[str, dict[str, Any]]:
+    """Bland–Altman points, bias, limits of agreement and their confidence intervals.
+
+    The intervals are the approximate ones of Bland & Altman (1986): standard error
+    ``s / sqrt(n)`` for the bias and ``s sqrt(3 / n)`` for each limit, with a t quantile
+    on ``n - 1`` degrees of freedom. Pairs from the same subject are treated as
+    independent, so the intervals are somewhat narrow.
+
+    References
+    ----------
+    .. [1] Bland JM, Altman DG. Statistical methods for assessing agreement between two
+       methods of clinical measurement. Lancet 327(8476):307-310, 1986.
+       doi:10.1016/S0140-6736(86)90837-8
+    """
+    from ..metrics import bland_altman
+
+    col = scored_column(predictions)
+    out: dict[str, dict[str, Any]] = {}
+    for m in models:
+        ref, pred, _ = _finite_pairs(first_repeat(predictions, m), col)
+        n = ref.size
+        if n < 3:
+            continue
+        bias, low, high = bland_altman(ref, pred)
+        s = (high - bias) / 1.96
+        tq = _t_quantile(level, n - 1)
+        se_b, se_l = s / math.sqrt(n), s * math.sqrt(3.0 / n)
+        out[m] = {
+            "mean_mgdl": 0.5 * (ref + pred),
+            "difference_mgdl": pred - ref,
+            "bias": bias, "loa_low": low, "loa_high": high,
+            "bias_ci": (bias - tq * se_b, bias + tq * se_b),
+            "loa_low_ci": (low - tq * se_l, low + tq * se_l),
+            "loa_high_ci": (high - tq * se_l, high + tq * se_l),
+        }
+    return out
+
+
+def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
+                     level: float = 0.95) -> dict[str, dict[str, Any]]:
+    """Least-squares line of predicted on reference glucose, its slope CI and R²."""
+    col = scored_column(predictions)
+    out: dict[str, dict[str, Any]] = {}
+    for m in models:
+        ref, pred, _ = _finite_pairs(first_repeat(predictions, m), col)
+        n = ref.size
+        if n < 3 or np.ptp(ref) == 0:
+            continue
+        slope, intercept = np.polyfit(ref, pred, 1)
+        resid = pred - (intercept + slope * ref)
+        sxx = float(np.sum((ref - ref.mean()) ** 2))
+        se = math.sqrt(float(resid @ resid) / (n - 2) / sxx)
+        tq = _t_quantile(level, n - 2)
+        sst = float(np.sum((pred - pred.mean()) ** 2))
+        r2 = 1.0 - float(resid @ resid) / sst if sst > 0 else float("nan")
+        out[m] = {"reference": ref, "predicted": pred, "slope": float(slope),
+                  "intercept": float(intercept), "r_squared": r2,
+                  "slope_ci": (float(slope - tq * se), float(slope + tq * se))}
+    return out
+
+
+def _metric(metrics: pd.DataFrame, models: Sequence[str], col: str) -> np.ndarray:
+    if col not in metrics.columns:
+        return np.full(len(models), np.nan)
+    s = metrics.drop_duplicates("model").set_index("model")[col]
+    return pd.to_numeric(s.reindex(list(models)), errors="coerce").to_numpy(float)
+
+
+#: Decades of parameters or latency above the smallest model's that score 0 on the radar.
+RADAR_COST_DECADES: Final = 6.0
+
+
+def radar_scores(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Scores in [0, 1] per model and radar axis, 1 = best of these models.
+
+    Accuracy axes are ratios to the best model (``best / x`` for RMSE and MARD,
+    ``x / best`` for Clarke A and ±15 %), so that close models look close. Cost axes
+    (parameters, latency) lose ``1 / RADAR_COST_DECADES`` per decade above the
+    cheapest model: ``1 - log10(x / best) / 6``, floored at 0 (parameter counts below 1
+    and latencies below 1 µs count as 1 and 1 µs). A missing value is NaN.
+
+    Examples
+    --------
+    >>> m = pd.DataFrame({"model": ["a", "b"], "rmse_mgdl": [10.0, 20.0],
+    ...                   "n_parameters": [100, 100_000]})
+    >>> s = radar_scores(m, ["a", "b"])
+    >>> s["RMSE"].tolist(), s["parameters"].tolist()
+    ([1.0, 0.5], [1.0, 0.5])
+    """
+    cols = {}
+    for label, col, higher, log in RADAR_AXES:
+        v = _metric(metrics, models, col)
+        floor = 1.0 if col == "n_parameters" else 1e-3  # 0 parameters scores as 1
+        ok = np.isfinite(v) & (v > 0 if not (log or higher) else v >= 0)
+        score = np.full(v.shape, np.nan)
+        if ok.any():
+            if log:
+                x = np.log10(np.maximum(v[ok], floor))
+                score[ok] = np.clip(1.0 - (x - x.min()) / RADAR_COST_DECADES, 0.0, 1.0)
+            elif higher:
+                best = v[ok].max()
+                score[ok] = v[ok] / best if best > 0 else 1.0
+            else:
+                score[ok] = v[ok].min() / v[ok]
+        cols[label] = score
+    return pd.DataFrame(cols, index=pd.Index(list(models), name="model"))
+
+
+def pareto_front(cost: Sequence[float], rmse: Sequence[float]) -> np.ndarray:
+    """Mask of points no other point dominates (both lower-or-equal, one strictly lower).
+
+    Examples
+    --------
+    >>> pareto_front([1, 2, 3, 4], [10, 5, 7, 4]).tolist()
+    [True, True, False, True]
+    """
+    c = np.asarray(cost, dtype=float)
+    r = np.asarray(rmse, dtype=float)
+    ok = np.isfinite(c) & np.isfinite(r)
+    le = (c[:, None] <= c[None, :]) & (r[:, None] <= r[None, :])
+    lt = (c[:, None] < c[None, :]) | (r[:, None] < r[None, :])
+    dominated = (le & lt & ok[:, None]).any(axis=0)
+    return ok & ~dominated
+
+
+def combined_cost_index(n_parameters: Sequence[float], latency_ms: Sequence[float]
+                        ) -> np.ndarray:
+    """Mean of the min–max normalised log10 parameter count and log10 latency.
+
+    0 is the smallest and fastest model of the set, 1 the largest and slowest (counts
+    below 1 parameter and latencies below 1 µs are taken as 1 and 1 µs).
+
+    Examples
+    --------
+    >>> combined_cost_index([10, 1000], [0.01, 1.0]).tolist()
+    [0.0, 1.0]
+    """
+    parts = []
+    for v, floor in ((n_parameters, 1.0), (latency_ms, 1e-3)):
+        x = np.log10(np.maximum(np.asarray(v, dtype=float), floor))
+        finite = x[np.isfinite(x)]
+        if finite.size and np.ptp(finite) > 0:
+            parts.append((x - finite.min()) / np.ptp(finite))
+        else:
+            parts.append(np.where(np.isfinite(x), 0.0, np.nan))
+    return np.nanmean(np.vstack(parts), axis=0) if parts else np.array([])
+
+
+def efficiency_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Inputs of figure 10: costs, the combined index and the three Pareto fronts."""
+    t = pd.DataFrame({
+        "model": list(models),
+        "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
+        "n_parameters": _metric(metrics, models, "n_parameters"),
+        "latency_single_ms": _metric(metrics, models, "latency_single_ms"),
+    })
+    t["combined_index"] = combined_cost_index(t["n_parameters"], t["latency_single_ms"])
+    for col, front, log in (("n_parameters", "front_parameters", True),
+                            ("latency_single_ms", "front_latency", True),
+                            ("combined_index", "front_combined", False)):
+        cost = t[col].to_numpy(float)
+        if log:  # a log axis cannot show zero cost: the front is among what is drawn
+            cost = np.where(cost > 0, cost, np.nan)
+        t[front] = pareto_front(cost, t["rmse_mgdl"])
+    return t
+
+
+def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str]) -> tuple[pd.DataFrame,
+                                                                                list[str]]:
+    """Inputs of figure 9 and the models left out (no known physics depth)."""
+    known = [m for m in models if m in PHYSICS_DEPTH]
+    t = pd.DataFrame({
+        "model": known,
+        "physics_depth": [PHYSICS_DEPTH[m] for m in known],
+        "rmse_mgdl": _metric(metrics, known, "rmse_mgdl"),
+        "n_parameters": _metric(metrics, known, "n_parameters"),
+    })
+    t = t[np.isfinite(t["rmse_mgdl"]) & np.isfinite(t["n_parameters"])].reset_index(drop=True)
+    t["on_front"] = pareto_front(t["n_parameters"], t["rmse_mgdl"])
+    # spread models sharing a level
+    t["x_offset"] = 0.0
+    for _, idx in t.groupby("physics_depth").groups.items():
+        k = len(idx)
+        if k > 1:
+            t.loc[idx, "x_offset"] = np.linspace(-0.3, 0.3, k)
+    left_out = [m for m in models if m not in set(t["model"])]
+    return t, left_out
+
+
+def importance_matrix(importance: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Models × wavelengths matrix of the mean RMSE increase (rows in display order)."""
+    mat = importance.pivot_table(index="model", columns="wavelength_nm",
+                                 values="rmse_increase_mgdl", aggfunc="mean")
+    rows = [m for m in models if m in mat.index] + [m for m in mat.index if m not in models]
+    return mat.reindex(rows).sort_index(axis=1)
+
+
+def _study_rows() -> dict[str, dict[str, Any]]:
+    from ..evaluation.reference import STUDY_TABLE
+
+    return {str(r["model"]): dict(r) for r in STUDY_TABLE}
+
+
+def forest_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Inputs of figure 12: RMSE, its interval, and the study's RMSE where it has one."""
+    study = _study_rows()
+    return pd.DataFrame({
+        "model": list(models),
+        "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
+        "rmse_ci_low": _metric(metrics, models, "rmse_ci_low"),
+        "rmse_ci_high": _metric(metrics, models, "rmse_ci_high"),
+        "study_rmse_mgdl": [float(study[m]["rmse_mgdl"]) if m in study else np.nan
+                            for m in models],
+    })
+
+
+# --------------------------------------------------------------------------- data figures
+
+
+def _fmt_range(v: Sequence[float], unit: str) -> str:
+    return f"{v[0]:g}–{v[1]:g} {unit}"
+
+
+def pipeline_columns(config) -> list[list[dict[str, Any]]]:
+    """Boxes of the pipeline diagram (figure 2), from a resolved ScenarioConfig.
+
+    Each box lists settings of its layer and the noise sources acting in it
+    (:data:`NOISE_LAYER`), on (with their effective factor, enabled × scale ×
+    ``noise_scale``) or off.
+    """
+    from ..config import NOISE_SOURCES
+
+    noise: dict[str, tuple[list[str], list[str]]] = {}
+    for src in NOISE_SOURCES:
+        layer = NOISE_LAYER.get(src, "hardware")
+        on, off = noise.setdefault(layer, ([], []))
+        f = config.noise_factor(src)
+        (on if f > 0 else off).append(f"{src.replace('_', ' ')}" + (f" ×{f:g}" if f > 0 and f != 1
+                                                                       else ""))
+
+    def box(title: str, layers: Sequence[str], details: list[str], kind: str) -> dict[str, Any]:
+        on = [s for layer in layers for s in noise.get(layer, ([], []))[0]]
+        off = [s for layer in layers for s in noise.get(layer, ([], []))[1]]
+        return {"title": title, "details": details, "noise_on": on, "noise_off": off,
+                "kind": kind}
+
+    env, phys, glu, hw, opt = (config.environment, config.physiology, config.glucose,
+                               config.hardware, config.optics)
+    wl = ", ".join(f"{w:g}" for w in config.leds.wavelengths_nm)
+    status = [f"  {k} {v:.0%}" for k, v in glu.status_probs.items()]
+    return [
+        [
+            box("Environment", ("environment",), [
+                f"ambient {_fmt_range(env.temperature_c, '°C')}",
+                f"RH {_fmt_range(env.humidity_pct, '%')}",
+                f"light {_fmt_range(env.ambient_lux, 'lx')}",
+            ], "input"),
+            box("Glucose", (), [
+                f"signal gain ×{glu.signal_gain:g}",
+                "diabetes status mix:",
+                *status,
+            ], "input"),
+            box("Physiology + contact", ("physiology", "contact"), [
+                f"age {_fmt_range(phys.age_yr, 'yr')}",
+                f"variation scale ×{phys.variation_scale:g}",
+                f"coupling SD {config.contact.coupling_sd:g}",
+            ], "input"),
+        ],
+        [
+            box(f"Optics: {opt.model}", (), [
+                f"LEDs {wl} nm",
+                f"source–detector {opt.source_detector_mm:g} mm",
+                f"water spectrum: {opt.water_source}",
+                "μa: water, Hb, HbO2, lipid, melanin, glucose; μs′: power law, "
+                "lowered by glucose",
+            ], "optics"),
+        ],
+        [
+            box("Hardware", ("hardware",), [
+                f"LED power {', '.join(f'{p:g}' for p in hw.led_power_mw)} mW",
+                f"TIA gain {hw.tia_gain_ohm:.0e} Ω",
+                f"ADC {hw.adc_bits} bit, {hw.adc_vref_v:g} V",
+            ], "hardware"),
+        ],
+        [
+            box("Measured outputs", ("measurement",), [
+                "adc_<nm>: codes per LED",
+                "adc_ref_<nm>: start-up reference",
+                "PMF vector (12 measured values)",
+            ], "output"),
+        ],
+    ]
+
+
+def _panel(frame: pd.DataFrame, cols: Sequence[str], xlabel: str, log: bool = False
+           ) -> dict[str, Any] | None:
+    for c in cols:
+        if c in frame.columns:
+            return {"values": frame[c].to_numpy(float), "xlabel": xlabel, "log": log}
+    return None
+
+
+def environment_panels(frame: pd.DataFrame) -> list[dict[str, Any]]:
+    """Panels of the environment figure (true ambient conditions where recorded)."""
+    panels = [
+        _panel(frame, ["true_ambient_temperature_c"], "ambient temperature [°C]"),
+        _panel(frame, ["true_humidity_pct", "humidity_pct"], "relative humidity [%]"),
+        _panel(frame, ["true_pressure_mbar", "pressure_mbar"], "barometric pressure [mbar]"),
+        _panel(frame, ["true_ambient_lux", "ambient_lux"], "ambient illuminance [lx]", log=True),
+    ]
+    out = [p for p in panels if p is not None]
+    if "true_light_source" in frame.columns:
+        counts = frame["true_light_source"].astype(str).value_counts()
+        out.append({"counts": counts.sort_index(), "xlabel": "ambient light source"})
+    return out
+
+
+_PHYSIOLOGY: Final = (
+    ("age_yr", "age [yr]"),
+    ("bmi_kgm2", "BMI [kg/m²]"),
+    ("melanin_fraction", "melanin [volume fraction]"),
+    ("skin_thickness_mm", "skin thickness [mm]"),
+    ("hydration_pct", "hydration [% of nominal]"),
+    ("systolic_bp_mmhg", "systolic BP [mmHg]"),
+    ("heart_rate_bpm", "heart rate [1/min]"),
+    ("resp_rate_bpm", "respiration rate [1/min]"),
+    ("skin_temp_c", "skin temperature [°C]"),
+)
+
+
+def physiology_panels(frame: pd.DataFrame) -> list[dict[str, Any]]:
+    """Panels of the physiology figure (the measured physiological vector)."""
+    out: list[dict[str, Any]] = []
+    if "fitzpatrick_type" in frame.columns:
+        counts = frame["fitzpatrick_type"].astype(int).value_counts().sort_index()
+        out.append({"counts": {f"{k}": int(v) for k, v in counts.items()},
+                    "xlabel": "Fitzpatrick skin type [I–VI as 1–6]"})
+    for col, label in _PHYSIOLOGY:
+        p = _panel(frame, [col], label)
+        if p is not None:
+            out.append(p)
+    return out
+
+
+# --------------------------------------------------------------------------- rendering
+
+
+def _adc_by_wavelength(frame: pd.DataFrame, wavelengths: Sequence[float]
+                       ) -> dict[float, np.ndarray]:
+    out = {}
+    for w in wavelengths:
+        col = f"adc_{w:g}"
+        if col in frame.columns:
+            out[float(w)] = frame[col].to_numpy(float)
+    return out
+
+
+def render_figures(results: Results, figures_dir: str | Path | None = None,
+                   formats: Sequence[str] = ("png", "svg"), *,
+                   include: Iterable[str] | None = None) -> list[RenderedFigure]:
+    """Build every figure of the report from loaded results.
+
+    Parameters
+    ----------
+    results : Results
+        From :func:`load_results`.
+    figures_dir : str or path, optional
+        If given, also write each figure there as ``<number>_<key>.<fmt>``; the
+        directory is created if its parent exists.
+    formats : sequence of str
+        File formats written to ``figures_dir``. [-]
+    include : iterable of str, optional
+        Keys of the figures to render (``"clarke"``, ``"training"``, ...); all by default.
+
+    Returns
+    -------
+    list of RenderedFigure
+        In page order; a figure whose inputs are missing has no PNG and a ``note``.
+    """
+    from ..plots import agreement, data, forest, grids, pipeline, tradeoffs, training
+    from ..plots import wavelengths as wl_plots
+    from ..plots.style import figure_bytes, plot_style, save_figure
+
+    out_dir = None
+    if figures_dir is not None:
+        out_dir = Path(figures_dir)
+        if not out_dir.parent.exists():
+            raise DataError(f"figure directory's parent {str(out_dir.parent)!r} does not exist")
+        out_dir.mkdir(exist_ok=True)
+
+    wanted = None if include is None else set(include)
+    models = results.models
+    pred_models = [m for m in models if m in set(results.predictions["model"])]
+    preds = results.predictions
+    rendered: list[RenderedFigure] = []
+
+    def add(key: str, number: str, title: str, caption: str,
+            build: Callable[[], Any] | None, note: str | None = None) -> None:
+        if wanted is not None and key not in wanted:
+            return
+        fig_out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
+        if build is not None:
+            try:
+                fig = build()
+            except (ValueError, KeyError, TypeError, IndexError) as exc:
+                logger.exception("figure %s could not be drawn", number)
+                fig_out.note = f"Figure {number} could not be drawn: {exc}"
+                fig = None
+            if fig is not None:
+                fig_out.png = figure_bytes(fig, "png")
+                if out_dir is not None:
+                    fig_out.files = save_figure(fig, out_dir / f"fig{number}_{key}", formats)
+                else:
+                    fig.clear()
+        rendered.append(fig_out)
+
+    ds = results.dataset
+    n_first = len(first_repeat(preds, pred_models[0])) if pred_models else 0
+    rep_note = ("the first repeat of the cross-validation, each snapshot once"
+                if "repeat" in preds.columns and preds["repeat"].nunique() > 1 else
+                "every out-of-fold prediction")
+
+    # 1: data
+    if ds is not None:
+        frame = ds.frame
+        wls = [float(w) for w in ds.wavelengths_nm]
+        adc = _adc_by_wavelength(frame, wls)
+        g = frame["glucose_mgdl"].to_numpy(float)
+        corr = channel_correlations(g, adc)
+        corr_txt = ", ".join(f"{w:g} nm r = {r:+.2f}" for w, r in corr.items())
+        add("data", "1a", "Glucose and NIR signal",
+            f"Reference glucose of the {len(frame)} simulated snapshots by diabetes status "
+            f"(left) and the log ADC code of each LED channel against glucose, with the "
+            f"Pearson correlation ({corr_txt}).",
+            lambda: data.figure_data_characteristics(
+                g, frame["diabetes_status"].astype(str).to_numpy()
+                if "diabetes_status" in frame else np.full(len(frame), "unknown"),
+                {w: np.log(v) for w, v in adc.items()}, corr))
+        add("environment", "1b", "Environment",
+            "Distributions of the ambient conditions the snapshots were simulated under "
+            "(true temperature, humidity, pressure, illuminance and light source).",
+            lambda: data.figure_distributions(environment_panels(frame), ncols=5))
+        add("physiology", "1c", "Physiology",
+            "Distributions of the measured physiological vector the models see (its "
+            "humidity and pressure entries are shown with the environment in figure 1b).",
+            lambda: data.figure_distributions(physiology_panels(frame), ncols=5))
+    else:
+        for key, number, title in (("data", "1a", "Glucose and NIR signal"),
+                                   ("environment", "1b", "Environment"),
+                                   ("physiology", "1c", "Physiology")):
+            add(key, number, title, "Characteristics of the simulated data.", None,
+                note="No dataset.parquet in the results directory: figure not drawn.")
+
+    # 2: pipeline
+    cfg = results.config
+    if cfg is not None:
+        n_off = sum(1 for s in NOISE_LAYER if cfg.noise_factor(s) == 0)
+        add("pipeline", "2", "Data-generation pipeline",
+            f"The simulator's layers for this run, left to right in the order applied, with "
+            f"the '{cfg.optics.model}' forward model and {len(NOISE_LAYER) - n_off} of "
+            f"{len(NOISE_LAYER)} noise sources on (✓ on, with its factor when not ×1; "
+            f"✗ off).",
+            lambda: _figure_pipeline(pipeline, cfg, plot_style))
+    else:
+        add("pipeline", "2", "Data-generation pipeline", "The simulator's layers.", None,
+            note="No resolved configuration in the results: diagram not drawn.")
+
+    # 3, 4: error grids
+    cg, clipped = error_grid_inputs(preds, pred_models, kind="clarke")
+    clip_txt = f" ({clipped} negative predictions placed at 0 mg/dL)" if clipped else ""
+    add("clarke", "3", "Clarke error grids",
+        f"Clarke error grid of each model ({rep_note}, n = {n_first} per model){clip_txt}, "
+        f"with the share of points in each zone in the legend.",
+        lambda: grids.figure_error_grids(cg, kind="clarke") if cg else None,
+        note=None if cg else "No predictions: figure not drawn.")
+    pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=1)
+    add("parkes", "4", "Parkes error grids",
+        f"Parkes (consensus) error grid for type 1 diabetes of each model ({rep_note}), "
+        f"with the share of points in each zone in the legend.",
+        lambda: grids.figure_error_grids(pg, kind="parkes") if pg else None,
+        note=None if pg else "No predictions: figure not drawn.")
+
+    # 5, 6: agreement
+    ba = bland_altman_inputs(preds, pred_models)
+    add("bland_altman", "5", "Bland–Altman",
+        f"Prediction minus reference against their mean for each model ({rep_note}), with "
+        f"the bias and 95 % limits of agreement and their 95 % confidence intervals "
+        f"(shaded; Bland & Altman 1986).",
+        lambda: agreement.figure_bland_altman(ba) if ba else None,
+        note=None if ba else "Too few predictions: figure not drawn.")
+    lin = linearity_inputs(preds, pred_models)
+    add("linearity", "6", "Linearity",
+        f"Predicted against reference glucose for each model ({rep_note}), with the unity "
+        f"line and the least-squares line (slope with its 95 % CI, intercept, R²).",
+        lambda: agreement.figure_linearity(lin) if lin else None,
+        note=None if lin else "Too few predictions: figure not drawn.")
+
+    # 7: training dynamics
+    if results.histories is None:
+        add("training", "7", "Training dynamics", "Training and validation loss per epoch.",
+            None, note="No histories.json in the results directory: figure not drawn.")
+    else:
+        hist = {m: results.histories[m] for m in model_order(results.histories)}
+        add("training", "7", "Training dynamics",
+            ("Training (solid) and validation (dashed) loss per epoch of each network, and "
+             "each loss term of the physics-informed ones." if hist else
+             "No networks in this run, so there are no training curves to show."),
+            lambda: training.figure_training_dynamics(hist),
+            note=None if hist else "No networks in this run.")
+
+    # 8-10: trade-offs
+    radar_models = [m for m in models if m != "oracle"]
+    scores = radar_scores(results.metrics, radar_models)
+    add("radar", "8", "Normalised scores",
+        "Each model's RMSE, MARD, Clarke zone A and share within ±15 % as a ratio to the "
+        "best model shown (1 = best), and its parameter count and latency scored 1 for the "
+        "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound rather "
+        "than a competitor, is left out).",
+        lambda: _figure_one(lambda ax: tradeoffs.plot_radar(scores, ax=ax), (7.6, 5.0),
+                            plot_style, polar=True) if len(scores) else None,
+        note=None if len(scores) else "No model besides the oracle.")
+    depth, left_out = physics_depth_table(results.metrics, models)
+    lo_txt = f" ({', '.join(left_out)} left out: no physics depth or metrics)" if left_out else ""
+    add("physics_depth", "9", "Accuracy vs physics depth",
+        f"RMSE against how much of the forward model each method uses, bubble area "
+        f"proportional to the trainable parameter count; outlined bubbles are on the "
+        f"parameters–RMSE Pareto front{lo_txt}.",
+        lambda: _figure_one(lambda ax: tradeoffs.plot_physics_depth(
+            depth, depth_labels=PHYSICS_DEPTH_LABELS, ax=ax), (8.8, 4.8), plot_style)
+        if len(depth) else None,
+        note=None if len(depth) else "No model with a known physics depth.")
+    eff = efficiency_table(results.metrics, models)
+    add("efficiency", "10", "Efficiency landscape",
+        "RMSE against trainable parameters, single-sample latency and a combined cost index "
+        "(mean of the normalised log parameters and log latency); Pareto-optimal models "
+        "(no other model both cheaper and more accurate) are outlined and joined by a "
+        "dashed line.",
+        lambda: tradeoffs.figure_efficiency_landscape(eff))
+
+    # 11: wavelength importance
+    if results.importance is not None and len(results.importance):
+        mat = importance_matrix(results.importance, models)
+        add("wavelengths", "11", "Wavelength utilisation",
+            "Permutation importance of each LED channel for each model: the rise in "
+            "held-out RMSE when that channel's values are shuffled.",
+            lambda: _figure_one(lambda ax: wl_plots.plot_wavelength_heatmap(mat, ax=ax),
+                                (1.2 * mat.shape[1] + 4.2, 0.45 * mat.shape[0] + 1.6),
+                                plot_style))
+    else:
+        add("wavelengths", "11", "Wavelength utilisation", "Permutation importance per channel.",
+            None, note="No importance.csv in the results directory: figure not drawn.")
+
+    # 12: forest
+    ft = forest_table(results.metrics, models)
+    add("forest", "12", "RMSE with 95 % CI",
+        "Each model's RMSE with its 95 % cluster-bootstrap confidence interval, next to "
+        "the value the study reported from its single 48-snapshot test set (open diamonds).",
+        lambda: _figure_one(lambda ax: forest.plot_rmse_forest(ft, ax=ax),
+                            (7.0, 0.5 * len(ft) + 1.5), plot_style))
+    return rendered
+
+
+def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style, polar: bool = False):
+    from matplotlib.figure import Figure
+
+    with plot_style():
+        fig = Figure(figsize=figsize, layout="constrained")
+        ax = fig.add_subplot(projection="polar" if polar else None)
+        draw(ax)
+    return fig
+
+
+def _figure_pipeline(pipeline_mod, cfg, plot_style):
+    from matplotlib.figure import Figure
+
+    cols = pipeline_columns(cfg)
+    with plot_style():
+        fig = Figure(figsize=(12.0, pipeline_mod.pipeline_height_in(cols)),
+                     layout="constrained")
+        pipeline_mod.plot_pipeline(
+            cols, ax=fig.add_subplot(),
+            title=f"Simulator layers: preset '{cfg.preset}', global noise scale "
+                  f"×{cfg.noise_scale:g}")
+    return fig

@@ -1,0 +1,434 @@
+"""The HTML report: one self-contained page from a benchmark results directory.
+
+The page holds the reproduced table (ours, with 95 % confidence intervals, next to the
+study's Table 1), the significance statements, the run's configuration, seed, dataset
+hash and package version, and every figure with a one-sentence caption. Figures are
+embedded as base64 PNG; the style sheet is inline; the page loads nothing from the
+network and runs no script. It is written atomically.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import json
+import math
+import re
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..exceptions import DataError
+from .figures import RenderedFigure, Results, load_results, render_figures
+
+__all__ = ["build_report", "render_html", "markdown_to_html", "REPORT_TITLE"]
+
+#: Title of the page.
+REPORT_TITLE = "nirglucose benchmark report"
+
+_CSS = """
+:root { --fg: #1b1b1b; --muted: #5a5a5a; --line: #d0d0d0; --accent: #0072B2; }
+* { box-sizing: border-box; }
+body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", sans-serif;
+       color: var(--fg); margin: 0 auto; max-width: 1280px; padding: 1.5rem 2rem 4rem;
+       line-height: 1.45; font-size: 15px; background: #fff; }
+h1 { font-size: 1.6rem; margin: 0 0 .3rem; }
+h2 { font-size: 1.25rem; margin: 2.2rem 0 .6rem; border-bottom: 1px solid var(--line);
+     padding-bottom: .2rem; }
+h3 { font-size: 1.05rem; margin: 1.4rem 0 .4rem; }
+p.sub { color: var(--muted); margin: 0 0 1rem; }
+nav ol { margin: .3rem 0; }
+nav ol.figs { columns: 3; padding-left: 1.4rem; }
+table { border-collapse: collapse; margin: .6rem 0 1rem; font-size: 13px; }
+th, td { border: 1px solid var(--line); padding: .25rem .45rem; text-align: right;
+         vertical-align: top; }
+th { background: #f3f6f9; text-align: center; }
+td { white-space: nowrap; }
+td:first-child, th:first-child { text-align: left; }
+td.study { background: #fafafa; color: var(--muted); }
+.scroll { overflow-x: auto; }
+figure { margin: 1.2rem 0 2rem; }
+figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
+figcaption { color: var(--fg); margin-top: .35rem; max-width: 70rem; }
+figcaption b { color: var(--accent); }
+.note { border-left: 4px solid #E69F00; background: #fff8e8; padding: .45rem .8rem;
+        margin: .6rem 0; }
+dl.meta { display: grid; grid-template-columns: max-content auto; gap: .15rem 1rem; }
+dl.meta dt { font-weight: 600; }
+dl.meta dd { margin: 0; font-family: ui-monospace, "DejaVu Sans Mono", monospace;
+             font-size: 13px; overflow-wrap: anywhere; }
+pre { background: #f6f8fa; padding: .7rem; overflow-x: auto; font-size: 12px; }
+code { font-family: ui-monospace, "DejaVu Sans Mono", monospace; font-size: .92em; }
+details summary { cursor: pointer; color: var(--accent); }
+.sig { color: #D55E00; font-weight: 600; }
+"""
+
+# (metrics column, ci stem, study column, header, digits)
+_TABLE_COLUMNS: tuple[tuple[str, str | None, str | None, str, int], ...] = (
+    ("rmse_mgdl", "rmse", "rmse_mgdl", "RMSE [mg/dL]", 1),
+    ("mard_pct", "mard", "mard_pct", "MARD [%]", 1),
+    ("clarke_a_pct", "clarke_a", "clarke_a_pct", "Clarke A [%]", 1),
+    ("within15_pct", "within15", "within15_pct", "±15 % [%]", 1),
+    ("n_parameters", None, "n_parameters", "Parameters", 0),
+    ("latency_single_ms", None, "latency_single_ms", "Latency [ms/sample]", 3),
+)
+
+_EXTRA_COLUMNS: tuple[tuple[str, str, int], ...] = (
+    ("clarke_ab_pct", "Clarke A+B [%]", 1),
+    ("parkes_a_pct", "Parkes A [%]", 1),
+    ("iso15197_pct", "ISO 15197 [%]", 1),
+    ("bias_mgdl", "bias [mg/dL]", 1),
+    ("loa_low_mgdl", "LoA low [mg/dL]", 1),
+    ("loa_high_mgdl", "LoA high [mg/dL]", 1),
+    ("throughput_per_s", "throughput [1/s]", 0),
+    ("rmse_vs_oracle", "RMSE / oracle [-]", 2),
+    ("n_predictions", "predictions [-]", 0),
+)
+
+
+def _esc(x: Any) -> str:
+    return html.escape(str(x), quote=True)
+
+
+def _num(v: Any, digits: int = 1) -> str:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return "–" if v is None or v == "" else _esc(v)
+    if not math.isfinite(f):
+        return "–"
+    if digits == 0:
+        return f"{f:,.0f}"
+    if digits == 3:  # latencies span 0.001-100 ms
+        return f"{f:.3f}" if abs(f) < 0.1 else f"{f:.2f}" if abs(f) < 10 else f"{f:.1f}"
+    return f"{f:,.{digits}f}"
+
+
+def _pval(v: Any) -> str:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return "–"
+    return f"{f:.3g}" if math.isfinite(f) else "–"
+
+
+def _inline_md(text: str) -> str:
+    out = _esc(text)
+    out = re.sub(r"`([^`]+)`", r"<code>\1</code>", out)
+    out = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", out)
+    return out
+
+
+def markdown_to_html(text: str, *, skip_tables: bool = False, skip_h1: bool = False) -> str:
+    """Render the small Markdown subset the benchmark writes (headings, tables, lists).
+
+    Everything is HTML-escaped first; only headings, pipe tables, ``-`` lists,
+    paragraphs, ``code`` and ``**bold**`` are recognised.
+
+    Examples
+    --------
+    >>> markdown_to_html("# T\\n\\nA `x` <b>\\n\\n- one")
+    '<h3>T</h3>\\n<p>A <code>x</code> &lt;b&gt;</p>\\n<ul><li>one</li></ul>'
+    """
+    blocks: list[str] = []
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines):
+        line = lines[i].rstrip()
+        if not line.strip():
+            i += 1
+            continue
+        if line.startswith("#"):
+            level = len(line) - len(line.lstrip("#"))
+            if not (skip_h1 and level == 1):
+                h = min(6, level + 2)
+                blocks.append(f"<h{h}>{_inline_md(line.lstrip('#').strip())}</h{h}>")
+            i += 1
+        elif line.lstrip().startswith("|"):
+            rows = []
+            while i < len(lines) and lines[i].lstrip().startswith("|"):
+                rows.append(lines[i].strip().strip("|").split("|"))
+                i += 1
+            if skip_tables:
+                continue
+            body = [r for r in rows if not all(re.fullmatch(r"\s*:?-+:?\s*", c) for c in r)]
+            if not body:
+                continue
+            head = "".join(f"<th>{_inline_md(c.strip())}</th>" for c in body[0])
+            trs = "".join("<tr>" + "".join(f"<td>{_inline_md(c.strip())}</td>" for c in r)
+                          + "</tr>" for r in body[1:])
+            blocks.append(f'<div class="scroll"><table><thead><tr>{head}</tr></thead>'
+                          f"<tbody>{trs}</tbody></table></div>")
+        elif re.match(r"\s*[-*] ", line):
+            items = []
+            while i < len(lines) and re.match(r"\s*[-*] ", lines[i]):
+                item = re.sub(r"^\s*[-*] ", "", lines[i])
+                items.append(f"<li>{_inline_md(item)}</li>")
+                i += 1
+            blocks.append(f"<ul>{''.join(items)}</ul>")
+        else:
+            para = []
+            while (i < len(lines) and lines[i].strip() and not lines[i].startswith("#")
+                   and not lines[i].lstrip().startswith("|")
+                   and not re.match(r"\s*[-*] ", lines[i])):
+                para.append(lines[i].strip())
+                i += 1
+            blocks.append(f"<p>{_inline_md(' '.join(para))}</p>")
+    return "\n".join(blocks)
+
+
+def _model_label(model: str, metrics_row: pd.Series | None = None) -> str:
+    from ..plots.style import model_label
+
+    if metrics_row is not None and isinstance(metrics_row.get("label"), str):
+        return metrics_row["label"]
+    return model_label(model)
+
+
+def _reproduced_table(results: Results) -> str:
+    from ..evaluation.reference import STUDY_TABLE
+
+    study = {str(r["model"]): r for r in STUDY_TABLE}
+    m = results.metrics.drop_duplicates("model").set_index("model")
+    head1 = "<th rowspan=2>Model</th>" + "".join(
+        f"<th colspan=2>{_esc(h)}</th>" for _, _, _, h, _ in _TABLE_COLUMNS)
+    head2 = "".join(f"<th>{'ours [95 % CI]' if stem else 'ours'}</th><th>study</th>"
+                    for _, stem, _, _, _ in _TABLE_COLUMNS)
+    rows = []
+    for model in results.models:
+        r = m.loc[model]
+        s = study.get(model, {})
+        cells = [f"<td>{_esc(_model_label(model, r))}</td>"]
+        for col, stem, scol, _, digits in _TABLE_COLUMNS:
+            ours = _num(r.get(col), digits)
+            if stem and f"{stem}_ci_low" in r.index and f"{stem}_ci_high" in r.index:
+                lo, hi = r.get(f"{stem}_ci_low"), r.get(f"{stem}_ci_high")
+                if _num(lo) != "–":
+                    ours += f" [{_num(lo, digits)}, {_num(hi, digits)}]"
+            cells.append(f"<td>{ours}</td>")
+            cells.append(f'<td class="study">{_num(s.get(scol), digits) if s else "–"}</td>')
+        rows.append("<tr>" + "".join(cells) + "</tr>")
+    return (f'<div class="scroll"><table id="reproduced-table"><thead><tr>{head1}</tr>'
+            f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
+
+
+def _extra_table(results: Results) -> str:
+    m = results.metrics.drop_duplicates("model").set_index("model")
+    cols = [c for c in _EXTRA_COLUMNS if c[0] in m.columns]
+    if not cols:
+        return ""
+    head = "<th>Model</th>" + "".join(f"<th>{_esc(h)}</th>" for _, h, _ in cols)
+    rows = []
+    for model in results.models:
+        r = m.loc[model]
+        rows.append(f"<tr><td>{_esc(_model_label(model, r))}</td>" + "".join(
+            f"<td>{_num(r.get(c), d)}</td>" for c, _, d in cols) + "</tr>")
+    return (f'<div class="scroll"><table id="extra-table"><thead><tr>{head}</tr></thead>'
+            f"<tbody>{''.join(rows)}</tbody></table></div>")
+
+
+def _significance(results: Results) -> str:
+    parts = []
+    if results.table_md:
+        parts.append(markdown_to_html(results.table_md, skip_tables=True, skip_h1=True))
+    c = results.comparisons
+    if c is not None and len(c):
+        if not results.table_md:
+            lines = []
+            for _, r in c.iterrows():
+                sig = bool(r.get("significant")) if pd.notna(r.get("significant")) else False
+                lines.append(
+                    f"<li>{_esc(_model_label(str(r['model'])))} vs "
+                    f"{_esc(_model_label(str(r['reference_model'])))}: RMSE difference "
+                    f"{_num(r.get('rmse_diff_mgdl'))} mg/dL [{_num(r.get('ci_low'))}, "
+                    f"{_num(r.get('ci_high'))}], p (Holm) = {_pval(r.get('p_holm'))}: "
+                    + ('<span class="sig">significant</span>' if sig else "not significant")
+                    + "</li>")
+            parts.append(f"<ul>{''.join(lines)}</ul>")
+        cols = [k for k in ("family", "model", "reference_model", "rmse_diff_mgdl", "ci_low",
+                            "ci_high", "p_value", "p_holm", "significant") if k in c.columns]
+        head = "".join(f"<th>{_esc(k)}</th>" for k in cols)
+        def cell(k: str, v: Any) -> str:
+            if k.startswith("p_"):
+                return _pval(v)
+            if k in ("rmse_diff_mgdl", "ci_low", "ci_high"):
+                return _num(v)
+            return _esc(v)
+
+        body = "".join("<tr>" + "".join(f"<td>{cell(k, r[k])}</td>" for k in cols) + "</tr>"
+                       for _, r in c.iterrows())
+        parts.append(f"<details><summary>All paired comparisons (comparisons.csv, "
+                     f"{len(c)} rows)</summary><div class=\"scroll\"><table id=\"comparisons\">"
+                     f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>"
+                     f"</details>")
+    if not parts:
+        parts.append('<p class="note">No significance statements: neither table.md nor '
+                     "comparisons.csv is in the results directory.</p>")
+    return "\n".join(parts)
+
+
+def _run_info(results: Results) -> str:
+    from .. import __version__
+
+    meta = results.meta
+    ds = results.dataset
+    dataset_hash = meta.get("dataset_hash") or meta.get("dataset_sha256")
+    if not dataset_hash and ds is not None:
+        dataset_hash = f"{ds.content_hash()} (computed from dataset.parquet)"
+    items = [
+        ("protocol", meta.get("protocol")),
+        ("seed", meta.get("seed")),
+        ("preset", meta.get("preset")),
+        ("dataset hash", dataset_hash),
+        ("dataset seed", meta.get("dataset_seed", getattr(ds, "seed", None))),
+        ("subjects / snapshots",
+         f"{meta['n_subjects']} / {meta['n_snapshots']}" if "n_subjects" in meta
+         and "n_snapshots" in meta else None),
+        ("folds × repeats",
+         f"{meta['n_splits']} × {meta['repeats']}" if "n_splits" in meta and "repeats" in meta
+         else None),
+        ("package version (benchmark)", meta.get("version") or meta.get("package_version")),
+        ("package version (report)", __version__),
+        ("confidence intervals", meta.get("ci_method")),
+        ("comparisons", meta.get("comparison_method")),
+        ("timing", meta.get("timing_method")),
+        ("results directory", str(results.directory)),
+    ]
+    dl = "".join(f"<dt>{_esc(k)}</dt><dd>{_esc(v)}</dd>" for k, v in items
+                 if v is not None and v != "")
+    out = [f'<dl class="meta" id="run-info">{dl}</dl>']
+    cfg = results.config
+    if cfg is not None:
+        cfg_json = json.dumps(cfg.model_dump(mode="json"), indent=2, sort_keys=True)
+        out.append(f"<details><summary>Resolved configuration (JSON)</summary>"
+                   f'<pre id="config">{_esc(cfg_json)}</pre></details>')
+    else:
+        out.append('<p class="note">The resolved configuration is not recorded in these '
+                   "results.</p>")
+    rest = {k: v for k, v in meta.items() if k != "config"}
+    if rest:
+        out.append(f"<details><summary>All run metadata (JSON)</summary>"
+                   f"<pre>{_esc(json.dumps(rest, indent=2, sort_keys=True, default=str))}"
+                   f"</pre></details>")
+    return "\n".join(out)
+
+
+def _figure_html(f: RenderedFigure) -> str:
+    anchor = f"fig-{_esc(f.key)}"
+    cap = f"<b>Figure {_esc(f.number)}. {_esc(f.title)}.</b> {_esc(f.caption)}"
+    note = f'<p class="note">{_esc(f.note)}</p>' if f.note else ""
+    if not f.png:
+        return f'<figure id="{anchor}">{note}<figcaption>{cap}</figcaption></figure>'
+    data = base64.b64encode(f.png).decode("ascii")
+    return (f'<figure id="{anchor}"><img src="data:image/png;base64,{data}" '
+            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}">{note}'
+            f"<figcaption>{cap}</figcaption></figure>")
+
+
+def render_html(results: Results, figures: Sequence[RenderedFigure], *,
+                title: str = REPORT_TITLE) -> str:
+    """The report page as a string (no I/O).
+
+    Parameters
+    ----------
+    results : Results
+        Loaded results (:func:`nirglucose.report.figures.load_results`).
+    figures : sequence of RenderedFigure
+        Rendered figures (:func:`nirglucose.report.figures.render_figures`).
+    title : str
+        Page title.
+
+    Returns
+    -------
+    str
+        A complete, self-contained HTML document.
+    """
+    meta = results.meta
+    sub = ", ".join(p for p in (
+        f"preset {meta['preset']}" if meta.get("preset") else "",
+        f"seed {meta['seed']}" if meta.get("seed") is not None else "",
+        f"protocol {meta['protocol']}" if meta.get("protocol") else "",
+        f"{len(results.models)} models",
+        f"generated {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}",
+    ) if p)
+    notes = "".join(f'<p class="note">{_esc(n)}</p>' for n in results.notes)
+    toc_figs = "".join(f'<li><a href="#fig-{_esc(f.key)}">Figure {_esc(f.number)}: '
+                       f"{_esc(f.title)}</a></li>" for f in figures)
+    sections = [
+        f"<h1>{_esc(title)}</h1>",
+        f'<p class="sub">{_esc(sub)}</p>',
+        notes,
+        '<nav><b>Contents</b><ol><li><a href="#table">Reproduced table</a></li>'
+        '<li><a href="#significance">Significance</a></li>'
+        '<li><a href="#run">Configuration and provenance</a></li>'
+        f'<li><a href="#figures">Figures</a></li></ol><ol class="figs">{toc_figs}</ol></nav>',
+        '<h2 id="table">Reproduced table</h2>',
+        "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
+        "(single 60/20/20 split by subject, test n = 48; no intervals reported). "
+        "Latency: median single-sample prediction time on this machine.</p>",
+        _reproduced_table(results),
+        "<h3>Further metrics</h3>",
+        _extra_table(results),
+        '<h2 id="significance">Significance</h2>',
+        _significance(results),
+        '<h2 id="run">Configuration and provenance</h2>',
+        _run_info(results),
+        '<h2 id="figures">Figures</h2>',
+        *(_figure_html(f) for f in figures),
+    ]
+    body = "\n".join(s for s in sections if s)
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+        "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; "
+        "img-src data:; style-src 'unsafe-inline'\">\n"
+        "<link rel=\"icon\" href=\"data:,\">\n"
+        f"<title>{_esc(title)}</title>\n<style>{_CSS}</style>\n</head>\n<body>\n{body}\n"
+        "</body>\n</html>\n"
+    )
+
+
+def build_report(results_dir: str | Path, out_path: str | Path, *,
+                 figures_dir: str | Path | None = None) -> Path:
+    """Build the HTML report of a benchmark results directory.
+
+    Parameters
+    ----------
+    results_dir : str or path
+        Directory written by ``nirglucose benchmark --out``.
+    out_path : str or path
+        The HTML file to write (atomically); its directory must exist.
+    figures_dir : str or path, optional
+        Also write every figure there as PNG and SVG.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out_path``.
+
+    Raises
+    ------
+    DataError
+        If the results directory is missing or incomplete, or the output directory
+        does not exist.
+
+    Examples
+    --------
+    >>> build_report("results/", "results/report.html")  # doctest: +SKIP
+    PosixPath('results/report.html')
+    """
+    from ..dataset import atomic_write
+
+    out_path = Path(out_path)
+    if not out_path.parent.exists():
+        raise DataError(f"output directory {str(out_path.parent)!r} does not exist; "
+                        "create it first")
+    results = load_results(results_dir)
+    figures = render_figures(results, figures_dir)
+    page = render_html(results, figures)
+    path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
+    path.chmod(0o644)  # the temporary file was private; a report is for reading
+    return path

@@ -1,0 +1,42 @@
+"""Forest plot of RMSE (figure 12) and the wavelength heatmap (figure 11)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+from matplotlib.image import AxesImage
+
+from nirglucose.plots.forest import plot_rmse_forest
+from nirglucose.plots.wavelengths import plot_wavelength_heatmap
+
+
+def test_forest_one_errorbar_per_model_and_study_marks():
+    t = pd.DataFrame({"model": ["ebl", "pls", "oracle"], "rmse_mgdl": [14.0, 18.0, 5.0],
+                      "rmse_ci_low": [12.0, 16.0, 4.0], "rmse_ci_high": [16.0, 20.0, 6.0],
+                      "study_rmse_mgdl": [13.6, np.nan, np.nan]})
+    ax = Figure().add_subplot()
+    assert plot_rmse_forest(t, ax=ax) is ax
+    assert len(ax.containers) == 3
+    assert len(ax.collections[-1].get_offsets()) == 1  # only EBL has a study value
+    assert [t.get_text() for t in ax.get_yticklabels()][0] == "Enhanced Beer–Lambert"
+    assert ax.get_xlabel() == "RMSE [mg/dL]"
+
+
+def test_forest_without_study_values():
+    t = pd.DataFrame({"model": ["mine"], "rmse_mgdl": [10.0], "rmse_ci_low": [np.nan],
+                      "rmse_ci_high": [np.nan]})
+    ax = plot_rmse_forest(t)
+    assert len(ax.containers) == 1 and len(ax.get_legend().get_texts()) == 1
+
+
+def test_heatmap_cells_and_annotations():
+    mat = pd.DataFrame([[1.0, 2.0, 3.0, 4.0], [0.5, np.nan, 1.5, 2.5]],
+                       index=["ebl", "pls"], columns=[850.0, 940.0, 1050.0, 1150.0])
+    ax = Figure().add_subplot()
+    assert plot_wavelength_heatmap(mat, ax=ax) is ax
+    images = [a for a in ax.get_children() if isinstance(a, AxesImage)]
+    assert len(images) == 1 and images[0].get_array().shape == (2, 4)
+    assert len(ax.texts) == 7  # finite cells only
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["850", "940", "1050", "1150"]
+    assert ax.get_xlabel() == "LED wavelength [nm]"

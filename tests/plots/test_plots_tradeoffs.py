@@ -1,0 +1,91 @@
+"""Radar, physics-depth bubbles and the efficiency landscape."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.collections import PathCollection
+from matplotlib.figure import Figure
+
+from nirglucose.plots.tradeoffs import (
+    MAX_BUBBLE_PT2,
+    bubble_area,
+    figure_efficiency_landscape,
+    plot_efficiency,
+    plot_physics_depth,
+    plot_radar,
+)
+
+MODELS = ["ebl", "pls", "original-pinn", "sdnn"]
+SCORES = pd.DataFrame(
+    {"RMSE": [1.0, 0.8, 0.9, 0.4], "MARD": [1.0, 0.7, 0.9, 0.4], "Clarke A": [1, .9, .95, .8],
+     "±15 %": [1, .8, .9, .7], "parameters": [1.0, 1.0, 0.2, 0.6], "latency": [1, 1, .5, .7]},
+    index=MODELS)
+
+
+def test_radar_one_polygon_per_model():
+    ax = Figure().add_subplot(projection="polar")
+    assert plot_radar(SCORES, ax=ax) is ax
+    assert len(ax.lines) == len(MODELS)
+    assert len(ax.patches) == len(MODELS)
+    assert [t.get_text() for t in ax.get_xticklabels()] == list(SCORES.columns)
+    assert len(ax.lines[0].get_xdata()) == SCORES.shape[1] + 1  # closed outline
+
+
+def test_radar_needs_polar_axes():
+    with pytest.raises(ValueError, match="polar"):
+        plot_radar(SCORES, ax=Figure().add_subplot())
+    assert plot_radar(SCORES).name == "polar"
+
+
+def test_bubble_area_proportional_to_parameters():
+    a = bubble_area([1_000_000, 500_000, 10], 1_000_000)
+    assert a[0] == MAX_BUBBLE_PT2 and a[1] == pytest.approx(MAX_BUBBLE_PT2 / 2)
+    assert a[2] > 0  # floored so that it stays visible
+
+
+def test_physics_depth_one_bubble_per_model():
+    t = pd.DataFrame({"model": MODELS, "physics_depth": [4, 0, 1, 0],
+                      "rmse_mgdl": [13.6, 20.0, 14.6, 35.1],
+                      "n_parameters": [56, 17, 163_000, 3_713],
+                      "on_front": [True, True, False, False],
+                      "x_offset": [0.0, -0.3, 0.0, 0.3]})
+    ax = Figure().add_subplot()
+    assert plot_physics_depth(t, depth_labels={0: "none", 1: "loss", 4: "features"},
+                              ax=ax) is ax
+    scat = [c for c in ax.collections if isinstance(c, PathCollection)]
+    assert len(scat) == len(MODELS)
+    sizes = [c.get_sizes()[0] for c in scat]
+    assert sizes[2] == max(sizes)  # the largest model has the largest bubble
+    assert ax.get_ylabel() == "RMSE [mg/dL]"
+
+
+def test_efficiency_front_line():
+    ax = Figure().add_subplot()
+    out = plot_efficiency([56, 17, 163_000, 3_713], [13.6, 20.0, 14.6, 35.1], MODELS,
+                          on_front=[True, True, False, False], xlabel="parameters [-]",
+                          log_x=True, ax=ax)
+    assert out is ax
+    assert len(ax.collections) == len(MODELS)
+    assert len(ax.lines) == 1
+    np.testing.assert_array_equal(ax.lines[0].get_xdata(), [17, 56])
+    assert ax.get_xscale() == "log"
+
+
+def test_efficiency_rejects_mismatch():
+    with pytest.raises(ValueError, match="differ in length"):
+        plot_efficiency([1, 2], [1], ["a", "b"], xlabel="x")
+
+
+def test_efficiency_landscape_three_panels():
+    t = pd.DataFrame({"model": MODELS, "rmse_mgdl": [13.6, 20.0, 14.6, 35.1],
+                      "n_parameters": [56, 17, 163_000, 3_713],
+                      "latency_single_ms": [0.01, 0.02, 3.8, 0.8],
+                      "combined_index": [0.0, 0.05, 1.0, 0.6],
+                      "front_parameters": [True, True, False, False],
+                      "front_latency": [True, False, False, False],
+                      "front_combined": [True, False, False, False]})
+    fig = figure_efficiency_landscape(t)
+    assert len(fig.axes) == 3
+    assert all(len(ax.collections) == len(MODELS) for ax in fig.axes)

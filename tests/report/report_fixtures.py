@@ -1,0 +1,109 @@
+"""A small synthetic benchmark results directory, written the way the benchmark does.
+
+It does not run the benchmark: predictions are the reference plus noise, metrics are
+computed from them with :mod:`nirglucose.metrics`, and the other files follow the
+contract of ``nirglucose benchmark --out`` (metrics.csv/json, meta.json, table.md,
+comparisons.csv, predictions.parquet, histories.json, importance.csv, dataset.parquet).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+import nirglucose as ng
+from nirglucose.evaluation.reference import MODEL_LABELS
+from nirglucose.metrics import summary
+
+#: Models of the synthetic run: a linear one, a baseline, the bound, two networks.
+SYNTHETIC_MODELS = ("ebl", "pls", "oracle", "original-pinn", "sdnn")
+_NOISE_SD = {"ebl": 14.0, "pls": 20.0, "oracle": 5.0, "original-pinn": 16.0, "sdnn": 30.0}
+_PARAMS = {"ebl": 56, "pls": 17, "oracle": 0, "original-pinn": 163_000, "sdnn": 3_713}
+_LATENCY = {"ebl": 0.02, "pls": 0.03, "oracle": 0.5, "original-pinn": 1.2, "sdnn": 0.4}
+_NETWORKS = ("original-pinn", "sdnn")
+#: Models of the shared report fixture: a linear model, the bound and a physics-informed
+#: network (three keep the tests fast while covering every kind of figure input).
+REPORT_TEST_MODELS = ("ebl", "oracle", "original-pinn")
+
+
+def write_synthetic_results(out: Path, *, models=SYNTHETIC_MODELS, networks=_NETWORKS,
+                            n_subjects: int = 20, per_subject: int = 3, repeats: int = 2,
+                            seed: int = 0, with_optional: bool = True) -> Path:
+    """Write a results directory under ``out`` and return it."""
+    out.mkdir(parents=True, exist_ok=True)
+    ds = ng.simulate("paper", n_subjects, per_subject, seed)
+    frame = ds.frame
+    rng = np.random.default_rng(seed)
+    ref = frame["glucose_mgdl"].to_numpy(float)
+    parts = []
+    for m in models:
+        for r in range(repeats):
+            pred = ref + rng.normal(0.0, _NOISE_SD.get(m, 20.0), ref.size)
+            parts.append(pd.DataFrame({
+                "model": m, "subject_id": frame["subject_id"], "measurement_id":
+                frame["measurement_id"], "repeat": r, "fold": frame["subject_id"] % 5,
+                "reference_mgdl": ref, "predicted_mgdl": pred,
+                "scored_mgdl": np.maximum(pred, 0.0),
+            }))
+    preds = pd.concat(parts, ignore_index=True)
+    rows = []
+    for m in models:
+        p = preds[preds["model"] == m]
+        s = summary(p["reference_mgdl"], p["scored_mgdl"])
+        row = {"model": m, "label": MODEL_LABELS.get(m, m),
+               **{k: v for k, v in s.items() if k != "n"}}
+        for stem, col in (("rmse", "rmse_mgdl"), ("mard", "mard_pct"),
+                          ("clarke_a", "clarke_a_pct"), ("within15", "within15_pct"),
+                          ("bias", "bias_mgdl")):
+            row[f"{stem}_ci_low"] = row[col] - 2.0
+            row[f"{stem}_ci_high"] = row[col] + 2.0
+        row.update(n_parameters=_PARAMS.get(m, 100), latency_single_ms=_LATENCY.get(m, 1.0),
+                   throughput_per_s=1e4, n_predictions=len(p))
+        rows.append(row)
+    metrics = pd.DataFrame(rows)
+    oracle = metrics.loc[metrics["model"] == "oracle", "rmse_mgdl"]
+    metrics["rmse_vs_oracle"] = metrics["rmse_mgdl"] / (oracle.iloc[0] if len(oracle) else np.nan)
+    meta = {"protocol": "grouped-cv", "seed": seed, "preset": "paper",
+            "dataset_hash": ds.content_hash(), "version": ng.__version__,
+            "n_subjects": n_subjects, "n_snapshots": len(frame), "n_splits": 5,
+            "repeats": repeats, "config": json.loads(ds.config.to_json())}
+    metrics.to_csv(out / "metrics.csv", index=False)
+    (out / "metrics.json").write_text(json.dumps(
+        {"meta": meta, "metrics": json.loads(metrics.to_json(orient="records"))}))
+    preds.to_parquet(out / "predictions.parquet")
+    if not with_optional:
+        return out
+    (out / "meta.json").write_text(json.dumps(meta))
+    (out / "table.md").write_text(
+        "# Benchmark against the reference study (Table 1)\n\nOurs: synthetic fixture.\n\n"
+        "| Model | RMSE |\n|---|---|\n| ebl | 14 |\n\n"
+        "Significant rankings: best is Enhanced Beer–Lambert; significantly different from "
+        "it: SDNN; not distinguishable from it: PLS.\n\n"
+        "- Enhanced Beer–Lambert < SDNN: holds (significant)\n")
+    comp = pd.DataFrame([{"family": "vs_best", "model": m, "reference_model": "ebl",
+                          "rmse_diff_mgdl": 3.0, "ci_low": -1.0, "ci_high": 7.0,
+                          "p_value": 0.2, "p_holm": 0.4, "significant": False}
+                         for m in models if m not in ("ebl", "oracle")])
+    comp.to_csv(out / "comparisons.csv", index=False)
+    hist = {}
+    for m in models:
+        if m in networks:
+            e = np.arange(1, 16)
+            hist[m] = [{"epoch": int(k), "train_loss": float(1.0 / k + 0.1),
+                        "val_loss": float(1.2 / k + 0.15),
+                        **({"train_mse": float(0.9 / k + 0.1),
+                            "train_physics": float(0.1 / k)} if "pinn" in m else {})}
+                       for k in e]
+        else:
+            hist[m] = []
+    (out / "histories.json").write_text(json.dumps(hist))
+    imp = pd.DataFrame([{"model": m, "wavelength_nm": w,
+                         "rmse_increase_mgdl": float(rng.uniform(0, 10)),
+                         "rmse_increase_sd_mgdl": 1.0, "n_tasks": 10}
+                        for m in models for w in ds.wavelengths_nm])
+    imp.to_csv(out / "importance.csv", index=False)
+    ds.save(out / "dataset.parquet")
+    return out

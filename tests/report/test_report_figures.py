@@ -1,0 +1,128 @@
+"""Per-figure inputs computed by the report layer."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from nirglucose.config import resolve_config
+from nirglucose.metrics import bland_altman, clarke_zones, zone_percentages
+from nirglucose.report.figures import (
+    bland_altman_inputs,
+    channel_correlations,
+    combined_cost_index,
+    efficiency_table,
+    error_grid_inputs,
+    importance_matrix,
+    linearity_inputs,
+    model_order,
+    pareto_front,
+    physics_depth_table,
+    pipeline_columns,
+    radar_scores,
+)
+
+RNG = np.random.default_rng(3)
+REF = RNG.uniform(80, 300, 60)
+
+
+def _preds(models=("ebl", "pls"), repeats=2):
+    rows = []
+    for m in models:
+        for r in range(repeats):
+            rows.append(pd.DataFrame({"model": m, "repeat": r, "subject_id": np.arange(60) // 3,
+                                      "reference_mgdl": REF,
+                                      "predicted_mgdl": REF + RNG.normal(0, 15, 60)}))
+    return pd.concat(rows, ignore_index=True)
+
+
+def test_error_grid_inputs_use_first_repeat_and_metrics():
+    p = _preds()
+    grids, clipped = error_grid_inputs(p, ["ebl", "pls"])
+    assert clipped == 0 and list(grids) == ["ebl", "pls"]
+    g = grids["ebl"]
+    assert g["reference"].size == 60
+    first = p[(p["model"] == "ebl") & (p["repeat"] == 0)]
+    assert g["zone_pct"] == zone_percentages(clarke_zones(first["reference_mgdl"],
+                                                          first["predicted_mgdl"]))
+
+
+def test_error_grid_inputs_place_negative_predictions_at_zero():
+    p = _preds(("ebl",), 1)
+    p.loc[0, "predicted_mgdl"] = -5.0
+    grids, clipped = error_grid_inputs(p, ["ebl"], kind="parkes")
+    assert clipped == 1 and grids["ebl"]["predicted"].min() == 0.0
+
+
+def test_bland_altman_inputs_intervals():
+    p = _preds(("ebl",), 1)
+    out = bland_altman_inputs(p, ["ebl"])["ebl"]
+    bias, low, high = bland_altman(p["reference_mgdl"], p["predicted_mgdl"])
+    assert (out["bias"], out["loa_low"], out["loa_high"]) == (bias, low, high)
+    for key, value in (("bias_ci", bias), ("loa_low_ci", low), ("loa_high_ci", high)):
+        lo, hi = out[key]
+        assert lo < value < hi
+    # limits are less certain than the bias: sqrt(3) times wider (Bland & Altman 1986)
+    width = np.diff(out["loa_low_ci"])[0] / np.diff(out["bias_ci"])[0]
+    assert width == pytest.approx(np.sqrt(3))
+
+
+def test_linearity_inputs_recover_a_line():
+    p = pd.DataFrame({"model": "m", "reference_mgdl": REF,
+                      "predicted_mgdl": 0.8 * REF + 20 + RNG.normal(0, 1e-6, REF.size)})
+    out = linearity_inputs(p, ["m"])["m"]
+    assert out["slope"] == pytest.approx(0.8) and out["intercept"] == pytest.approx(20.0)
+    assert out["r_squared"] == pytest.approx(1.0)
+
+
+def test_channel_correlations():
+    adc = {850.0: np.exp(0.01 * REF), 940.0: np.full(REF.size, 2000.0)}
+    r = channel_correlations(REF, adc)
+    assert r[850.0] == pytest.approx(1.0) and np.isnan(r[940.0])
+
+
+def test_pareto_and_combined_index():
+    assert pareto_front([1, 2, 3, np.nan], [3, 2, 4, 1]).tolist() == [True, True, False, False]
+    idx = combined_cost_index([56, 163_000, 0], [0.01, 3.8, 0.5])
+    assert idx[1] == 1.0 and 0 < idx[0] < idx[2] < 1  # 0 parameters count as 1
+
+
+def test_radar_scores_orientation():
+    m = pd.DataFrame({"model": ["a", "b"], "rmse_mgdl": [10.0, 20.0], "mard_pct": [5, 10],
+                      "clarke_a_pct": [90.0, 45.0], "within15_pct": [80.0, 80.0],
+                      "n_parameters": [10, 10_000_000], "latency_single_ms": [1.0, 10.0]})
+    s = radar_scores(m, ["a", "b"])
+    assert s.loc["a"].tolist() == [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]
+    assert s.loc["b", "RMSE"] == 0.5 and s.loc["b", "Clarke A"] == 0.5
+    assert s.loc["b", "parameters"] == 0.0  # six decades above the smallest
+    assert s.loc["b", "latency"] == pytest.approx(1 - 1 / 6)
+
+
+def test_efficiency_and_depth_tables():
+    m = pd.DataFrame({"model": ["ebl", "sdnn", "oracle"], "rmse_mgdl": [14.0, 35.0, 5.0],
+                      "n_parameters": [56, 3713, 0], "latency_single_ms": [0.01, 0.8, 0.5]})
+    t = efficiency_table(m, ["ebl", "sdnn", "oracle"])
+    assert t["front_parameters"].tolist() == [True, False, False]  # 0 is off a log axis
+    assert t["front_combined"].tolist() == [True, False, True]
+    d, left_out = physics_depth_table(m, ["ebl", "sdnn", "oracle", "mine"])
+    assert list(d["model"]) == ["ebl", "sdnn", "oracle"] and left_out == ["mine"]
+
+
+def test_importance_matrix_and_order():
+    imp = pd.DataFrame({"model": ["pls", "ebl", "ebl"], "wavelength_nm": [940.0, 850.0, 940.0],
+                        "rmse_increase_mgdl": [1.0, 2.0, 3.0]})
+    mat = importance_matrix(imp, model_order(imp["model"]))
+    assert list(mat.index) == ["ebl", "pls"] and list(mat.columns) == [850.0, 940.0]
+    assert np.isnan(mat.loc["pls", 850.0])
+
+
+def test_pipeline_reflects_the_config():
+    cfg = resolve_config("paper", {"optics.model": "diffusion", "noise.shot.enabled": False,
+                                   "noise.johnson.scale": 2.0})
+    cols = pipeline_columns(cfg)
+    boxes = {b["title"]: b for col in cols for b in col}
+    assert "Optics: diffusion" in boxes
+    hw = boxes["Hardware"]
+    assert "shot" in hw["noise_off"] and "johnson ×2" in hw["noise_on"]
+    assert "ambient light" in boxes["Environment"]["noise_on"]
