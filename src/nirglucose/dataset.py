@@ -36,6 +36,7 @@ from .simulate.measurement import PMF_COLUMNS
 __all__ = [
     "Dataset",
     "load_dataset",
+    "scan_dataset",
     "PMF_COLUMNS",
     "COLUMN_UNITS",
     "adc_columns",
@@ -286,8 +287,10 @@ class Dataset:
 def load_dataset(path: str | os.PathLike) -> Dataset:
     """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
 
-    A directory is read as a partitioned Parquet dataset (all ``*.parquet`` files in
-    name order).
+    A directory is opened as a partitioned Parquet dataset (the parts its
+    ``manifest.json`` lists, else all ``*.parquet`` files in name order) without reading
+    its rows: a :class:`~nirglucose.simulate.partitioned.PartitionedDataset`, whose
+    ``frame`` is read on first access.
 
     Raises
     ------
@@ -302,13 +305,10 @@ def load_dataset(path: str | os.PathLike) -> Dataset:
     meta: dict[str, Any] = {}
     try:
         if path.is_dir():
-            parts = sorted(path.glob("*.parquet"))
-            if not parts:
-                raise DataError(f"directory {str(path)!r} holds no .parquet files")
-            tables = [pq.read_table(p) for p in parts]
-            raw = tables[0].schema.metadata or {}
-            frame = pd.concat([t.to_pandas() for t in tables], ignore_index=True)
-        elif path.suffix == ".parquet":
+            from .simulate.partitioned import open_partitioned
+
+            return open_partitioned(path)
+        if path.suffix == ".parquet":
             table = pq.read_table(path)
             raw = table.schema.metadata or {}
             frame = table.to_pandas()
@@ -336,3 +336,23 @@ def load_dataset(path: str | os.PathLike) -> Dataset:
     return Dataset(
         frame, config=config, seed=meta.get("seed"), metadata={**extra, "source": str(path)}
     )
+
+
+def scan_dataset(path: str | os.PathLike):
+    """A partitioned dataset directory as a lazy :class:`pyarrow.dataset.Dataset`.
+
+    For out-of-core work on data too large for memory: filters and column selections
+    are pushed down to the Parquet parts (``.to_table(columns=..., filter=...)``,
+    ``.to_batches()``, ``.count_rows()``).
+
+    Raises
+    ------
+    DataError
+        Not a directory of Parquet parts.
+    """
+    from .simulate.partitioned import open_partitioned
+
+    path = Path(path)
+    if not path.is_dir():
+        raise DataError(f"{str(path)!r} is not a partitioned dataset directory")
+    return open_partitioned(path).scan()

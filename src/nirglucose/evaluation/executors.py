@@ -1,0 +1,183 @@
+"""Where independent tasks run: this process, a local process pool, or a Dask cluster.
+
+:func:`run_unordered` applies one picklable function to a list of items and yields
+``(index, result)`` pairs as the tasks finish, in whatever order they finish. The
+caller owns the results (it writes them, counts them, shows progress), so the same
+loop serves every backend:
+
+``jobs=1``
+    In this process, in order (no start-up cost, easiest to debug).
+``jobs=N``
+    A local pool of ``N`` worker processes (joblib's loky backend; workers are reused,
+    BLAS threads are limited so that ``N`` workers do not oversubscribe the cores).
+``scheduler="tcp://host:8786"`` (or a :class:`distributed.Client`)
+    An existing Dask cluster. The workers need the same ``nirglucose`` version
+    installed; nothing else changes.
+
+A task must be seeded from its own specification, never from the order or the place
+it ran, so results are the same for every backend (the sweep's tasks are).
+
+Examples
+--------
+>>> sorted(run_unordered(abs, [-1, -2, 3]))
+[(0, 1), (1, 2), (2, 3)]
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from ..exceptions import ConfigError
+
+__all__ = ["BACKENDS", "available_cores", "resolve_backend", "run_unordered"]
+
+#: Backend names :func:`resolve_backend` returns.
+BACKENDS = ("serial", "processes", "dask")
+
+
+def available_cores() -> int:
+    """CPU cores this process may run on (its affinity mask, else ``os.cpu_count()``)."""
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except AttributeError:  # not Linux
+        return max(os.cpu_count() or 1, 1)
+
+
+def resolve_backend(jobs: int | None, scheduler: Any = None) -> tuple[str, int]:
+    """Backend name and worker count for ``jobs`` / ``scheduler``.
+
+    Parameters
+    ----------
+    jobs : int or None
+        Local worker processes; None uses :func:`available_cores`. Ignored with a
+        scheduler. [-]
+    scheduler : str or distributed.Client, optional
+        Dask scheduler address (``tcp://host:8786``) or a connected client.
+
+    Returns
+    -------
+    tuple of (str, int)
+        One of :data:`BACKENDS` and the local worker count (0 for Dask).
+
+    Raises
+    ------
+    ConfigError
+        ``jobs`` not a positive integer, or a scheduler that is neither an address
+        nor a client.
+    """
+    if scheduler is not None:
+        if isinstance(scheduler, str):
+            if "://" not in scheduler:
+                raise ConfigError(
+                    f"scheduler {scheduler!r} is not an address; use e.g. tcp://host:8786"
+                )
+        elif not hasattr(scheduler, "submit"):
+            raise ConfigError(
+                f"scheduler must be an address or a distributed.Client, got "
+                f"{type(scheduler).__name__}"
+            )
+        return "dask", 0
+    if jobs is None:
+        jobs = available_cores()
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ConfigError(f"jobs must be a positive integer, got {jobs!r}")
+    return ("serial", 1) if jobs == 1 else ("processes", int(jobs))
+
+
+def _indexed(fn: Callable[[Any], Any], i: int, item: Any) -> tuple[int, Any]:
+    return i, fn(item)
+
+
+def run_unordered(
+    fn: Callable[[Any], Any],
+    items: Sequence[Any],
+    *,
+    jobs: int | None = 1,
+    scheduler: Any = None,
+    keys: Sequence[str] | None = None,
+) -> Iterator[tuple[int, Any]]:
+    """Yield ``(index, fn(items[index]))`` for every item, as each task finishes.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level (picklable) function of one item.
+    items : sequence
+        Task inputs (picklable).
+    jobs : int or None
+        Local worker processes (see :func:`resolve_backend`).
+    scheduler : str or distributed.Client, optional
+        Run on this Dask cluster instead of locally.
+    keys : sequence of str, optional
+        Dask task keys (one per item, unique); default ones otherwise.
+
+    Yields
+    ------
+    tuple of (int, object)
+        The item's index and its result.
+
+    Raises
+    ------
+    ConfigError
+        Bad ``jobs`` / ``scheduler``, or no Dask scheduler at the address.
+
+    Notes
+    -----
+    Closing the generator early (an interrupt, an exception in the caller) cancels the
+    tasks not yet finished: a local pool is shut down, Dask futures are cancelled.
+    An exception raised by a task is re-raised here.
+    """
+    backend, n = resolve_backend(jobs, scheduler)
+    items = list(items)
+    if not items:
+        return
+    if backend == "dask":
+        yield from _run_dask(fn, items, scheduler, keys)
+    elif backend == "serial" or len(items) == 1:
+        for i, item in enumerate(items):
+            yield i, fn(item)
+    else:
+        from joblib import Parallel, delayed
+
+        parallel = Parallel(n_jobs=min(n, len(items)), return_as="generator_unordered")
+        yield from parallel(delayed(_indexed)(fn, i, item) for i, item in enumerate(items))
+
+
+def _run_dask(
+    fn: Callable[[Any], Any], items: list[Any], scheduler: Any, keys: Sequence[str] | None
+) -> Iterator[tuple[int, Any]]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:  # pragma: no cover - distributed is a dependency
+        raise ConfigError(
+            "a Dask scheduler needs the 'distributed' package; pip install 'dask[distributed]'"
+        ) from None
+    own = isinstance(scheduler, str)
+    if own:
+        try:
+            client = Client(scheduler, timeout="10s", set_as_default=False)
+        except (OSError, TimeoutError) as exc:
+            raise ConfigError(
+                f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}"
+            ) from None
+    else:
+        client = scheduler
+    futures = []
+    try:
+        if keys is None:
+            futures = client.map(fn, items, pure=False)
+        else:
+            futures = client.map(fn, items, key=list(keys))
+        index = {f.key: i for i, f in enumerate(futures)}
+        for fut in as_completed(futures, loop=client.loop):
+            result = fut.result()
+            yield index[fut.key], result
+            fut.release()
+    finally:
+        pending = [f for f in futures if not f.done()]
+        if pending:
+            client.cancel(pending)
+        if own:
+            client.close()

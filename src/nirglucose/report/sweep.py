@@ -1,0 +1,278 @@
+"""The sweep section of the report: figures and tables of a sweep directory.
+
+:func:`sweep_section` returns an HTML fragment (a ``<section id="sweep">``) with the
+degradation curves, the ablation or domain-shift bars and their tables, figures
+embedded as base64 PNG, for the report page to include; :func:`save_sweep_figures`
+writes the same figures as files. The numbers come from
+:mod:`nirglucose.evaluation.sweep`; the drawing from :mod:`nirglucose.plots.sweep`.
+
+>>> from nirglucose.report.sweep import sweep_section
+>>> html = sweep_section("sweep/")  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+from matplotlib.figure import Figure
+
+from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
+
+__all__ = ["SweepFigure", "MARD_LIMIT_PCT", "sweep_figures", "save_sweep_figures",
+           "sweep_section"]
+
+#: MARD above which a model is reported as no longer usable. [%]
+MARD_LIMIT_PCT = 15.0
+
+#: Axis labels of the built-in studies' varied keys.
+_KEY_LABELS = {
+    "noise_scale": "noise scale, every source (× nominal) [-]",
+    "noise.pmf_measurement.scale": "physiological-vector measurement error (× nominal) [-]",
+}
+
+
+@dataclass
+class SweepFigure:
+    """One rendered sweep figure.
+
+    Attributes
+    ----------
+    name : str
+        File stem (``"sweep_rmse"``).
+    caption : str
+        One sentence saying what the figure shows.
+    figure : matplotlib.figure.Figure
+        The figure.
+    """
+
+    name: str
+    caption: str
+    figure: Figure
+
+
+def _key_label(key: str) -> str:
+    """Axis label of a config key, with the unit from the field's description."""
+    if key in _KEY_LABELS:
+        return _KEY_LABELS[key]
+    from pydantic import BaseModel
+
+    from ..config import ScenarioConfig
+
+    model: Any = ScenarioConfig
+    desc = ""
+    for part in key.split("."):
+        fields = getattr(model, "model_fields", {})
+        if part not in fields:
+            break
+        desc = fields[part].description or ""
+        ann = fields[part].annotation
+        model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else None
+    unit = re.search(r"\[([^\]]*)\]\s*$", desc)
+    return f"{key} [{unit.group(1)}]" if unit else key
+
+
+def _numeric_key(res: SweepResult) -> str | None:
+    varied = res.meta.get("varied") or []
+    if len(varied) != 1 or varied[0] not in res.summary:
+        return None
+    vals = pd.to_numeric(res.summary[varied[0]], errors="coerce")
+    return varied[0] if vals.notna().all() and vals.nunique() > 1 else None
+
+
+def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
+    """The figures of a sweep: curves for a one-key grid, bars for ablation / cohort.
+
+    Parameters
+    ----------
+    sweep_dir : str, Path or SweepResult
+        A directory written by :func:`~nirglucose.evaluation.sweep.run_sweep`.
+
+    Returns
+    -------
+    list of SweepFigure
+    """
+    from ..plots.sweep import figure_ablation, plot_shift_bars, plot_sweep_curve
+
+    res = sweep_dir if isinstance(sweep_dir, SweepResult) else load_sweep(sweep_dir)
+    n_seeds = len(res.meta.get("seeds", []))
+    out: list[SweepFigure] = []
+    key = _numeric_key(res)
+    if key is not None:
+        xl = _key_label(key)
+        ax = plot_sweep_curve(res.summary, key, metric="rmse_mgdl", xlabel=xl)
+        out.append(SweepFigure(
+            "sweep_rmse", f"RMSE of each model against {key}: mean over {n_seeds} seeds, "
+            "band = 95 % t-interval over seeds.", ax.figure))
+        ax = plot_sweep_curve(res.summary, key, metric="mard_pct", xlabel=xl,
+                              threshold=MARD_LIMIT_PCT)
+        out.append(SweepFigure(
+            "sweep_mard", f"MARD of each model against {key}, with the "
+            f"{MARD_LIMIT_PCT:g} % line; band = 95 % t-interval over seeds.", ax.figure))
+    if res.effects is not None and "source" in res.effects:
+        out.append(SweepFigure(
+            "sweep_ablation", "Noise-source ablation: ΔRMSE when a source is switched off "
+            "with all others on (left) and when it is the only one on (right); error bars: "
+            f"95 % paired t-interval over {n_seeds} seeds.", figure_ablation(res.effects)))
+    if res.effects is not None and "shift" in res.effects:
+        ax = plot_shift_bars(res.effects)
+        out.append(SweepFigure(
+            "sweep_shift", "Domain shift: test RMSE in the training domain (hatched) and "
+            "in the shifted domain (solid); error bars: 95 % paired t-interval of the "
+            "shift's effect over seeds.", ax.figure))
+    return out
+
+
+def save_sweep_figures(
+    sweep_dir: str | Path, formats: tuple[str, ...] = ("png", "svg")
+) -> list[Path]:
+    """Write every sweep figure to ``<sweep_dir>/figures/<name>.<fmt>``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
+    from ..plots.style import save_figure
+
+    d = Path(sweep_dir)
+    figs = sweep_figures(d)
+    (d / "figures").mkdir(exist_ok=True)
+    paths: list[Path] = []
+    for f in figs:
+        paths += save_figure(f.figure, d / "figures" / f.name, formats)
+    return paths
+
+
+def _esc(x: Any) -> str:
+    return html.escape(str(x))
+
+
+def _num(v: Any, digits: int = 1) -> str:
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return _esc(v)
+    return "–" if not math.isfinite(v) else f"{v:.{digits}f}"
+
+
+def _table(head: list[str], rows: list[list[str]], table_id: str) -> str:
+    th = "".join(f"<th>{h}</th>" for h in head)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
+    return (f'<div class="scroll"><table id="{table_id}"><thead><tr>{th}</tr></thead>'
+            f"<tbody>{body}</tbody></table></div>")
+
+
+def _ci(row: pd.Series, stem: str) -> str:
+    return (f"{_num(row[f'{stem}_mean'])} [{_num(row.get(f'{stem}_ci_low'))}, "
+            f"{_num(row.get(f'{stem}_ci_high'))}]")
+
+
+def _label(model: str) -> str:
+    from ..plots.style import model_label
+
+    return _esc(model_label(model))
+
+
+def _figure_html(f: SweepFigure) -> str:
+    from ..plots.style import figure_bytes
+
+    data = base64.b64encode(figure_bytes(f.figure, "png", close=True)).decode("ascii")
+    return (f'<figure id="fig-{f.name}"><img src="data:image/png;base64,{data}" '
+            f'alt="{_esc(f.caption)}"><figcaption><b>{_esc(f.name)}.</b> '
+            f"{_esc(f.caption)}</figcaption></figure>")
+
+
+def sweep_section(sweep_dir: str | Path) -> str:
+    """An HTML fragment presenting a sweep directory, for the report page.
+
+    Parameters
+    ----------
+    sweep_dir : str or Path
+        A directory written by ``nirglucose sweep`` / :func:`run_sweep`.
+
+    Returns
+    -------
+    str
+        ``<section id="sweep">…</section>``: a description of the sweep, its tables
+        (MARD-limit crossings and RMSE per scenario; ablation or shift effects) and its
+        figures as base64 PNG. Self-contained (no script, nothing loaded).
+
+    Raises
+    ------
+    DataError
+        ``sweep_dir`` is not a sweep directory.
+    """
+    res = load_sweep(sweep_dir)
+    m = res.meta
+    layout = (f"{m.get('protocol')} ({m.get('n_splits')} folds × {m.get('repeats')} repeats)"
+              if m.get("protocol") == "grouped-cv" else str(m.get("protocol")))
+    parts = [
+        '<section id="sweep">',
+        f"<h2>Sweep: {_esc(m.get('study'))}</h2>",
+        f"<p>{len(m.get('scenarios', []))} scenarios × {len(m.get('seeds', []))} seeds × "
+        f"{len(m.get('models', []))} models ({', '.join(_label(x) for x in m.get('models', []))})"
+        f" on preset <code>{_esc(m.get('preset'))}</code>, {m.get('n_subjects')} subjects × "
+        f"{m.get('per_subject')} snapshots per dataset, {_esc(layout)} per task; "
+        f"nirglucose {_esc(m.get('version'))}. Values are means over seeds with 95 % "
+        "t-intervals over seeds.</p>",
+    ]
+    if m.get("base_overrides"):
+        sets = ", ".join(f"<code>{_esc(k)}={_esc(v)}</code>"
+                         for k, v in m["base_overrides"].items())
+        parts.append(f"<p>Shared overrides: {sets}.</p>")
+    key = _numeric_key(res)
+    s = res.summary
+    if key is not None:
+        cross = threshold_crossing(s, key, "mard_pct", MARD_LIMIT_PCT)
+        rows = [[_label(r["model"]),
+                 _num(r["crossing"], 2) if r["status"] == "crosses" else _esc(r["status"])]
+                for _, r in cross.iterrows()]
+        parts.append(f"<h3>Where MARD crosses {MARD_LIMIT_PCT:g} %</h3>")
+        parts.append(_table(["model", f"{_esc(key)} at the crossing"], rows, "sweep-crossing"))
+    if "rmse_mgdl_mean" in s:
+        label_cols = [c for c in m.get("label_columns", []) if c in s]
+        head = ["scenario", "model", "RMSE mg/dL [95 % CI]", "MARD % [95 % CI]",
+                "Clarke A %"]
+        if "rmse_vs_oracle_mean" in s and s["rmse_vs_oracle_mean"].notna().any():
+            head.append("RMSE / oracle")
+        rows = []
+        for _, r in s.iterrows():
+            name = (", ".join(f"{c}={r[c]}" for c in label_cols) if key is not None
+                    else r["scenario"])
+            row = [_esc(name), _label(r["model"]), _ci(r, "rmse_mgdl"), _ci(r, "mard_pct"),
+                   _num(r.get("clarke_a_pct_mean"))]
+            if len(head) == 6:
+                row.append(_num(r.get("rmse_vs_oracle_mean"), 2))
+            rows.append(row)
+        parts.append("<details><summary>RMSE and MARD per scenario and model "
+                     f"({len(rows)} rows)</summary>"
+                     + _table(head, rows, "sweep-summary") + "</details>")
+    e = res.effects
+    if e is not None and "source" in e and len(e):
+        parts.append("<h3>Which noise source costs most</h3>")
+        rows = [[_label(r["model"]), _esc(r["source"]),
+                 f"{_num(r['delta_off'], 2)} [{_num(r['delta_off_ci_low'], 2)}, "
+                 f"{_num(r['delta_off_ci_high'], 2)}]",
+                 f"{_num(r['delta_only'], 2)} [{_num(r['delta_only_ci_low'], 2)}, "
+                 f"{_num(r['delta_only_ci_high'], 2)}]"] for _, r in e.iterrows()]
+        parts.append(_table(["model", "source", "ΔRMSE, source off (mg/dL)",
+                             "ΔRMSE, source alone (mg/dL)"], rows, "sweep-ablation"))
+    if e is not None and "shift" in e and len(e):
+        parts.append("<h3>Domain shift</h3>")
+        rows = [[_label(r["model"]), _esc(r["shift"]), _esc(r["train_domain"]),
+                 _esc(r["test_domain"]), _num(r["in_domain"]), _num(r["shifted"]),
+                 f"{_num(r['delta'])} [{_num(r['delta_ci_low'])}, {_num(r['delta_ci_high'])}]"]
+                for _, r in e.iterrows()]
+        parts.append(_table(["model", "shift", "train", "shifted test", "RMSE in domain",
+                             "RMSE shifted", "ΔRMSE [95 % CI]"], rows, "sweep-shift"))
+    for f in sweep_figures(res):
+        parts.append(_figure_html(f))
+    parts.append("</section>")
+    return "\n".join(parts) + "\n"
