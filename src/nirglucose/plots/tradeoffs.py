@@ -45,6 +45,15 @@ MAX_BUBBLE_PT2 = 2200.0
 MIN_BUBBLE_PT2 = 14.0
 
 
+def _unit(v: np.ndarray) -> np.ndarray:
+    """Values rescaled to [0, 1] over their finite range (0.5 when constant)."""
+    v = np.asarray(v, dtype=float)
+    finite = v[np.isfinite(v)]
+    if not finite.size or np.ptp(finite) == 0:
+        return np.full(v.shape, 0.5)
+    return (v - finite.min()) / np.ptp(finite)
+
+
 def bubble_area(n_parameters: ArrayLike, max_parameters: float) -> np.ndarray:
     """Marker area proportional to the parameter count, floored at :data:`MIN_BUBBLE_PT2`.
 
@@ -231,17 +240,22 @@ def plot_efficiency(
     colors = model_colors(names)
     front = np.zeros(len(names), bool) if on_front is None else np.asarray(on_front, bool)
     tx = np.log10(np.maximum(xv, 1e-12)) if log_x else xv
-    finite = tx[np.isfinite(tx)]
-    span = float(np.ptp(finite)) if finite.size else 0.0
+    fx_, fy_ = _unit(tx), _unit(yv)
+    placed: list[tuple[float, float, bool]] = []
     for k, m in enumerate(names):
         ax.scatter([xv[k]], [yv[k]], s=55, color=colors[m], marker=model_marker(m),
                    edgecolors="black" if front[k] else "white", linewidths=1.0, zorder=3,
                    label=model_label(m))
-        # label on the side away from the nearer edge, so it stays inside the panel
-        right_half = span > 0 and (tx[k] - finite.min()) / span > 0.6
-        ax.annotate(model_label(m), (xv[k], yv[k]), xytext=(-6 if right_half else 6, 5),
+        # label on the side away from the nearer edge, so it stays inside the panel, and
+        # below the point when a label already sits above a nearby one
+        right_half = fx_[k] > 0.6
+        crowded = any(abs(fx_[k] - x) < 0.25 and abs(fy_[k] - y) < 0.08 and up
+                      for x, y, up in placed)
+        placed.append((fx_[k], fy_[k], not crowded))
+        ax.annotate(model_label(m), (xv[k], yv[k]),
+                    xytext=(-6 if right_half else 6, -6 if crowded else 5),
                     textcoords="offset points", ha="right" if right_half else "left",
-                    fontsize=6.5, color="#333333")
+                    va="top" if crowded else "baseline", fontsize=6.5, color="#333333")
     if front.any():
         order = np.argsort(xv[front])
         fx, fy = xv[front][order], yv[front][order]

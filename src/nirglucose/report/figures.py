@@ -81,10 +81,10 @@ PHYSICS_DEPTH: Final[dict[str, int]] = {
 PHYSICS_DEPTH_LABELS: Final[dict[int, str]] = {
     0: "none\n(data-driven)",
     1: "Beer–Lambert\nloss term",
-    2: "RTE regulariser\n(2 wavelengths)",
-    3: "RTE regulariser\n(all wavelengths)",
-    4: "Beer–Lambert\nfeatures + PMF",
-    5: "exact forward\nmodel (oracle)",
+    2: "RTE loss\n(2 λ)",
+    3: "RTE loss\n(all λ)",
+    4: "Beer–Lambert\nfeatures",
+    5: "forward model\n(oracle)",
 }
 
 #: Simulator layer in which each noise source acts (for the pipeline diagram).
@@ -972,7 +972,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         f"proportional to the trainable parameter count; outlined bubbles are on the "
         f"parameters–RMSE Pareto front{lo_txt}.",
         lambda: _figure_one(lambda ax: tradeoffs.plot_physics_depth(
-            depth, depth_labels=PHYSICS_DEPTH_LABELS, ax=ax), (8.8, 4.8), plot_style)
+            depth, depth_labels=PHYSICS_DEPTH_LABELS, ax=ax), (10.0, 4.8), plot_style)
         if len(depth) else None,
         note=None if len(depth) else "No model with a known physics depth.")
     eff = efficiency_table(results.metrics, models)
