@@ -92,36 +92,30 @@ def test_benchmark_writes_every_output(tmp_path, capsys):
     assert meta["config"]["noise_scale"] == 0.5 and meta["n_subjects"] == 12
     assert meta["repeats"] == 1 and meta["n_splits"] == 3
     printed = capsys.readouterr().out
-    assert "cli-ridge" in printed and "6 tasks computed, 0 reused" in printed
+    n = meta["tasks_total"]
+    assert "cli-ridge" in printed and f"{n} tasks computed, 0 reused" in printed
+    if "oracle" in meta["auxiliary_models"]:  # fitted for the ratio, not reported as a row
+        assert n == 9 and metrics["rmse_vs_oracle"].notna().all()
+    else:
+        assert n == 6 and meta["oracle_note"]
     assert main([*BASE, "--out", str(out), "--set", "noise_scale=0.5"]) == 0
-    assert "0 tasks computed, 6 reused" in capsys.readouterr().out
+    assert f"0 tasks computed, {n} reused" in capsys.readouterr().out
 
 
-def test_benchmark_on_a_saved_dataset(tmp_path, capsys):
-    data = tmp_path / "data.parquet"
+def test_benchmark_on_a_saved_csv_dataset(tmp_path, capsys):
+    data = tmp_path / "data.csv"
     ng.simulate("paper", n_subjects=10, per_subject=2, seed=3).save(data)
     out = tmp_path / "r"
-    argv = [
-        "benchmark",
-        "--data",
-        str(data),
-        "--models",
-        "cli-ridge",
-        "--folds",
-        "2",
-        "--repeats",
-        "1",
-        "--resamples",
-        "50",
-        "--protocol",
-        "paper-split",
-        "--out",
-        str(out),
-    ]
+    argv = ["benchmark", "--data", str(data), "--models", "cli-ridge", "--resamples", "50",
+            "--protocol", "paper-split", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     meta = json.loads((out / "meta.json").read_text())
     assert meta["protocol"] == "paper-split" and meta["n_snapshots"] == 20
+    assert meta["n_splits"] == 1 and meta["repeats"] == 1
     assert meta["dataset_hash"] == ng.load_dataset(data).content_hash()
+    # a CSV carries no scenario config: no oracle, and the result says so
+    assert "no scenario config" in meta["oracle_note"]
+    assert "no scenario config" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

@@ -189,19 +189,22 @@ def benchmark(
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
         console.print(f"warning: {msg}", highlight=False, soft_wrap=True)
-    table = Table(title=f"benchmark: {res.meta['protocol']}, {ds!r}")
-    for col in ("model", "RMSE mg/dL [95 % CI]", "MARD %", "Clarke A %", "params", "ms/sample"):
-        table.add_column(col, justify="left" if col == "model" else "right")
+    from rich import box
+
+    table = Table(title=f"benchmark ({res.meta['protocol']}): {ds!r}", box=box.SIMPLE_HEAD)
+    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "params", "ms"):
+        table.add_column(col, justify="left" if col == "model" else "right", no_wrap=True)
     for _, r in res.metrics.iterrows():
         table.add_row(
             r["model"],
-            f"{r['rmse_mgdl']:.1f} [{r['rmse_ci_low']:.1f}, {r['rmse_ci_high']:.1f}]",
+            f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
             f"{r['mard_pct']:.1f}",
             f"{r['clarke_a_pct']:.1f}",
             f"{int(r['n_parameters']):,}",
             f"{r['latency_single_ms']:.3f}",
         )
-    out_console.print(table)
+    # not a terminal (a log file, make): wide enough that no column is truncated
+    (out_console if out_console.is_terminal else Console(width=110)).print(table)
     m = res.meta
     out_console.print(
         f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "

@@ -14,8 +14,17 @@ Tasks
     With ``out`` given, each task's result is written atomically to
     ``out/.tasks/<model>-r<repeat>-f<fold>-<hash>.json`` as it finishes, the hash
     covering its full specification (dataset hash, model, parameters, protocol, folds,
-    seed, repeat, fold, package version); a rerun loads finished tasks instead of
-    recomputing them, and a corrupt or mismatching file is recomputed.
+    seed, repeat, fold, package version, a hash of the estimator code); a rerun loads
+    finished tasks instead of recomputing them, and a corrupt or mismatching file is
+    recomputed.
+
+Validation
+    Under ``paper-split`` the validation part (20 % of subjects) is passed as
+    ``fit(train, X_val=..., y_val=...)`` to estimators whose ``fit`` takes ``X_val``
+    (the networks: early stopping); the others fit on the training part only (60 %),
+    choosing their hyper-parameters by inner cross-validation there. Under
+    ``grouped-cv`` every estimator gets the training folds only and the networks take
+    their own inner validation split by subject from them.
 
 Scoring
     Predictions below 0 mg/dL are scored as 0 and non-finite ones as the median
@@ -269,6 +278,29 @@ def _task_key(spec: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:20]
 
 
+def _code_fingerprint(cls: type) -> str:
+    """Hash of the estimator code a task result depends on.
+
+    Every module of :mod:`nirglucose.models`, :mod:`nirglucose.features` and the file
+    defining ``cls``: editing a model invalidates its cached task results (the package
+    version alone does not change while developing).
+    """
+    from .. import __file__ as package_file
+
+    root = Path(package_file).parent
+    files = sorted((root / "models").glob("*.py")) + [root / "features.py"]
+    try:
+        files.append(Path(inspect.getfile(cls)))
+    except (TypeError, OSError):
+        pass
+    h = hashlib.sha256()
+    for f in dict.fromkeys(files):
+        if f.is_file():
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def _checksum(result: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(result, sort_keys=True, allow_nan=True).encode()).hexdigest()
 
@@ -363,6 +395,7 @@ def _run_task(
     if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
         val = rows(split.val)
         fit_kwargs = {"X_val": val, "y_val": val.frame["glucose_mgdl"].to_numpy(float)}
+    cpu0, wall0 = time.process_time(), time.perf_counter()
     with _one_thread_torch():
         model = cls(**params)
         t0 = time.perf_counter()
@@ -386,6 +419,8 @@ def _run_task(
         "fallback_mgdl": float(np.median(train.frame["glucose_mgdl"].to_numpy(float))),
         "n_parameters": int(getattr(model, "n_parameters", -1)),
         "fit_time_s": fit_time,
+        "task_wall_s": time.perf_counter() - wall0,
+        "task_cpu_s": time.process_time() - cpu0,
         "history": _history(model),
         "timing": latency,
         "importance": {
@@ -523,6 +558,11 @@ def run_benchmark(
             oracle_note = (
                 "no true_* columns in the data: the oracle cannot run; rmse_vs_oracle is NaN"
             )
+        elif dataset.config is None:
+            oracle_note = (
+                "the data carries no scenario config (a CSV or a user's own data): the "
+                "oracle cannot run; rmse_vs_oracle is NaN"
+            )
         elif ORACLE not in available_models():
             oracle_note = "the oracle model is not registered; rmse_vs_oracle is NaN"
         else:
@@ -539,12 +579,14 @@ def run_benchmark(
     splits = make_splits(groups, protocol, n_splits=n_splits, repeats=repeats, seed=seed)
     data_hash = dataset.content_hash()
     timing = dict(timing or {})
+    code = {name: _code_fingerprint(get_model_class(name)) for name in [*names, *aux]}
     tasks = []
     for split in splits:
         for name in [*names, *aux]:
             spec = {
                 "format": TASK_FORMAT,
                 "version": __version__,
+                "code": code[name],
                 "dataset": data_hash,
                 "model": name,
                 "params": _jsonable_params(model_params.get(name, {})),
@@ -583,28 +625,31 @@ def run_benchmark(
                 on_task(spec, True)
 
     bar = _Progress(len(tasks), len(results)) if progress else None
+
+    def args(i):
+        spec, split, cls = tasks[i]
+        path = None if tasks_dir is None else _task_file(tasks_dir, spec)
+        return cls, spec, dataset, split, path, timing
+
     try:
+        with warnings.catch_warnings():
+            # loky replaces a worker whose memory grew, and says so; results are unaffected
+            warnings.filterwarnings("ignore", message="A worker stopped while some jobs")
+            if jobs == 1 or len(pending) <= 1:
+                stream = (_indexed_task(i, *args(i)) for i in pending)
+            else:
+                from joblib import Parallel, delayed
 
-        def args(i):
-            spec, split, cls = tasks[i]
-            path = None if tasks_dir is None else _task_file(tasks_dir, spec)
-            return cls, spec, dataset, split, path, timing
-
-        if jobs == 1 or len(pending) <= 1:
-            stream = (_indexed_task(i, *args(i)) for i in pending)
-        else:
-            from joblib import Parallel, delayed
-
-            stream = Parallel(n_jobs=jobs, return_as="generator_unordered")(
-                delayed(_indexed_task)(i, *args(i)) for i in pending
-            )
-        for i, res in stream:
-            results[i] = res
-            if on_task is not None:
-                on_task(tasks[i][0], False)
-            if bar is not None:
-                spec = tasks[i][0]
-                bar.advance(f"{spec['model']} r{spec['repeat']} f{spec['fold']}")
+                stream = Parallel(n_jobs=jobs, return_as="generator_unordered")(
+                    delayed(_indexed_task)(i, *args(i)) for i in pending
+                )
+            for i, res in stream:
+                results[i] = res
+                if on_task is not None:
+                    on_task(tasks[i][0], False)
+                if bar is not None:
+                    spec = tasks[i][0]
+                    bar.advance(f"{spec['model']} r{spec['repeat']} f{spec['fold']}")
     finally:
         if bar is not None:
             bar.close()
@@ -649,6 +694,7 @@ def run_benchmark(
         "tasks_cached": len(tasks) - len(pending),
         "tasks_computed": len(pending),
         "tasks_corrupt": n_corrupt,
+        "tasks_cpu_s": float(sum(r.get("task_cpu_s", np.nan) for r in results.values())),
     }
     result = _aggregate(
         dataset, tasks, results, names, aux, meta, n_boot=n_boot, alpha=alpha, seed=seed
@@ -906,13 +952,22 @@ def _significance_lines(res: BenchmarkResult) -> list[str]:
     vb = c[c["family"] == "vs_best"]
     if len(vb):
         best = vb["reference_model"].iloc[0]
-        sig = [label[m] for m in vb.loc[vb["significant"], "model"]]
-        not_sig = [label[m] for m in vb.loc[~vb["significant"], "model"]]
+        worse = vb["significant"] & (vb["rmse_diff_mgdl"] > 0)
+        better = vb["significant"] & (vb["rmse_diff_mgdl"] < 0)
+
+        def names(mask):
+            return ", ".join(label[m] for m in vb.loc[mask, "model"]) or "none"
+
         out.append(
-            f"Significant rankings (paired cluster bootstrap of the RMSE difference, Holm, "
-            f"α = {res.meta['alpha']}): best is {label[best]}; "
-            f"significantly different from it: {', '.join(sig) or 'none'}; "
-            f"not distinguishable from it: {', '.join(not_sig) or 'none'}."
+            f"Significant rankings (paired cluster bootstrap of the RMSE difference over "
+            f"subjects, Holm-adjusted, α = {res.meta['alpha']}): best model is {label[best]}; "
+            f"significantly worse than it: {names(worse)}; "
+            f"not distinguishable from it: {names(~vb['significant'])}"
+            + (
+                f"; significantly better (a bound, not a competitor): {names(better)}."
+                if better.any()
+                else "."
+            )
         )
     so = c[c["family"] == "study_order"]
     if len(so):
