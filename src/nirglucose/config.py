@@ -42,7 +42,7 @@ __all__ = [
 ]
 
 #: Forward optical models selectable by name (``optics.model``).
-FORWARD_MODELS = ("beer-lambert", "diffusion")
+FORWARD_MODELS = ("beer-lambert", "diffusion", "rte-lut")
 
 #: Noise sources, each with an on/off switch and a scale in ``noise.<name>``.
 NOISE_SOURCES = (
@@ -280,7 +280,18 @@ class GlucoseConfig(_Model):
 class EnvironmentConfig(_Model):
     """Ambient temperature, humidity, pressure and light."""
 
-    temperature_c: tuple[float, float] = Field((18.0, 30.0), description="Ambient range. [degC]")
+    temperature_c: tuple[float, float] = Field(
+        (18.0, 30.0), description="Range of a session's ambient temperature. [degC]"
+    )
+    temperature_within_sd_c: float = Field(
+        1.0, ge=0, description="SD of ambient temperature within a subject's session. [degC]"
+    )
+    humidity_within_sd_pct: float = Field(
+        5.0, ge=0, description="SD of relative humidity within a session. [%]"
+    )
+    pressure_within_sd_mbar: float = Field(
+        1.0, ge=0, description="SD of pressure within a session (weather over hours). [mbar]"
+    )
     humidity_pct: tuple[float, float] = Field((30.0, 90.0), description="RH range. [%]")
     humidity_coupling_loss: float = Field(
         0.03,
@@ -326,7 +337,7 @@ class EnvironmentConfig(_Model):
 class OpticsConfig(_Model):
     """Forward optical model and probe geometry."""
 
-    model: Literal["beer-lambert", "diffusion"] = Field(
+    model: Literal["beer-lambert", "diffusion", "rte-lut"] = Field(
         "beer-lambert", description=f"Forward model, one of {FORWARD_MODELS}."
     )
     source_detector_mm: float = Field(
@@ -353,7 +364,10 @@ class HardwareConfig(_Model):
     led_self_heating_c: float = Field(
         8.0, ge=0, description="Junction temperature above ambient while pulsed. [degC]"
     )
-    led_self_heating_sd_c: float = Field(2.0, ge=0, description="Its SD per reading. [degC]")
+    led_self_heating_sd_c: float = Field(
+        0.5, ge=0, description="SD of the junction temperature between readings at the same "
+        "drive (an assumption). [degC]"
+    )
     led_age_h: tuple[float, float] = Field((0.0, 5000.0), description="Device age range. [h]")
     led_flicker_rel: float = Field(
         0.001, ge=0, description="Relative flicker SD, N(0, 0.1 %) (DESIGN.md). [-]"
@@ -512,9 +526,9 @@ class ScenarioConfig(_Model):
 
 #: Glucose-signal gain of the study's regime: with literature noise and physiology, the
 #: raw glucose-NIR correlation reaches the study's 0.21 only when glucose's optical
-#: effects are 13 times the literature magnitudes (calibrated on 20,000 snapshots;
+#: effects are 12.5 times the literature magnitudes (calibrated on 20,000 snapshots;
 #: README, "Presets").
-PAPER_SIGNAL_GAIN = 13.0
+PAPER_SIGNAL_GAIN = 12.5
 
 #: Preset name -> overrides on the defaults. ``paper`` is the study's low-SNR regime.
 PRESETS: dict[str, dict[str, Any]] = {
@@ -526,6 +540,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "glucose.signal_gain": PAPER_SIGNAL_GAIN,
         "physiology.variation_scale": 0.0,
         "environment.temperature_c": (24.5, 25.5),
+        "environment.temperature_within_sd_c": 0.2,
         "environment.ambient_lux": (0.1, 0.2),
         "environment.pressure_mbar_sd": 0.0,
         "noise.contact_pressure.enabled": False,
@@ -537,6 +552,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "field": {
         "glucose.signal_gain": PAPER_SIGNAL_GAIN,
         "environment.temperature_c": (5.0, 35.0),
+        "environment.temperature_within_sd_c": 4.0,
         "environment.ambient_lux": (1.0, 100000.0),
         "environment.light_source_probs": {"sun": 0.5, "fluorescent": 0.25, "led": 0.25},
         "contact.coupling_sd": 0.08,

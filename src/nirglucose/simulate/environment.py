@@ -88,13 +88,33 @@ def ambient_photocurrent_a(
     )
 
 
-def sample_environment(cfg: EnvironmentConfig, n: int, streams: RandomStreams) -> dict:
-    """Draw ambient conditions for ``n`` measurements."""
+def sample_environment(
+    cfg: EnvironmentConfig, n_sessions: int, per_session: int, streams: RandomStreams
+) -> dict:
+    """Draw ambient conditions for ``n_sessions`` x ``per_session`` measurements.
+
+    Temperature, humidity and pressure are drawn per session (a subject's measurements
+    happen in one place) and vary within it by ``*_within_sd`` (truncated to the
+    configured ranges); illuminance and light source vary per measurement.
+    """
     rng = streams("environment")
-    temperature_c = rng.uniform(*cfg.temperature_c, size=n)
-    humidity_pct = rng.uniform(*cfg.humidity_pct, size=n)
+    n = n_sessions * per_session
+    rep = np.repeat(np.arange(n_sessions), per_session)
+    t_lo, t_hi = cfg.temperature_c
+    temperature_c = truncated_normal(
+        rng, rng.uniform(t_lo, t_hi, size=n_sessions)[rep], cfg.temperature_within_sd_c,
+        t_lo, t_hi, size=n,
+    )
+    h_lo, h_hi = cfg.humidity_pct
+    humidity_pct = truncated_normal(
+        rng, rng.uniform(h_lo, h_hi, size=n_sessions)[rep], cfg.humidity_within_sd_pct,
+        h_lo, h_hi, size=n,
+    )
+    session_p = truncated_normal(
+        rng, cfg.pressure_mbar_mean, cfg.pressure_mbar_sd, *cfg.pressure_mbar, size=n_sessions
+    )
     pressure_mbar = truncated_normal(
-        rng, cfg.pressure_mbar_mean, cfg.pressure_mbar_sd, *cfg.pressure_mbar, size=n
+        rng, session_p[rep], cfg.pressure_within_sd_mbar, *cfg.pressure_mbar, size=n
     )
     log_lo, log_hi = np.log10(cfg.ambient_lux)
     ambient_lux = 10.0 ** rng.uniform(log_lo, log_hi, size=n)
@@ -110,9 +130,11 @@ def sample_environment(cfg: EnvironmentConfig, n: int, streams: RandomStreams) -
     }
 
 
-def apply_environment(cfg: ScenarioConfig, n_rows: int, streams: RandomStreams) -> dict:
+def apply_environment(
+    cfg: ScenarioConfig, n_sessions: int, per_session: int, streams: RandomStreams
+) -> dict:
     """Environment layer entry: the columns of the ambient conditions (``true_*`` names)."""
-    env = sample_environment(cfg.environment, n_rows, streams)
+    env = sample_environment(cfg.environment, n_sessions, per_session, streams)
     return {
         "true_ambient_temperature_c": env["temperature_c"],
         "true_humidity_pct": env["humidity_pct"],

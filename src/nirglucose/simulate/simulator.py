@@ -173,7 +173,7 @@ def simulate_block(
     hw = cfg.hardware
 
     glucose = sample_glucose(cfg, n_sub, per_subject, streams)
-    env = environment.apply_environment(cfg, n, streams)
+    env = environment.apply_environment(cfg, n_sub, per_subject, streams)
     traits = physiology.sample_traits(cfg, n_sub, streams)
     traits_rows = {k: v[rep] for k, v in traits.items()}
     phys = physiology.apply_physiology(cfg, traits_rows, env, glucose, n, streams)
