@@ -245,8 +245,14 @@ def test_transformer(small):
 @parametrize_with_checks(
     [EnhancedBeerLambertFeatures()], expected_failed_checks=lambda est: EXPECTED_FAILED
 )
-def test_sklearn_checks(estimator, check):
-    check(estimator)
+def test_sklearn_checks(estimator, check, request):
+    if request.node.get_closest_marker("xfail") is None:
+        check(estimator)  # a real failure keeps its full traceback
+        return
+    try:
+        check(estimator)
+    except Exception as exc:  # an expected failure: a one-frame report is enough
+        raise AssertionError(f"{type(exc).__name__}: {str(exc)[:300]}") from None
 
 
 def test_transformer_contract(small):

@@ -118,7 +118,8 @@ class _LinearBase(JsonModelMixin, RegressorMixin, BaseEstimator):
     """Shared plumbing: input handling, fitted checks, ``n_parameters``."""
 
     def _require_fitted(self) -> None:
-        require_fitted(self, "coef_")
+        if "coef_" not in self.__dict__:  # cheap test first: this sits on the hot path
+            require_fitted(self, "coef_")
 
     def _record_input(self, X) -> None:
         self.n_features_in_ = N_MEASURED
@@ -197,6 +198,9 @@ class EnhancedBeerLambert(_LinearBase):
         "coef_": (N_FEATURES,),
         "intercept_": None,
     }
+
+    #: Batches up to this size are predicted row by row in plain Python (lower latency).
+    SMALL_BATCH = 8
 
     def __init__(self, alphas=None, cv: int = 5, random_state=None):
         self.alphas = alphas
@@ -278,14 +282,23 @@ class EnhancedBeerLambert(_LinearBase):
         """Glucose for each row of measurements. [mg/dL]
 
         Evaluates the folded polynomial (:meth:`predict_one`'s, vectorised, in chunks),
-        which equals ``ebl_feature_matrix(X) @ coef_ + intercept_`` to rounding.
+        which equals ``ebl_feature_matrix(X) @ coef_ + intercept_`` to rounding. Up to
+        :attr:`SMALL_BATCH` rows go through :meth:`predict_one` instead, where numpy's
+        per-call overhead would exceed the arithmetic.
         """
         self._require_fitted()
         # NaN/inf in an array is caught through the output (cheaper than scanning X).
         Xa, _, _ = measured_input(self, X, fit=False, finite=False)
-        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            pred = self._kernel(Xa)
-        if not np.isfinite(pred).all():
+        if len(Xa) <= self.SMALL_BATCH:
+            one = self.predict_one
+            vals = [one(r[:4], r[4:8], r[8:]) for r in Xa.tolist()]
+            pred = np.array(vals, dtype=float)
+            finite = all(map(math.isfinite, vals))
+        else:
+            with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+                pred = self._kernel(Xa)
+            finite = bool(np.isfinite(pred).all())
+        if not finite:
             as_measurements(Xa)  # names the rows with NaN or infinite values
             raise DataError("input gives non-finite predictions; check for extreme values")
         return pred
