@@ -294,6 +294,121 @@ def report(
     out_console.print(f"wrote {path}", highlight=False, soft_wrap=True)
 
 
+@app.command()
+def sweep(
+    out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
+    vary: Annotated[
+        list[str] | None,
+        typer.Option(help="KEY=V1,V2,... config values to sweep (dotted key); repeat for a grid."),
+    ] = None,
+    study: Annotated[
+        str | None, typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort.")
+    ] = None,
+    preset: Annotated[str, typer.Option(help="Scenario preset every task starts from.")] = "paper",
+    seeds: Annotated[int, typer.Option(help="Seeds per scenario (seed, seed+1, ...).")] = 5,
+    seed: Annotated[int, typer.Option(help="First seed.")] = 0,
+    models: Annotated[
+        str | None, typer.Option(help="Comma-separated model names (default: ebl,pls,oracle).")
+    ] = None,
+    protocol: Annotated[str, typer.Option(help="grouped-cv or paper-split.")] = "grouped-cv",
+    subjects: Annotated[int, typer.Option(help="Subjects per simulated dataset.")] = 80,
+    per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
+    folds: Annotated[int, typer.Option(help="Folds of grouped-cv.")] = 5,
+    repeats: Annotated[int, typer.Option(help="Repeats of grouped-cv.")] = 3,
+    resamples: Annotated[int, typer.Option(help="Bootstrap resamples per task.")] = 1000,
+    jobs: Annotated[
+        int | None, typer.Option(help="Local worker processes (default: available cores).")
+    ] = None,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
+    ] = None,
+    figures: Annotated[bool, typer.Option(help="Write figures to OUT/figures.")] = True,
+    set_: SetOption = None,
+) -> None:
+    """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks)."""
+    import warnings
+
+    from .evaluation.sweep import DEFAULT_MODELS, parse_vary, run_sweep, threshold_crossing
+    from .models.registry import available_models
+
+    for name, value in (("--subjects", subjects), ("--per-subject", per_subject),
+                        ("--folds", folds), ("--repeats", repeats), ("--seeds", seeds),
+                        ("--resamples", resamples)):
+        _positive(name, value)
+    if jobs is not None:
+        _positive("--jobs", jobs)
+    if seed < 0:
+        raise UserError(f"--seed must be non-negative, got {seed}")
+    if study is None and not vary:
+        raise UserError("give --vary KEY=V1,V2,... or --study NAME")
+    grid: dict = {}
+    for text in vary or []:
+        key, values = parse_vary(text)
+        if key in grid:
+            raise UserError(f"--vary {key} is given twice; list all its values once")
+        grid[key] = values
+    if models is None:
+        names = [m for m in DEFAULT_MODELS if m in available_models()]
+    else:
+        names = [m.strip() for m in models.split(",") if m.strip()]
+        if not names:
+            raise UserError(f"--models {models!r} names no model")
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {str(out)!r} exists and is not a directory")
+    if not out.exists() and not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = run_sweep(grid or None, study=study, preset=preset,
+                        seeds=list(range(seed, seed + seeds)), models=names,
+                        overrides=_parse_sets(set_), protocol=protocol, n_splits=folds,
+                        repeats=repeats, n_subjects=subjects, per_subject=per_subject,
+                        n_boot=resamples, out=out, jobs=jobs, scheduler=scheduler,
+                        progress=sys.stderr.isatty())
+        if figures:
+            from .report.sweep import save_sweep_figures
+
+            save_sweep_figures(out)
+    msgs = [str(w.message) for w in caught] + res.meta["warnings"]
+    for msg in dict.fromkeys(m.replace("\n", " ") for m in msgs):
+        console.print(f"warning: {msg}", highlight=False, soft_wrap=True)
+    meta = res.meta
+    s = res.summary
+    table = Table(title=f"sweep {meta['study']}: mean over {len(meta['seeds'])} seeds "
+                  "[95 % CI over seeds]")
+    for col in ("scenario", "model", "RMSE mg/dL", "MARD %", "Clarke A %"):
+        table.add_column(col, justify="left" if col in ("scenario", "model") else "right")
+    for _, r in s.iterrows():
+        table.add_row(str(r["scenario"]), str(r["model"]),
+                      f"{r['rmse_mgdl_mean']:.1f} [{r['rmse_mgdl_ci_low']:.1f}, "
+                      f"{r['rmse_mgdl_ci_high']:.1f}]", f"{r['mard_pct_mean']:.1f}",
+                      f"{r['clarke_a_pct_mean']:.1f}")
+    out_console.print(table)
+    if len(meta["varied"]) == 1 and meta["varied"][0] in s:
+        key = meta["varied"][0]
+        for _, r in threshold_crossing(s, key).iterrows():
+            where = {"crosses": f"crosses 15 % at {key} = {r['crossing']:.2f}",
+                     "above at every x": f"is above 15 % at every {key}",
+                     "below at every x": f"stays below 15 % at every {key}"}[r["status"]]
+            out_console.print(f"{r['model']}: MARD {where}", highlight=False)
+    if res.effects is not None and "source" in res.effects and len(res.effects):
+        for model, g in res.effects.groupby("model", sort=False):
+            top = g.iloc[0]
+            alone = g.sort_values("delta_only", ascending=False).iloc[0]
+            out_console.print(
+                f"{model}: costliest source {top['source']} (ΔRMSE {top['delta_off']:+.2f} "
+                f"mg/dL when switched off); alone: {alone['source']} "
+                f"({alone['delta_only']:+.2f} mg/dL)", highlight=False)
+    if res.effects is not None and "shift" in res.effects:
+        for _, r in res.effects.iterrows():
+            out_console.print(
+                f"{r['model']}: {r['shift']} shift (train {r['train_domain']}, test "
+                f"{r['test_domain']}) ΔRMSE {r['delta']:+.1f} mg/dL", highlight=False)
+    out_console.print(f"wrote {out}/sweep.csv ({meta['tasks_computed']} tasks computed, "
+                      f"{meta['tasks_cached']} reused, {meta['wall_time_s']:.0f} s)",
+                      highlight=False)
+
+
 def _print_summary(ds) -> None:
     import numpy as np
 
