@@ -9,9 +9,13 @@ Selected by name (``optics.model``), listed in :data:`FORWARD_MODELS`:
     equals the diffusion model at nominal skin.
 ``"diffusion"``
     Farrell-Patterson-Wilson dipole reflectance R(rho) times the detector area.
+``"rte-lut"``
+    Three-layer skin (epidermis, dermis, semi-infinite subcutis) solved as layered
+    transport (:mod:`nirglucose.optics.layers`), read from a cached look-up table
+    (:mod:`nirglucose.optics.lut`); R(rho) times the detector area.
 
-Both put the epidermis (melanin) in front as a round-trip transmittance and mix dermis
-and subcutis by the share of the path in each (:mod:`nirglucose.optics.skin`).
+The first two put the epidermis (melanin) in front as a round-trip transmittance and mix
+dermis and subcutis by the share of the path in each (:mod:`nirglucose.optics.skin`).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from .diffusion import (
 
 __all__ = ["FORWARD_MODELS", "detected_fraction", "geometry_factor", "mixed_optics"]
 
-FORWARD_MODELS = ("beer-lambert", "diffusion")
+FORWARD_MODELS = ("beer-lambert", "diffusion", "rte-lut")
 
 
 def mixed_optics(optics: dict, skin_thickness_cm: np.ndarray, separation_cm: float):
@@ -57,12 +61,13 @@ def detected_fraction(
     detector_area_cm2: float,
     n_tissue: float,
     geometry_factor: np.ndarray | None = None,
+    lut=None,
 ) -> np.ndarray:
     """Fraction of emitted power detected, per sample and band node, (n, n_led, n_pts).
 
     Parameters
     ----------
-    model : {'beer-lambert', 'diffusion'}
+    model : {'beer-lambert', 'diffusion', 'rte-lut'}
         Forward model.
     optics : dict
         Output of :func:`nirglucose.optics.tissue.tissue_optics`.
@@ -81,6 +86,9 @@ def detected_fraction(
     geometry_factor : array_like, optional
         G of the Beer-Lambert model per (n_led, n_pts); from :func:`geometry_factor`
         when omitted.
+    lut : SkinLUT or NodeLUT, optional
+        Table of the ``rte-lut`` model (:mod:`nirglucose.optics.lut`); the cached
+        default table for this geometry when omitted.
 
     Returns
     -------
@@ -89,6 +97,14 @@ def detected_fraction(
     """
     if model not in FORWARD_MODELS:
         raise ConfigError(f"unknown forward model {model!r}; valid: {', '.join(FORWARD_MODELS)}")
+    if model == "rte-lut":
+        from .lut import reflectance_from_tissue_optics
+
+        return detector_area_cm2 * reflectance_from_tissue_optics(
+            optics, melanin_fraction=melanin_fraction, skin_thickness_cm=skin_thickness_cm,
+            epidermis_thickness_cm=epidermis_thickness_cm, separation_cm=separation_cm,
+            n_tissue=n_tissue, lut=lut,
+        )
     mua, musp, _ = mixed_optics(optics, skin_thickness_cm, separation_cm)
     mel = np.asarray(melanin_fraction)[:, None, None]
     mua_epi = skin.epidermis_mua_per_cm(mel, optics["melanosome"], optics["baseline"])

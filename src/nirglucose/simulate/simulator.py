@@ -51,6 +51,7 @@ class _Tables:
     geometry: np.ndarray
     ambient: tuple[np.ndarray, np.ndarray, np.ndarray]
     light_names: tuple[str, ...]
+    lut: object = None  # the rte-lut model's table, specialised to the band nodes
 
 
 def _tables(cfg: ScenarioConfig) -> _Tables:
@@ -80,7 +81,16 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
     )
     names = tuple(environment.LIGHT_SOURCES)
     table = np.array([environment.LIGHT_SOURCES[k] for k in names])
-    return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names)
+    lut = None
+    if cfg.optics.model == "rte-lut":
+        from ..optics import lut as lut_mod
+
+        lut = lut_mod.node_lut(
+            lut_mod.get_lut(sep_cm, cfg.optics.epidermis_thickness_mm / 10.0,
+                            cfg.optics.tissue_refractive_index),
+            optics["musp_subcutis"][0] / optics["musp_dermis"][0],
+        )
+    return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names, lut)
 
 
 #: Rows per optics slice: the (rows, n_led, n_points) temporaries then fit in the
@@ -125,6 +135,7 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
             detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
             n_tissue=cfg.optics.tissue_refractive_index,
             geometry_factor=tables.geometry,
+            lut=tables.lut,
         )
         out[sl] = np.einsum("nlp,lp->nl", nodes, tables.spectra.weights)
     return out

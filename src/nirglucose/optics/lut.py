@@ -1,0 +1,958 @@
+"""Look-up table of layered-skin reflectance and per-layer path, for the fast path.
+
+The three-layer skin model (:func:`nirglucose.optics.layers.three_layer_reflectance`)
+costs about 0.1-0.3 ms of CPU per evaluation (with its per-layer paths); the simulator
+needs tens of millions. The table holds, at the probe's source-detector distance, the
+natural logarithms of the reflectance R(rho) and of the mean path in the epidermis,
+dermis and subcutis over six axes, and interpolates them multilinearly:
+
+========================  ==========  ================  ====================================
+axis                      coordinate  default box       what moves it in the simulator
+========================  ==========  ================  ====================================
+musp_dermis_per_cm        log         7 - 30 /cm        wavelength, glucose (Maier 1994)
+musp_ratio                linear      0.48 - 0.85       subcutis / dermis mus' (wavelength)
+mua_dermis_per_cm         sqrt        0.05 - 2 /cm      blood, saturation, water, glucose
+mua_subcutis_per_cm       sqrt        0.01 - 2 /cm      fat (BMI), blood, water
+mua_epidermis_per_cm      linear      0 - 35 /cm        melanin (Fitzpatrick type)
+skin_transport_thickness  log         0.25 - 13         mus'_dermis x skin thickness
+========================  ==========  ================  ====================================
+
+Why these six: once the probe geometry (distance, epidermis thickness, refractive index;
+the cache key) is fixed, the layered model has exactly these free inputs (the epidermis
+scatters like the dermis: one skin power law, Jacques 2013). The coordinates make ln R
+nearly linear along each axis: ln R ~ -rho sqrt(3 mua mus') in diffusion theory (hence
+sqrt(mua)), ~ -mua_e L_e through the thin epidermis (linear), power laws in mus' (log).
+The epidermal effect does not factor out of the deep part (its path depends on the deep
+absorption by up to 8 %), so it is a full axis. Thickness is counted in transport mean
+free paths because the model's source, one transport mean free path deep, crosses into
+the subcutis at tau = 1 and R has a kink there: the grid has a node line on tau = 1, so
+no cell straddles the kink. The default box covers LEDs anywhere in 700-1300 nm,
+Fitzpatrick I-VI, every preset's physiology and skin 0.4-4 mm.
+
+Build: the model is solved on a coarse grid (74 088 nodes by default, about 15 s of one
+CPU core), each axis is refined twice (three times along ``musp_ratio``) by cubic splines
+through the solved nodes, piecewise on either side of tau = 1, and the refined float32
+table (about 60 MB) is what is interpolated. Measured against direct solves at random
+points uniform over the box, the default table's reflectance error has a median of
+0.2 % and a 99th percentile of 0.6 % (maximum about 1 %); over the paper preset's cohort
+the median is 0.1 % and the maximum 0.7 % (``benchmarks/optics.py``).
+
+Where the table comes from, and what "direct solve" means: each node is one evaluation
+of the three-layer diffusion model (:mod:`nirglucose.optics.layers`), whose accuracy
+against Monte Carlo is measured separately (:mod:`nirglucose.optics.mc_paths`: R within
+about 3 % for light to moderately dark skin, 11 % low at the darkest epidermis at
+700 nm). A Monte Carlo estimate at 3 mm costs about 2 ms of CPU per photon here and needs
+about 1e6 photons for a 1 % standard error, i.e. about half an hour per node, so the
+table is built from the smooth model, and its interpolation error is measured against
+that same model at random off-grid points (:func:`lut_errors`).
+
+Cache: ``<cache dir>/lut-<key>.npz``, where the key hashes the geometry, the grid and the
+solver settings; the directory is ``$NIRGLUCOSE_CACHE``, else
+``$XDG_CACHE_HOME/nirglucose``, else ``~/.cache/nirglucose``. Files are written
+atomically (temporary file + rename) and read with ``allow_pickle=False``. The grid is
+``$NIRGLUCOSE_LUT_GRID`` (default ``"default"``) where none is named.
+
+References
+----------
+.. [1] A. Liemert, A. Kienle, "Light diffusion in N-layered turbid media: steady-state
+   domain", J. Biomed. Opt. 15, 025003 (2010), doi:10.1117/1.3368682
+.. [2] L. Wang, S. L. Jacques, L. Zheng, "MCML - Monte Carlo modeling of light transport
+   in multi-layered tissues", Comput. Methods Programs Biomed. 47, 131-146 (1995),
+   doi:10.1016/0169-2607(95)01640-F
+.. [3] S. L. Jacques, "Optical properties of biological tissues: a review",
+   Phys. Med. Biol. 58, R37-R61 (2013), doi:10.1088/0031-9155/58/11/R37
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import logging
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..exceptions import ConfigError
+from . import layers
+
+__all__ = [
+    "LUT_AXES",
+    "LUT_GRIDS",
+    "SkinLUT",
+    "NodeLUT",
+    "build_lut",
+    "cache_dir",
+    "lut_key",
+    "load_or_build_lut",
+    "get_lut",
+    "interpolate_lut",
+    "node_lut",
+    "interpolate_node_lut",
+    "reflectance_from_tissue_optics",
+    "random_lut_points",
+    "lut_errors",
+]
+
+_log = logging.getLogger(__name__)
+
+#: Bump when the solver or the file layout changes: old cache files are then ignored.
+_FORMAT_VERSION = 1
+
+#: Axis names, in table order, with their coordinate and unit. The thickness axis is
+#: the skin (epidermis + dermis) thickness in transport mean free paths,
+#: tau = mus'_dermis * skin thickness: the model's point source (one transport mean free
+#: path deep) crosses into the subcutis at tau = 1, where R has a kink, and the grid
+#: always has a node line there, so the kink never falls inside a cell.
+LUT_AXES: dict[str, tuple[str, str]] = {
+    "musp_dermis_per_cm": ("log", "1/cm"),
+    "musp_ratio": ("linear", "-"),
+    "mua_dermis_per_cm": ("sqrt", "1/cm"),
+    "mua_subcutis_per_cm": ("sqrt", "1/cm"),
+    "mua_epidermis_per_cm": ("linear", "1/cm"),
+    "skin_transport_thickness": ("log", "-"),
+}
+
+#: Grids by name: per axis ``(low, high, n_solve, upsample)``. The model is solved at
+#: ``n_solve`` nodes uniform in the axis' coordinate, then each axis is refined
+#: ``upsample`` times by a cubic spline through the solved nodes (piecewise on either
+#: side of tau = 1), and the refined table is what is interpolated multilinearly. The
+#: ``default`` box covers every LED in 700-1300 nm, Fitzpatrick I-VI, the physiology
+#: presets and skin 0.4-4.2 mm; ``tiny`` covers the same box coarsely, for tests.
+LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
+    "default": {
+        "musp_dermis_per_cm": (7.0, 30.0, 7, 2),
+        "musp_ratio": (0.48, 0.85, 3, 3),
+        "mua_dermis_per_cm": (0.05, 2.0, 7, 2),
+        "mua_subcutis_per_cm": (0.01, 2.0, 7, 2),
+        "mua_epidermis_per_cm": (0.0, 35.0, 6, 2),
+        "skin_transport_thickness": (0.25, 13.0, 12, 2),
+    },
+    "tiny": {
+        "musp_dermis_per_cm": (7.0, 30.0, 2, 1),
+        "musp_ratio": (0.48, 0.85, 2, 1),
+        "mua_dermis_per_cm": (0.05, 2.0, 2, 1),
+        "mua_subcutis_per_cm": (0.01, 2.0, 2, 1),
+        "mua_epidermis_per_cm": (0.0, 35.0, 2, 1),
+        "skin_transport_thickness": (0.25, 13.0, 3, 1),
+    },
+}
+
+#: Output channels of :attr:`SkinLUT.values`.
+_CHANNELS = ("ln_reflectance", "ln_path_epidermis", "ln_path_dermis", "ln_path_subcutis")
+
+#: Paths below this are stored as this (a layer the detected light hardly reaches; the
+#: finite-difference path there is rounding noise). [cm]
+_PATH_FLOOR_CM = 1e-6
+
+#: On every grid node the skin is at least this many times thicker than the epidermis.
+_MIN_SKIN_OVER_EPIDERMIS = 1.25
+
+
+def _forward(kind: str, x: np.ndarray) -> np.ndarray:
+    if kind == "log":
+        return np.log(x)
+    if kind == "sqrt":
+        return np.sqrt(x)
+    return x
+
+
+def _inverse(kind: str, u: np.ndarray) -> np.ndarray:
+    if kind == "log":
+        return np.exp(u)
+    if kind == "sqrt":
+        return u * u
+    return u
+
+
+@dataclass(frozen=True)
+class SkinLUT:
+    """A tabulated three-layer skin model at one probe geometry.
+
+    Attributes
+    ----------
+    values : ndarray
+        (*shape, 4), float32: ln R [ln(1/cm^2)] and ln of the epidermis, dermis and
+        subcutis paths [ln cm] at the (refined) grid nodes; paths below 1e-6 cm are
+        stored as 1e-6 cm.
+    nodes : tuple of ndarray
+        Node coordinates of each axis (in the axis' coordinate: log, sqrt or linear);
+        uniform, except the thickness axis, uniform on either side of tau = 1.
+    shape : tuple of int
+        Nodes per axis.
+    grid : dict
+        The grid spec (axis -> (low, high, n_solve, upsample)).
+    geometry : dict
+        ``rho_cm``, ``epidermis_thickness_cm``, ``n_tissue``, ``n_ambient``.
+    key : str
+        Cache key (hash of geometry, grid and solver settings).
+    build_seconds : float
+        Wall-clock time the build took (0 when loaded from the cache). [s]
+    n_solves : int
+        Grid nodes at which the model was solved. [-]
+    """
+
+    values: NDArray[np.float32] = field(repr=False)
+    nodes: tuple[NDArray[np.float64], ...] = field(repr=False)
+    shape: tuple[int, ...]
+    grid: dict
+    geometry: dict
+    key: str
+    build_seconds: float = 0.0
+    n_solves: int = 0
+
+    def axis_nodes(self, name: str) -> NDArray[np.float64]:
+        """Physical values of the nodes of one axis."""
+        i = list(LUT_AXES).index(name)
+        return _inverse(LUT_AXES[name][0], self.nodes[i])
+
+    @property
+    def box(self) -> dict[str, tuple[float, float]]:
+        """Physical (low, high) of each axis actually covered by the nodes."""
+        return {k: (float(v[0]), float(v[-1]))
+                for k, v in ((k, self.axis_nodes(k)) for k in LUT_AXES)}
+
+
+def _check_grid(grid: dict) -> None:
+    if set(grid) != set(LUT_AXES):
+        raise ConfigError(f"a LUT grid needs exactly the axes {list(LUT_AXES)}, got {list(grid)}")
+    for name, (lo, hi, n, m) in grid.items():
+        kind, unit = LUT_AXES[name]
+        if not (np.isfinite(hi) and hi > lo and n >= 2 and m >= 1):
+            raise ConfigError(
+                f"LUT axis {name}: (low, high, n_solve, upsample) = {(lo, hi, n, m)} needs "
+                f"low < high, n_solve >= 2 and upsample >= 1 [{unit}]"
+            )
+        if lo < 0 or (kind == "log" and lo == 0):
+            raise ConfigError(
+                f"LUT axis {name}: low = {lo!r} is out of range; valid range is "
+                f"{'(0' if kind == 'log' else '[0'}, high) [{unit}]"
+            )
+
+
+def _resolve_grid(grid: str | dict) -> dict:
+    if isinstance(grid, str):
+        if grid not in LUT_GRIDS:
+            raise ConfigError(f"unknown LUT grid {grid!r}; valid: {', '.join(LUT_GRIDS)}")
+        grid = LUT_GRIDS[grid]
+    grid = {k: (float(v[0]), float(v[1]), int(v[2]), int(v[3])) for k, v in grid.items()}
+    _check_grid(grid)
+    return grid
+
+
+def _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient) -> dict:
+    geo = {
+        "rho_cm": float(separation_cm),
+        "epidermis_thickness_cm": float(epidermis_thickness_cm),
+        "n_tissue": float(n_tissue),
+        "n_ambient": float(n_ambient),
+    }
+    for name, v in geo.items():
+        if not (np.isfinite(v) and v > 0):
+            raise ConfigError(f"{name} = {v!r} is out of range; valid range is (0, inf)")
+    return geo
+
+
+def lut_key(
+    separation_cm: float,
+    epidermis_thickness_cm: float,
+    n_tissue: float = 1.4,
+    n_ambient: float = 1.0,
+    grid: str | dict = "default",
+) -> str:
+    """Hash of everything a table depends on: geometry, grid, solver settings.
+
+    Examples
+    --------
+    >>> len(lut_key(0.3, 0.008))
+    20
+    """
+    payload = {
+        "version": _FORMAT_VERSION,
+        "geometry": _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient),
+        "grid": _resolve_grid(grid),
+        "solver": {
+            "gauss_points": layers._GAUSS_POINTS,
+            "k_max_per_musp": layers._K_MAX_PER_MUSP,
+            "mua_step": layers._MUA_STEP_PER_CM,
+            "min_skin_over_epidermis": _MIN_SKIN_OVER_EPIDERMIS,
+            "path_floor_cm": _PATH_FLOOR_CM,
+        },
+    }
+    text = json.dumps(payload, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def _solve_axes(grid: dict, geo: dict) -> tuple[list[np.ndarray], list[int | None]]:
+    """Solve-grid coordinates of each axis, and the index of the tau = 1 node (or None)."""
+    coords, splits = [], []
+    for name, (lo, hi, n, _m) in grid.items():
+        kind = LUT_AXES[name][0]
+        if name == "skin_transport_thickness":
+            # keep the skin thicker than the epidermis on every node ...
+            lo = max(lo, _MIN_SKIN_OVER_EPIDERMIS * geo["epidermis_thickness_cm"]
+                     * grid["musp_dermis_per_cm"][1])
+            if not hi > lo:
+                raise ConfigError(
+                    f"epidermis_thickness_cm = {geo['epidermis_thickness_cm']!r} leaves no "
+                    f"room for a dermis in the grid's skin_transport_thickness box "
+                    f"(up to {hi:g}) [-]"
+                )
+            u_lo, u_hi = np.log(lo), np.log(hi)
+            if u_lo < 0.0 < u_hi:  # ... and a node on tau = 1 (u = 0), uniform either side
+                n_lo = int(np.clip(round((n - 1) * -u_lo / (u_hi - u_lo)), 1, n - 2))
+                u = np.concatenate([np.linspace(u_lo, 0.0, n_lo + 1)[:-1],
+                                    np.linspace(0.0, u_hi, n - n_lo)])
+                coords.append(u)
+                splits.append(n_lo)
+                continue
+            coords.append(np.linspace(u_lo, u_hi, n))
+            splits.append(None)
+            continue
+        u_lo, u_hi = _forward(kind, np.float64(lo)), _forward(kind, np.float64(hi))
+        coords.append(np.linspace(u_lo, u_hi, n))
+        splits.append(None)
+    return coords, splits
+
+
+def _upsample(values: np.ndarray, axis: int, u: np.ndarray, m: int,
+              split: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """Refine one axis m times with cubic splines (separately on each side of ``split``)."""
+    from scipy.interpolate import make_interp_spline
+
+    pieces = [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
+    out, fine_u = [], []
+    for a, b in pieces:
+        k = min(3, b - a)
+        spline = make_interp_spline(u[a:b + 1], values.take(range(a, b + 1), axis=axis),
+                                    k=k, axis=axis)
+        fine = np.linspace(u[a], u[b], (b - a) * m + 1)
+        if out:
+            fine = fine[1:]
+        out.append(spline(fine))
+        fine_u.append(fine)
+    return np.concatenate(out, axis=axis), np.concatenate(fine_u)
+
+
+def build_lut(
+    separation_cm: float,
+    epidermis_thickness_cm: float,
+    n_tissue: float = 1.4,
+    n_ambient: float = 1.0,
+    *,
+    grid: str | dict = "default",
+) -> SkinLUT:
+    """Tabulate the three-layer model (no caching; see :func:`load_or_build_lut`).
+
+    Parameters
+    ----------
+    separation_cm : float
+        Source-detector distance. [cm]
+    epidermis_thickness_cm : float
+        Living epidermis thickness. [cm]
+    n_tissue, n_ambient : float, optional
+        Refractive indices of the skin and of the medium above it. [-]
+    grid : str or dict, optional
+        A name of :data:`LUT_GRIDS` or a spec with the same axes. Default "default".
+
+    Returns
+    -------
+    SkinLUT
+
+    Notes
+    -----
+    The solves run on the coarse grid in blocks (one vectorised call per block); the
+    cubic refinement is separable (one spline per axis, Prahl's adding-doubling idea of
+    building big from small, here in parameter space), so it costs far less than the
+    solves.
+
+    References
+    ----------
+    .. [1] A. Liemert, A. Kienle, J. Biomed. Opt. 15, 025003 (2010),
+       doi:10.1117/1.3368682
+
+    Examples
+    --------
+    >>> lut = build_lut(0.3, 0.008, grid="tiny")
+    >>> lut.values.shape
+    (2, 2, 2, 2, 2, 3, 4)
+    """
+    grid = _resolve_grid(grid)
+    geo = _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient)
+    start = time.perf_counter()
+    names = list(LUT_AXES)
+    coords, splits = _solve_axes(grid, geo)
+    axes = [_inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)]
+    mesh = dict(zip(names, np.meshgrid(*axes, indexing="ij"), strict=True))
+    musp_d = mesh["musp_dermis_per_cm"]
+    refl, paths = layers.three_layer_reflectance(
+        geo["rho_cm"],
+        mua_epidermis_per_cm=mesh["mua_epidermis_per_cm"],
+        mua_dermis_per_cm=mesh["mua_dermis_per_cm"],
+        musp_dermis_per_cm=musp_d,
+        mua_subcutis_per_cm=mesh["mua_subcutis_per_cm"],
+        musp_subcutis_per_cm=musp_d * mesh["musp_ratio"],
+        epidermis_thickness_cm=geo["epidermis_thickness_cm"],
+        skin_thickness_cm=mesh["skin_transport_thickness"] / musp_d,
+        n_tissue=geo["n_tissue"],
+        n_ambient=geo["n_ambient"],
+    )
+    paths = np.maximum(paths, _PATH_FLOOR_CM)
+    values = np.concatenate([np.log(refl)[..., None], np.log(paths)], axis=-1)
+    nodes = []
+    for i, name in enumerate(names):
+        m = grid[name][3]
+        u = coords[i]
+        if m > 1:
+            values, u = _upsample(values, i, u, m, splits[i])
+        nodes.append(u)
+    key = lut_key(geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"],
+                  geo["n_ambient"], grid)
+    return SkinLUT(
+        np.ascontiguousarray(values, dtype=np.float32), tuple(nodes), values.shape[:-1],
+        grid, geo, key, time.perf_counter() - start, int(refl.size),
+    )
+
+
+# ------------------------------------------------------------------------------- cache
+
+
+def cache_dir() -> Path:
+    """``$NIRGLUCOSE_CACHE``, else ``$XDG_CACHE_HOME/nirglucose``, else ``~/.cache/nirglucose``."""
+    env = os.environ.get("NIRGLUCOSE_CACHE")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "nirglucose"
+
+
+def _save(lut: SkinLUT, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez(
+                fh,
+                values=lut.values,
+                nodes=np.concatenate(lut.nodes),
+                shape=np.array(lut.shape, dtype=np.int64),
+                grid=np.array(json.dumps(lut.grid, sort_keys=True)),
+                geometry=np.array(json.dumps(lut.geometry, sort_keys=True)),
+                key=np.array(lut.key),
+                n_solves=np.array(lut.n_solves, dtype=np.int64),
+            )
+        os.chmod(tmp, 0o644)  # mkstemp makes it private; a cache is for every reader
+        os.replace(tmp, path)  # atomic on POSIX: readers see the old file or the new one
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _load(path: Path, key: str) -> SkinLUT | None:
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            if str(f["key"]) != key:
+                return None
+            return SkinLUT(
+                values=f["values"].copy(),
+                nodes=tuple(np.split(f["nodes"].copy(), np.cumsum(f["shape"])[:-1])),
+                shape=tuple(int(v) for v in f["shape"]),
+                grid={k: tuple(v) for k, v in json.loads(str(f["grid"])).items()},
+                geometry=json.loads(str(f["geometry"])),
+                key=key,
+                n_solves=int(f["n_solves"]),
+            )
+    except (OSError, ValueError, KeyError) as exc:
+        _log.warning("ignoring unreadable LUT cache file %s (%s)", path, exc)
+        return None
+
+
+def load_or_build_lut(
+    separation_cm: float,
+    epidermis_thickness_cm: float,
+    n_tissue: float = 1.4,
+    n_ambient: float = 1.0,
+    *,
+    grid: str | dict = "default",
+    directory: str | os.PathLike | None = None,
+) -> SkinLUT:
+    """The table for a geometry: read from the disk cache, or built and written there.
+
+    Parameters
+    ----------
+    separation_cm, epidermis_thickness_cm, n_tissue, n_ambient
+        See :func:`build_lut`.
+    grid : str or dict, optional
+        Grid name or spec. Default "default".
+    directory : path, optional
+        Cache directory; :func:`cache_dir` when omitted.
+
+    Returns
+    -------
+    SkinLUT
+        ``build_seconds`` is 0 when it came from the cache.
+    """
+    key = lut_key(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid)
+    path = Path(directory) if directory is not None else cache_dir()
+    path = path / f"lut-{key}.npz"
+    if path.exists():
+        lut = _load(path, key)
+        if lut is not None:
+            return lut
+    _log.info("building the skin LUT %s (grid %s)", key,
+              grid if isinstance(grid, str) else "custom")
+    lut = build_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=grid)
+    try:
+        _save(lut, path)
+    except OSError as exc:  # a read-only home still simulates, it just rebuilds next time
+        _log.warning("could not write the LUT cache %s (%s)", path, exc)
+    return lut
+
+
+@lru_cache(maxsize=8)
+def _get_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, directory):
+    return load_or_build_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient,
+                             grid=grid, directory=directory)
+
+
+def get_lut(
+    separation_cm: float,
+    epidermis_thickness_cm: float,
+    n_tissue: float = 1.4,
+    n_ambient: float = 1.0,
+    *,
+    grid: str | None = None,
+) -> SkinLUT:
+    """:func:`load_or_build_lut`, memoised per process, for the current cache directory.
+
+    ``grid`` defaults to ``$NIRGLUCOSE_LUT_GRID``, else ``"default"``.
+    """
+    grid = grid or os.environ.get("NIRGLUCOSE_LUT_GRID", "default")
+    return _get_lut(float(separation_cm), float(epidermis_thickness_cm), float(n_tissue),
+                    float(n_ambient), grid, str(cache_dir()))
+
+
+# ------------------------------------------------------------------------ interpolation
+
+
+@lru_cache(maxsize=256)
+def _axis_map(nodes_bytes: bytes) -> tuple[float, float, int, float]:
+    """(u0, h_low, n_low, h_high): node i at u0 + i h_low up to n_low, then h_high after."""
+    u = np.frombuffer(nodes_bytes, dtype=np.float64)
+    d = np.diff(u)
+    if np.allclose(d, d[0], rtol=1e-9, atol=0.0):
+        return float(u[0]), float(d[0]), u.size - 1, float(d[0])
+    n_low = int(np.argmax(~np.isclose(d, d[0], rtol=1e-9, atol=0.0)))
+    if not np.allclose(d[n_low:], d[n_low], rtol=1e-9, atol=0.0):  # pragma: no cover
+        raise ConfigError("LUT axes must be uniform, or uniform on either side of one node")
+    return float(u[0]), float(d[0]), n_low, float(d[n_low])
+
+
+def _cell_coords(
+    nodes: list[np.ndarray], names: list[str], inputs: list[np.ndarray],
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Cell index and fraction along each axis; raises for points outside the nodes."""
+    idx, frac = [], []
+    for u_nodes, name, x in zip(nodes, names, inputs, strict=True):
+        kind, unit = LUT_AXES[name]
+        n = u_nodes.size
+        u0, h_lo, n_lo, h_hi = _axis_map(np.ascontiguousarray(u_nodes, dtype=np.float64).tobytes())
+        pos = _forward(kind, x) - u0
+        pos /= h_lo
+        if n_lo < n - 1:  # two-piece axis: past node n_lo the spacing changes
+            hi_part = pos > n_lo
+            pos[hi_part] = n_lo + (pos[hi_part] - n_lo) * (h_lo / h_hi)
+        pmin, pmax = np.min(pos, initial=np.inf), np.max(pos, initial=-np.inf)
+        tol = 1e-9 * n
+        if not (pmin >= -tol and pmax <= n - 1 + tol):  # also catches NaN
+            lo, hi = _inverse(kind, u_nodes[0]), _inverse(kind, u_nodes[-1])
+            bad = x.flat[int(np.argmin(pos))] if not pmin >= -tol else x.flat[int(np.argmax(pos))]
+            if np.isnan(pmin) or np.isnan(pmax):
+                bad = float("nan")
+            hint = " (mus'_dermis x skin thickness)" if name == "skin_transport_thickness" else ""
+            raise ConfigError(
+                f"{name}{hint} = {bad!r} is outside the look-up table; valid range is "
+                f"[{lo:.6g}, {hi:.6g}] [{unit}] (use another grid or forward model)"
+            )
+        j = pos.astype(np.intp)
+        np.clip(j, 0, n - 2, out=j)
+        pos -= j
+        idx.append(j)
+        frac.append(pos)
+    return idx, frac
+
+
+def _multilinear(flat: np.ndarray, strides: np.ndarray, idx, frac, base=None) -> np.ndarray:
+    """Multilinear interpolation on a flattened (n_nodes, C) table; returns (M, C)."""
+    d = len(idx)
+    offsets = np.zeros(1, dtype=np.intp)
+    for k in reversed(range(d)):  # dimension 0 ends as the most significant corner bit
+        offsets = np.concatenate([offsets, offsets + strides[k]])
+    lin = idx[0] * strides[0] if base is None else base + idx[0] * strides[0]
+    for k in range(1, d):
+        lin = lin + idx[k] * strides[k]
+    vals = flat[lin[:, None] + offsets[None, :]]  # (M, 2^d, C)
+    for k in range(d):
+        half = vals.shape[1] // 2
+        a = vals[:, :half]
+        vals = a + frac[k][:, None, None] * (vals[:, half:] - a)
+    return vals[:, 0]
+
+
+def _multilinear_1d(flat: np.ndarray, strides: np.ndarray, lin: np.ndarray, frac) -> np.ndarray:
+    """Multilinear interpolation on a 1-D table (the hot path), depth first.
+
+    ``lin`` is the flat index of each point's lower corner; one ``take`` per corner and
+    one lerp per pair keep every temporary at (M,), which stays in the CPU cache.
+    """
+    d = len(frac)
+
+    def corner(level: int, offset: int) -> np.ndarray:
+        if level == d:
+            return flat.take(lin + offset if offset else lin)
+        a = corner(level + 1, offset)
+        b = corner(level + 1, offset + int(strides[level]))
+        b -= a
+        b *= frac[level]
+        b += a
+        return b
+
+    return corner(0, 0)
+
+
+def _strides(shape: tuple[int, ...]) -> np.ndarray:
+    return np.array([int(np.prod(shape[k + 1:])) for k in range(len(shape))], dtype=np.intp)
+
+
+def interpolate_lut(
+    lut: SkinLUT,
+    *,
+    mua_epidermis_per_cm: ArrayLike,
+    mua_dermis_per_cm: ArrayLike,
+    musp_dermis_per_cm: ArrayLike,
+    mua_subcutis_per_cm: ArrayLike,
+    musp_subcutis_per_cm: ArrayLike,
+    skin_thickness_cm: ArrayLike,
+    pathlengths: bool = False,
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """Reflectance (and per-layer path) of three-layer skin, from the table.
+
+    Same inputs and outputs as :func:`nirglucose.optics.layers.three_layer_reflectance`
+    at the table's geometry; multilinear in the axes' coordinates, in log of the outputs.
+
+    Parameters
+    ----------
+    lut : SkinLUT
+        The table.
+    mua_epidermis_per_cm, mua_dermis_per_cm, mua_subcutis_per_cm : array_like
+        Absorption of each layer. [1/cm]
+    musp_dermis_per_cm, musp_subcutis_per_cm : array_like
+        Reduced scattering of the skin and of the subcutis. [1/cm]
+    skin_thickness_cm : array_like
+        Epidermis + dermis thickness. [cm]
+    pathlengths : bool, optional
+        Also return the paths. Default False.
+
+    Returns
+    -------
+    reflectance_per_cm2 : ndarray
+        R(rho). [1/cm^2]
+    pathlength_cm : ndarray or None
+        Mean path per layer (last axis: epidermis, dermis, subcutis). [cm]
+
+    Raises
+    ------
+    ConfigError
+        If a point lies outside the table's box (the message names the axis and range).
+
+    References
+    ----------
+    .. [1] A. Liemert, A. Kienle, J. Biomed. Opt. 15, 025003 (2010),
+       doi:10.1117/1.3368682
+
+    Examples
+    --------
+    >>> lut = build_lut(0.3, 0.008, grid="tiny")
+    >>> r, _ = interpolate_lut(lut, mua_epidermis_per_cm=2.0, mua_dermis_per_cm=0.3,
+    ...     musp_dermis_per_cm=20.0, mua_subcutis_per_cm=0.1, musp_subcutis_per_cm=12.0,
+    ...     skin_thickness_cm=0.18)
+    >>> bool(0.1 < r < 1.0)
+    True
+    """
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
+        mua_epidermis_per_cm, mua_dermis_per_cm, musp_dermis_per_cm, mua_subcutis_per_cm,
+        musp_subcutis_per_cm, skin_thickness_cm)))
+    shape = arrays[0].shape
+    mua_e, mua_d, musp_d, mua_s, musp_s, t_skin = (a.ravel() for a in arrays)
+    inputs = [musp_d, musp_s / musp_d, mua_d, mua_s, mua_e, musp_d * t_skin]
+    idx, frac = _cell_coords(list(lut.nodes), list(LUT_AXES), inputs)
+    n_ch = 4 if pathlengths else 1
+    flat = lut.values.reshape(-1, 4)[:, :n_ch]
+    out = np.exp(_multilinear(flat, _strides(lut.shape), idx, frac).astype(np.float64))
+    refl = out[:, 0].reshape(shape)
+    paths = out[:, 1:].reshape(shape + (3,)) if pathlengths else None
+    return refl, paths
+
+
+@dataclass(frozen=True)
+class NodeLUT:
+    """A :class:`SkinLUT` specialised to fixed wavelength nodes (the simulator's fast path).
+
+    Along ``musp_ratio`` (the subcutis/dermis scattering ratio, which depends on
+    wavelength only) the table is replaced, per node, by its value and slope at the
+    node's ratio: exact for the multilinear interpolant while the ratio stays in the
+    node's cell. Only ln R is kept. ``values`` has shape (n_nodes, *other axes), complex64:
+    ln R + 1j d(ln R)/d(ratio) (one gather fetches both, and the multilinear weights are
+    real, so complex arithmetic interpolates the two channels at once).
+    """
+
+    values: NDArray[np.float32] = field(repr=False)
+    musp_ratio: NDArray[np.float64] = field(repr=False)
+    node_shape: tuple[int, ...]
+    lut: SkinLUT = field(repr=False)
+
+    def __reduce__(self):
+        # pickle the recipe, not the arrays: a worker process rebuilds the node table
+        # from its own disk cache (simulate_block's tables travel to Dask/joblib workers)
+        geo = self.lut.geometry
+        return (_node_lut_from_recipe, (
+            geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"], geo["n_ambient"],
+            self.lut.grid, self.musp_ratio.tolist(),
+        ))
+
+
+_Q = list(LUT_AXES).index("musp_ratio")
+_NOT_Q = [i for i in range(len(LUT_AXES)) if i != _Q]
+
+
+_NODE_CACHE: dict[tuple, NodeLUT] = {}
+_NODE_CACHE_SIZE = 8
+
+
+def node_lut(lut: SkinLUT, musp_ratio: ArrayLike) -> NodeLUT:
+    """Specialise a table to fixed subcutis/dermis scattering ratios, one per node.
+
+    Memoised per process on the table's key and the ratios (the simulator asks for the
+    same one at every call of its tables).
+
+    Parameters
+    ----------
+    lut : SkinLUT
+        The table.
+    musp_ratio : array_like
+        mus'_subcutis / mus'_dermis at each node, any shape (e.g. (n_led, n_pts)). [-]
+
+    Returns
+    -------
+    NodeLUT
+    """
+    q = np.ascontiguousarray(musp_ratio, dtype=float)
+    memo = (lut.key, q.shape, q.tobytes())
+    if memo in _NODE_CACHE:
+        return _NODE_CACHE[memo]
+    (j,), (f,) = _cell_coords([lut.nodes[_Q]], ["musp_ratio"], [q.ravel()])
+    v = np.moveaxis(lut.values[..., 0], _Q, 0)  # (n_q, ...) view, float32
+    v0 = v[j].astype(np.float64)  # (n_nodes, ...)
+    v1 = v[j + 1].astype(np.float64)
+    ff = f.reshape((-1,) + (1,) * (v0.ndim - 1))
+    slope = v1 - v0
+    value = v0 + ff * slope
+    slope /= np.diff(lut.nodes[_Q])[j].reshape(ff.shape)
+    values = np.ascontiguousarray((value + 1j * slope).astype(np.complex64))
+    out = NodeLUT(values, q.copy(), q.shape, lut)
+    if len(_NODE_CACHE) >= _NODE_CACHE_SIZE:
+        _NODE_CACHE.pop(next(iter(_NODE_CACHE)))
+    _NODE_CACHE[memo] = out
+    return out
+
+
+def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, ratio):
+    grid = {k: tuple(v) for k, v in grid.items()}
+    named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == _resolve_grid(grid)]
+    lut = (get_lut(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=named[0])
+           if named else load_or_build_lut(rho_cm, epidermis_thickness_cm, n_tissue,
+                                           n_ambient, grid=grid))
+    return node_lut(lut, np.asarray(ratio))
+
+
+def interpolate_node_lut(
+    nlut: NodeLUT,
+    *,
+    mua_epidermis_per_cm: np.ndarray,
+    mua_dermis_per_cm: np.ndarray,
+    musp_dermis_per_cm: np.ndarray,
+    mua_subcutis_per_cm: np.ndarray,
+    musp_subcutis_per_cm: np.ndarray,
+    skin_thickness_cm: np.ndarray,
+) -> NDArray[np.float64]:
+    """Reflectance R(rho) from a :class:`NodeLUT`, as :func:`interpolate_lut` gives it.
+
+    Inputs have shape (n, *node_shape); ``skin_thickness_cm`` may be (n,). Absorption
+    and scattering in [1/cm], thickness in [cm]; returns R in [1/cm^2].
+    """
+    lut = nlut.lut
+    mua_d = np.asarray(mua_dermis_per_cm, dtype=float)
+    full = mua_d.shape
+    k = len(nlut.node_shape)
+    if full[len(full) - k:] != nlut.node_shape:
+        raise ConfigError(
+            f"inputs of shape {full} do not end with the node shape {nlut.node_shape}"
+        )
+    lead = len(full) - k
+    # node-major order: consecutive points read the same node's slab (cache locality)
+    perm = tuple(range(lead, len(full))) + tuple(range(lead))
+
+    def flat(a: ArrayLike) -> np.ndarray:
+        return np.broadcast_to(a, full).transpose(perm).ravel()
+
+    t = np.asarray(skin_thickness_cm, dtype=float)
+    t = t.reshape(t.shape + (1,) * (len(full) - t.ndim))
+    musp_d = flat(musp_dermis_per_cm)
+    q = flat(musp_subcutis_per_cm) / musp_d
+    inputs = [musp_d, flat(mua_d), flat(mua_subcutis_per_cm), flat(mua_epidermis_per_cm),
+              musp_d * flat(t)]
+    names = [n for n in LUT_AXES if n != "musp_ratio"]
+    shape = tuple(lut.shape[i] for i in _NOT_Q)
+    idx, frac = _cell_coords([lut.nodes[i] for i in _NOT_Q], names, inputs)
+    _cell_coords([lut.nodes[_Q]], ["musp_ratio"], [q])
+    strides = _strides(shape)
+    n_nodes = int(np.prod(nlut.node_shape))
+    n_rows = q.size // n_nodes
+    lin = np.repeat(np.arange(n_nodes, dtype=np.intp) * int(np.prod(shape)), n_rows)
+    for j, s in zip(idx, strides, strict=True):
+        lin += j * s
+    out = _multilinear_1d(nlut.values.ravel(), strides, lin,
+                          [f.astype(np.float32) for f in frac])
+    dq = q - np.repeat(nlut.musp_ratio.ravel(), n_rows)
+    ln_r = out.real.astype(np.float64) + dq * out.imag
+    return np.exp(ln_r).reshape(tuple(full[i] for i in perm)).transpose(np.argsort(perm))
+
+
+def reflectance_from_tissue_optics(
+    optics: dict,
+    *,
+    melanin_fraction: ArrayLike,
+    skin_thickness_cm: ArrayLike,
+    epidermis_thickness_cm: float,
+    separation_cm: float,
+    n_tissue: float,
+    lut: SkinLUT | NodeLUT | None = None,
+) -> NDArray[np.float64]:
+    """R(rho) of three-layer skin for the simulator's tissue optics, from the table.
+
+    Parameters
+    ----------
+    optics : dict
+        Output of :func:`nirglucose.optics.tissue.tissue_optics`, (n, n_led, n_pts). [1/cm]
+    melanin_fraction : array_like
+        Epidermal melanosome fraction, (n,). [-]
+    skin_thickness_cm : array_like
+        Epidermis + dermis thickness, (n,). [cm]
+    epidermis_thickness_cm, separation_cm : float
+        Probe geometry; must match the table's. [cm]
+    n_tissue : float
+        Tissue refractive index; must match the table's. [-]
+    lut : SkinLUT or NodeLUT, optional
+        The table; :func:`get_lut` for this geometry when omitted.
+
+    Returns
+    -------
+    ndarray
+        R(rho), (n, n_led, n_pts). [1/cm^2]
+    """
+    if lut is None:
+        lut = get_lut(separation_cm, epidermis_thickness_cm, n_tissue)
+    geo = (lut.lut if isinstance(lut, NodeLUT) else lut).geometry
+    want = {"rho_cm": separation_cm, "epidermis_thickness_cm": epidermis_thickness_cm,
+            "n_tissue": n_tissue}
+    for name, v in want.items():
+        if not np.isclose(geo[name], float(v), rtol=1e-12, atol=0.0):
+            raise ConfigError(f"the look-up table was built for {name} = {geo[name]!r}, "
+                              f"not {float(v)!r}")
+    lay = layers.layers_from_tissue_optics(optics, melanin_fraction)
+    t = np.asarray(skin_thickness_cm, dtype=float)
+    args = {
+        "mua_epidermis_per_cm": lay["mua_epidermis"],
+        "mua_dermis_per_cm": lay["mua_dermis"],
+        "musp_dermis_per_cm": lay["musp_dermis"],
+        "mua_subcutis_per_cm": lay["mua_subcutis"],
+        "musp_subcutis_per_cm": lay["musp_subcutis"],
+    }
+    if isinstance(lut, NodeLUT):
+        return interpolate_node_lut(lut, skin_thickness_cm=t, **args)
+    t = t.reshape(t.shape + (1,) * (lay["mua_dermis"].ndim - t.ndim))
+    return interpolate_lut(lut, skin_thickness_cm=t, **args)[0]
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def random_lut_points(lut: SkinLUT, n_points: int, *, rng: np.random.Generator | int = 0,
+                      ) -> dict[str, NDArray[np.float64]]:
+    """Points uniform in each axis' coordinate over the table's box, as solver inputs.
+
+    Returns keyword arguments for :func:`interpolate_lut` and
+    :func:`~nirglucose.optics.layers.three_layer_reflectance`.
+    """
+    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    pts = {}
+    for i, name in enumerate(LUT_AXES):
+        kind = LUT_AXES[name][0]
+        u_nodes = lut.nodes[i]
+        u = u_nodes[0] + (u_nodes[-1] - u_nodes[0]) * gen.random(n_points)
+        lo, hi = lut.box[name]
+        pts[name] = np.clip(_inverse(kind, u), lo, hi)  # round-off at the edges
+    musp = pts["musp_dermis_per_cm"]
+    return {
+        "mua_epidermis_per_cm": pts["mua_epidermis_per_cm"],
+        "mua_dermis_per_cm": pts["mua_dermis_per_cm"],
+        "musp_dermis_per_cm": musp,
+        "mua_subcutis_per_cm": pts["mua_subcutis_per_cm"],
+        "musp_subcutis_per_cm": musp * pts["musp_ratio"],
+        "skin_thickness_cm": pts["skin_transport_thickness"] / musp,
+    }
+
+
+def lut_errors(
+    lut: SkinLUT, points: dict | None = None, n_points: int = 200, *,
+    rng: np.random.Generator | int = 0,
+) -> dict[str, NDArray[np.float64]]:
+    """Relative errors of the table against direct solves at off-grid points.
+
+    "Direct solve": :func:`nirglucose.optics.layers.three_layer_reflectance` at the
+    point, with the table's geometry (the same model the table was built from, so this
+    measures the table alone; the model's own error is measured against Monte Carlo).
+
+    Parameters
+    ----------
+    lut : SkinLUT
+        The table.
+    points : dict, optional
+        Solver keyword arguments (arrays); :func:`random_lut_points` when omitted.
+    n_points : int, optional
+        Number of random points when ``points`` is omitted. Default 200.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed. Default 0.
+
+    Returns
+    -------
+    dict
+        ``reflectance`` (n,) and ``pathlength`` (n, 3): table / direct - 1.
+    """
+    args = points if points is not None else random_lut_points(lut, n_points, rng=rng)
+    r_lut, p_lut = interpolate_lut(lut, pathlengths=True, **args)
+    r_dir, p_dir = layers.three_layer_reflectance(
+        lut.geometry["rho_cm"],
+        epidermis_thickness_cm=lut.geometry["epidermis_thickness_cm"],
+        n_tissue=lut.geometry["n_tissue"],
+        n_ambient=lut.geometry["n_ambient"],
+        **args,
+    )
+    return {"reflectance": r_lut / r_dir - 1.0, "pathlength": p_lut / p_dir - 1.0}

@@ -1,0 +1,250 @@
+"""Tests of nirglucose.optics.lut (the rte-lut look-up table) and its simulator wiring.
+
+Every test uses a temporary cache directory (NIRGLUCOSE_CACHE) and never a pre-existing
+cache. "Direct solve" below is nirglucose.optics.layers.three_layer_reflectance at the
+same point and geometry (the model the table is built from).
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import nirglucose as ng
+from nirglucose.exceptions import ConfigError
+from nirglucose.optics import forward, layers, tissue
+from nirglucose.optics import lut as L
+
+RHO, T_EPI = 0.3, 0.008
+
+
+@pytest.fixture(autouse=True)
+def _tmp_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("NIRGLUCOSE_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv("NIRGLUCOSE_LUT_GRID", raising=False)
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    return L.build_lut(RHO, T_EPI, grid="tiny")
+
+
+def _sub_grid(n: int = 5, first: int = 1) -> dict:
+    """A block of the default grid: its own node spacing, n solve nodes per axis.
+
+    The block sits where the simulator's cohorts are dense (mid wavelengths, normal
+    skin); it is refined exactly as the default grid is, so its interpolation error
+    is that of the default table there, at a fraction of the build time.
+    """
+    spec = L.LUT_GRIDS["default"]
+    out = {}
+    start = {"musp_dermis_per_cm": first, "mua_dermis_per_cm": first,
+             "mua_subcutis_per_cm": first, "mua_epidermis_per_cm": first - 1}
+    for name, (lo, hi, ns, m) in spec.items():
+        kind = L.LUT_AXES[name][0]
+        if name == "musp_ratio":
+            out[name] = (lo, hi, ns, m)
+            continue
+        if name == "skin_transport_thickness":
+            # the right-hand piece of the default thickness axis, from tau = 1
+            u_hi = np.log(hi)
+            n_right = ns - int(np.clip(round((ns - 1) * -np.log(lo) / (u_hi - np.log(lo))),
+                                       1, ns - 2))
+            h = u_hi / (n_right - 1)
+            out[name] = (float(np.exp(h * (first - 1))), float(np.exp(h * (first + n - 2))),
+                         n, m)
+            continue
+        u = np.linspace(L._forward(kind, np.float64(lo)), L._forward(kind, np.float64(hi)), ns)
+        i = start[name]
+        out[name] = (float(L._inverse(kind, u[i])), float(L._inverse(kind, u[i + n - 1])), n, m)
+    return out
+
+
+def test_grids_and_axes_are_consistent():
+    for spec in L.LUT_GRIDS.values():
+        assert set(spec) == set(L.LUT_AXES)
+    with pytest.raises(ConfigError, match="unknown LUT grid"):
+        L.build_lut(RHO, T_EPI, grid="huge")
+    bad = dict(L.LUT_GRIDS["tiny"])
+    bad["mua_dermis_per_cm"] = (1.0, 0.5, 3, 1)
+    with pytest.raises(ConfigError, match="mua_dermis_per_cm"):
+        L.build_lut(RHO, T_EPI, grid=bad)
+
+
+def test_tiny_table_is_exact_at_its_nodes(tiny):
+    assert tiny.values.shape == (2, 2, 2, 2, 2, 3, 4)
+    assert tiny.values.dtype == np.float32
+    ax = {k: tiny.axis_nodes(k) for k in L.LUT_AXES}
+    mesh = np.meshgrid(*ax.values(), indexing="ij")
+    p = dict(zip(ax, (m.ravel() for m in mesh), strict=True))
+    args = dict(
+        mua_epidermis_per_cm=p["mua_epidermis_per_cm"], mua_dermis_per_cm=p["mua_dermis_per_cm"],
+        musp_dermis_per_cm=p["musp_dermis_per_cm"], mua_subcutis_per_cm=p["mua_subcutis_per_cm"],
+        musp_subcutis_per_cm=p["musp_dermis_per_cm"] * p["musp_ratio"],
+        skin_thickness_cm=p["skin_transport_thickness"] / p["musp_dermis_per_cm"],
+    )
+    r, paths = L.interpolate_lut(tiny, pathlengths=True, **args)
+    r0, p0 = layers.three_layer_reflectance(RHO, epidermis_thickness_cm=T_EPI, **args)
+    np.testing.assert_allclose(r, r0, rtol=1e-5)  # float32 storage of ln R
+    np.testing.assert_allclose(paths, np.maximum(p0, 1e-6), rtol=1e-5)
+
+
+def test_thickness_axis_has_a_node_at_one_transport_length(tiny):
+    nodes = tiny.axis_nodes("skin_transport_thickness")
+    assert np.any(np.isclose(nodes, 1.0, rtol=1e-12))
+    # every node keeps the skin thicker than the epidermis
+    assert nodes[0] / L.LUT_GRIDS["tiny"]["musp_dermis_per_cm"][1] > T_EPI
+
+
+def test_interpolation_accuracy_at_default_spacing():
+    # <= 1 % against direct solves at random off-grid points in a block of the default
+    # grid (the whole default grid is checked by the slow test and benchmarks/optics.py)
+    lut = L.build_lut(RHO, T_EPI, grid=_sub_grid())
+    # points in the block's inner cells, away from the spline's end conditions at the
+    # block's faces (which the full grid has only at the faces of the whole box)
+    inner = L.build_lut(RHO, T_EPI, grid=_sub_grid(3, first=2))  # the inner cells' box
+    pts = L.random_lut_points(inner, 300, rng=2)
+    err = L.lut_errors(lut, pts)
+    assert np.max(np.abs(err["reflectance"])) <= 0.01
+    assert np.median(np.abs(err["reflectance"])) <= 0.003
+    assert np.median(np.abs(err["pathlength"][:, :2])) <= 0.01
+
+
+@pytest.mark.slow
+def test_default_table_within_one_percent_of_direct_solves():
+    lut = L.build_lut(RHO, T_EPI)  # about 15 s of CPU
+    err = L.lut_errors(lut, n_points=400, rng=7)
+    assert np.max(np.abs(err["reflectance"])) <= 0.01
+    assert np.median(np.abs(err["reflectance"])) <= 0.004
+
+
+def test_out_of_box_raises_with_axis_name(tiny):
+    kw = dict(mua_epidermis_per_cm=2.0, mua_dermis_per_cm=0.3, musp_dermis_per_cm=20.0,
+              mua_subcutis_per_cm=0.1, musp_subcutis_per_cm=12.0, skin_thickness_cm=0.18)
+    L.interpolate_lut(tiny, **kw)
+    for key, value, axis in (("mua_dermis_per_cm", 9.0, "mua_dermis_per_cm"),
+                             ("musp_dermis_per_cm", 50.0, "musp_dermis_per_cm"),
+                             ("mua_epidermis_per_cm", np.nan, "mua_epidermis_per_cm"),
+                             ("skin_thickness_cm", 3.0, "skin_transport_thickness")):
+        bad = dict(kw)
+        bad[key] = value
+        with pytest.raises(ConfigError, match=axis):
+            L.interpolate_lut(tiny, **bad)
+
+
+def test_cache_round_trip_is_atomic_and_pickle_free(tmp_path):
+    d = tmp_path / "c"
+    lut = L.load_or_build_lut(RHO, T_EPI, grid="tiny", directory=d)
+    files = sorted(p.name for p in d.iterdir())
+    assert files == [f"lut-{lut.key}.npz"]  # no temporary file left behind
+    assert lut.build_seconds > 0
+    with np.load(d / files[0], allow_pickle=False) as f:
+        assert str(f["key"]) == lut.key
+    again = L.load_or_build_lut(RHO, T_EPI, grid="tiny", directory=d)
+    assert again.build_seconds == 0.0
+    np.testing.assert_array_equal(again.values, lut.values)
+    for a, b in zip(again.nodes, lut.nodes, strict=True):
+        np.testing.assert_array_equal(a, b)
+    # a corrupt file is rebuilt, not trusted
+    (d / files[0]).write_bytes(b"not a zip file")
+    rebuilt = L.load_or_build_lut(RHO, T_EPI, grid="tiny", directory=d)
+    assert rebuilt.build_seconds > 0
+    np.testing.assert_array_equal(rebuilt.values, lut.values)
+
+
+def test_key_depends_on_geometry_and_grid():
+    k = L.lut_key(RHO, T_EPI, grid="tiny")
+    assert k == L.lut_key(RHO, T_EPI, 1.4, 1.0, "tiny")
+    assert k != L.lut_key(0.4, T_EPI, grid="tiny")
+    assert k != L.lut_key(RHO, 0.01, grid="tiny")
+    assert k != L.lut_key(RHO, T_EPI, 1.45, grid="tiny")
+    assert k != L.lut_key(RHO, T_EPI, grid="default")
+
+
+def test_cache_dir_env(monkeypatch, tmp_path):
+    monkeypatch.setenv("NIRGLUCOSE_CACHE", str(tmp_path / "x"))
+    assert L.cache_dir() == tmp_path / "x"
+    monkeypatch.delenv("NIRGLUCOSE_CACHE")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert L.cache_dir() == tmp_path / "xdg" / "nirglucose"
+
+
+def _sim_optics(n=64, seed=0, n_led=4, n_pts=3):
+    cfg = ng.resolve_config("paper", {"leds.band_points": n_pts})
+    spectra = tissue.band_spectra(cfg.leds.wavelengths_nm, cfg.leds.fwhm_nm, n_pts)
+    rng = np.random.default_rng(seed)
+    state = tissue.TissueState(
+        rng.uniform(0.01, 0.05, n), rng.uniform(0.6, 0.8, n), rng.uniform(0.6, 0.7, n),
+        rng.uniform(0.7, 0.9, n), rng.uniform(4.0, 20.0, n),
+    )
+    shift = rng.normal(0.0, 2.0, (n, n_led))
+    optics = tissue.tissue_optics(spectra, state, water_displacement_per_mm=1.1e-4,
+                                  scattering_rel_per_mm=-1.25e-3 * 13.5, shift_nm=shift)
+    nominal = tissue.tissue_optics(spectra, tissue.TissueState(*(np.full(1, v) for v in (
+        0.02, 0.7, 0.65, 0.8, 5.5))), water_displacement_per_mm=0.0, scattering_rel_per_mm=0.0)
+    ratio = nominal["musp_subcutis"][0] / nominal["musp_dermis"][0]
+    return optics, rng.uniform(0.01, 0.15, n), rng.uniform(0.045, 0.4, n), ratio
+
+
+def test_node_table_equals_the_generic_interpolation(tiny):
+    optics, mel, thick, ratio = _sim_optics()
+    nlut = L.node_lut(tiny, ratio)
+    lay = layers.layers_from_tissue_optics(optics, mel)
+    args = {
+        "mua_epidermis_per_cm": lay["mua_epidermis"], "mua_dermis_per_cm": lay["mua_dermis"],
+        "musp_dermis_per_cm": lay["musp_dermis"], "mua_subcutis_per_cm": lay["mua_subcutis"],
+        "musp_subcutis_per_cm": lay["musp_subcutis"],
+    }
+    fast = L.interpolate_node_lut(nlut, skin_thickness_cm=thick, **args)
+    slow, _ = L.interpolate_lut(tiny, skin_thickness_cm=thick[:, None, None], **args)
+    assert fast.shape == slow.shape == lay["mua_dermis"].shape
+    np.testing.assert_allclose(fast, slow, rtol=2e-5)
+
+
+def test_forward_model_by_name(tiny, monkeypatch):
+    monkeypatch.setenv("NIRGLUCOSE_LUT_GRID", "tiny")
+    optics, mel, thick, ratio = _sim_optics(n=16)
+    kw = dict(melanin_fraction=mel, skin_thickness_cm=thick, epidermis_thickness_cm=T_EPI,
+              separation_cm=RHO, detector_area_cm2=0.066, n_tissue=1.4)
+    assert "rte-lut" in forward.FORWARD_MODELS
+    implicit = forward.detected_fraction("rte-lut", optics, **kw)  # default table (tiny)
+    explicit = forward.detected_fraction("rte-lut", optics, lut=tiny, **kw)
+    node = forward.detected_fraction("rte-lut", optics, lut=L.node_lut(tiny, ratio), **kw)
+    np.testing.assert_allclose(implicit, explicit, rtol=1e-12)
+    np.testing.assert_allclose(node, explicit, rtol=2e-5)
+    assert np.all((explicit > 0) & (explicit < 0.066))
+    with pytest.raises(ConfigError, match="rho_cm"):
+        forward.detected_fraction("rte-lut", optics, lut=tiny, **{**kw, "separation_cm": 0.4})
+
+
+def test_node_table_pickles_as_a_recipe(tiny, monkeypatch):
+    monkeypatch.setenv("NIRGLUCOSE_LUT_GRID", "tiny")
+    _, _, _, ratio = _sim_optics(n=2)
+    nlut = L.node_lut(L.get_lut(RHO, T_EPI), ratio)
+    blob = pickle.dumps(nlut)
+    assert len(blob) < 20_000  # the arrays do not travel to worker processes
+    back = pickle.loads(blob)
+    np.testing.assert_array_equal(back.values, nlut.values)
+
+
+def test_simulator_runs_with_rte_lut(monkeypatch):
+    monkeypatch.setenv("NIRGLUCOSE_LUT_GRID", "tiny")
+    over = {"optics.model": "rte-lut"}
+    a = ng.simulate("paper", n_subjects=12, per_subject=2, seed=3, overrides=over)
+    b = ng.simulate("paper", n_subjects=12, per_subject=2, seed=3, overrides=over)
+    d = ng.simulate("paper", n_subjects=12, per_subject=2, seed=3)
+    cfg = ng.resolve_config("paper", over)
+    cols = [f"true_detected_fraction_{w:g}" for w in cfg.leds.wavelengths_nm]
+    frac = a.frame[cols].to_numpy()
+    assert np.all(np.isfinite(frac)) and np.all(frac > 0)
+    assert a.frame.equals(b.frame)  # deterministic
+    # same physiology and noise draws as the default model; only the optics differ
+    np.testing.assert_array_equal(a.frame["glucose_mgdl"], d.frame["glucose_mgdl"])
+    assert not np.allclose(frac, d.frame[cols].to_numpy())
+    # the oracle's forward model reproduces the simulated fractions
+    from nirglucose.simulate.simulator import detected_fraction_given_glucose
+
+    again = detected_fraction_given_glucose(cfg, a.frame, a.frame["glucose_mgdl"].to_numpy())
+    np.testing.assert_allclose(again, frac, rtol=1e-9)
