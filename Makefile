@@ -20,8 +20,9 @@ $(STAMP): $(BIN)/python pyproject.toml requirements.lock
 install: $(STAMP)
 
 run: $(STAMP)
-	mkdir -p $(OUT)
-	$(BIN)/nirglucose simulate --preset $(PRESET) --seed $(SEED) --out $(OUT)/dataset.parquet
+	$(BIN)/nirglucose benchmark --preset $(PRESET) --seed $(SEED) --out $(OUT) --jobs 2
+	$(BIN)/nirglucose report $(OUT) --out $(OUT)/report.html
+	@echo "report: $(abspath $(OUT))/report.html"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile
