@@ -7,6 +7,12 @@ only, choose their one hyperparameter by subject-grouped inner cross-validation
 :class:`~sklearn.model_selection.KFold`), fold their standardisation into the
 coefficients, and save to JSON.
 
+Cross-validation needs one pass over the data: each inner fold is standardised exactly
+by its own training rows from sums (z, z z^T, z y) over all rows minus those over the
+fold, and every candidate (all ridge penalties from one eigen-decomposition; all PLS
+component counts from one kernel-PLS run) is scored at once. The results equal
+``cross_val_predict`` with ``StandardScaler`` + ``Ridge`` / ``PLSRegression`` (tested).
+
 References
 ----------
 .. [1] R. Gani, "Physics-Informed Neural Networks vs. Physics Models for Non-Invasive
@@ -20,6 +26,8 @@ References
    doi:10.1016/0169-7439(93)85002-X; scikit-learn's
    :class:`~sklearn.cross_decomposition.PLSRegression` (NIPALS, same predictions for a
    single response).
+.. [4] B. S. Dayal, J. F. MacGregor, "Improved PLS algorithms", J. Chemometrics 11,
+   73-85 (1997), doi:10.1002/(SICI)1099-128X(199701)11:1<73::AID-CEM435>3.0.CO;2-#
 """
 
 from __future__ import annotations
