@@ -31,6 +31,19 @@ MODEL_MODULES = (
     "nirglucose.models.sdnn",
 )
 
+#: Registered name -> the module that defines it, so that looking up a linear model
+#: does not import torch.
+_NAME_MODULES = {
+    "ebl": "nirglucose.models.linear",
+    "pls": "nirglucose.models.linear",
+    "oracle": "nirglucose.models.oracle",
+    "original-pinn": "nirglucose.models.pinn",
+    "optimized-pinn": "nirglucose.models.pinn",
+    "rte-pinn": "nirglucose.models.pinn",
+    "selective-rte-pinn": "nirglucose.models.pinn",
+    "sdnn": "nirglucose.models.sdnn",
+}
+
 _REGISTRY: dict[str, type] = {}
 _loaded = False
 
@@ -67,7 +80,10 @@ def available_models() -> list[str]:
 
 def get_model_class(name: str) -> type:
     """The estimator class registered under ``name``; unknown names raise ConfigError."""
-    _load_all()
+    if name in _NAME_MODULES and name not in _REGISTRY:
+        importlib.import_module(_NAME_MODULES[name])
+    if name not in _REGISTRY:
+        _load_all()
     if name not in _REGISTRY:
         raise ConfigError(f"unknown model {name!r}; valid: {', '.join(sorted(_REGISTRY))}")
     return _REGISTRY[name]
