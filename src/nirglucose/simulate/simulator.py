@@ -95,7 +95,7 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
 
 #: Rows per optics slice: the (rows, n_led, n_points) temporaries then fit in the
 #: CPU cache, which makes the memory-bound array arithmetic several times faster.
-_OPTICS_SLICE_ROWS = 1024
+_OPTICS_SLICE_ROWS = 2048
 
 
 def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm) -> np.ndarray:
