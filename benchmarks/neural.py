@@ -1,0 +1,175 @@
+"""Speed of the five networks: training, single-sample latency, batch throughput.
+
+Measures, on this machine:
+
+1. training each network with its defaults on the ``paper`` preset (80 subjects x 3 =
+   240 snapshots, seed 0); goal: all five in <= 60 s together;
+2. training each on 100,000 snapshots (``paper`` preset, 33,334 subjects x 3) with
+   large-data settings (batch 512, at most 40 epochs, patience 5, no refit: the 20 %
+   validation split is 20,000 snapshots), fully, not extrapolated; goal: <= 5 min each;
+3. median single-sample latency of ``predict_one`` and of ``predict`` on a one-row
+   array, against the study's 3.8 / 2.1 / 15.2 / 6.1 / 0.8 ms; goal: 10x faster;
+4. batch throughput of ``predict`` on 100,000 rows.
+
+Torch runs on ``--threads`` intra-op threads (default 1: these networks are small, and
+on a shared two-core machine a second thread mostly adds contention). The one-off cost
+of importing ``torch._dynamo`` (pulled in by the first ``torch.optim`` optimiser of a
+process) is reported separately. The load average before and after is recorded: other
+work on the machine slows every number here.
+
+Usage::
+
+    python benchmarks/neural.py [--threads 1] [--large-n 100000] [--skip-large]
+
+The last line of the output is one JSON object.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+import torch
+
+import nirglucose as ng
+from nirglucose.models import make_model
+from nirglucose.models._base import MEASURED_COLUMNS
+
+MODELS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn", "sdnn")
+#: The study's single-sample inference times. [ms]
+STUDY_LATENCY_MS = {
+    "original-pinn": 3.8,
+    "optimized-pinn": 2.1,
+    "rte-pinn": 15.2,
+    "selective-rte-pinn": 6.1,
+    "sdnn": 0.8,
+}
+LARGE_SETTINGS = {"batch_size": 512, "max_epochs": 40, "patience": 5, "refit": False}
+
+
+def _median_us(fn, calls: int, warmup: int = 200) -> tuple[float, float]:
+    for i in range(warmup):
+        fn(i)
+    t = np.empty(calls)
+    for i in range(calls):
+        t0 = time.perf_counter_ns()
+        fn(i)
+        t[i] = time.perf_counter_ns() - t0
+    return float(np.median(t) / 1e3), float(np.percentile(t, 90) / 1e3)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--large-n", type=int, default=100_000)
+    ap.add_argument("--skip-large", action="store_true")
+    ap.add_argument("--calls", type=int, default=3000)
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    out: dict = {
+        "benchmark": "neural",
+        "torch_version": torch.__version__,
+        "torch_threads": args.threads,
+        "cpu_count": os.cpu_count(),
+        "load_avg_start": os.getloadavg()[0],
+    }
+
+    t0 = time.perf_counter()
+    torch.optim.Adam([torch.zeros(1, requires_grad=True)])
+    out["one_off_first_optimizer_import_s"] = round(time.perf_counter() - t0, 2)
+
+    # 1. paper preset, 240 snapshots, defaults
+    ds = ng.simulate("paper", n_subjects=80, per_subject=3, seed=0)
+    fitted, paper = {}, {}
+    for name in MODELS:
+        m = make_model(name, random_state=0)
+        t0 = time.perf_counter()
+        m.fit(ds)
+        dt = time.perf_counter() - t0
+        fitted[name] = m
+        paper[name] = {
+            "fit_s": round(dt, 2),
+            "epochs": m.n_epochs_,
+            "refit_epochs": m.refit_epochs_,
+            "n_parameters": m.n_parameters,
+        }
+        print(f"paper-240 {name}: {dt:.1f} s, {m.n_epochs_} + {m.refit_epochs_} epochs", flush=True)
+    total = sum(v["fit_s"] for v in paper.values())
+    out["paper_240"] = {
+        "models": paper,
+        "total_fit_s": round(total, 2),
+        "goal_s": 60,
+        "meets_goal": total <= 60,
+    }
+
+    # 3./4. latency and throughput (fitted on the paper preset)
+    X = ds.frame[list(MEASURED_COLUMNS)].to_numpy(float)
+    big = np.tile(X, (int(np.ceil(100_000 / len(X))), 1))[:100_000]
+    latency, throughput = {}, {}
+    k = len(X)
+    for name, m in fitted.items():
+        one, one_p90 = _median_us(
+            lambda i, m=m: m.predict_one(X[i % k, :4], X[i % k, 4:8], X[i % k, 8:]), args.calls
+        )
+        row, row_p90 = _median_us(lambda i, m=m: m.predict(X[i % k : i % k + 1]), args.calls)
+        study_us = STUDY_LATENCY_MS[name] * 1e3
+        latency[name] = {
+            "predict_one_median_us": round(one, 1),
+            "predict_one_p90_us": round(one_p90, 1),
+            "predict_1row_median_us": round(row, 1),
+            "predict_1row_p90_us": round(row_p90, 1),
+            "study_ms": STUDY_LATENCY_MS[name],
+            "speedup_vs_study_predict_one": round(study_us / one, 1),
+            "speedup_vs_study_predict_1row": round(study_us / row, 1),
+            "goal_10x_met": bool(study_us / one >= 10 and study_us / row >= 10),
+        }
+        m.predict(big[:1000])
+        best = min(_time(lambda m=m: m.predict(big)) for _ in range(3))
+        throughput[name] = round(len(big) / best)
+        print(f"latency {name}: {latency[name]}, {throughput[name]:,} samples/s", flush=True)
+    out["latency"] = latency
+    out["throughput_samples_per_s"] = throughput
+
+    # 2. 100,000 snapshots
+    if not args.skip_large:
+        per = 3
+        t0 = time.perf_counter()
+        big_ds = ng.simulate("paper", n_subjects=-(-args.large_n // per), per_subject=per, seed=0)
+        large = {
+            "n_snapshots": len(big_ds),
+            "simulate_s": round(time.perf_counter() - t0, 2),
+            "settings": LARGE_SETTINGS,
+            "goal_s_each": 300,
+            "models": {},
+        }
+        for name in MODELS:
+            m = make_model(name, random_state=0, **LARGE_SETTINGS)
+            t0 = time.perf_counter()
+            m.fit(big_ds)
+            dt = time.perf_counter() - t0
+            best = m.history_[m.best_epoch_ - 1]
+            large["models"][name] = {
+                "fit_s": round(dt, 1),
+                "epochs": m.n_epochs_,
+                "best_epoch": m.best_epoch_,
+                "s_per_epoch": round(dt / m.n_epochs_, 2),
+                "val_rmse_mgdl": round(best["val_rmse_mgdl"], 2),
+                "meets_goal": dt <= 300,
+            }
+            print(f"large {name}: {large['models'][name]}", flush=True)
+        out["large"] = large
+    out["load_avg_end"] = os.getloadavg()[0]
+    print(json.dumps(out))
+
+
+def _time(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,948 @@
+"""One PyTorch training loop behind the scikit-learn estimator API.
+
+:class:`TorchRegressor` is the base of every network estimator (the four PINNs and the
+SDNN). It follows the scikit-learn contract (``__init__`` only stores keyword
+arguments, validation happens in ``fit``, learned state ends in ``_``, ``fit`` returns
+``self``, ``predict`` checks that the model is fitted) and the skorch habit of one
+training loop split into small overridable steps [1]_:
+
+``build_module()``
+    the :class:`torch.nn.Module` (architecture only);
+``get_loss(y_pred, y_true, batch)``
+    ``(total, terms)``; a physics-informed variant calls the parent and adds its
+    residual, it never copies the loop;
+``train_step(batch)`` / ``validation_step(batch)``
+    one optimiser step / one evaluation, returning the loss terms.
+
+What the loop does, in order: read the measured columns (never ``true_*``), turn the
+ADC codes into decadic absorbances :math:`A = \\log_{10}(I_0/I)` (robust to the LED
+power and gain), standardise the absorbances, the physiological vector and the target
+on the training rows, hold out a validation set by subject (``GroupShuffleSplit`` on
+``subject_id``, or a random split when there are no subject ids, or the ``X_val`` the
+caller passes), and train with Adam [2]_, a learning-rate schedule and early stopping
+on the validation MSE, keeping the best weights and a per-epoch history
+(``history_``). With an internal split the model is then refitted on every training
+row for the selected number of epochs (``refit``; the epoch count is the minimum of
+the smoothed validation curve), so the held-out subjects are not lost on small data.
+
+Prediction: batches run through the module under :func:`torch.inference_mode` in
+float32; up to :data:`NUMPY_ROWS` rows (and :meth:`TorchRegressor.predict_one`) run
+through a NumPy snapshot of the same network, which avoids PyTorch's per-module
+dispatch cost on one sample.
+
+Training is seeded: the same ``random_state`` gives identical weights and predictions
+(the weight initialisation, dropout and batch shuffling all draw from generators seeded
+from it, inside :func:`torch.random.fork_rng` so the caller's global torch RNG is left
+untouched). :func:`torch.use_deterministic_algorithms` is *not* switched on: in torch
+2.13 the first call imports ``torch._inductor`` (several seconds), and every CPU kernel
+these small networks use (linear, softplus, attention, Adam) is deterministic already,
+which the tests check (same seed, bit-identical weights). Results are reproducible for
+a given torch build and thread count.
+
+Save/load writes a JSON document plus a safetensors weight file beside it (both
+atomically); loading reads JSON and safetensors (or a ``weights_only`` torch file) and
+never executes code from the files.
+
+References
+----------
+.. [1] skorch developers, "skorch: a scikit-learn compatible neural network library
+   that wraps PyTorch", https://skorch.readthedocs.io (NeuralNet.get_loss,
+   train_step, validation_step).
+.. [2] D. P. Kingma and J. Ba, "Adam: a method for stochastic optimization",
+   ICLR (2015). arXiv:1412.6980
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import logging
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+import pandas as pd
+import torch
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
+from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit
+from sklearn.utils import check_array, check_random_state
+from torch import nn
+
+from ..constants import DEFAULT_LED_WAVELENGTHS_NM
+from ..dataset import Dataset, atomic_write
+from ..exceptions import ConfigError, DataError, NotFittedError
+from ._base import N_MEASURED, as_measurements
+from .networks import count_parameters
+
+__all__ = ["TorchRegressor", "LR_SCHEDULES", "FORMAT_VERSION", "NUMPY_ROWS", "nir_pmf_features"]
+
+logger = logging.getLogger(__name__)
+
+#: Valid ``lr_schedule`` names.
+LR_SCHEDULES = ("plateau", "cosine", "none")
+#: Version of the saved-model JSON layout.
+FORMAT_VERSION = 1
+
+_N_LED = len(DEFAULT_LED_WAVELENGTHS_NM)
+_PREDICT_CHUNK = 65536
+#: Batches up to this many rows are predicted through the NumPy closure.
+NUMPY_ROWS = 8
+_MIN_IMPROVEMENT = 1e-4  # relative improvement that resets the early-stopping counter
+_SMOOTHING_EPOCHS = 5  # window of the validation curve's moving average (refit only)
+
+
+class _UnfittedError(NotFittedError, _SklearnNotFittedError):
+    """nirglucose's :class:`~nirglucose.exceptions.NotFittedError`, also recognised by
+    scikit-learn tools as theirs (it subclasses both)."""
+
+
+def nir_pmf_features(Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Decadic absorbances and the physiological vector from the 20 measured columns.
+
+    Parameters
+    ----------
+    Xa : numpy.ndarray
+        (n, 20) measured columns in ``MEASURED_COLUMNS`` order (ADC codes, reference
+        codes, physiological vector).
+
+    Returns
+    -------
+    absorbance : numpy.ndarray
+        :math:`A_\\lambda = \\log_{10}(\\mathrm{adc\\_ref}_\\lambda / \\mathrm{adc}_\\lambda)`,
+        (n, 4). [-]
+    pmf : numpy.ndarray
+        (n, 12) physiological vector. [column units]
+
+    Raises
+    ------
+    DataError
+        If any ADC or reference code is not positive (no absorbance exists).
+    """
+    adc = Xa[:, :_N_LED]
+    ref = Xa[:, _N_LED : 2 * _N_LED]
+    bad = ~((adc > 0) & (ref > 0))
+    if np.any(bad):
+        row = int(np.flatnonzero(bad.any(axis=1))[0])
+        raise DataError(
+            f"ADC and reference codes must be > 0 to form absorbances log10(adc_ref/adc); "
+            f"row {row} has adc={adc[row].tolist()}, adc_ref={ref[row].tolist()}"
+        )
+    return np.log10(ref / adc), Xa[:, 2 * _N_LED :]
+
+
+def _smoothed_argmin(values: list[float], window: int) -> int:
+    """1-based index of the minimum of a centred moving average of ``values``.
+
+    The edges average over the part of the window that exists. A small validation set
+    gives a noisy loss curve whose raw minimum is often a lucky epoch; the smoothed
+    minimum picks the epoch count for the refit more stably.
+    """
+    v = np.asarray(values, dtype=float)
+    half = window // 2
+    c = np.concatenate(([0.0], np.cumsum(v)))
+    idx = np.arange(len(v))
+    lo, hi = np.maximum(idx - half, 0), np.minimum(idx + half + 1, len(v))
+    return int(np.argmin((c[hi] - c[lo]) / (hi - lo))) + 1
+
+
+def _scale_of(x: np.ndarray) -> np.ndarray:
+    s = np.std(x, axis=0)
+    return np.where(s > 1e-12 * np.maximum(np.abs(np.mean(x, axis=0)), 1.0), s, 1.0)
+
+
+class TorchRegressor(RegressorMixin, BaseEstimator):
+    """Base of the network estimators: one seeded training loop, save/load, fast predict.
+
+    Subclasses implement :meth:`build_module` and may override :meth:`get_loss`
+    (calling the parent), :meth:`_fit_physics` and :meth:`_validate_extra_params`.
+
+    Parameters
+    ----------
+    max_epochs : int
+        Upper bound on training epochs. [-]
+    batch_size : int
+        Mini-batch size. [-]
+    lr : float
+        Adam learning rate. [-]
+    weight_decay : float
+        Adam L2 weight decay. [-]
+    patience : int or None
+        Stop after this many epochs without a relative improvement of 1e-4 in the
+        monitored loss (validation MSE, or training loss without a validation set);
+        None trains all ``max_epochs``. [-]
+    val_fraction : float
+        Share of subjects (or rows, without subject ids) held out for early stopping
+        when no ``X_val`` is passed to :meth:`fit`; 0 disables the split. [-]
+    lr_schedule : {'plateau', 'cosine', 'none'}
+        Halve the learning rate when the monitored loss stalls for ``patience // 4``
+        epochs (``ReduceLROnPlateau``), cosine annealing over ``max_epochs``, or
+        constant.
+    refit : bool
+        After early stopping on an *internal* validation split, retrain from the same
+        initial weights on every training row for the selected number of epochs, at
+        the learning rates those epochs had (so the held-out subjects are not lost to
+        the final model). Not done with an explicit ``X_val`` (the study's 60/20/20
+        protocol trains on the 60 % only) or without a validation split.
+    random_state : int, numpy.random.RandomState or None
+        Seeds the split, the initialisation, dropout and shuffling. The same integer
+        gives identical weights and predictions.
+
+    Attributes
+    ----------
+    module_ : torch.nn.Module
+        The trained network (in eval mode).
+    history_ : list of dict
+        One dict per epoch: ``epoch``, ``lr``, ``train_loss``, ``val_loss`` and each
+        loss term as ``train_<term>`` / ``val_<term>`` (e.g. ``train_mse``,
+        ``train_physics``), plus ``val_rmse_mgdl``. Losses are in standardised target
+        units; ``val_*`` are None without a validation set.
+    best_epoch_ : int
+        Epoch with the lowest monitored loss (whose weights were kept, or how many
+        epochs the refit ran).
+    n_epochs_ : int
+        Epochs run before early stopping.
+    refit_epochs_ : int
+        Epochs of the refit on all rows (0 without one).
+    refit_history_ : list of dict
+        Per-epoch training losses of the refit.
+    scaler_ : dict
+        Means and scales of the absorbances, physiology and target (all training rows,
+        an internal validation split included; an explicit ``X_val`` excluded).
+    physics_ : dict
+        Constants of the physics terms (JSON-serialisable), empty for the SDNN.
+    n_features_in_ : int
+        20, the measured columns.
+    """
+
+    #: Set by :func:`~nirglucose.models.registry.register`.
+    registry_name: ClassVar[str] = ""
+
+    def __init__(
+        self,
+        *,
+        max_epochs: int = 300,
+        batch_size: int = 32,
+        lr: float = 1e-3,
+        weight_decay: float = 0.0,
+        patience: int | None = 30,
+        val_fraction: float = 0.2,
+        lr_schedule: str = "plateau",
+        refit: bool = True,
+        random_state: int | np.random.RandomState | None = None,
+    ) -> None:
+        self.max_epochs = max_epochs
+        self.batch_size = batch_size
+        self.lr = lr
+        self.weight_decay = weight_decay
+        self.patience = patience
+        self.val_fraction = val_fraction
+        self.lr_schedule = lr_schedule
+        self.refit = refit
+        self.random_state = random_state
+
+    # ------------------------------------------------------------------ overridables
+
+    def build_module(self) -> nn.Module:
+        """Return a freshly initialised network.
+
+        Modules that need data-dependent constants read them from
+        :meth:`_physics_or_default`.
+        """
+        raise NotImplementedError
+
+    def get_loss(
+        self, y_pred: Any, y_true: torch.Tensor, batch: dict[str, torch.Tensor]
+    ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """Data loss: mean squared error of the standardised glucose.
+
+        Parameters
+        ----------
+        y_pred : torch.Tensor or tuple
+            The module's output (glucose first when a tuple).
+        y_true : torch.Tensor
+            Standardised reference glucose, (n,).
+        batch : dict of torch.Tensor
+            ``nir``, ``pmf`` (scaled inputs), ``absorbance`` (raw decadic, (n, 4)),
+            ``y``.
+
+        Returns
+        -------
+        total : torch.Tensor
+            Scalar loss to minimise.
+        terms : dict of torch.Tensor
+            Its named parts (``mse`` here; subclasses add theirs).
+        """
+        g = self._glucose(y_pred)
+        mse = torch.mean((g - y_true) ** 2)
+        return mse, {"mse": mse}
+
+    def train_step(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """One optimiser step on ``batch``; returns the detached loss terms (and ``loss``)."""
+        self._optimizer.zero_grad(set_to_none=True)
+        out = self.module_(batch["nir"], batch["pmf"])
+        total, terms = self.get_loss(out, batch["y"], batch)
+        total.backward()
+        self._optimizer.step()
+        return {"loss": total.detach(), **{k: v.detach() for k, v in terms.items()}}
+
+    def validation_step(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """Loss terms (and ``loss``) on ``batch`` without gradients."""
+        with torch.no_grad():
+            out = self.module_(batch["nir"], batch["pmf"])
+            total, terms = self.get_loss(out, batch["y"], batch)
+        return {"loss": total, **terms}
+
+    def _fit_physics(self, source: Any, absorbance: np.ndarray, y: np.ndarray) -> dict:
+        """Constants of the physics terms, from the training data and its scenario."""
+        return {}
+
+    def _default_physics(self) -> dict:
+        """``physics_`` used to build an unfitted module (for ``n_parameters``)."""
+        return {}
+
+    def _validate_extra_params(self) -> None:
+        """Check subclass hyper-parameters (raise ConfigError)."""
+
+    def _prepare_physics_tensors(self) -> None:
+        """Turn ``physics_`` into tensors the loss uses (after fit setup or load)."""
+
+    # ------------------------------------------------------------------ sklearn glue
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.allow_nan = False
+        tags.target_tags.required = True
+        tags.regressor_tags.poor_score = True
+        return tags
+
+    @property
+    def n_parameters(self) -> int:
+        """Trainable parameters, counted from the module (a fresh one if not fitted)."""
+        module = getattr(self, "module_", None)
+        if module is None:
+            with torch.random.fork_rng(devices=[]):
+                module = self.build_module()
+        return count_parameters(module)
+
+    def _physics_or_default(self) -> dict:
+        """Fitted ``physics_``, or :meth:`_default_physics` before fitting."""
+        physics = self.__dict__.get("physics_")
+        return physics if physics is not None else self._default_physics()
+
+    def _check_fitted(self) -> None:
+        if getattr(self, "module_", None) is None:
+            raise _UnfittedError(
+                f"this {type(self).__name__} is not fitted yet; call fit(...) first"
+            )
+
+    @staticmethod
+    def _glucose(out: Any) -> torch.Tensor:
+        return out[0] if isinstance(out, tuple) else out
+
+    def _validate_params(self) -> None:
+        def need(ok: bool, name: str, rule: str) -> None:
+            if not ok:
+                raise ConfigError(f"{type(self).__name__}: {name}={getattr(self, name)!r}; {rule}")
+
+        for name in ("max_epochs", "batch_size"):
+            v = getattr(self, name)
+            need(
+                isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1,
+                name,
+                "must be an integer >= 1",
+            )
+        need(
+            self.patience is None
+            or (isinstance(self.patience, int | np.integer) and self.patience >= 1),
+            "patience",
+            "must be None or an integer >= 1",
+        )
+        need(
+            isinstance(self.lr, float | int) and math.isfinite(self.lr) and self.lr > 0,
+            "lr",
+            "must be a finite number > 0",
+        )
+        need(
+            isinstance(self.weight_decay, float | int) and self.weight_decay >= 0,
+            "weight_decay",
+            "must be >= 0",
+        )
+        need(
+            isinstance(self.val_fraction, float | int) and 0 <= self.val_fraction < 1,
+            "val_fraction",
+            "must lie in [0, 1)",
+        )
+        need(self.lr_schedule in LR_SCHEDULES, "lr_schedule", f"valid: {', '.join(LR_SCHEDULES)}")
+        need(isinstance(self.refit, bool | np.bool_), "refit", "must be True or False")
+        self._validate_extra_params()
+
+    def _check_study_leds(self, X: Any) -> None:
+        if isinstance(X, Dataset):
+            wl = tuple(float(w) for w in X.wavelengths_nm)
+        elif isinstance(X, pd.DataFrame):
+            wl = tuple(
+                float(c[4:])
+                for c in X.columns
+                if isinstance(c, str)
+                and c.startswith("adc_")
+                and c[4:].replace(".", "", 1).isdigit()
+            )
+        else:
+            return
+        if wl and tuple(sorted(wl)) != tuple(DEFAULT_LED_WAVELENGTHS_NM):
+            raise DataError(
+                f"{type(self).__name__} needs exactly the study's four LEDs "
+                f"({', '.join(f'{w:g}' for w in DEFAULT_LED_WAVELENGTHS_NM)} nm): its input "
+                f"layer takes their four absorbances; the data has LEDs "
+                f"({', '.join(f'{w:g}' for w in wl)}) nm"
+            )
+
+    def _measurements(self, X: Any, y: Any = None, *, require_target: bool = False):
+        """``as_measurements`` after the LED check and, for arrays, sklearn's checks.
+
+        Arrays other than a dense float64 (n, 20) one (the common case, kept cheap for
+        single-sample latency) first go through :func:`sklearn.utils.check_array` so
+        that sparse, complex, NaN/inf, empty and too-narrow input fail with
+        scikit-learn's standard messages; the exact width (20 measured columns) and
+        finiteness are then checked by :func:`~nirglucose.models._base.as_measurements`.
+        """
+        self._check_study_leds(X)
+        dense = (
+            type(X) is np.ndarray
+            and X.dtype == np.float64
+            and X.ndim == 2
+            and X.shape[1] == N_MEASURED
+            and len(X) >= 1
+        )
+        if dense and not (require_target and (y is None or len(X) < 2)):
+            pass  # dense float64 (n, 20) already: as_measurements checks NaN/inf
+        elif not isinstance(X, Dataset | pd.DataFrame):
+            if require_target and y is None:
+                raise DataError(
+                    f"{type(self).__name__} requires y to be passed, but the target y is None "
+                    f"(or pass a Dataset/DataFrame with a 'glucose_mgdl' column)"
+                )
+            X = check_array(
+                X,
+                dtype=np.float64,
+                accept_sparse=False,
+                ensure_all_finite=True,
+                ensure_min_samples=2 if require_target else 1,
+                ensure_min_features=N_MEASURED,
+            )
+        return as_measurements(X, y, require_target=require_target)
+
+    # ------------------------------------------------------------------ scaling
+
+    def _transform(self, Xa: np.ndarray) -> dict[str, np.ndarray]:
+        a, pmf = nir_pmf_features(Xa)
+        s = self.scaler_
+        return {
+            "nir": (a - s["nir_mean"]) / s["nir_scale"],
+            "pmf": (pmf - s["pmf_mean"]) / s["pmf_scale"],
+            "absorbance": a,
+        }
+
+    @staticmethod
+    def _tensors(arrays: dict[str, np.ndarray]) -> dict[str, torch.Tensor]:
+        return {
+            k: torch.as_tensor(np.ascontiguousarray(v), dtype=torch.float32)
+            for k, v in arrays.items()
+        }
+
+    # ------------------------------------------------------------------ fit
+
+    def fit(self, X: Any, y: Any = None, *, X_val: Any = None, y_val: Any = None):
+        """Train the network.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like (n, 20)
+            Training measurements (measured columns only are read).
+        y : array_like, optional
+            Reference glucose; taken from ``glucose_mgdl`` when omitted. [mg/dL]
+        X_val, y_val : optional
+            An explicit validation set (e.g. the study's 60/20/20 split) used for
+            early stopping instead of an internal subject-grouped split.
+
+        Returns
+        -------
+        self
+        """
+        self._validate_params()
+        self.__dict__.pop("_fast", None)  # a previous fit's snapshot
+        Xa, y, groups = self._measurements(X, y, require_target=True)
+        if len(Xa) < 2:
+            raise DataError(f"fitting needs at least 2 samples, got {len(Xa)}")
+        rs = check_random_state(self.random_state)
+        split_seed, init_seed, shuffle_seed = (int(s) for s in rs.randint(0, 2**31 - 1, size=3))
+
+        if X_val is not None:
+            Xv, yv, _ = self._measurements(X_val, y_val, require_target=True)
+            Xt, yt = Xa, y
+        else:
+            tr, va = self._split(len(Xa), groups, split_seed)
+            Xt, yt = Xa[tr], y[tr]
+            Xv, yv = (Xa[va], y[va]) if va is not None else (None, None)
+        refit = bool(self.refit) and X_val is None and Xv is not None
+
+        # Scaling and physics constants from every row given for training (an internal
+        # validation split is part of the training data; an explicit X_val is not).
+        a_train, pmf_train = nir_pmf_features(Xa)
+        self.scaler_ = {
+            "nir_mean": a_train.mean(axis=0),
+            "nir_scale": _scale_of(a_train),
+            "pmf_mean": pmf_train.mean(axis=0),
+            "pmf_scale": _scale_of(pmf_train),
+            "y_mean": float(y.mean()),
+            "y_scale": float(_scale_of(y[:, None])[0]),
+        }
+        self.physics_ = self._fit_physics(X, a_train, y)
+        self._prepare_physics_tensors()
+        train = self._tensors({**self._transform(Xt), "y": self._scale_y(yt)})
+        val = None
+        if Xv is not None and len(Xv):
+            val = self._tensors({**self._transform(Xv), "y": self._scale_y(yv)})
+
+        try:
+            with torch.random.fork_rng(devices=[]):
+                torch.manual_seed(init_seed)
+                self.history_, self.best_epoch_ = self._train(train, val, shuffle_seed)
+                self.n_epochs_ = len(self.history_)
+                self.refit_history_ = []
+                if refit:
+                    # Same initial weights and shuffling seed, every training row, the
+                    # selected number of epochs at the learning rates they had.
+                    torch.manual_seed(init_seed)
+                    every = self._tensors({**self._transform(Xa), "y": self._scale_y(y)})
+                    self.best_epoch_ = _smoothed_argmin(
+                        [r["val_mse"] for r in self.history_], _SMOOTHING_EPOCHS
+                    )
+                    plan = [r["lr"] for r in self.history_[: self.best_epoch_]]
+                    self.refit_history_, _ = self._train(every, None, shuffle_seed, lr_plan=plan)
+        finally:
+            self.__dict__.pop("_optimizer", None)
+        self.refit_epochs_ = len(self.refit_history_)
+        self.n_features_in_ = N_MEASURED
+        self._build_fast_path()
+        return self
+
+    def _scale_y(self, y: np.ndarray) -> np.ndarray:
+        return (y - self.scaler_["y_mean"]) / self.scaler_["y_scale"]
+
+    def _split(self, n: int, groups: np.ndarray | None, seed: int):
+        all_rows = np.arange(n)
+        if self.val_fraction == 0 or n < 4:
+            return all_rows, None
+        if groups is not None and len(np.unique(groups)) >= 2:
+            splitter = GroupShuffleSplit(n_splits=1, test_size=self.val_fraction, random_state=seed)
+            tr, va = next(splitter.split(all_rows, groups=groups))
+        else:
+            splitter = ShuffleSplit(n_splits=1, test_size=self.val_fraction, random_state=seed)
+            tr, va = next(splitter.split(all_rows))
+        if len(tr) < 2 or len(va) == 0:
+            return all_rows, None
+        return tr, va
+
+    @staticmethod
+    def _batches(
+        tensors: dict[str, torch.Tensor], batch_size: int, order: torch.Tensor | None = None
+    ) -> Iterator[tuple[int, dict[str, torch.Tensor]]]:
+        n = len(tensors["y"])
+        for start in range(0, n, batch_size):
+            if order is None:
+                yield (
+                    min(batch_size, n - start),
+                    {k: v[start : start + batch_size] for k, v in tensors.items()},
+                )
+            else:
+                idx = order[start : start + batch_size]
+                yield len(idx), {k: v[idx] for k, v in tensors.items()}
+
+    def _evaluate(self, tensors: dict[str, torch.Tensor]) -> dict[str, float]:
+        self.module_.eval()
+        sums: dict[str, torch.Tensor] = {}
+        n = 0
+        for size, batch in self._batches(tensors, max(_PREDICT_CHUNK // 8, self.batch_size)):
+            for k, v in self.validation_step(batch).items():
+                sums[k] = sums.get(k, 0.0) + v * size
+            n += size
+        return {k: float(v) / n for k, v in sums.items()}
+
+    def _train(
+        self,
+        train: dict,
+        val: dict | None,
+        shuffle_seed: int,
+        *,
+        lr_plan: list[float] | None = None,
+    ) -> tuple[list[dict], int]:
+        """Train a fresh module; return ``(history, best_epoch)``.
+
+        Without ``lr_plan``: up to ``max_epochs`` with the schedule and early stopping,
+        keeping the best weights. With it: exactly ``len(lr_plan)`` epochs at those
+        learning rates, keeping the last weights (the refit).
+        """
+        self.module_ = self.build_module()
+        self._optimizer = torch.optim.Adam(
+            self.module_.parameters(), lr=self.lr, weight_decay=self.weight_decay
+        )
+        patience = self.patience if lr_plan is None else None
+        max_epochs = int(self.max_epochs) if lr_plan is None else len(lr_plan)
+        if lr_plan is not None:
+            sched = None
+        elif self.lr_schedule == "plateau":
+            sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
+                self._optimizer,
+                mode="min",
+                factor=0.5,
+                patience=max(1, (patience or 20) // 4),
+            )
+        elif self.lr_schedule == "cosine":
+            sched = torch.optim.lr_scheduler.CosineAnnealingLR(
+                self._optimizer, T_max=self.max_epochs
+            )
+        else:
+            sched = None
+        gen = torch.Generator().manual_seed(shuffle_seed)
+        n_train = len(train["y"])
+        y_scale = self.scaler_["y_scale"]
+        history: list[dict] = []
+        best, best_epoch, best_state, stale = math.inf, 0, None, 0
+        for epoch in range(1, max_epochs + 1):
+            self.module_.train()
+            if lr_plan is not None:
+                for group in self._optimizer.param_groups:
+                    group["lr"] = lr_plan[epoch - 1]
+            lr_now = self._optimizer.param_groups[0]["lr"]
+            order = torch.randperm(n_train, generator=gen)
+            sums: dict[str, torch.Tensor] = {}
+            for size, batch in self._batches(train, int(self.batch_size), order):
+                for k, v in self.train_step(batch).items():
+                    sums[k] = sums.get(k, 0.0) + v * size
+            record: dict[str, Any] = {"epoch": epoch, "lr": lr_now}
+            train_terms = {k: float(v) / n_train for k, v in sums.items()}
+            record["train_loss"] = train_terms.pop("loss")
+            record.update({f"train_{k}": v for k, v in train_terms.items()})
+            if val is not None:
+                val_terms = self._evaluate(val)
+                record["val_loss"] = val_terms.pop("loss")
+                record.update({f"val_{k}": v for k, v in val_terms.items()})
+                record["val_rmse_mgdl"] = math.sqrt(max(val_terms["mse"], 0.0)) * y_scale
+                monitor = val_terms["mse"]
+            else:
+                record["val_loss"] = None
+                record.update({f"val_{k}": None for k in train_terms})
+                record["val_rmse_mgdl"] = None
+                monitor = record["train_loss"]
+            history.append(record)
+            logger.debug("%s epoch %d: %s", type(self).__name__, epoch, record)
+            if not math.isfinite(monitor):
+                raise DataError(
+                    f"{type(self).__name__}: training diverged at epoch {epoch} "
+                    f"(loss {monitor}); lower lr (now {self.lr})"
+                )
+            if lr_plan is not None:
+                best_epoch = epoch
+            elif monitor < best - _MIN_IMPROVEMENT * abs(best) or best_state is None:
+                best, best_epoch, stale = monitor, epoch, 0
+                best_state = copy.deepcopy(self.module_.state_dict())
+            else:
+                stale += 1
+            if isinstance(sched, torch.optim.lr_scheduler.ReduceLROnPlateau):
+                sched.step(monitor)
+            elif sched is not None:
+                sched.step()
+            if patience is not None and stale >= patience:
+                break
+        if best_state is not None:
+            self.module_.load_state_dict(best_state)
+        self.module_.eval()
+        return history, best_epoch
+
+    # ------------------------------------------------------------------ predict
+
+    def _inputs32(self, Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Standardised float32 network inputs ``(nir, pmf)`` from measured columns."""
+        a, pmf = nir_pmf_features(Xa)
+        s = self.scaler_
+        nir = ((a - s["nir_mean"]) / s["nir_scale"]).astype(np.float32)
+        return nir, ((pmf - s["pmf_mean"]) / s["pmf_scale"]).astype(np.float32)
+
+    def predict(self, X: Any) -> np.ndarray:
+        """Glucose estimates.
+
+        Up to :data:`NUMPY_ROWS` rows go through the network's NumPy closure (the
+        low-latency path, see :meth:`predict_one`); larger batches through the torch
+        module in ``torch.inference_mode`` in chunks of 65,536 rows. The two paths
+        agree to float32 rounding.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like (n, 20)
+            Measurements.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) glucose. [mg/dL]
+        """
+        self._check_fitted()
+        Xa, _, _ = self._measurements(X)
+        nir, pmf = self._inputs32(Xa)
+        fast = self.__dict__.get("_fast")
+        if len(Xa) <= NUMPY_ROWS and fast is not None and fast["fn"] is not None:
+            out = self._glucose(fast["fn"](nir, pmf)).astype(np.float64)
+        else:
+            out = np.empty(len(Xa), dtype=np.float64)
+            nir_t, pmf_t = torch.from_numpy(nir), torch.from_numpy(pmf)
+            self.module_.eval()
+            with torch.inference_mode():
+                for start in range(0, len(Xa), _PREDICT_CHUNK):
+                    stop = start + _PREDICT_CHUNK
+                    g = self._glucose(self.module_(nir_t[start:stop], pmf_t[start:stop]))
+                    out[start:stop] = g.numpy()
+        return out * self.scaler_["y_scale"] + self.scaler_["y_mean"]
+
+    def predict_one(self, adc: Any, adc_ref: Any, pmf: Any) -> float:
+        """Glucose from one snapshot, on the low-latency path.
+
+        No DataFrame handling and no autograd: the inputs are standardised into
+        pre-allocated float32 buffers and run through the network's NumPy closure
+        (:meth:`~nirglucose.models.networks.OriginalPINNNet.numpy_forward` and
+        siblings), a snapshot of the fitted weights that evaluates the same function
+        as the torch module (tested to float32 rounding) without PyTorch's per-module
+        dispatch cost. Not thread-safe: the buffers belong to the estimator.
+
+        Parameters
+        ----------
+        adc : array_like
+            The four ADC codes (850, 940, 1050, 1150 nm). [code]
+        adc_ref : array_like
+            The four reference codes. [code]
+        pmf : array_like
+            The 12 physiological values in ``PMF_COLUMNS`` order. [column units]
+
+        Returns
+        -------
+        float
+            Glucose. [mg/dL]
+        """
+        self._check_fitted()
+        fast = self._fast
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.log10(np.asarray(adc_ref, dtype=np.float64) / np.asarray(adc, dtype=np.float64))
+        p = np.asarray(pmf, dtype=np.float64)
+        if a.shape != (_N_LED,) or p.shape != (N_MEASURED - 2 * _N_LED,):
+            raise DataError(
+                f"predict_one takes 4 ADC codes, 4 reference codes and 12 physiological "
+                f"values; got shapes {np.shape(adc)}, {np.shape(adc_ref)}, {p.shape}"
+            )
+        nir, pm = fast["nir"], fast["pmf"]
+        nir[0] = (a - fast["nir_mean"]) / fast["nir_scale"]
+        pm[0] = (p - fast["pmf_mean"]) / fast["pmf_scale"]
+        if not (np.isfinite(nir).all() and np.isfinite(pm).all()):
+            raise DataError("predict_one: codes must be > 0 and every value finite")
+        if fast["fn"] is not None:
+            g = self._glucose(fast["fn"](nir, pm))
+        else:
+            with torch.inference_mode():
+                g = self._glucose(self.module_(torch.from_numpy(nir), torch.from_numpy(pm)))
+        return float(g[0]) * fast["y_scale"] + fast["y_mean"]
+
+    def _build_fast_path(self) -> None:
+        """Snapshot the fitted weights and scaler for the low-latency path."""
+        s = self.scaler_
+        self.module_.eval()
+        numpy_forward = getattr(self.module_, "numpy_forward", None)
+        self._fast = {
+            "fn": numpy_forward() if callable(numpy_forward) else None,
+            "nir": np.zeros((1, _N_LED), dtype=np.float32),
+            "pmf": np.zeros((1, N_MEASURED - 2 * _N_LED), dtype=np.float32),
+            "nir_mean": np.asarray(s["nir_mean"], dtype=np.float64),
+            "nir_scale": np.asarray(s["nir_scale"], dtype=np.float64),
+            "pmf_mean": np.asarray(s["pmf_mean"], dtype=np.float64),
+            "pmf_scale": np.asarray(s["pmf_scale"], dtype=np.float64),
+            "y_mean": float(s["y_mean"]),
+            "y_scale": float(s["y_scale"]),
+        }
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state.pop("_fast", None)  # closures do not pickle; rebuilt on unpickling
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        if getattr(self, "module_", None) is not None:
+            self._build_fast_path()
+
+    # ------------------------------------------------------------------ save / load
+
+    def _json_params(self) -> dict:
+        params = self.get_params(deep=False)
+        rs = params.get("random_state")
+        if not (rs is None or isinstance(rs, int | np.integer)):
+            params["random_state"] = None  # a RandomState object has no JSON form
+        return {k: (v.item() if isinstance(v, np.generic) else v) for k, v in params.items()}
+
+    def save(self, path: str | Path) -> Path:
+        """Write the model: ``path`` (JSON) and ``<stem>.safetensors`` beside it.
+
+        Both files are written atomically (temporary file, then rename); the weights
+        first, so a JSON document never names weights that are not there.
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination of the JSON document (e.g. ``model.json``).
+
+        Returns
+        -------
+        Path
+            ``path``.
+        """
+        from safetensors.torch import save_file
+
+        from .. import __version__
+
+        self._check_fitted()
+        path = Path(path)
+        weights = path.with_name(path.stem + ".safetensors")
+        if weights == path:
+            raise DataError(
+                f"{str(path)!r}: the model document needs a suffix other than "
+                f"'.safetensors' (e.g. 'model.json')"
+            )
+        tensors = {
+            k: v.detach().to("cpu").contiguous() for k, v in self.module_.state_dict().items()
+        }
+        meta = {"format": "nirglucose-model", "model": self.registry_name}
+        atomic_write(weights, lambda tmp: save_file(tensors, tmp, metadata=meta))
+        doc = {
+            "format": "nirglucose-model",
+            "format_version": FORMAT_VERSION,
+            "model": self.registry_name,
+            "nirglucose_version": __version__,
+            "params": self._json_params(),
+            "scaler": {k: np.asarray(v).tolist() for k, v in self.scaler_.items()},
+            "physics": self.physics_,
+            "history": self.history_,
+            "best_epoch": self.best_epoch_,
+            "n_epochs": self.n_epochs_,
+            "refit_history": self.refit_history_,
+            "n_parameters": self.n_parameters,
+            "weights_file": weights.name,
+        }
+        text = json.dumps(doc, indent=1, allow_nan=False)
+        atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path):
+        """Load a model written by :meth:`save`.
+
+        Reads JSON and safetensors (or a ``.pt`` file through
+        ``torch.load(weights_only=True)``); never executes code from the files.
+
+        Raises
+        ------
+        DataError
+            If the document is not a model of this class, or the weights miss keys,
+            have extra keys or wrong shapes.
+        """
+        path = Path(path)
+        if not path.exists():
+            raise DataError(f"no such model file {str(path)!r}")
+        try:
+            doc = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
+        if not isinstance(doc, dict) or doc.get("format") != "nirglucose-model":
+            raise DataError(f"{str(path)!r} is not a nirglucose model file")
+        if doc.get("model") != cls.registry_name:
+            raise DataError(
+                f"{str(path)!r} holds a {doc.get('model')!r} model, not {cls.registry_name!r}"
+            )
+        if doc.get("format_version") != FORMAT_VERSION:
+            raise DataError(
+                f"{str(path)!r} has format_version {doc.get('format_version')!r}; "
+                f"this nirglucose reads {FORMAT_VERSION}"
+            )
+        required = ("params", "scaler", "physics", "history", "weights_file")
+        missing = [k for k in required if k not in doc]
+        if missing:
+            raise DataError(f"{str(path)!r} lacks {missing}")
+        params = doc["params"]
+        valid = cls().get_params(deep=False)
+        unknown = sorted(set(params) - set(valid))
+        if unknown:
+            raise DataError(f"{str(path)!r}: unknown parameters {unknown}; valid: {sorted(valid)}")
+        est = cls(**params)
+        est.scaler_ = {
+            k: (float(v) if k.startswith("y_") else np.asarray(v, dtype=np.float64))
+            for k, v in doc["scaler"].items()
+        }
+        est.physics_ = doc["physics"]
+        est.history_ = doc["history"]
+        est.best_epoch_ = doc.get("best_epoch", len(est.history_))
+        est.n_epochs_ = doc.get("n_epochs", len(est.history_))
+        est.refit_history_ = doc.get("refit_history", [])
+        est.refit_epochs_ = len(est.refit_history_)
+        est.n_features_in_ = N_MEASURED
+        module = est.build_module()
+        state = _read_weights(path, doc["weights_file"])
+        expected = module.state_dict()
+        missing_keys = sorted(set(expected) - set(state))
+        extra_keys = sorted(set(state) - set(expected))
+        if missing_keys or extra_keys:
+            raise DataError(
+                f"weights for {cls.registry_name!r} do not match its network: "
+                f"missing keys {missing_keys}, unexpected keys {extra_keys}"
+            )
+        bad = [k for k in expected if tuple(state[k].shape) != tuple(expected[k].shape)]
+        if bad:
+            k = bad[0]
+            raise DataError(
+                f"weights for {cls.registry_name!r}: {k} has shape {tuple(state[k].shape)}, "
+                f"the network needs {tuple(expected[k].shape)}"
+            )
+        module.load_state_dict(
+            {k: state[k].to(dtype=expected[k].dtype) for k in expected}, strict=True
+        )
+        module.eval()
+        est.module_ = module
+        est._prepare_physics_tensors()
+        est._build_fast_path()
+        return est
+
+
+def _read_weights(doc_path: Path, name: Any) -> dict[str, torch.Tensor]:
+    """Tensors of the weight file ``name`` beside ``doc_path`` (no code execution)."""
+    if not isinstance(name, str) or Path(name).name != name or name in ("", ".", ".."):
+        raise DataError(f"weights_file must be a plain file name beside the model, got {name!r}")
+    wpath = doc_path.with_name(name)
+    if not wpath.exists():
+        raise DataError(f"weights file {str(wpath)!r} is missing")
+    if wpath.suffix == ".safetensors":
+        from safetensors import SafetensorError
+        from safetensors.torch import load_file
+
+        try:
+            return load_file(str(wpath), device="cpu")
+        except (SafetensorError, OSError, ValueError) as exc:
+            raise DataError(f"{str(wpath)!r} is not a readable safetensors file: {exc}") from None
+    if wpath.suffix in (".pt", ".pth"):
+        try:
+            state = torch.load(wpath, map_location="cpu", weights_only=True)
+        except Exception as exc:  # noqa: BLE001 - any unpickling refusal is a data error
+            raise DataError(f"{str(wpath)!r} is not a weights-only torch file: {exc}") from None
+        if not isinstance(state, dict) or not all(
+            isinstance(v, torch.Tensor) for v in state.values()
+        ):
+            raise DataError(f"{str(wpath)!r} does not hold a state_dict of tensors")
+        return state
+    raise DataError(f"unknown weights format {wpath.suffix!r}; valid: .safetensors, .pt, .pth")

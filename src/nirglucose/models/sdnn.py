@@ -1,0 +1,79 @@
+"""Shallow dense neural network (SDNN) after Srichan et al. (2022): no physics.
+
+Examples
+--------
+>>> import nirglucose as ng
+>>> from nirglucose.models import SDNN
+>>> ds = ng.simulate("paper", n_subjects=10, per_subject=2, seed=0)
+>>> SDNN(max_epochs=2, random_state=0).fit(ds).n_parameters
+3713
+
+References
+----------
+.. [1] C. Srichan, W. Srichan, P. Danvirutai, C. Ritsongmuang, A. Sharma and
+   S. Anutrakulchai, "Non-invasively accuracy enhanced blood glucose sensor using
+   shallow dense neural networks with NIR monitoring and medical features",
+   Sci. Rep. 12, 1769 (2022). :doi:`10.1038/s41598-022-05570-8`
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._torch_base import TorchRegressor
+from .networks import SDNNNet
+from .registry import register
+
+__all__ = ["SDNN"]
+
+
+@register("sdnn")
+class SDNN(TorchRegressor):
+    """Shallow front end on the absorbances, then a deeper dense stack; MSE loss only.
+
+    Network: :class:`~nirglucose.models.networks.SDNNNet` — 4 -> 16 on the four
+    absorbances, concatenated with the 12 physiological values, then
+    28 -> 48 -> 32 -> 16 -> 8 -> 1 (ReLU); 3,713 parameters, the study's count [1]_.
+
+    Parameters
+    ----------
+    max_epochs, batch_size, lr, weight_decay, patience, val_fraction, lr_schedule,
+    refit, random_state
+        Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
+
+    Notes
+    -----
+    Srichan et al. trained a small dense network on multi-band NIR readings and
+    personal medical features; the layer sizes here are a reconstruction chosen to
+    match the reference study's 3,713 parameters, not theirs. The loss is the base
+    class's MSE (no ``get_loss`` override).
+    """
+
+    def __init__(
+        self,
+        *,
+        max_epochs: int = 300,
+        batch_size: int = 32,
+        lr: float = 1e-3,
+        weight_decay: float = 0.0,
+        patience: int | None = 30,
+        val_fraction: float = 0.2,
+        lr_schedule: str = "plateau",
+        refit: bool = True,
+        random_state: int | np.random.RandomState | None = None,
+    ) -> None:
+        super().__init__(
+            max_epochs=max_epochs,
+            batch_size=batch_size,
+            lr=lr,
+            weight_decay=weight_decay,
+            patience=patience,
+            val_fraction=val_fraction,
+            lr_schedule=lr_schedule,
+            refit=refit,
+            random_state=random_state,
+        )
+
+    def build_module(self) -> SDNNNet:
+        """:class:`~nirglucose.models.networks.SDNNNet`."""
+        return SDNNNet()
