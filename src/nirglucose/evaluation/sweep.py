@@ -42,7 +42,8 @@ Resumability
     With ``out`` given, each finished task is written atomically to
     ``out/.tasks/<model>-s<seed>-<hash>.json``; the hash covers the task's full
     specification (preset, resolved overrides and the SHA-256 of the resolved config,
-    seed, model, protocol options, bootstrap size, package version, task format). A
+    seed, model, protocol options, bootstrap size, package version, a digest of the
+    package's source (:func:`source_digest`), task format). A
     rerun loads finished tasks instead of recomputing them; a file whose checksum,
     specification or schema does not match is recomputed (and counted). Files are
     written by the process that gathers results, so a remote cluster needs no shared
@@ -57,6 +58,7 @@ Outputs (:meth:`SweepResult.save`)
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import inspect
 import itertools
@@ -84,6 +86,7 @@ __all__ = [
     "SUMMARY_METRICS",
     "SWEEP_FILES",
     "TASK_FORMAT",
+    "source_digest",
     "Scenario",
     "SweepResult",
     "parse_vary",
@@ -447,6 +450,22 @@ def _sha(text: str) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+@functools.lru_cache(maxsize=1)
+def source_digest() -> str:
+    """SHA-256 (16 hex digits) of the installed package's code and data files.
+
+    Part of every task's specification, so a cached task is reused only by the same
+    code, even while the version number stays the same during development.
+    """
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and path.suffix in (".py", ".csv", ".json", ".md"):
+            h.update(path.relative_to(root).as_posix().encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def _canonical(obj: Any) -> Any:
     return json.loads(json.dumps(obj, sort_keys=True))
 
@@ -510,6 +529,7 @@ def plan_sweep(
                     {
                         "format": TASK_FORMAT,
                         "version": __version__,
+                        "source_sha256": source_digest(),
                         "kind": sc.kind,
                         "preset": preset,
                         "overrides": overrides,
@@ -642,6 +662,7 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     return {
         "metrics": clean,
         "version": __version__,
+        "source_sha256": source_digest(),
         "warnings": list(dict.fromkeys(str(w.message).replace("\n", " ") for w in caught)),
         "wall_s": time.perf_counter() - t0,
     }
@@ -1251,6 +1272,13 @@ def run_sweep(
                         f"a worker runs nirglucose {res.get('version')}, this "
                         f"process {spec['version']}; install the same version "
                         "on every worker"
+                    )
+                if res.get("source_sha256") != spec["source_sha256"]:
+                    warnings.warn(
+                        "a worker runs different nirglucose code than this process "
+                        f"(source digest {res.get('source_sha256')} vs "
+                        f"{spec['source_sha256']}); results may mix code versions",
+                        stacklevel=2,
                     )
                 if tasks_dir is not None:
                     _save_task(_task_file(tasks_dir, spec, key), spec, res)
