@@ -214,86 +214,6 @@ def benchmark(
     )
 
 
-@app.command("fit")
-def fit_model(
-    model: Annotated[str, typer.Option(help="Registered model name, e.g. ebl, pls, sdnn.")],
-    data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv) with glucose_mgdl.")],
-    out: Annotated[Path, typer.Option(help="Model file to write (.json).")],
-) -> None:
-    """Fit a model on your own measurements and save it."""
-    from .dataset import load_dataset, validate_measurements
-    from .models import make_model
-
-    if out.suffix != ".json":
-        raise UserError(f"--out {str(out)!r}: the model file must end in .json")
-    if not out.parent.exists():
-        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
-    estimator = make_model(model)  # unknown names raise with the valid ones
-    ds = load_dataset(data)
-    validate_measurements(ds.frame, require_target=True)
-    estimator.fit(ds)
-    estimator.save(out)
-    out_console.print(f"fitted {model!r} on {len(ds)} measurements; wrote {out}")
-
-
-@app.command("predict")
-def predict_glucose(
-    model: Annotated[Path, typer.Option(help="Model file written by `nirglucose fit`.")],
-    data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv).")],
-    out: Annotated[Path, typer.Option(help="Predictions to write (.csv).")],
-) -> None:
-    """Predict glucose for your own measurements; writes predicted_glucose_mgdl."""
-    import pandas as pd
-
-    from .dataset import atomic_write, load_dataset, validate_measurements
-    from .models import load_model
-
-    if out.suffix != ".csv":
-        raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
-    if not out.parent.exists():
-        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
-    estimator = load_model(model)
-    ds = load_dataset(data)
-    validate_measurements(ds.frame)
-    pred = estimator.predict(ds)
-    ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
-    table = ds.frame[ids].reset_index(drop=True).copy()
-    table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
-    atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
-    out_console.print(f"predicted {len(table)} measurements; wrote {out}")
-
-
-@app.command("export-c")
-def export_c_source(
-    model: Annotated[Path, typer.Option(help="Linear model file (ebl or pls) from `fit`.")],
-    out: Annotated[Path, typer.Option(help="Output directory for the .h and .c files.")],
-) -> None:
-    """Write C99 source + header of a linear model for a microcontroller."""
-    from .export import export_c
-    from .models import load_model
-
-    header, source = export_c(load_model(model), out)
-    out_console.print(f"wrote {header} and {source}")
-
-
-@app.command()
-def report(
-    results: Annotated[Path, typer.Argument(help="Results directory of `nirglucose benchmark`.")],
-    out: Annotated[
-        Path | None, typer.Option(help="HTML file to write (default: RESULTS/report.html).")
-    ] = None,
-    figures: Annotated[
-        Path | None, typer.Option(help="Also write every figure here as PNG and SVG.")
-    ] = None,
-) -> None:
-    """Write the figures and tables of a benchmark run as one self-contained HTML file."""
-    from .report import build_report
-
-    path = build_report(results, out if out is not None else results / "report.html",
-                        figures_dir=figures)
-    out_console.print(f"wrote {path}", highlight=False, soft_wrap=True)
-
-
 @app.command()
 def sweep(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
@@ -407,6 +327,93 @@ def sweep(
     out_console.print(f"wrote {out}/sweep.csv ({meta['tasks_computed']} tasks computed, "
                       f"{meta['tasks_cached']} reused, {meta['wall_time_s']:.0f} s)",
                       highlight=False)
+
+
+@app.command("fit")
+def fit_model(
+    model: Annotated[str, typer.Option(help="Registered model name, e.g. ebl, pls, sdnn.")],
+    data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv) with glucose_mgdl.")],
+    out: Annotated[Path, typer.Option(help="Model file to write (.json).")],
+) -> None:
+    """Fit a model on your own measurements and save it."""
+    from .dataset import load_dataset, validate_measurements
+    from .models import make_model
+
+    if out.suffix != ".json":
+        raise UserError(f"--out {str(out)!r}: the model file must end in .json")
+    if not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    estimator = make_model(model)  # unknown names raise with the valid ones
+    ds = load_dataset(data)
+    validate_measurements(ds.frame, require_target=True)
+    estimator.fit(ds)
+    estimator.save(out)
+    out_console.print(f"fitted {model!r} on {len(ds)} measurements; wrote {out}")
+
+
+@app.command("predict")
+def predict_glucose(
+    model: Annotated[Path, typer.Option(help="Model file written by `nirglucose fit`.")],
+    data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv).")],
+    out: Annotated[Path, typer.Option(help="Predictions to write (.csv).")],
+) -> None:
+    """Predict glucose for your own measurements; writes predicted_glucose_mgdl."""
+    import pandas as pd
+
+    from .dataset import atomic_write, load_dataset, validate_measurements
+    from .models import load_model
+
+    if out.suffix != ".csv":
+        raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
+    if not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    estimator = load_model(model)
+    ds = load_dataset(data)
+    validate_measurements(ds.frame)
+    pred = estimator.predict(ds)
+    ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
+    table = ds.frame[ids].reset_index(drop=True).copy()
+    table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
+    atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
+    out_console.print(f"predicted {len(table)} measurements; wrote {out}")
+
+
+@app.command("export-c")
+def export_c_source(
+    model: Annotated[Path, typer.Option(help="Linear model file (ebl or pls) from `fit`.")],
+    out: Annotated[Path, typer.Option(help="Output directory for the .h and .c files.")],
+) -> None:
+    """Write C99 source + header of a linear model for a microcontroller."""
+    from .export import export_c
+    from .models import load_model
+
+    header, source = export_c(load_model(model), out)
+    out_console.print(f"wrote {header} and {source}")
+
+
+@app.command()
+def report(
+    results: Annotated[Path, typer.Argument(help="Results directory of `nirglucose benchmark`.")],
+    out: Annotated[
+        Path | None, typer.Option(help="HTML file to write (default: RESULTS/report.html).")
+    ] = None,
+    figures: Annotated[
+        Path | None, typer.Option(help="Also write every figure here as PNG and SVG.")
+    ] = None,
+    sweep: Annotated[
+        list[Path] | None,
+        typer.Option(help="A `nirglucose sweep` output directory to add (repeatable)."),
+    ] = None,
+) -> None:
+    """Write the figures and tables of a benchmark run as one self-contained HTML file."""
+    from .report import build_report
+
+    for d in sweep or []:
+        if not (d / "sweep.csv").exists():
+            raise UserError(f"--sweep {str(d)!r} holds no sweep.csv; run `nirglucose sweep` first")
+    path = build_report(results, out if out is not None else results / "report.html",
+                        figures_dir=figures, sweep_dirs=sweep or [])
+    out_console.print(f"wrote {path}", highlight=False, soft_wrap=True)
 
 
 def _print_summary(ds) -> None:

@@ -74,3 +74,20 @@ def test_ablation_section_and_files(ablation_dir):
 def test_not_a_sweep_dir(tmp_path):
     with pytest.raises(DataError, match="not a sweep directory"):
         sweep_section(tmp_path)
+
+
+def test_build_report_includes_sweep_sections(synthetic_results, grid_dir, tmp_path):
+    from nirglucose.report import build_report
+
+    out = build_report(synthetic_results, tmp_path / "r.html", sweep_dirs=[grid_dir])
+    page = out.read_text()
+    assert page.count('<section id="sweep">') == 1
+    assert page.index('id="figures"') < page.index('<section id="sweep">')
+
+
+def test_cli_report_rejects_a_missing_sweep_dir(synthetic_results, tmp_path, capsys):
+    from nirglucose.cli import main
+
+    code = main(["report", str(synthetic_results), "--out", str(tmp_path / "r.html"),
+                 "--sweep", str(tmp_path / "nope")])
+    assert code == 2 and "holds no sweep.csv" in capsys.readouterr().err

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from .figures import RenderedFigure, Results, load_results, render_figures
 from .html import build_report, render_html
+from .sweep import sweep_section
 
 __all__ = ["build_report", "render_html", "load_results", "render_figures", "Results",
-           "RenderedFigure"]
+           "RenderedFigure", "sweep_section"]

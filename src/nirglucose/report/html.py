@@ -329,7 +329,7 @@ def _figure_html(f: RenderedFigure) -> str:
 
 
 def render_html(results: Results, figures: Sequence[RenderedFigure], *,
-                title: str = REPORT_TITLE) -> str:
+                title: str = REPORT_TITLE, extra_sections: Sequence[str] = ()) -> str:
     """The report page as a string (no I/O).
 
     Parameters
@@ -378,6 +378,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         _run_info(results),
         '<h2 id="figures">Figures</h2>',
         *(_figure_html(f) for f in figures),
+        *extra_sections,
     ]
     body = "\n".join(s for s in sections if s)
     return (
@@ -392,7 +393,8 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
 
 
 def build_report(results_dir: str | Path, out_path: str | Path, *,
-                 figures_dir: str | Path | None = None) -> Path:
+                 figures_dir: str | Path | None = None,
+                 sweep_dirs: Sequence[str | Path] = ()) -> Path:
     """Build the HTML report of a benchmark results directory.
 
     Parameters
@@ -403,6 +405,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
         The HTML file to write (atomically); its directory must exist.
     figures_dir : str or path, optional
         Also write every figure there as PNG and SVG.
+    sweep_dirs : sequence of str or path, optional
+        Directories written by ``nirglucose sweep``; each adds a section with its
+        degradation curves or ablation effects.
 
     Returns
     -------
@@ -428,7 +433,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
                         "create it first")
     results = load_results(results_dir)
     figures = render_figures(results, figures_dir)
-    page = render_html(results, figures)
+    from .sweep import sweep_section
+
+    page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs])
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
     path.chmod(0o644)  # the temporary file was private; a report is for reading
     return path
