@@ -76,6 +76,7 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
+from .benchmark import METRIC_COLUMNS
 
 __all__ = [
     "STUDIES",
@@ -128,32 +129,10 @@ COHORT_SHIFTS: dict[str, dict[str, Any]] = {
 DEFAULT_MODELS = ("ebl", "pls", "oracle")
 #: Metric columns of ``sweep.csv``, in order (timing columns are left out: they depend
 #: on the machine, the metrics do not).
-SWEEP_METRICS = (
-    "rmse_mgdl",
-    "rmse_ci_low",
-    "rmse_ci_high",
-    "mard_pct",
-    "mard_ci_low",
-    "mard_ci_high",
-    "clarke_a_pct",
-    "clarke_a_ci_low",
-    "clarke_a_ci_high",
-    "clarke_ab_pct",
-    "parkes_a_pct",
-    "parkes_ab_pct",
-    "within15_pct",
-    "within15_ci_low",
-    "within15_ci_high",
-    "within20_pct",
-    "iso15197_pct",
-    "bias_mgdl",
-    "bias_ci_low",
-    "bias_ci_high",
-    "loa_low_mgdl",
-    "loa_high_mgdl",
-    "n_parameters",
-    "n_predictions",
-    "n_invalid_predictions",
+SWEEP_METRICS = tuple(
+    c for c in METRIC_COLUMNS
+    if c not in ("model", "label", "latency_single_ms", "latency_single_p90_ms",
+                 "throughput_per_s", "latency_input", "rmse_vs_oracle", "fit_time_s")
 )
 #: Metrics :func:`summarize_sweep` aggregates over seeds by default.
 SUMMARY_METRICS = (
