@@ -6,8 +6,9 @@ on ``subject_id``), fit every network with its defaults (``random_state`` = fold
 the held-out predictions of the five folds and score them: RMSE [mg/dL], MARD [%],
 Clarke zone A [%] (a negative estimate placed at 0 mg/dL on the grid) and the share
 within +/-15 % [%]. Reported per model: mean, SD, min and max over the five seeds,
-beside the study's single-split figures. The Enhanced Beer-Lambert ridge (``ebl``) is
-scored the same way for context when it is available.
+beside the study's single-split figures. For context, the Enhanced Beer-Lambert ridge
+(``ebl``, when available) is scored the same way, and so is ``train-mean``: each fold's
+training mean as the prediction (the no-skill reference).
 
 Usage::
 
@@ -69,6 +70,7 @@ def main() -> None:
 
     t_start = time.perf_counter()
     per_seed: dict[str, list[dict[str, float]]] = {m: [] for m in models}
+    per_seed["train-mean"] = []
     fit_s: dict[str, float] = {m: 0.0 for m in models}
     for seed in seeds:
         ds = ng.simulate("paper", n_subjects=80, per_subject=3, seed=seed)
@@ -76,6 +78,10 @@ def main() -> None:
         y = f["glucose_mgdl"].to_numpy(float)
         groups = f["subject_id"].to_numpy()
         folds = list(GroupKFold(n_splits=5).split(f, y, groups))
+        baseline = np.empty_like(y)  # each fold's training mean: the no-skill reference
+        for tr, te in folds:
+            baseline[te] = y[tr].mean()
+        per_seed["train-mean"].append(_scores(y, baseline))
         for name in models:
             pred = np.empty_like(y)
             for k, (tr, te) in enumerate(folds):
@@ -92,6 +98,8 @@ def main() -> None:
                 flush=True,
             )
 
+    fit_s["train-mean"] = 0.0
+    models = [*models, "train-mean"]
     table = {}
     for name in models:
         rows = per_seed[name]
@@ -115,12 +123,12 @@ def main() -> None:
     for name in models:
         t = table[name]
         st = STUDY.get(name, {})
-        print(
-            f"{name:20s} {t['rmse_mgdl']['mean']:8.1f} +/- {t['rmse_mgdl']['sd']:4.1f}"
-            f"  {t['mard_pct']['mean']:7.1f} +/- {t['mard_pct']['sd']:4.1f}"
-            f"  {t['clarke_a_pct']['mean']:7.1f} +/- {t['clarke_a_pct']['sd']:4.1f}"
-            f"   {st.get('rmse_mgdl')} / {st.get('mard_pct')} / {st.get('clarke_a_pct')}"
-        )
+        cells = [
+            f"{t[k]['mean']:7.1f} +/- {t[k]['sd'] if t[k]['sd'] is not None else float('nan'):4.1f}"
+            for k in ("rmse_mgdl", "mard_pct", "clarke_a_pct")
+        ]
+        study = " / ".join(str(st.get(k, "-")) for k in ("rmse_mgdl", "mard_pct", "clarke_a_pct"))
+        print(f"{name:20s} {cells[0]:>18s} {cells[1]:>16s} {cells[2]:>16s}   {study}")
     out = {
         "benchmark": "neural_accuracy",
         "protocol": "paper preset 80x3, GroupKFold(5) on subject_id, pooled per seed",

@@ -261,7 +261,7 @@ def test_numpy_forward_matches_the_module(net, n):
     b = rng.normal(size=(n, 12)).astype(np.float32)
     with torch.inference_mode():
         expected = net(torch.from_numpy(a), torch.from_numpy(b))
-    got = net.numpy_forward()(a, b)
+    got = net.numpy_forward()(np.concatenate((a, b), axis=1))
     expected = expected if isinstance(expected, tuple) else (expected,)
     got = got if isinstance(got, tuple) else (got,)
     for e, g in zip(expected, got, strict=True):
@@ -301,6 +301,13 @@ def test_predict_one_rejects_bad_input(fitted):
         fitted.predict_one([1, 2, 3], [1, 2, 3], np.ones(12))
     with pytest.raises(DataError, match="> 0"):
         fitted.predict_one([0, 2, 3, 4], [1, 2, 3, 4], np.ones(12))
+    X = np.ones((1, 20))
+    X[0, 5] = -1.0
+    with pytest.raises(DataError, match="> 0"):
+        fitted.predict(X)  # the one-row (NumPy) path checks the codes too
+    X[0, 5] = np.nan
+    with pytest.raises(DataError, match="NaN"):
+        fitted.predict(X)
 
 
 def test_predict_accepts_dataset_frame_and_array(fitted, small):

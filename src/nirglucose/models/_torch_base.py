@@ -123,9 +123,8 @@ def nir_pmf_features(Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     adc = Xa[:, :_N_LED]
     ref = Xa[:, _N_LED : 2 * _N_LED]
-    bad = ~((adc > 0) & (ref > 0))
-    if np.any(bad):
-        row = int(np.flatnonzero(bad.any(axis=1))[0])
+    if not (Xa[:, : 2 * _N_LED] > 0).all():
+        row = int(np.flatnonzero((Xa[:, : 2 * _N_LED] <= 0).any(axis=1))[0])
         raise DataError(
             f"ADC and reference codes must be > 0 to form absorbances log10(adc_ref/adc); "
             f"row {row} has adc={adc[row].tolist()}, adc_ref={ref[row].tolist()}"
@@ -692,11 +691,18 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         """
         self._check_fitted()
         Xa, _, _ = self._measurements(X)
-        nir, pmf = self._inputs32(Xa)
         fast = self.__dict__.get("_fast")
         if len(Xa) <= NUMPY_ROWS and fast is not None and fast["fn"] is not None:
-            out = self._glucose(fast["fn"](nir, pmf)).astype(np.float64)
+            if not (Xa[:, : 2 * _N_LED] > 0).all():
+                nir_pmf_features(Xa)  # raises the detailed DataError
+            x = np.concatenate(
+                (np.log10(Xa[:, _N_LED : 2 * _N_LED] / Xa[:, :_N_LED]), Xa[:, 2 * _N_LED :]), axis=1
+            )
+            x -= fast["mu"]
+            x *= fast["inv_scale"]
+            out = self._glucose(fast["fn"](x.astype(np.float32))).astype(np.float64)
         else:
+            nir, pmf = self._inputs32(Xa)
             out = np.empty(len(Xa), dtype=np.float64)
             nir_t, pmf_t = torch.from_numpy(nir), torch.from_numpy(pmf)
             self.module_.eval()
@@ -710,8 +716,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
     def predict_one(self, adc: Any, adc_ref: Any, pmf: Any) -> float:
         """Glucose from one snapshot, on the low-latency path.
 
-        No DataFrame handling and no autograd: the inputs are standardised into
-        pre-allocated float32 buffers and run through the network's NumPy closure
+        No DataFrame handling and no autograd: the inputs are standardised into a
+        pre-allocated float32 buffer and run through the network's NumPy closure
         (:meth:`~nirglucose.models.networks.OriginalPINNNet.numpy_forward` and
         siblings), a snapshot of the fitted weights that evaluates the same function
         as the torch module (tested to float32 rounding) without PyTorch's per-module
@@ -741,16 +747,19 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                 f"predict_one takes 4 ADC codes, 4 reference codes and 12 physiological "
                 f"values; got shapes {np.shape(adc)}, {np.shape(adc_ref)}, {p.shape}"
             )
-        nir, pm = fast["nir"], fast["pmf"]
-        nir[0] = (a - fast["nir_mean"]) / fast["nir_scale"]
-        pm[0] = (p - fast["pmf_mean"]) / fast["pmf_scale"]
-        if not (np.isfinite(nir).all() and np.isfinite(pm).all()):
+        u = np.concatenate((a, p))
+        u -= fast["mu"]
+        u *= fast["inv_scale"]
+        x = fast["x"]
+        x[0] = u
+        if not np.isfinite(x).all():
             raise DataError("predict_one: codes must be > 0 and every value finite")
         if fast["fn"] is not None:
-            g = self._glucose(fast["fn"](nir, pm))
+            g = self._glucose(fast["fn"](x))
         else:
             with torch.inference_mode():
-                g = self._glucose(self.module_(torch.from_numpy(nir), torch.from_numpy(pm)))
+                t = torch.from_numpy(x)
+                g = self._glucose(self.module_(t[:, :_N_LED], t[:, _N_LED:]))
         return float(g[0]) * fast["y_scale"] + fast["y_mean"]
 
     def _build_fast_path(self) -> None:
@@ -760,12 +769,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         numpy_forward = getattr(self.module_, "numpy_forward", None)
         self._fast = {
             "fn": numpy_forward() if callable(numpy_forward) else None,
-            "nir": np.zeros((1, _N_LED), dtype=np.float32),
-            "pmf": np.zeros((1, N_MEASURED - 2 * _N_LED), dtype=np.float32),
-            "nir_mean": np.asarray(s["nir_mean"], dtype=np.float64),
-            "nir_scale": np.asarray(s["nir_scale"], dtype=np.float64),
-            "pmf_mean": np.asarray(s["pmf_mean"], dtype=np.float64),
-            "pmf_scale": np.asarray(s["pmf_scale"], dtype=np.float64),
+            "x": np.zeros((1, N_MEASURED - _N_LED), dtype=np.float32),
+            "mu": np.concatenate((s["nir_mean"], s["pmf_mean"])).astype(np.float64),
+            "inv_scale": 1.0 / np.concatenate((s["nir_scale"], s["pmf_scale"])).astype(np.float64),
             "y_mean": float(s["y_mean"]),
             "y_scale": float(s["y_scale"]),
         }

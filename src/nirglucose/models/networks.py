@@ -78,9 +78,10 @@ def mlp(
     return nn.Sequential(*layers)
 
 
-#: A NumPy forward: ``(x_nir (n, 4), x_pmf (n, 12))`` float32 -> glucose (n,) or, for
-#: the RTE networks, ``(glucose, mua, musp)``.
-NumpyForward = Callable[[np.ndarray, np.ndarray], "np.ndarray | tuple[np.ndarray, ...]"]
+#: A NumPy forward: ``x = [x_nir | x_pmf]`` (n, 4 + 12) float32 -> glucose (n,) or, for
+#: the RTE networks, ``(glucose, mua, musp)``. One concatenated input saves a copy per
+#: call on the latency path.
+NumpyForward = Callable[[np.ndarray], "np.ndarray | tuple[np.ndarray, ...]"]
 
 
 def _np(t: torch.Tensor) -> np.ndarray:
@@ -206,8 +207,8 @@ class OriginalPINNNet(nn.Module):
         """NumPy closure of :meth:`forward` (eval mode, current weights)."""
         branches, head = numpy_mlp(self.nir, self.pmf), numpy_mlp(self.head)
 
-        def run(x_nir: np.ndarray, x_pmf: np.ndarray) -> np.ndarray:
-            return head(branches(np.concatenate((x_nir, x_pmf), axis=-1)))[:, 0]
+        def run(x: np.ndarray) -> np.ndarray:
+            return head(branches(x))[:, 0]
 
         return run
 
@@ -284,9 +285,9 @@ class OptimizedPINNNet(nn.Module):
         d_h = d // h_n
         scale = np.float32(1.0 / np.sqrt(d_h))
 
-        def run(x_nir: np.ndarray, x_pmf: np.ndarray) -> np.ndarray:
-            n = x_nir.shape[0]
-            t = branches(np.concatenate((x_nir, x_pmf), axis=-1)).reshape(n, 2, d)
+        def run(x: np.ndarray) -> np.ndarray:
+            n = x.shape[0]
+            t = branches(x).reshape(n, 2, d)
             t += token_type  # (n, 2, d): the NIR and physiology tokens
             qkv = (t @ w_in + b_in).reshape(n, 2, 3, h_n, d_h).transpose(2, 0, 3, 1, 4)
             q, k, v = qkv[0], qkv[1], qkv[2]  # (n, h, 2, d_h)
@@ -370,8 +371,8 @@ class RTEPINNNet(nn.Module):
         k = self.n_wavelengths
         mua_floor, musp_floor = np.float32(self.mua_floor), np.float32(self.musp_floor)
 
-        def run(x_nir: np.ndarray, x_pmf: np.ndarray):
-            h = trunk(branches(np.concatenate((x_nir, x_pmf), axis=-1)))
+        def run(x: np.ndarray):
+            h = trunk(branches(x))
             raw = np.logaddexp(np.float32(0.0), optics(h))  # softplus
             mua, musp = raw[:, :k] + mua_floor, raw[:, k:] + musp_floor
             g = glucose(np.concatenate((h, np.log(mua), np.log(musp)), axis=-1))[:, 0]
@@ -415,7 +416,7 @@ class SDNNNet(nn.Module):
         """NumPy closure of :meth:`forward` (eval mode, current weights)."""
         front, stack = numpy_mlp(self.front), numpy_mlp(self.stack)
 
-        def run(x_nir: np.ndarray, x_pmf: np.ndarray) -> np.ndarray:
-            return stack(np.concatenate((front(x_nir), x_pmf), axis=-1))[:, 0]
+        def run(x: np.ndarray) -> np.ndarray:
+            return stack(np.concatenate((front(x[:, :4]), x[:, 4:]), axis=-1))[:, 0]
 
         return run
