@@ -86,3 +86,16 @@ def test_band_spectra_weights_and_narrow_band_limit():
     assert water == pytest.approx(float(absorption.water_mua_per_cm(940.0)), rel=1e-4)
     # the 940 nm LED band straddles the steep water edge: wide band absorbs more
     assert (wide.spectra["water"] * wide.weights).sum() > water
+
+
+def test_solvers_are_exported_lazily():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, nirglucose as ng; ng.simulate('paper', 2, 1, 0);"
+        "assert 'iadpython' not in sys.modules;"
+        "from nirglucose.optics import slab_rt; r, t = slab_rt(10, 90, 0.75, 0.02, 1.0);"
+        "assert abs(r - 0.09734) / 0.09734 < 0.01 and abs(t - 0.66096) / 0.66096 < 0.01"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)

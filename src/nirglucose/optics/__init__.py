@@ -2,7 +2,10 @@
 
 absorption (chromophore tables), scattering (power laws, glucose), beer_lambert
 (modified Beer-Lambert law), diffusion (dipole diffusion theory), skin (layers),
-tissue (band-integrated tissue properties), forward (forward models by name).
+tissue (band-integrated tissue properties), forward (forward models by name),
+adding_doubling (``slab_rt``), monte_carlo (``mc_slab``, ``mc_layers``), layers (the
+three-layer skin model), lut (the ``rte-lut`` look-up table), mc_paths (per-layer paths).
+The solvers load lazily: the simulator's fast path never imports iadpython.
 """
 
 from __future__ import annotations
@@ -14,7 +17,24 @@ from .diffusion import (
 )
 from .forward import FORWARD_MODELS, detected_fraction
 
+_LAZY = {
+    "slab_rt": "adding_doubling",
+    "mc_slab": "monte_carlo",
+    "mc_layers": "monte_carlo",
+    "three_layer_reflectance": "layers",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
+    *_LAZY,
     "FORWARD_MODELS",
     "detected_fraction",
     "differential_pathlength_factor",
