@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from .config import ScenarioConfig, resolve_config
 from .dataset import Dataset
 from .exceptions import ConfigError
@@ -53,11 +55,7 @@ def simulate(
     from .simulate.simulator import simulate_frame
 
     for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, int | __import__("numpy").integer)
-            or value < 1
-        ):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
             raise ConfigError(f"{name} must be a positive integer, got {value!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")

@@ -41,6 +41,24 @@ RESP_DEPTH = 0.005
 #: Skin temperature: about 33 degC at thermoneutral ambient, rising about 0.3 degC per
 #: degC of ambient (an assumption of the wrist's coupling). [degC], [-]
 SKIN_TEMP_NEUTRAL_C = 33.0
+#: Cohort vital signs, (mean, between-subject SD): resting heart rate of adults about
+#: 72 +/- 9 /min and respiratory rate 16 +/- 1.5 /min (normal ranges 60-100 and 12-20;
+#: e.g. Fleming et al., Lancet 377, 1011 (2011)). [1/min]
+HEART_RATE_BPM = (72.0, 9.0)
+RESP_RATE_BPM = (16.0, 1.5)
+#: Systolic pressure at 18 yr, its rise per year of age (Framingham, about 0.5 mmHg/yr)
+#: and between-subject SD. [mmHg], [mmHg/yr], [mmHg]
+SBP_AT_18_MMHG, SBP_PER_YR_MMHG, SBP_SD_MMHG = 110.0, 0.5, 12.0
+#: Within-subject SD between snapshots of systolic pressure, heart rate, respiratory rate
+#: and skin temperature (assumptions of plausible size). [mmHg], [1/min], [1/min], [degC]
+SBP_STATE_SD_MMHG, HR_STATE_SD_BPM, RR_STATE_SD_BPM, SKIN_TEMP_STATE_SD_C = 5.0, 4.0, 1.0, 0.7
+#: Acute mental stress raises systolic pressure about 8 mmHg and heart rate about
+#: 10 /min (order of the laboratory stress responses reviewed by Kario et al., Hypertens.
+#: Res. 26, 355 (2003)). [mmHg], [1/min]
+STRESS_SBP_MMHG, STRESS_HR_BPM = 8.0, 10.0
+#: Skin thickness grows about 0.03 mm per kg/m^2 of BMI (an assumption of size) and thins
+#: about 6 % per decade after 40 (Shuster et al. 1975). [mm/(kg/m^2)], [1/decade]
+THICKNESS_PER_BMI_MM, THICKNESS_LOSS_PER_DECADE = 0.03, 0.06
 SKIN_TEMP_PER_AMBIENT = 0.3
 
 
@@ -108,17 +126,17 @@ def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
     melanin = melanin_fraction_from_fitzpatrick(fitz, 0.5 + v * (rng.random(size=n) - 0.5))
     thickness_mean = (
         p.skin_thickness_mm_mean
-        + 0.03 * (bmi - 25.0)
-        - 0.06 * p.skin_thickness_mm_mean * np.maximum(age - 40.0, 0.0) / 10.0
+        + THICKNESS_PER_BMI_MM * (bmi - 25.0)
+        - THICKNESS_LOSS_PER_DECADE * p.skin_thickness_mm_mean * np.maximum(age - 40.0, 0.0) / 10.0
     )
     thickness_mean = np.clip(thickness_mean, *p.skin_thickness_mm)
     thickness = truncated_normal(
         rng, thickness_mean, v * p.skin_thickness_mm_sd, *p.skin_thickness_mm, size=n
     )
-    sbp_mid = 110.0 + 0.5 * (age - 18.0)
-    sbp = truncated_normal(rng, sbp_mid, v * 12.0, *p.systolic_bp_mmhg, size=n)
-    hr = truncated_normal(rng, 72.0, v * 9.0, *p.heart_rate_bpm, size=n)
-    rr = truncated_normal(rng, 16.0, v * 1.5, *p.resp_rate_bpm, size=n)
+    sbp_mid = SBP_AT_18_MMHG + SBP_PER_YR_MMHG * (age - 18.0)
+    sbp = truncated_normal(rng, sbp_mid, v * SBP_SD_MMHG, *p.systolic_bp_mmhg, size=n)
+    hr = truncated_normal(rng, HEART_RATE_BPM[0], v * HEART_RATE_BPM[1], *p.heart_rate_bpm, size=n)
+    rr = truncated_normal(rng, RESP_RATE_BPM[0], v * RESP_RATE_BPM[1], *p.resp_rate_bpm, size=n)
     log_blood = np.log(p.blood_fraction_median) + v * p.blood_fraction_log_sd_subject * rng.normal(
         size=n
     )
@@ -155,16 +173,21 @@ def sample_state(
     hydration = traits["_hydration_base"] + v * p.hydration_pct_sd_state * rng.normal(size=n_rows)
     hydration = lim * np.tanh(hydration / lim)  # stays inside +/- limit, smoothly
     sbp = np.clip(
-        traits["_sbp_base"] + v * 5.0 * rng.normal(size=n_rows) + 8.0 * stress,
+        traits["_sbp_base"]
+        + v * SBP_STATE_SD_MMHG * rng.normal(size=n_rows)
+        + STRESS_SBP_MMHG * stress,
         *p.systolic_bp_mmhg,
     )
     hr = np.clip(
-        traits["_hr_base"] + v * 4.0 * rng.normal(size=n_rows) + 10.0 * stress, *p.heart_rate_bpm
+        traits["_hr_base"] + v * HR_STATE_SD_BPM * rng.normal(size=n_rows) + STRESS_HR_BPM * stress,
+        *p.heart_rate_bpm,
     )
-    rr = np.clip(traits["_rr_base"] + v * 1.0 * rng.normal(size=n_rows), *p.resp_rate_bpm)
-    skin_temp = skin_temperature_c(env["true_ambient_temperature_c"]) + v * 0.7 * rng.normal(
-        size=n_rows
+    rr = np.clip(
+        traits["_rr_base"] + v * RR_STATE_SD_BPM * rng.normal(size=n_rows), *p.resp_rate_bpm
     )
+    skin_temp = skin_temperature_c(
+        env["true_ambient_temperature_c"]
+    ) + v * SKIN_TEMP_STATE_SD_C * rng.normal(size=n_rows)
     saturation = np.clip(
         p.saturation_mean + v * p.saturation_sd * rng.normal(size=n_rows), 0.3, 0.98
     )

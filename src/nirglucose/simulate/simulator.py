@@ -86,8 +86,9 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
         from ..optics import lut as lut_mod
 
         lut = lut_mod.node_lut(
-            lut_mod.get_lut(sep_cm, cfg.optics.epidermis_thickness_mm / 10.0,
-                            cfg.optics.tissue_refractive_index),
+            lut_mod.get_lut(
+                sep_cm, cfg.optics.epidermis_thickness_mm / 10.0, cfg.optics.tissue_refractive_index
+            ),
             optics["musp_subcutis"][0] / optics["musp_dermis"][0],
         )
     return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names, lut)
@@ -261,9 +262,8 @@ def simulate_block(
         "ambient_flicker": flick,
     }
     hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
-    truth = {**phys, **env}
-    truth["true_skin_thickness_mm"] = phys["true_skin_thickness_mm"]
-    pmf = measurement.measure_physiology(cfg, truth, streams)
+    truth_out = {**phys, **env}
+    pmf = measurement.measure_physiology(cfg, truth_out, streams)
 
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     cols: dict[str, np.ndarray] = {
@@ -278,8 +278,6 @@ def simulate_block(
         cols[f"adc_ref_{w}"] = hwout["adc_ref"][:, i]
     cols.update(pmf)
     cols["ambient_lux"] = env["true_ambient_lux"]
-    truth_out = {k: v for k, v in phys.items()}
-    truth_out.update({k: v for k, v in env.items()})
     truth_out.update(
         {
             "true_blood_fraction_detected": blood,
