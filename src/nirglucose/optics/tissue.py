@@ -151,37 +151,102 @@ def tissue_optics(
         (n, n_led, n_pts) [1/cm], ``melanosome`` (n, n_led, n_pts) and the flat
         ``baseline`` (1, n_led, n_pts) [1/cm].
     """
-    shift = np.asarray(shift_nm, dtype=float)
-    if shift.ndim == 1:
-        shift = shift[:, None]
-    shift = shift[..., None] if shift.ndim == 2 else shift
-    tab, der = spectra.spectra, spectra.derivatives
-
-    def spec(name):
-        # first-order Taylor in the LED's thermal shift (a few nm at most)
-        return tab[name][None] + shift * der[name][None]
-
-    c = state.glucose_mm[:, None, None]
-    b = state.blood_fraction[:, None, None]
-    s = state.saturation[:, None, None]
-    w = state.water_fraction[:, None, None]
-    f_sub = state.subcutis_fat_fraction[:, None, None]
-    oxy, deoxy = spec("blood_oxy"), spec("blood_deoxy")
-    blood = deoxy + s * (oxy - deoxy)
-    fluid = spec("water") * np.maximum(1.0 - water_displacement_per_mm * c, 0.0)
-    fluid += c * spec("glucose")
-    baseline = tab["baseline"][None]  # flat in the NIR: no shift needed
-    mua_dermis = b * (blood - baseline) + w * (fluid - baseline) + baseline
+    n = np.shape(state.glucose_mm)[0]
+    n_led, n_pts = spectra.nodes_nm.shape
+    shift = _shift_per_node(shift_nm, n, n_led, n_pts)
+    c = np.asarray(state.glucose_mm, dtype=float)
+    b = np.asarray(state.blood_fraction, dtype=float)
+    s = np.asarray(state.saturation, dtype=float)
+    w = np.asarray(state.water_fraction, dtype=float)
+    f_sub = np.asarray(state.subcutis_fat_fraction, dtype=float)
+    # Each layer's mua is a per-sample mixture of the tabulated spectra: coefficients
+    # (n, K) times the table (K, n_led * n_pts), plus the thermal-shift term
+    # shift * (coefficients times the derivative table) -- two small matrix products
+    # per layer instead of one broadcast pass per chromophore.
+    disp = np.maximum(1.0 - water_displacement_per_mm * c, 0.0)  # water left [-]
+    b_oxy = b * s
+    coef_dermis = np.stack([b_oxy, b - b_oxy, w * disp, w * c, 1.0 - b - w], axis=1)
     b_sub = SUBCUTIS["blood_ratio_to_dermis"] * b
     w_sub = SUBCUTIS["water_fraction"]
     rest = np.maximum(1.0 - b_sub - w_sub - f_sub, 0.0)
-    mua_sub = b_sub * blood + w_sub * fluid + f_sub * spec("fat") + rest * baseline
-    glc_scatter = scattering.glucose_scattering_factor(c, scattering_rel_per_mm)
+    b_sub_oxy = b_sub * s
+    coef_sub = np.stack(
+        [b_sub_oxy, b_sub - b_sub_oxy, w_sub * disp, w_sub * c, f_sub, rest], axis=1
+    )
+    tables = _mixture_tables(spectra)
+    mua_dermis = _mix(coef_dermis, *tables["dermis"], shift)
+    mua_sub = _mix(coef_sub, *tables["subcutis"], shift)
+    glc_scatter = scattering.glucose_scattering_factor(c, scattering_rel_per_mm)[:, None]
+    musp_dermis = _mix(None, *tables["musp_skin"], shift, n)
+    musp_dermis *= glc_scatter
+    musp_sub = _mix(None, *tables["musp_fat"], shift, n)
+    musp_sub *= glc_scatter
+    shape = (n, n_led, n_pts)
     return {
-        "mua_dermis": mua_dermis,
-        "musp_dermis": spec("musp_skin") * glc_scatter,
-        "mua_subcutis": mua_sub,
-        "musp_subcutis": spec("musp_fat") * glc_scatter,
-        "melanosome": spec("melanosome"),
-        "baseline": baseline,
+        "mua_dermis": mua_dermis.reshape(shape),
+        "musp_dermis": musp_dermis.reshape(shape),
+        "mua_subcutis": mua_sub.reshape(shape),
+        "musp_subcutis": musp_sub.reshape(shape),
+        "melanosome": _mix(None, *tables["melanosome"], shift, n).reshape(shape),
+        "baseline": spectra.spectra["baseline"][None],  # flat in the NIR: no shift
     }
+
+
+#: Chromophores of each layer's absorption mixture, in the order of the coefficients
+#: built in :func:`tissue_optics`.
+_MIXTURES = {
+    "dermis": ("blood_oxy", "blood_deoxy", "water", "glucose", "baseline"),
+    "subcutis": ("blood_oxy", "blood_deoxy", "water", "glucose", "fat", "baseline"),
+}
+
+
+def _mixture_tables(spectra: BandSpectra) -> dict:
+    """Per scenario: (table, derivative table) of each mixture, flattened over nodes.
+
+    The baseline is flat in the NIR and is not shifted (zero derivative), as before.
+    Memoised on the (immutable) spectra object.
+    """
+    cached = spectra.__dict__.get("_mixture_tables")
+    if cached is not None:
+        return cached
+    tab, der = spectra.spectra, spectra.derivatives
+
+    def rows(names):
+        t = np.stack([np.ravel(tab[k]) for k in names])
+        d = np.stack([np.zeros(t.shape[1]) if k == "baseline" else np.ravel(der[k])
+                      for k in names])
+        return np.ascontiguousarray(t), np.ascontiguousarray(d)
+
+    out = {k: rows(v) for k, v in _MIXTURES.items()}
+    for k in ("musp_skin", "musp_fat", "melanosome"):
+        out[k] = (np.ravel(tab[k]).copy(), np.ravel(der[k]).copy())
+    object.__setattr__(spectra, "_mixture_tables", out)  # frozen dataclass: a cache slot
+    return out
+
+
+def _shift_per_node(shift_nm, n: int, n_led: int, n_pts: int) -> np.ndarray | None:
+    """The LED peak shift at every node, (n, n_led * n_pts), or None when zero."""
+    shift = np.asarray(shift_nm, dtype=float)
+    if shift.ndim == 0:
+        return None if shift == 0.0 else np.full((n, n_led * n_pts), float(shift))
+    if shift.ndim == 1:
+        shift = shift[:, None]
+    return np.repeat(np.broadcast_to(shift, (n, n_led)), n_pts, axis=1)
+
+
+def _mix(coef, table, derivative, shift, n: int = 0) -> np.ndarray:
+    """coef @ (table + shift * derivative), (n, n_nodes); ``coef`` None means one
+    chromophore with coefficient 1 (first-order Taylor in the shift, a few nm at most)."""
+    if coef is None:
+        if shift is None:
+            return np.broadcast_to(table, (n, table.size)).copy()
+        out = shift * derivative
+        out += table
+        return out
+    if shift is None:
+        return coef @ table
+    both = coef @ np.concatenate([table, derivative], axis=1)  # one product, (n, 2 n_nodes)
+    m = table.shape[1]
+    out = both[:, m:] * shift
+    out += both[:, :m]
+    return out

@@ -80,20 +80,84 @@ def truncated_normal(
     low: float,
     high: float,
     size: int,
+    *,
+    group: np.ndarray | None = None,
 ) -> np.ndarray:
     """Draw from N(mean, sd) truncated to [low, high] by inverse-CDF sampling.
 
     One uniform per value (no rejection loop), so the number of variates is fixed.
     With ``sd == 0`` it returns ``mean`` (which must lie in the range).
+
+    ``group`` (optional, with a scalar ``sd``): ``mean`` is given per group and value i
+    has mean ``mean[group[i]]``; the truncation probabilities are then computed once per
+    group. The values equal those of ``truncated_normal(rng, mean[group], ...)`` exactly.
     """
-    mean = np.broadcast_to(np.asarray(mean, dtype=float), (size,))
-    sd = np.broadcast_to(np.asarray(sd, dtype=float), (size,))
     u = rng.random(size=size)
+    mean_a = np.asarray(mean, dtype=float)
+    sd_a = np.asarray(sd, dtype=float)
+    if group is not None and (sd_a.ndim != 0 or mean_a.ndim != 1):
+        raise ValueError("group needs a scalar sd and one mean per group")
+    if sd_a.ndim == 0 and mean_a.ndim <= 1:
+        return _truncated_normal_scalar_sd(u, mean_a, float(sd_a), low, high, size, group)
+    mean = np.broadcast_to(mean_a, (size,))
+    sd = np.broadcast_to(sd_a, (size,))
     safe_sd = np.where(sd > 0, sd, 1.0)
     a = ndtr((low - mean) / safe_sd)
     b = ndtr((high - mean) / safe_sd)
-    p = np.clip(a + u * (b - a), 1e-15, 1 - 1e-15)
+    p = np.clip(a + u * (b - a), _P_EDGE, 1 - _P_EDGE)
     out = mean + safe_sd * ndtri(p)
     out = np.where(sd > 0, out, mean)
     # Numerical safety only (inverse CDF can land a rounding error outside).
     return np.minimum(np.maximum(out, low), high)
+
+
+#: Keeps the inverse normal CDF finite: p in [1e-15, 1 - 1e-15] (|z| <= 7.9). [-]
+_P_EDGE = 1e-15
+
+
+def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None):
+    """:func:`truncated_normal` for one SD (the common case), in place: the same
+    operations in the same order, so the same values to the last bit."""
+    if sd <= 0:
+        out = np.array(np.broadcast_to(mean if group is None else mean[group], (size,)),
+                       dtype=float)
+    elif group is not None:
+        a = np.subtract(low, mean)
+        a /= sd
+        ndtr(a, out=a)
+        b = np.subtract(high, mean)
+        b /= sd
+        ndtr(b, out=b)
+        a = a[group]
+        p = b[group]
+        p -= a
+        p *= u
+        p += a
+        np.maximum(p, _P_EDGE, out=p)
+        np.minimum(p, 1 - _P_EDGE, out=p)
+        out = ndtri(p, out=p)
+        out *= sd
+        out += mean[group]
+    else:
+        if mean.ndim == 0:
+            a = float(ndtr((low - mean) / sd))
+            p = u * (float(ndtr((high - mean) / sd)) - a)
+            p += a
+        else:
+            a = np.subtract(low, mean)
+            a /= sd
+            ndtr(a, out=a)
+            p = np.subtract(high, mean)
+            p /= sd
+            ndtr(p, out=p)
+            p -= a
+            p *= u
+            p += a
+        np.maximum(p, _P_EDGE, out=p)
+        np.minimum(p, 1 - _P_EDGE, out=p)
+        out = ndtri(p, out=p)
+        out *= sd
+        out += mean
+    np.maximum(out, low, out=out)
+    np.minimum(out, high, out=out)
+    return out

@@ -101,20 +101,21 @@ def sample_environment(
     n = n_sessions * per_session
     rep = np.repeat(np.arange(n_sessions), per_session)
     t_lo, t_hi = cfg.temperature_c
+    # one session mean per subject; truncation probabilities computed per session
     temperature_c = truncated_normal(
-        rng, rng.uniform(t_lo, t_hi, size=n_sessions)[rep], cfg.temperature_within_sd_c,
-        t_lo, t_hi, size=n,
+        rng, rng.uniform(t_lo, t_hi, size=n_sessions), cfg.temperature_within_sd_c,
+        t_lo, t_hi, size=n, group=rep,
     )
     h_lo, h_hi = cfg.humidity_pct
     humidity_pct = truncated_normal(
-        rng, rng.uniform(h_lo, h_hi, size=n_sessions)[rep], cfg.humidity_within_sd_pct,
-        h_lo, h_hi, size=n,
+        rng, rng.uniform(h_lo, h_hi, size=n_sessions), cfg.humidity_within_sd_pct,
+        h_lo, h_hi, size=n, group=rep,
     )
     session_p = truncated_normal(
         rng, cfg.pressure_mbar_mean, cfg.pressure_mbar_sd, *cfg.pressure_mbar, size=n_sessions
     )
     pressure_mbar = truncated_normal(
-        rng, session_p[rep], cfg.pressure_within_sd_mbar, *cfg.pressure_mbar, size=n
+        rng, session_p, cfg.pressure_within_sd_mbar, *cfg.pressure_mbar, size=n, group=rep
     )
     log_lo, log_hi = np.log10(cfg.ambient_lux)
     ambient_lux = 10.0 ** rng.uniform(log_lo, log_hi, size=n)
