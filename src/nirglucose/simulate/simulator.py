@@ -104,6 +104,21 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
     n = len(melanin)
     n_led = len(cfg.leds.wavelengths_nm)
     shift = np.broadcast_to(np.asarray(shift_nm, dtype=float), (n, n_led))
+    if cfg.optics.model == "beer-lambert":  # the default: one compiled pass
+        from ..optics.band_kernel import band_detected_fraction
+
+        return band_detected_fraction(
+            tables.spectra,
+            state,
+            shift_nm=shift,
+            melanin_fraction=melanin,
+            skin_thickness_cm=thickness_mm / 10.0,
+            epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
+            separation_cm=cfg.optics.source_detector_mm / 10.0,
+            geometry_factor=tables.geometry,
+            water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
+        )
     out = np.empty((n, n_led))
     # band integral as one matrix product: (rows, n_led * n_pts) @ (n_led * n_pts, n_led)
     w = tables.spectra.weights
