@@ -782,6 +782,35 @@ def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, g
     return node_lut(lut, np.asarray(ratio))
 
 
+def _node_kernel_args(nlut: NodeLUT) -> tuple:
+    """The table arguments of :func:`._lut_kernel.node_reflectance`, cached on the table.
+
+    ``(table words, cells per node, node ratios, axis_f, axis_i)``; see the kernel.
+    """
+    cached = nlut.__dict__.get("_kernel_args")
+    if cached is not None:
+        return cached
+    from ._lut_kernel import KERNEL_AXES
+
+    lut = nlut.lut
+    kinds = tuple(LUT_AXES[list(LUT_AXES)[i]][0] for i in _NOT_Q)
+    if kinds != KERNEL_AXES:  # pragma: no cover - a guard for whoever edits LUT_AXES
+        raise ConfigError(f"the LUT kernel expects axes {KERNEL_AXES}, the table has {kinds}")
+    strides = [*_strides(tuple(lut.shape[i] for i in _NOT_Q)), 0]
+    axis_f = np.empty((6, 4))
+    axis_i = np.empty((6, 3), dtype=np.int64)
+    for row, (i, stride) in enumerate(zip([*_NOT_Q, _Q], strides, strict=True)):
+        u = np.ascontiguousarray(lut.nodes[i], dtype=np.float64)
+        u0, h_lo, n_lo, h_hi = _axis_map(u.tobytes())  # the map _cell_coords uses
+        axis_f[row] = (u0, 1.0 / h_lo, h_lo / h_hi, 1e-9 * u.size)
+        axis_i[row] = (n_lo, u.size, stride)
+    values = np.ascontiguousarray(nlut.values, dtype=np.complex64)
+    cached = (values.reshape(-1).view(np.int64), values[0].size,
+              np.ascontiguousarray(nlut.musp_ratio, dtype=np.float64).ravel(), axis_f, axis_i)
+    object.__setattr__(nlut, "_kernel_args", cached)  # frozen dataclass: a cache slot
+    return cached
+
+
 def interpolate_node_lut(
     nlut: NodeLUT,
     *,
@@ -794,9 +823,73 @@ def interpolate_node_lut(
 ) -> NDArray[np.float64]:
     """Reflectance R(rho) from a :class:`NodeLUT`, as :func:`interpolate_lut` gives it.
 
-    Inputs have shape (n, *node_shape); ``skin_thickness_cm`` may be (n,). Absorption
-    and scattering in [1/cm], thickness in [cm]; returns R in [1/cm^2].
+    One call of a compiled kernel (:mod:`nirglucose.optics._lut_kernel`): coordinates,
+    cells, the 32-corner multilinear interpolation and the ``musp_ratio`` slope in one
+    pass over the points; equal to the numpy reference (``_interpolate_node_lut_numpy``)
+    to float32 rounding of ln R.
+
+    Parameters
+    ----------
+    nlut : NodeLUT
+        The node table.
+    mua_epidermis_per_cm, mua_dermis_per_cm, mua_subcutis_per_cm : array_like
+        Absorption of each layer, (n, *node_shape). [1/cm]
+    musp_dermis_per_cm, musp_subcutis_per_cm : array_like
+        Reduced scattering of the skin and of the subcutis, (n, *node_shape). [1/cm]
+    skin_thickness_cm : array_like
+        Epidermis + dermis thickness, (n,) or (n, *node_shape). [cm]
+
+    Returns
+    -------
+    ndarray
+        R(rho), (n, *node_shape). [1/cm^2]
+
+    Raises
+    ------
+    ConfigError
+        If a point lies outside the table's box (the message names the axis and range).
     """
+    from ._lut_kernel import node_reflectance
+
+    mua_d = np.asarray(mua_dermis_per_cm, dtype=float)
+    full = mua_d.shape
+    k = len(nlut.node_shape)
+    if full[len(full) - k:] != nlut.node_shape:
+        raise ConfigError(
+            f"inputs of shape {full} do not end with the node shape {nlut.node_shape}"
+        )
+
+    def flat(a: ArrayLike) -> np.ndarray:  # C order, 1-D; a view where it can be
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), full)).ravel()
+
+    musp_d = flat(musp_dermis_per_cm)
+    t = np.asarray(skin_thickness_cm, dtype=float)
+    ln_t = np.log(t.reshape(t.shape + (1,) * (len(full) - t.ndim)))  # one log per row
+    out = np.empty(musp_d.size)
+    bad = node_reflectance(
+        *_node_kernel_args(nlut), np.log(musp_d), flat(mua_d), flat(mua_subcutis_per_cm),
+        flat(mua_epidermis_per_cm), flat(ln_t), flat(musp_subcutis_per_cm), musp_d, out,
+    )
+    if bad >= 0:  # the reference names the axis and the range, and raises
+        return _interpolate_node_lut_numpy(
+            nlut, mua_epidermis_per_cm=mua_epidermis_per_cm, mua_dermis_per_cm=mua_d,
+            musp_dermis_per_cm=musp_dermis_per_cm, mua_subcutis_per_cm=mua_subcutis_per_cm,
+            musp_subcutis_per_cm=musp_subcutis_per_cm, skin_thickness_cm=skin_thickness_cm,
+        )
+    return out.reshape(full)
+
+
+def _interpolate_node_lut_numpy(
+    nlut: NodeLUT,
+    *,
+    mua_epidermis_per_cm: np.ndarray,
+    mua_dermis_per_cm: np.ndarray,
+    musp_dermis_per_cm: np.ndarray,
+    mua_subcutis_per_cm: np.ndarray,
+    musp_subcutis_per_cm: np.ndarray,
+    skin_thickness_cm: np.ndarray,
+) -> NDArray[np.float64]:
+    """Numpy reference of :func:`interpolate_node_lut` (the tests compare the two)."""
     lut = nlut.lut
     mua_d = np.asarray(mua_dermis_per_cm, dtype=float)
     full = mua_d.shape
