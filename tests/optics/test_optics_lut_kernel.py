@@ -138,6 +138,8 @@ def test_kernel_at_the_corners_of_the_box(table):
 
 @pytest.mark.parametrize(("key", "value", "axis"), [
     ("musp_dermis_per_cm", 50.0, "musp_dermis_per_cm"),
+    ("musp_dermis_per_cm", np.nan, "musp_dermis_per_cm"),
+    ("musp_dermis_per_cm", -10.0, "musp_dermis_per_cm"),
     ("mua_dermis_per_cm", 9.0, "mua_dermis_per_cm"),
     ("mua_subcutis_per_cm", -0.5, "mua_subcutis_per_cm"),
     ("mua_epidermis_per_cm", np.nan, "mua_epidermis_per_cm"),
@@ -166,3 +168,19 @@ def test_kernel_is_deterministic_and_chunk_free(table):
     np.testing.assert_array_equal(a, b)
     part = L.interpolate_node_lut(nlut, **{k: v[123:457] for k, v in pts.items()})
     np.testing.assert_array_equal(part, a[123:457])  # rows do not depend on their neighbours
+
+
+def test_kernel_log_and_exp_match_the_c_library():
+    # the kernel's arithmetic-only ln and exp (vectorisable), against numpy's
+    from nirglucose.optics._lut_kernel import _exp, _log
+
+    rng = np.random.default_rng(8)
+    x = np.concatenate([np.exp(rng.uniform(-40.0, 40.0, 2000)), rng.uniform(0.5, 2.0, 500),
+                        [1.0, 2.0, np.sqrt(2.0), 1e-300, 1e300]])
+    np.testing.assert_allclose([_log(v) for v in x], np.log(x), rtol=1e-15, atol=2e-16)
+    y = np.concatenate([rng.uniform(-40.0, 10.0, 2000), [0.0, -700.0, 700.0, 1e-12]])
+    np.testing.assert_allclose([_exp(v) for v in y], np.exp(y), rtol=5e-16, atol=0.0)
+    # what the box check relies on: bad inputs give NaN or |ln x| > 700, never a table value
+    for bad in (0.0, -1.0, np.nan, np.inf, 1e-310):
+        v = _log(bad)
+        assert np.isnan(v) or abs(v) > 700.0

@@ -862,13 +862,13 @@ def interpolate_node_lut(
     def flat(a: ArrayLike) -> np.ndarray:  # C order, 1-D; a view where it can be
         return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), full)).ravel()
 
-    musp_d = flat(musp_dermis_per_cm)
     t = np.asarray(skin_thickness_cm, dtype=float)
     ln_t = np.log(t.reshape(t.shape + (1,) * (len(full) - t.ndim)))  # one log per row
-    out = np.empty(musp_d.size)
+    out = np.empty(mua_d.size)
     bad = node_reflectance(
-        *_node_kernel_args(nlut), np.log(musp_d), flat(mua_d), flat(mua_subcutis_per_cm),
-        flat(mua_epidermis_per_cm), flat(ln_t), flat(musp_subcutis_per_cm), musp_d, out,
+        *_node_kernel_args(nlut), flat(mua_d), flat(mua_subcutis_per_cm),
+        flat(mua_epidermis_per_cm), flat(ln_t), flat(musp_subcutis_per_cm),
+        flat(musp_dermis_per_cm), out,
     )
     if bad >= 0:  # the reference names the axis and the range, and raises
         return _interpolate_node_lut_numpy(
