@@ -16,7 +16,7 @@ chunk by chunk of about 400 points, so that its scratch stays in the CPU's L1/L2
    the table's box (NaN included) on any axis stops the kernel;
 2. gather: for each of the 16 corners of the first four axes, the two (ln R, slope)
    float32 pairs along the thickness axis (adjacent in the table: one 16-byte stretch)
-   are read as two 8-byte words and interpolated as they come (:func:`_lerp_pair`);
+   are read in one 16-byte load and interpolated as they come (:func:`_lerp_at`);
 3. multilinear: four halvings of the corners (axes 3, 2, 1, 0), value and slope
    interleaved, in float32 (vectorised); steps 2 and 3 are the numpy reference's
    complex64 operations in the same order, so ln R comes out bit for bit the same;
@@ -77,23 +77,29 @@ def _from_bits(typingctx, x):
 
 
 @intrinsic
-def _lerp_pair(typingctx, a, b, f):
-    """a + (b - a) f on two float32 lanes packed in int64 words (value, slope); f float32.
+def _lerp_at(typingctx, table, p, f):
+    """a + (b - a) f for the (value, slope) float32 pairs a = table[p], b = table[p + 1].
 
-    The same float32 operations, lane by lane, as the numpy reference's complex64 lerp.
+    The two 8-byte words are read as one 16-byte load, and the lerp runs on both float32
+    lanes at once: the same float32 operations, lane by lane, as the numpy reference's
+    complex64 lerp. Returns the result's pair as an int64 word.
     """
+    quad = ir.VectorType(ir.FloatType(), 4)
     pair = ir.VectorType(ir.FloatType(), 2)
+    lane = ir.IntType(32)
 
     def codegen(context, builder, signature, args):
-        va = builder.bitcast(args[0], pair)
-        vb = builder.bitcast(args[1], pair)
-        lane = ir.IntType(32)
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        ptr = builder.bitcast(builder.gep(data, [args[1]]), quad.as_pointer())
+        both = builder.load(ptr, align=8)
+        va = builder.shuffle_vector(both, both, ir.Constant(ir.VectorType(lane, 2), [0, 1]))
+        vb = builder.shuffle_vector(both, both, ir.Constant(ir.VectorType(lane, 2), [2, 3]))
         vf = builder.insert_element(ir.Constant(pair, None), args[2], ir.Constant(lane, 0))
         vf = builder.insert_element(vf, args[2], ir.Constant(lane, 1))
         out = builder.fadd(builder.fmul(builder.fsub(vb, va), vf), va)
         return builder.bitcast(out, ir.IntType(64))
 
-    return types.int64(types.int64, types.int64, types.float32), codegen
+    return types.int64(table, types.int64, types.float32), codegen
 
 
 _LN2_HI = 6.93147180369123816490e-01  # ln 2 = _LN2_HI + _LN2_LO (fdlibm's split)
@@ -306,7 +312,7 @@ def node_reflectance(table, n_cells, ratio, axis_f, axis_i, mua_d, mua_s, mua_e,
             off = offsets[c]
             for e in range(cnt):
                 p = base[e] + off
-                words[c, e] = _lerp_pair(table[p], table[p + 1], frac[4, 2 * e])
+                words[c, e] = _lerp_at(table, p, frac[4, 2 * e])
         # 3. halve the corners along axes 3, 2, 1, 0 (value and slope interleaved)
         half = 16
         for a in (3, 2, 1, 0):
