@@ -184,3 +184,42 @@ def test_kernel_log_and_exp_match_the_c_library():
     for bad in (0.0, -1.0, np.nan, np.inf, 1e-310):
         v = _log(bad)
         assert np.isnan(v) or abs(v) > 700.0
+
+
+def test_simulator_fused_band_path_equals_tissue_optics_then_table(table):
+    """band_kernel.band_detected_fraction_lut (layer optics compiled, then the kernel)
+    equals tissue_optics -> detected_fraction('rte-lut') -> band weights."""
+    from nirglucose.optics import forward, tissue
+    from nirglucose.optics.band_kernel import band_detected_fraction_lut
+
+    spectra = tissue.band_spectra([850, 940, 1050, 1150], [30, 40, 50, 60], 3)
+    ratio = spectra.spectra["musp_fat"] / spectra.spectra["musp_skin"]
+    nlut = L.node_lut(table, ratio)
+    rng = np.random.default_rng(8)
+    n = 600
+    state = tissue.TissueState(rng.uniform(0.005, 0.05, n), rng.uniform(0.5, 0.95, n),
+                               rng.uniform(0.55, 0.72, n), rng.uniform(0.6, 0.9, n),
+                               rng.uniform(3.0, 30.0, n))
+    shift = rng.normal(0.0, 1.0, (n, 4))
+    mel = rng.uniform(0.01, 0.15, n)
+    t_cm = rng.uniform(0.08, 0.35, n)
+    kw = dict(water_displacement_per_mm=1.1e-4, scattering_rel_per_mm=-1.25e-3)
+    optics = tissue.tissue_optics(spectra, state, shift_nm=shift, **kw)
+    nodes = forward.detected_fraction(
+        "rte-lut", optics, melanin_fraction=mel, skin_thickness_cm=t_cm,
+        epidermis_thickness_cm=0.008, separation_cm=0.3, detector_area_cm2=0.066,
+        n_tissue=1.4, lut=nlut,
+    )
+    want = np.einsum("nlp,lp->nl", nodes, spectra.weights)
+    got = band_detected_fraction_lut(
+        spectra, state, shift_nm=shift, melanin_fraction=mel, skin_thickness_cm=t_cm,
+        node_lut=nlut, detector_area_cm2=0.066, **kw,
+    )
+    np.testing.assert_allclose(got, want, rtol=1e-6)  # float32 table rounding at worst
+    assert np.median(np.abs(got / want - 1.0)) < 1e-12
+    # a point outside the table raises the reference's message (names the axis)
+    with pytest.raises(ConfigError, match="skin_transport_thickness"):
+        band_detected_fraction_lut(
+            spectra, state, shift_nm=shift, melanin_fraction=mel,
+            skin_thickness_cm=np.full(n, 5.0), node_lut=nlut, detector_area_cm2=0.066, **kw,
+        )

@@ -28,13 +28,28 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..exceptions import ConfigError
 from .tissue import SUBCUTIS, BandSpectra
 
-__all__ = ["band_detected_fraction"]
+__all__ = ["band_detected_fraction", "band_detected_fraction_lut"]
 
 #: Chromophore order of the stacked tables passed to the kernel.
 _ORDER = ("blood_oxy", "blood_deoxy", "water", "glucose", "fat", "baseline",
           "musp_skin", "musp_fat", "melanosome")
+
+
+@njit(cache=True, inline="always")
+def _coefficients(b, s, w, f, c, x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, water_sub):
+    """Mixture coefficients of one snapshot: dermis (oxy, deoxy, water, glucose,
+    baseline), subcutis (oxy, deoxy, water, glucose, fat, baseline), and the glucose
+    scattering factor exp(k C) (see :func:`nirglucose.optics.tissue.tissue_optics`)."""
+    disp = max(1.0 - x_disp_per_mm * c, 0.0)
+    b_oxy = b * s
+    bs = blood_sub_ratio * b
+    bs_oxy = bs * s
+    return (b_oxy, b - b_oxy, w * disp, w * c, 1.0 - b - w,
+            bs_oxy, bs - bs_oxy, water_sub * disp, water_sub * c, f,
+            max(1.0 - bs - water_sub - f, 0.0), np.exp(k_scat_per_mm * c))
 
 
 @njit(cache=True, nogil=True)
@@ -52,25 +67,10 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
     c5, c6, c7, c8, c9 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     c10, glc_scatter, t_k = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
-        b = blood[i]
-        c = glucose_mm[i]
-        w = water[i]
-        disp = max(1.0 - x_disp_per_mm * c, 0.0)
-        glc_scatter[i] = np.exp(k_scat_per_mm * c)
-        b_oxy = b * sat[i]
-        c0[i] = b_oxy
-        c1[i] = b - b_oxy
-        c2[i] = w * disp
-        c3[i] = w * c
-        c4[i] = 1.0 - b - w
-        bs = blood_sub_ratio * b
-        bs_oxy = bs * sat[i]
-        c5[i] = bs_oxy
-        c6[i] = bs - bs_oxy
-        c7[i] = water_sub * disp
-        c8[i] = water_sub * c
-        c9[i] = fat_sub[i]
-        c10[i] = max(1.0 - bs - water_sub - fat_sub[i], 0.0)
+        (c0[i], c1[i], c2[i], c3[i], c4[i], c5[i], c6[i], c7[i], c8[i], c9[i], c10[i],
+         glc_scatter[i]) = _coefficients(blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i],
+                                         x_disp_per_mm, k_scat_per_mm, blood_sub_ratio,
+                                         water_sub)
         t_k[i] = share_k * skin_cm[i]
     out_t[:] = 0.0
     mua_d, mua_s, musp_d = np.empty(n), np.empty(n), np.empty(n)
@@ -116,6 +116,51 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
                 arg[i] = -(0.5 * x2 / (1.0 + np.sqrt(x2)) + epi[i])
             for i in range(n):
                 out_l[i] += wg * np.exp(arg[i])
+
+
+@njit(cache=True, nogil=True)
+def _layers_kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, tab, der,
+                   x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, water_sub,
+                   mua_d, mua_s, mua_e, musp_d, musp_s):  # pragma: no cover - compiled
+    """The three layers' optics at every (node, snapshot), node-major (n_led * n_pts, n):
+    :func:`nirglucose.optics.tissue.tissue_optics` then
+    :func:`nirglucose.optics.layers.layers_from_tissue_optics`, in one pass."""
+    n_led, n = shift_t.shape
+    n_pts = tab.shape[2]
+    c0, c1, c2, c3, c4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    c5, c6, c7, c8, c9 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    c10, glc_scatter = np.empty(n), np.empty(n)
+    for i in range(n):
+        (c0[i], c1[i], c2[i], c3[i], c4[i], c5[i], c6[i], c7[i], c8[i], c9[i], c10[i],
+         glc_scatter[i]) = _coefficients(blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i],
+                                         x_disp_per_mm, k_scat_per_mm, blood_sub_ratio,
+                                         water_sub)
+    for led in range(n_led):
+        sh_l = shift_t[led]
+        for p in range(n_pts):
+            t_oxy, d_oxy = tab[0, led, p], der[0, led, p]
+            t_deo, d_deo = tab[1, led, p], der[1, led, p]
+            t_wat, d_wat = tab[2, led, p], der[2, led, p]
+            t_glc, d_glc = tab[3, led, p], der[3, led, p]
+            t_fat, d_fat = tab[4, led, p], der[4, led, p]
+            base = tab[5, led, p]
+            t_msd, d_msd = tab[6, led, p], der[6, led, p]
+            t_mss, d_mss = tab[7, led, p], der[7, led, p]
+            t_mel, d_mel = tab[8, led, p], der[8, led, p]
+            first = (led * n_pts + p) * n
+            for i in range(n):  # a loop free of calls: vectorised
+                sh = sh_l[i]
+                oxy = t_oxy + sh * d_oxy
+                deoxy = t_deo + sh * d_deo
+                wat = t_wat + sh * d_wat
+                glc = t_glc + sh * d_glc
+                g = first + i
+                mua_d[g] = c0[i] * oxy + c1[i] * deoxy + c2[i] * wat + c3[i] * glc + c4[i] * base
+                mua_s[g] = (c5[i] * oxy + c6[i] * deoxy + c7[i] * wat + c8[i] * glc
+                            + c9[i] * (t_fat + sh * d_fat) + c10[i] * base)
+                musp_d[g] = (t_msd + sh * d_msd) * glc_scatter[i]
+                musp_s[g] = (t_mss + sh * d_mss) * glc_scatter[i]
+                mua_e[g] = base + melanin[i] * ((t_mel + sh * d_mel) - base)
 
 
 def _stacked(spectra: BandSpectra) -> tuple[np.ndarray, np.ndarray]:
@@ -196,3 +241,85 @@ def band_detected_fraction(
         float(SUBCUTIS["water_fraction"]), out_t,
     )
     return out_t.T
+
+
+def band_detected_fraction_lut(
+    spectra: BandSpectra,
+    state,
+    *,
+    shift_nm: np.ndarray,
+    melanin_fraction: np.ndarray,
+    skin_thickness_cm: np.ndarray,
+    node_lut,
+    detector_area_cm2: float,
+    water_displacement_per_mm: float,
+    scattering_rel_per_mm: float,
+) -> np.ndarray:
+    """Band-averaged detected fraction of the ``rte-lut`` model, (n, n_led).
+
+    The layer optics in one compiled pass, then the table kernel
+    (:func:`nirglucose.optics._lut_kernel.node_reflectance`), then the band weights:
+    equal (to rounding) to weighting ``detected_fraction('rte-lut', tissue_optics(...))``
+    over each band. Parameters as :func:`band_detected_fraction`, with ``node_lut`` the
+    :class:`~nirglucose.optics.lut.NodeLUT` of the scenario's band nodes and
+    ``detector_area_cm2`` the photodiode area [cm^2].
+
+    Raises
+    ------
+    ConfigError
+        If a snapshot's optics fall outside the table (the message names the axis).
+    """
+    from . import lut as lut_mod
+    from ._lut_kernel import node_reflectance
+
+    n_led, n_pts = spectra.nodes_nm.shape
+    if tuple(node_lut.node_shape) != (n_led, n_pts):
+        raise ConfigError(f"the node table is for nodes {node_lut.node_shape}, "
+                          f"the LED bands have {(n_led, n_pts)}")
+
+    def vec(a, shape):
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=np.float64), shape))
+
+    glucose = np.ascontiguousarray(state.glucose_mm, dtype=np.float64)
+    n = glucose.shape[0]
+    shift = np.asarray(shift_nm, dtype=np.float64)
+    if shift.ndim == 1:
+        shift = shift[:, None]
+    tab, der = _stacked(spectra)
+    k = n_led * n_pts
+    mua_d, mua_s, mua_e, musp_d, musp_s = (np.empty(n * k) for _ in range(5))
+    _layers_kernel(
+        vec(state.blood_fraction, (n,)), vec(state.saturation, (n,)),
+        vec(state.water_fraction, (n,)), vec(state.subcutis_fat_fraction, (n,)), glucose,
+        vec(np.broadcast_to(shift, (n, n_led)).T, (n_led, n)), vec(melanin_fraction, (n,)),
+        tab, der,
+        float(water_displacement_per_mm), float(scattering_rel_per_mm),
+        float(SUBCUTIS["blood_ratio_to_dermis"]), float(SUBCUTIS["water_fraction"]),
+        mua_d, mua_s, mua_e, musp_d, musp_s,
+    )
+    t_cm = vec(skin_thickness_cm, (n,))
+    ln_t = np.log(t_cm)
+    out = np.empty(n * k)
+    # node by node: each call reads one node's table (a few MB, cache-resident), where
+    # row-major points would jump between all the nodes' tables
+    table, n_cells, ratio, axis_f, axis_i = lut_mod._node_kernel_args(node_lut)
+    bad = -1
+    for node in range(k):
+        rows = slice(node * n, (node + 1) * n)
+        bad = node_reflectance(table[node * n_cells:(node + 1) * n_cells], n_cells,
+                               ratio[node:node + 1], axis_f, axis_i, mua_d[rows], mua_s[rows],
+                               mua_e[rows], ln_t, musp_s[rows], musp_d[rows], out[rows])
+        if bad >= 0:
+            break
+    if bad >= 0:  # outside the table: the reference path names the axis and raises
+        def rowmajor(a):
+            return a.reshape(n_led, n_pts, n).transpose(2, 0, 1)
+
+        lut_mod._interpolate_node_lut_numpy(
+            node_lut, mua_epidermis_per_cm=rowmajor(mua_e), mua_dermis_per_cm=rowmajor(mua_d),
+            musp_dermis_per_cm=rowmajor(musp_d), mua_subcutis_per_cm=rowmajor(mua_s),
+            musp_subcutis_per_cm=rowmajor(musp_s), skin_thickness_cm=t_cm,
+        )
+        raise ConfigError("the skin optics fall outside the look-up table")  # pragma: no cover
+    weights = np.asarray(spectra.weights) * float(detector_area_cm2)
+    return (weights.reshape(k, 1) * out.reshape(k, n)).reshape(n_led, n_pts, n).sum(axis=1).T

@@ -119,6 +119,20 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
             water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
             scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
         )
+    if cfg.optics.model == "rte-lut":  # layer optics compiled, then the table kernel
+        from ..optics.band_kernel import band_detected_fraction_lut
+
+        return band_detected_fraction_lut(
+            tables.spectra,
+            state,
+            shift_nm=shift,
+            melanin_fraction=melanin,
+            skin_thickness_cm=thickness_mm / 10.0,
+            node_lut=tables.lut,
+            detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
+            water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
+        )
     out = np.empty((n, n_led))
     # band integral as one matrix product: (rows, n_led * n_pts) @ (n_led * n_pts, n_led)
     w = tables.spectra.weights
