@@ -15,9 +15,11 @@ import subprocess
 import sys
 import time
 
-import numpy as np
-
+# one BLAS thread, set before numpy loads (BLAS reads it once, at load): the measure is
+# the CPU time of one process's work, not of idle BLAS threads spinning
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
 
 N_SNAPSHOTS = int(os.environ.get("NIRGLUCOSE_BENCH_SNAPSHOTS", 1_000_000))
 PER_SUBJECT = 3
