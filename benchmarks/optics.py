@@ -1,11 +1,14 @@
 """The rte-lut forward model: LUT build time, accuracy, interpolation speed, simulator cost.
 
-* build: the default table built from scratch in a temporary cache directory (wall and
-  CPU seconds, number of model solves);
-* accuracy: table / direct solve - 1 at random off-grid points, (a) uniform in each
-  axis' coordinate over the table's box and (b) drawn from the paper preset's simulated
-  cohort (every LED band node); "direct solve" is
-  nirglucose.optics.layers.three_layer_reflectance at the same point;
+* build: the default table built from scratch by white Monte Carlo in a temporary cache
+  directory (wall and CPU seconds, number of nodes solved);
+* accuracy: table / direct solve - 1 at 120 random off-grid points uniform in each axis'
+  coordinate over the table's box, in 12 groups sharing (musp_ratio, thickness) (one
+  Monte Carlo run each); "direct solve" is nirglucose.optics.lut.direct_solve, a run at
+  the point with the table's settings and common random numbers; with the direct
+  solve's own standard error;
+* monte_carlo_vs_diffusion: the MC table / the layered diffusion model
+  (nirglucose.optics.layers) over the box and over the paper preset's cohort;
 * throughput: points per CPU second of the generic interpolation and of the simulator's
   node-specialised path (node evaluations: the compiled kernel, and its numpy
   reference), in the simulator's slices, and the kernel's first call (a cache load);
@@ -97,6 +100,7 @@ def _errors(lut, points) -> dict:
     p = np.abs(err["pathlength"])
     return {
         "n_points": int(r.size),
+        "direct_median_rel_se": round(float(np.median(err["reflectance_se"])), 5),
         "reflectance_max_rel_error": round(float(r.max()), 5),
         "reflectance_median_rel_error": round(float(np.median(r)), 5),
         "reflectance_p99_rel_error": round(float(np.percentile(r, 99)), 5),
@@ -105,6 +109,17 @@ def _errors(lut, points) -> dict:
                                           np.round(np.median(p, axis=0), 5).tolist(),
                                           strict=True)),
     }
+
+
+def _vs_diffusion(lut, points) -> dict:
+    r_mc, _ = L.interpolate_lut(lut, **points)
+    r_d, _ = layers.three_layer_reflectance(RHO_CM, epidermis_thickness_cm=T_EPI_CM,
+                                            n_tissue=N_TISSUE, **points)
+    ratio = r_mc / r_d
+    return {k: round(float(f(ratio)), 4) for k, f in (
+        ("median_ratio", np.median), ("min_ratio", np.min), ("max_ratio", np.max),
+        ("p5_ratio", lambda x: np.percentile(x, 5)),
+        ("p95_ratio", lambda x: np.percentile(x, 95)))}
 
 
 def _throughput(lut, cohort) -> dict:
@@ -199,9 +214,13 @@ def main() -> dict:
             "cache_file_mb": round(os.path.getsize(
                 os.path.join(tmp, f"lut-{lut.key}.npz")) / 2**20, 1),
         }
-        result["accuracy_uniform"] = _errors(lut, L.random_lut_points(lut, 1000, rng=7))
+        result["accuracy_uniform"] = _errors(
+            lut, L.random_lut_points(lut, 120, rng=7, groups=12))
         cohort = _cohort()
-        result["accuracy_paper_cohort"] = _errors(lut, _cohort_points(cohort, 1000))
+        result["monte_carlo_vs_diffusion"] = {
+            "uniform_box": _vs_diffusion(lut, L.random_lut_points(lut, 2000, rng=5)),
+            "paper_cohort": _vs_diffusion(lut, _cohort_points(cohort, 2000)),
+        }
         result["throughput"] = _throughput(lut, cohort)
         result["simulator"] = _simulator()
         if os.environ.get("NIRGLUCOSE_BENCH_MC") == "1":

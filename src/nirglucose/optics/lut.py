@@ -1,10 +1,10 @@
 """Look-up table of layered-skin reflectance and per-layer path, for the fast path.
 
-The three-layer skin model (:func:`nirglucose.optics.layers.three_layer_reflectance`)
-costs about 0.1-0.3 ms of CPU per evaluation (with its per-layer paths); the simulator
-needs tens of millions. The table holds, at the probe's source-detector distance, the
-natural logarithms of the reflectance R(rho) and of the mean path in the epidermis,
-dermis and subcutis over six axes, and interpolates them multilinearly:
+A radiative-transport (Monte Carlo) solution of three-layer skin costs far too much per
+evaluation for the simulator, which needs tens of millions. The table holds, at the
+probe's source-detector distance, the natural logarithms of the reflectance R(rho) and
+of the mean path in the epidermis, dermis and subcutis over six axes, and interpolates
+them multilinearly:
 
 ========================  ==========  ================  ====================================
 axis                      coordinate  default box       what moves it in the simulator
@@ -22,29 +22,27 @@ the cache key) is fixed, the layered model has exactly these free inputs (the ep
 scatters like the dermis: one skin power law, Jacques 2013). The coordinates make ln R
 nearly linear along each axis: ln R ~ -rho sqrt(3 mua mus') in diffusion theory (hence
 sqrt(mua)), ~ -mua_e L_e through the thin epidermis (linear), power laws in mus' (log).
-The epidermal effect does not factor out of the deep part (its path depends on the deep
-absorption by up to 8 %), so it is a full axis. Thickness is counted in transport mean
-free paths because the model's source, one transport mean free path deep, crosses into
-the subcutis at tau = 1 and R has a kink there: the grid has a node line on tau = 1, so
-no cell straddles the kink. The default box covers LEDs anywhere in 700-1300 nm,
-Fitzpatrick I-VI, every preset's physiology and skin 0.4-4 mm.
+Thickness is counted in transport mean free paths (tau = mus'_dermis x skin thickness)
+because that is the Monte Carlo's own unit; the grid keeps a node line on tau = 1 (where
+the diffusion model, kept as an independent comparison, has a kink). The default box
+covers LEDs anywhere in 700-1300 nm, Fitzpatrick I-VI, every preset's physiology and
+skin 0.4-4 mm.
 
-Build: the model is solved on a coarse grid (74 088 nodes by default, about 15 s of one
-CPU core), each axis is refined twice (three times along ``musp_ratio``) by cubic splines
-through the solved nodes, piecewise on either side of tau = 1, and the refined float32
-table (about 60 MB) is what is interpolated. Measured against direct solves at random
-points uniform over the box, the default table's reflectance error has a median of
-0.2 % and a 99th percentile of 0.6 % (maximum about 1 %); over the paper preset's cohort
-the median is 0.1 % and the maximum 0.7 % (``benchmarks/optics.py``).
-
-Where the table comes from, and what "direct solve" means: each node is one evaluation
-of the three-layer diffusion model (:mod:`nirglucose.optics.layers`), whose accuracy
-against Monte Carlo is measured separately (:mod:`nirglucose.optics.mc_paths`: R within
-about 3 % for light to moderately dark skin, 11 % low at the darkest epidermis at
-700 nm). A Monte Carlo estimate at 3 mm costs about 2 ms of CPU per photon here and needs
-about 1e6 photons for a 1 % standard error, i.e. about half an hour per node, so the
-table is built from the smooth model, and its interpolation error is measured against
-that same model at random off-grid points (:func:`lut_errors`).
+Where the table comes from: a white Monte Carlo solution of the radiative transport
+equation (:mod:`nirglucose.optics.mc_white`, MCML physics with Henyey-Greenstein g = 0.9
+and Fresnel escape, compiled with numba): one run per (``musp_ratio``,
+``skin_transport_thickness``) solve node, in transport units, gives R and the per-layer
+mean paths at every ``musp_dermis_per_cm`` node by scaling and at every absorption node
+by re-weighting (exact for the RTE; Kienle & Patterson 1996, Sassaroli & Fantini 2004).
+Every run uses the same random numbers (:data:`LUT_MC_SETTINGS`), so the noise is
+correlated between nodes. The point reflectance at rho is a fourth-order kernel estimate
+over rho +- 0.75 mm. Then each axis is refined by cubic splines as before and the float32
+table is interpolated multilinearly. The default grid (36 runs of 400 000 photons) takes
+about 16 minutes of CPU (8 of wall time on 2 free cores); its nodes carry a Monte Carlo
+standard error of R of about 1 % (0.5-2 %), and that noise, not the interpolation,
+dominates its error against direct solves (:func:`direct_solve`, a run at the point with the same
+random numbers; ``benchmarks/optics.py`` reports max and median). The layered diffusion
+model (:mod:`nirglucose.optics.layers`) stays as an independent comparison.
 
 Cache: ``<cache dir>/lut-<key>.npz``, where the key hashes the geometry, the grid and the
 solver settings; the directory is ``$NIRGLUCOSE_CACHE``, else
@@ -61,6 +59,11 @@ References
    doi:10.1016/0169-2607(95)01640-F
 .. [3] S. L. Jacques, "Optical properties of biological tissues: a review",
    Phys. Med. Biol. 58, R37-R61 (2013), doi:10.1088/0031-9155/58/11/R37
+.. [4] A. Kienle, M. S. Patterson, "Determination of the optical properties of turbid
+   media from a single Monte Carlo simulation", Phys. Med. Biol. 41, 2221-2227 (1996),
+   doi:10.1088/0031-9155/41/10/026
+.. [5] A. Sassaroli, S. Fantini, Phys. Med. Biol. 49, N255-N257 (2004),
+   doi:10.1088/0031-9155/49/14/N07
 """
 
 from __future__ import annotations
@@ -80,7 +83,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..exceptions import ConfigError
-from . import layers
+from . import layers, mc_white
 
 __all__ = [
     "LUT_AXES",
@@ -97,13 +100,16 @@ __all__ = [
     "interpolate_node_lut",
     "reflectance_from_tissue_optics",
     "random_lut_points",
+    "direct_solve",
     "lut_errors",
+    "LUT_MC_PHOTONS",
+    "LUT_MC_SETTINGS",
 ]
 
 _log = logging.getLogger(__name__)
 
 #: Bump when the solver or the file layout changes: old cache files are then ignored.
-_FORMAT_VERSION = 1
+_FORMAT_VERSION = 2
 
 #: Axis names, in table order, with their coordinate and unit. The thickness axis is
 #: the skin (epidermis + dermis) thickness in transport mean free paths,
@@ -142,6 +148,24 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
         "mua_epidermis_per_cm": (0.0, 35.0, 2, 1),
         "skin_transport_thickness": (0.25, 13.0, 3, 1),
     },
+}
+
+#: Monte Carlo photons per (musp_ratio, skin_transport_thickness) node, by grid name
+#: (a custom grid takes the default grid's unless :func:`build_lut` is told). [-]
+LUT_MC_PHOTONS: dict[str, int] = {"default": 400_000, "tiny": 8_000}
+
+#: Settings of the white Monte Carlo behind the table (:mod:`nirglucose.optics.mc_white`;
+#: all in the cache key). ``seed``: the common random numbers of every run;
+#: ``half_width_cm``: the detector kernel's half-width about rho (fourth-order kernel,
+#: bias O(h^4): below 0.2 % at 0.75 mm for the most absorbing skin of the box);
+#: ``path_split``: path (transport mean free paths) past which each doubling of a
+#: photon's path plays Russian roulette (3x faster; 3-4x the mean path of the light
+#: detected at the farthest rho* of the box); ``anisotropy``: Henyey-Greenstein g.
+LUT_MC_SETTINGS: dict[str, float] = {
+    "seed": 9,
+    "half_width_cm": 0.075,
+    "path_split": 300.0,
+    "anisotropy": mc_white.SKIN_ANISOTROPY,
 }
 
 #: Output channels of :attr:`SkinLUT.values`.
@@ -265,8 +289,10 @@ def lut_key(
     n_tissue: float = 1.4,
     n_ambient: float = 1.0,
     grid: str | dict = "default",
+    *,
+    n_photons: int | None = None,
 ) -> str:
-    """Hash of everything a table depends on: geometry, grid, solver settings.
+    """Hash of everything a table depends on: geometry, grid, Monte Carlo settings.
 
     Examples
     --------
@@ -278,15 +304,54 @@ def lut_key(
         "geometry": _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient),
         "grid": _resolve_grid(grid),
         "solver": {
-            "gauss_points": layers._GAUSS_POINTS,
-            "k_max_per_musp": layers._K_MAX_PER_MUSP,
-            "mua_step": layers._MUA_STEP_PER_CM,
+            "monte_carlo": "white-mc-1",  # mc_white's algorithm; bump when it changes
+            "n_photons": _mc_photons(grid, n_photons),
+            **LUT_MC_SETTINGS,
+            "batch_photons": mc_white._BATCH_PHOTONS,
+            "split_survival": mc_white._SPLIT_SURVIVAL,
             "min_skin_over_epidermis": _MIN_SKIN_OVER_EPIDERMIS,
             "path_floor_cm": _PATH_FLOOR_CM,
         },
     }
     text = json.dumps(payload, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def _mc_photons(grid: str | dict, n_photons: int | None) -> int:
+    """Photons per Monte Carlo run: given, else the grid's, else the default grid's."""
+    if n_photons is None:
+        name = grid if isinstance(grid, str) else "default"
+        n_photons = LUT_MC_PHOTONS.get(name, LUT_MC_PHOTONS["default"])
+    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) \
+            or n_photons < 1:
+        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
+    return int(n_photons)
+
+
+def _mua_ref(grid: dict) -> float:
+    """Reference absorption of the runs, in transport units: the box's smallest mua*.
+
+    mua* = mua / mus'_dermis over the dermis and subcutis boxes (the epidermis, where
+    mua may be 0, is a thin layer the re-weighting handles exactly).
+    """
+    lo = min(grid["mua_dermis_per_cm"][0], grid["mua_subcutis_per_cm"][0])
+    if not lo > 0:
+        raise ConfigError(f"the dermis and subcutis absorption boxes must start above 0 for "
+                          f"the Monte Carlo table, got {lo!r} [1/cm]")
+    return float(lo / grid["musp_dermis_per_cm"][1])
+
+
+def _mc_run_kwargs(grid: dict, geo: dict, n_photons: int) -> dict:
+    """Keyword arguments of :func:`~nirglucose.optics.mc_white.white_mc_run` for a table."""
+    return {
+        "n_photons": n_photons,
+        "seed": int(LUT_MC_SETTINGS["seed"]),
+        "mua_ref": _mua_ref(grid),
+        "g": float(LUT_MC_SETTINGS["anisotropy"]),
+        "n_tissue": geo["n_tissue"],
+        "n_ambient": geo["n_ambient"],
+        "path_split": float(LUT_MC_SETTINGS["path_split"]),
+    }
 
 
 def _solve_axes(grid: dict, geo: dict) -> tuple[list[np.ndarray], list[int | None]]:
@@ -347,8 +412,9 @@ def build_lut(
     n_ambient: float = 1.0,
     *,
     grid: str | dict = "default",
+    n_photons: int | None = None,
 ) -> SkinLUT:
-    """Tabulate the three-layer model (no caching; see :func:`load_or_build_lut`).
+    """Tabulate three-layer skin by white Monte Carlo (no caching; see :func:`load_or_build_lut`).
 
     Parameters
     ----------
@@ -360,6 +426,8 @@ def build_lut(
         Refractive indices of the skin and of the medium above it. [-]
     grid : str or dict, optional
         A name of :data:`LUT_GRIDS` or a spec with the same axes. Default "default".
+    n_photons : int, optional
+        Photons per Monte Carlo run; default :data:`LUT_MC_PHOTONS` of the grid.
 
     Returns
     -------
@@ -367,44 +435,64 @@ def build_lut(
 
     Notes
     -----
-    The solves run on the coarse grid in blocks (one vectorised call per block); the
-    cubic refinement is separable (one spline per axis, Prahl's adding-doubling idea of
-    building big from small, here in parameter space), so it costs far less than the
-    solves.
+    One run of :func:`~nirglucose.optics.mc_white.white_mc_run` per
+    (``musp_ratio``, ``skin_transport_thickness``) solve node, in transport units;
+    :func:`~nirglucose.optics.mc_white.white_mc_tally` turns it into R and the mean
+    paths at every ``musp_dermis_per_cm`` node (scaling) and every absorption node
+    (re-weighting), exactly for the RTE up to Monte Carlo noise. Every run uses the
+    same random numbers (:data:`LUT_MC_SETTINGS` ``seed``). The refinement by cubic
+    splines then runs as before, on the axes whose ``upsample`` exceeds 1.
 
     References
     ----------
-    .. [1] A. Liemert, A. Kienle, J. Biomed. Opt. 15, 025003 (2010),
-       doi:10.1117/1.3368682
+    .. [1] A. Kienle, M. S. Patterson, Phys. Med. Biol. 41, 2221-2227 (1996),
+       doi:10.1088/0031-9155/41/10/026
+    .. [2] A. Sassaroli, S. Fantini, Phys. Med. Biol. 49, N255-N257 (2004),
+       doi:10.1088/0031-9155/49/14/N07
 
     Examples
     --------
-    >>> lut = build_lut(0.3, 0.008, grid="tiny")
+    >>> lut = build_lut(0.3, 0.008, grid="tiny", n_photons=2000)
     >>> lut.values.shape
     (2, 2, 2, 2, 2, 3, 4)
     """
+    photons = _mc_photons(grid, n_photons)
     grid = _resolve_grid(grid)
     geo = _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient)
     start = time.perf_counter()
     names = list(LUT_AXES)
     coords, splits = _solve_axes(grid, geo)
-    axes = [_inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)]
-    mesh = dict(zip(names, np.meshgrid(*axes, indexing="ij"), strict=True))
-    musp_d = mesh["musp_dermis_per_cm"]
-    refl, paths = layers.three_layer_reflectance(
-        geo["rho_cm"],
-        mua_epidermis_per_cm=mesh["mua_epidermis_per_cm"],
-        mua_dermis_per_cm=mesh["mua_dermis_per_cm"],
-        musp_dermis_per_cm=musp_d,
-        mua_subcutis_per_cm=mesh["mua_subcutis_per_cm"],
-        musp_subcutis_per_cm=musp_d * mesh["musp_ratio"],
-        epidermis_thickness_cm=geo["epidermis_thickness_cm"],
-        skin_thickness_cm=mesh["skin_transport_thickness"] / musp_d,
-        n_tissue=geo["n_tissue"],
-        n_ambient=geo["n_ambient"],
-    )
-    paths = np.maximum(paths, _PATH_FLOOR_CM)
-    values = np.concatenate([np.log(refl)[..., None], np.log(paths)], axis=-1)
+    ax = {k: _inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)}
+    musp = ax["musp_dermis_per_cm"]
+    rho, half = geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"])
+    if not half < rho:
+        raise ConfigError(f"separation_cm = {rho!r} must exceed the detector kernel's "
+                          f"half-width {half!r} [cm]")
+    band = ((rho - half) * float(musp.min()), (rho + half) * float(musp.max()))
+    run_kw = _mc_run_kwargs(grid, geo, photons)
+    shape = tuple(c.size for c in coords)
+    values = np.empty(shape + (4,))
+    worst_se = 0.0
+    for iq, q in enumerate(ax["musp_ratio"]):
+        for it, tau in enumerate(ax["skin_transport_thickness"]):
+            run = mc_white.white_mc_run(tau, q, musp * geo["epidermis_thickness_cm"], band,
+                                        **run_kw)
+            t = mc_white.white_mc_tally(run, rho, half, musp, ax["mua_epidermis_per_cm"],
+                                        ax["mua_dermis_per_cm"], ax["mua_subcutis_per_cm"])
+            refl = t["reflectance_per_cm2"]  # (musp, mua_e, mua_d, mua_s)
+            if not np.all(refl > 0):
+                raise ConfigError(
+                    f"{photons} photons per run leave R <= 0 at some node of the grid "
+                    f"(musp_ratio {q:.3g}, skin_transport_thickness {tau:.3g}); use more "
+                    f"photons [-]"
+                )
+            worst_se = max(worst_se, float(np.max(t["reflectance_se_per_cm2"] / refl)))
+            paths = np.maximum(t["pathlength_cm"], _PATH_FLOOR_CM)
+            block = np.concatenate([np.log(refl)[..., None], np.log(paths)], axis=-1)
+            # (musp, mua_e, mua_d, mua_s, 4) -> the table's (musp, mua_d, mua_s, mua_e, 4)
+            values[:, iq, :, :, :, it] = np.moveaxis(block, 1, 3)
+    _log.info("LUT Monte Carlo: %d runs of %d photons, worst node standard error of R %.2g",
+              shape[1] * shape[5], photons, worst_se)
     nodes = []
     for i, name in enumerate(names):
         m = grid[name][3]
@@ -413,10 +501,10 @@ def build_lut(
             values, u = _upsample(values, i, u, m, splits[i])
         nodes.append(u)
     key = lut_key(geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"],
-                  geo["n_ambient"], grid)
+                  geo["n_ambient"], grid, n_photons=photons)
     return SkinLUT(
         np.ascontiguousarray(values, dtype=np.float32), tuple(nodes), values.shape[:-1],
-        grid, geo, key, time.perf_counter() - start, int(refl.size),
+        grid, geo, key, time.perf_counter() - start, int(np.prod(shape)),
     )
 
 
@@ -988,18 +1076,31 @@ def reflectance_from_tissue_optics(
 
 
 def random_lut_points(lut: SkinLUT, n_points: int, *, rng: np.random.Generator | int = 0,
-                      ) -> dict[str, NDArray[np.float64]]:
+                      groups: int | None = None) -> dict[str, NDArray[np.float64]]:
     """Points uniform in each axis' coordinate over the table's box, as solver inputs.
 
     Returns keyword arguments for :func:`interpolate_lut` and
-    :func:`~nirglucose.optics.layers.three_layer_reflectance`.
+    :func:`~nirglucose.optics.layers.three_layer_reflectance`. With ``groups``, the
+    points come in that many consecutive groups that share ``musp_ratio`` and
+    ``skin_transport_thickness`` (so one Monte Carlo run solves a group: see
+    :func:`lut_errors`); every other coordinate is drawn per point.
     """
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    shared = ("musp_ratio", "skin_transport_thickness")
+    if groups is not None and not 1 <= int(groups) <= n_points:
+        raise ConfigError(f"groups = {groups!r} is out of range; valid range is "
+                          f"[1, n_points = {n_points}]")
+    sizes = np.diff(np.linspace(0, n_points, int(groups) + 1).round().astype(int)) \
+        if groups is not None else None
     pts = {}
     for i, name in enumerate(LUT_AXES):
         kind = LUT_AXES[name][0]
         u_nodes = lut.nodes[i]
-        u = u_nodes[0] + (u_nodes[-1] - u_nodes[0]) * gen.random(n_points)
+        if sizes is not None and name in shared:
+            r = np.repeat(gen.random(sizes.size), sizes)
+        else:
+            r = gen.random(n_points)
+        u = u_nodes[0] + (u_nodes[-1] - u_nodes[0]) * r
         lo, hi = lut.box[name]
         pts[name] = np.clip(_inverse(kind, u), lo, hi)  # round-off at the edges
     musp = pts["musp_dermis_per_cm"]
@@ -1013,15 +1114,73 @@ def random_lut_points(lut: SkinLUT, n_points: int, *, rng: np.random.Generator |
     }
 
 
+def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Monte Carlo solves at points, with the table's geometry and settings.
+
+    One white Monte Carlo run per distinct (``musp_ratio``, ``skin_transport_thickness``)
+    among the points, with the table's seed (common random numbers), photons,
+    reference absorption, roulette and detector kernel, so a solve differs from the
+    table's nodes only by where it is.
+
+    Parameters
+    ----------
+    lut : SkinLUT
+        The table.
+    points : dict
+        Solver keyword arguments, (P,) arrays (:func:`random_lut_points`).
+    n_photons : int, optional
+        Photons per run; default the table's (:func:`lut_key`'s for its grid).
+
+    Returns
+    -------
+    reflectance_per_cm2 : ndarray
+        R(rho), (P,). [1/cm^2]
+    reflectance_se_per_cm2 : ndarray
+        Its Monte Carlo standard error, (P,). [1/cm^2]
+    pathlength_cm : ndarray
+        Mean path in the epidermis, dermis and subcutis, (P, 3). [cm]
+
+    References
+    ----------
+    .. [1] A. Kienle, M. S. Patterson, Phys. Med. Biol. 41, 2221-2227 (1996),
+       doi:10.1088/0031-9155/41/10/026
+    """
+    geo, grid = lut.geometry, _resolve_grid(lut.grid)
+    named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == grid]
+    photons = _mc_photons(named[0] if named else grid, n_photons)
+    p = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in points.items()}
+    musp = p["musp_dermis_per_cm"]
+    q = p["musp_subcutis_per_cm"] / musp
+    tau = p["skin_thickness_cm"] * musp
+    refl, se, paths = np.empty(musp.size), np.empty(musp.size), np.empty((musp.size, 3))
+    pairs = np.unique(np.stack([q, tau], axis=1), axis=0)
+    for qq, tt in pairs:
+        sel = np.flatnonzero((q == qq) & (tau == tt))
+        refl[sel], se[sel], paths[sel] = mc_white.white_mc_points(
+            geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"]),
+            geo["epidermis_thickness_cm"],
+            mua_epidermis_per_cm=p["mua_epidermis_per_cm"][sel],
+            mua_dermis_per_cm=p["mua_dermis_per_cm"][sel],
+            musp_dermis_per_cm=musp[sel],
+            mua_subcutis_per_cm=p["mua_subcutis_per_cm"][sel],
+            musp_ratio=float(qq), skin_transport_thickness=float(tt),
+            **_mc_run_kwargs(grid, geo, photons),
+        )
+    return refl, se, paths
+
+
 def lut_errors(
     lut: SkinLUT, points: dict | None = None, n_points: int = 200, *,
-    rng: np.random.Generator | int = 0,
+    rng: np.random.Generator | int = 0, groups: int | None = 20,
+    n_photons: int | None = None,
 ) -> dict[str, NDArray[np.float64]]:
     """Relative errors of the table against direct solves at off-grid points.
 
-    "Direct solve": :func:`nirglucose.optics.layers.three_layer_reflectance` at the
-    point, with the table's geometry (the same model the table was built from, so this
-    measures the table alone; the model's own error is measured against Monte Carlo).
+    "Direct solve": :func:`direct_solve`, a white Monte Carlo run at the point with the
+    table's settings and random numbers (the model the table is built from, so this
+    measures the table: its interpolation and the part of the Monte Carlo noise that
+    the common random numbers do not share between the point and the nodes).
 
     Parameters
     ----------
@@ -1033,19 +1192,21 @@ def lut_errors(
         Number of random points when ``points`` is omitted. Default 200.
     rng : numpy.random.Generator or int, optional
         Random generator or seed. Default 0.
+    groups : int or None, optional
+        Random points share (``musp_ratio``, ``skin_transport_thickness``) in this many
+        groups, one Monte Carlo run each (None: one run per point). Default 20.
+    n_photons : int, optional
+        Photons per direct run; default the table's.
 
     Returns
     -------
     dict
-        ``reflectance`` (n,) and ``pathlength`` (n, 3): table / direct - 1.
+        ``reflectance`` (n,) and ``pathlength`` (n, 3): table / direct - 1;
+        ``reflectance_se`` (n,): the direct solve's relative standard error.
     """
-    args = points if points is not None else random_lut_points(lut, n_points, rng=rng)
+    args = points if points is not None else random_lut_points(
+        lut, n_points, rng=rng, groups=groups)
     r_lut, p_lut = interpolate_lut(lut, pathlengths=True, **args)
-    r_dir, p_dir = layers.three_layer_reflectance(
-        lut.geometry["rho_cm"],
-        epidermis_thickness_cm=lut.geometry["epidermis_thickness_cm"],
-        n_tissue=lut.geometry["n_tissue"],
-        n_ambient=lut.geometry["n_ambient"],
-        **args,
-    )
-    return {"reflectance": r_lut / r_dir - 1.0, "pathlength": p_lut / p_dir - 1.0}
+    r_dir, se_dir, p_dir = direct_solve(lut, args, n_photons=n_photons)
+    return {"reflectance": r_lut / r_dir - 1.0, "pathlength": p_lut / p_dir - 1.0,
+            "reflectance_se": se_dir / r_dir}
