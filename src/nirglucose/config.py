@@ -351,6 +351,13 @@ class OpticsConfig(_Model):
         0.08, gt=0, le=0.3, description="Living epidermis 50-100 um (SOURCES.md). [mm]"
     )
     tissue_refractive_index: float = Field(1.4, ge=1.3, le=1.6, description="Dermis n. [-]")
+    lut_solver: Literal["monte-carlo", "diffusion"] = Field(
+        "monte-carlo",
+        description=(
+            "What fills the rte-lut model's table: Monte Carlo of the RTE (about 16 CPU-min "
+            "per probe geometry, cached) or three-layer diffusion (about 15 s, smooth)."
+        ),
+    )
 
 
 class HardwareConfig(_Model):

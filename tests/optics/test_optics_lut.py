@@ -250,3 +250,49 @@ def test_simulator_runs_with_rte_lut(monkeypatch):
 
     again = detected_fraction_given_glucose(cfg, a.frame, a.frame["glucose_mgdl"].to_numpy())
     np.testing.assert_allclose(again, frac, rtol=1e-9)
+
+
+def test_solver_choice_keys_builds_and_validates():
+    mc = L.lut_key(RHO, T_EPI, grid="tiny")
+    assert mc == L.lut_key(RHO, T_EPI, grid="tiny", solver="monte-carlo")
+    assert mc != L.lut_key(RHO, T_EPI, grid="tiny", solver="diffusion")
+    with pytest.raises(ConfigError, match="valid: monte-carlo, diffusion"):
+        L.lut_key(RHO, T_EPI, solver="adding-doubling")
+    with pytest.raises(ConfigError, match="unknown look-up table solver"):
+        L.build_lut(RHO, T_EPI, grid="tiny", solver="mcml")
+    lut = L.build_lut(RHO, T_EPI, grid="tiny", solver="diffusion")
+    assert lut.solver == "diffusion"
+    # exact at its nodes: the diffusion model solved there
+    pts = {k: lut.axis_nodes(k) for k in L.LUT_AXES}
+    musp = pts["musp_dermis_per_cm"][1]
+    tau = pts["skin_transport_thickness"][-1]
+    r_dir, paths = layers.three_layer_reflectance(
+        RHO, mua_epidermis_per_cm=pts["mua_epidermis_per_cm"][0],
+        mua_dermis_per_cm=pts["mua_dermis_per_cm"][1], musp_dermis_per_cm=musp,
+        mua_subcutis_per_cm=pts["mua_subcutis_per_cm"][0],
+        musp_subcutis_per_cm=musp * pts["musp_ratio"][1], epidermis_thickness_cm=T_EPI,
+        skin_thickness_cm=tau / musp)
+    r_lut, p_lut = L.interpolate_lut(
+        lut, mua_epidermis_per_cm=pts["mua_epidermis_per_cm"][0],
+        mua_dermis_per_cm=pts["mua_dermis_per_cm"][1], musp_dermis_per_cm=musp,
+        mua_subcutis_per_cm=pts["mua_subcutis_per_cm"][0],
+        musp_subcutis_per_cm=musp * pts["musp_ratio"][1], skin_thickness_cm=tau / musp,
+        pathlengths=True)
+    np.testing.assert_allclose(r_lut, r_dir, rtol=1e-5)
+    np.testing.assert_allclose(p_lut, paths, rtol=1e-5)
+    # its direct solves are the diffusion model (no Monte Carlo noise)
+    err = L.lut_errors(lut, n_points=20, rng=3)
+    assert np.all(err["reflectance_se"] == 0.0)
+
+
+def test_simulator_lut_solver_from_the_config(monkeypatch):
+    monkeypatch.setenv("NIRGLUCOSE_LUT_GRID", "tiny")
+    over = {"optics.model": "rte-lut"}
+    mc = ng.simulate("paper", n_subjects=6, per_subject=2, seed=1, overrides=over)
+    dif = ng.simulate("paper", n_subjects=6, per_subject=2, seed=1,
+                      overrides={**over, "optics.lut_solver": "diffusion"})
+    col = "true_detected_fraction_850"
+    assert not np.allclose(mc.frame[col], dif.frame[col])
+    assert dif.config.optics.lut_solver == "diffusion"
+    with pytest.raises(ConfigError):
+        ng.resolve_config("paper", {"optics.lut_solver": "adding-doubling"})

@@ -168,6 +168,14 @@ LUT_MC_SETTINGS: dict[str, float] = {
     "anisotropy": mc_white.SKIN_ANISOTROPY,
 }
 
+#: What solves the model at the table's nodes. ``"monte-carlo"`` (default): the white
+#: Monte Carlo of the RTE above, about 16 CPU-minutes for the default grid, with about
+#: 1 % noise per node. ``"diffusion"``: the three-layer diffusion model
+#: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 15 s, smooth, within
+#: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.91-1.05 x
+#: the Monte Carlo table over the paper cohort: for quick sweeps of the probe geometry.
+LUT_SOLVERS = ("monte-carlo", "diffusion")
+
 #: Output channels of :attr:`SkinLUT.values`.
 _CHANNELS = ("ln_reflectance", "ln_path_epidermis", "ln_path_dermis", "ln_path_subcutis")
 
@@ -220,6 +228,8 @@ class SkinLUT:
         Wall-clock time the build took (0 when loaded from the cache). [s]
     n_solves : int
         Grid nodes at which the model was solved. [-]
+    solver : str
+        What solved the nodes, one of :data:`LUT_SOLVERS`.
     """
 
     values: NDArray[np.float32] = field(repr=False)
@@ -230,6 +240,7 @@ class SkinLUT:
     key: str
     build_seconds: float = 0.0
     n_solves: int = 0
+    solver: str = "monte-carlo"
 
     def axis_nodes(self, name: str) -> NDArray[np.float64]:
         """Physical values of the nodes of one axis."""
@@ -291,19 +302,25 @@ def lut_key(
     grid: str | dict = "default",
     *,
     n_photons: int | None = None,
+    solver: str = "monte-carlo",
 ) -> str:
-    """Hash of everything a table depends on: geometry, grid, Monte Carlo settings.
+    """Hash of everything a table depends on: geometry, grid, solver and its settings.
 
     Examples
     --------
     >>> len(lut_key(0.3, 0.008))
     20
     """
+    _check_solver(solver)
     payload = {
         "version": _FORMAT_VERSION,
         "geometry": _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient),
         "grid": _resolve_grid(grid),
         "solver": {
+            "diffusion": "layered-hankel-1",  # layers.py's solver; bump when it changes
+            "min_skin_over_epidermis": _MIN_SKIN_OVER_EPIDERMIS,
+            "path_floor_cm": _PATH_FLOOR_CM,
+        } if solver == "diffusion" else {
             "monte_carlo": "white-mc-1",  # mc_white's algorithm; bump when it changes
             "n_photons": _mc_photons(grid, n_photons),
             **LUT_MC_SETTINGS,
@@ -315,6 +332,12 @@ def lut_key(
     }
     text = json.dumps(payload, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def _check_solver(solver: str) -> None:
+    if solver not in LUT_SOLVERS:
+        raise ConfigError(f"unknown look-up table solver {solver!r}; valid: "
+                          f"{', '.join(LUT_SOLVERS)}")
 
 
 def _mc_photons(grid: str | dict, n_photons: int | None) -> int:
@@ -413,6 +436,7 @@ def build_lut(
     *,
     grid: str | dict = "default",
     n_photons: int | None = None,
+    solver: str = "monte-carlo",
 ) -> SkinLUT:
     """Tabulate three-layer skin by white Monte Carlo (no caching; see :func:`load_or_build_lut`).
 
@@ -428,6 +452,8 @@ def build_lut(
         A name of :data:`LUT_GRIDS` or a spec with the same axes. Default "default".
     n_photons : int, optional
         Photons per Monte Carlo run; default :data:`LUT_MC_PHOTONS` of the grid.
+    solver : {'monte-carlo', 'diffusion'}, optional
+        What solves the nodes (:data:`LUT_SOLVERS`). Default "monte-carlo".
 
     Returns
     -------
@@ -456,6 +482,7 @@ def build_lut(
     >>> lut.values.shape
     (2, 2, 2, 2, 2, 3, 4)
     """
+    _check_solver(solver)
     photons = _mc_photons(grid, n_photons)
     grid = _resolve_grid(grid)
     geo = _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient)
@@ -463,6 +490,49 @@ def build_lut(
     names = list(LUT_AXES)
     coords, splits = _solve_axes(grid, geo)
     ax = {k: _inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)}
+    if solver == "diffusion":
+        values = _diffusion_nodes(ax, geo)
+    else:
+        values = _monte_carlo_nodes(ax, grid, geo, photons)
+    shape = values.shape[:-1]
+    nodes = []
+    for i, name in enumerate(names):
+        m = grid[name][3]
+        u = coords[i]
+        if m > 1:
+            values, u = _upsample(values, i, u, m, splits[i])
+        nodes.append(u)
+    key = lut_key(geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"],
+                  geo["n_ambient"], grid, n_photons=photons, solver=solver)
+    return SkinLUT(
+        np.ascontiguousarray(values, dtype=np.float32), tuple(nodes), values.shape[:-1],
+        grid, geo, key, time.perf_counter() - start, int(np.prod(shape)), solver,
+    )
+
+
+def _diffusion_nodes(ax: dict, geo: dict) -> np.ndarray:
+    """ln R and ln paths at the solve nodes from the three-layer diffusion model."""
+    names = list(LUT_AXES)
+    mesh = dict(zip(names, np.meshgrid(*(ax[k] for k in names), indexing="ij"), strict=True))
+    musp_d = mesh["musp_dermis_per_cm"]
+    refl, paths = layers.three_layer_reflectance(
+        geo["rho_cm"],
+        mua_epidermis_per_cm=mesh["mua_epidermis_per_cm"],
+        mua_dermis_per_cm=mesh["mua_dermis_per_cm"],
+        musp_dermis_per_cm=musp_d,
+        mua_subcutis_per_cm=mesh["mua_subcutis_per_cm"],
+        musp_subcutis_per_cm=musp_d * mesh["musp_ratio"],
+        epidermis_thickness_cm=geo["epidermis_thickness_cm"],
+        skin_thickness_cm=mesh["skin_transport_thickness"] / musp_d,
+        n_tissue=geo["n_tissue"],
+        n_ambient=geo["n_ambient"],
+    )
+    paths = np.maximum(paths, _PATH_FLOOR_CM)
+    return np.concatenate([np.log(refl)[..., None], np.log(paths)], axis=-1)
+
+
+def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int) -> np.ndarray:
+    """ln R and ln paths at the solve nodes from white Monte Carlo runs (see build_lut)."""
     musp = ax["musp_dermis_per_cm"]
     rho, half = geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"])
     if not half < rho:
@@ -470,7 +540,7 @@ def build_lut(
                           f"half-width {half!r} [cm]")
     band = ((rho - half) * float(musp.min()), (rho + half) * float(musp.max()))
     run_kw = _mc_run_kwargs(grid, geo, photons)
-    shape = tuple(c.size for c in coords)
+    shape = tuple(a.size for a in ax.values())
     values = np.empty(shape + (4,))
     worst_se = 0.0
     for iq, q in enumerate(ax["musp_ratio"]):
@@ -493,19 +563,7 @@ def build_lut(
             values[:, iq, :, :, :, it] = np.moveaxis(block, 1, 3)
     _log.info("LUT Monte Carlo: %d runs of %d photons, worst node standard error of R %.2g",
               shape[1] * shape[5], photons, worst_se)
-    nodes = []
-    for i, name in enumerate(names):
-        m = grid[name][3]
-        u = coords[i]
-        if m > 1:
-            values, u = _upsample(values, i, u, m, splits[i])
-        nodes.append(u)
-    key = lut_key(geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"],
-                  geo["n_ambient"], grid, n_photons=photons)
-    return SkinLUT(
-        np.ascontiguousarray(values, dtype=np.float32), tuple(nodes), values.shape[:-1],
-        grid, geo, key, time.perf_counter() - start, int(np.prod(shape)),
-    )
+    return values
 
 
 # ------------------------------------------------------------------------------- cache
@@ -534,6 +592,7 @@ def _save(lut: SkinLUT, path: Path) -> None:
                 geometry=np.array(json.dumps(lut.geometry, sort_keys=True)),
                 key=np.array(lut.key),
                 n_solves=np.array(lut.n_solves, dtype=np.int64),
+                solver=np.array(lut.solver),
             )
         os.chmod(tmp, 0o644)  # mkstemp makes it private; a cache is for every reader
         os.replace(tmp, path)  # atomic on POSIX: readers see the old file or the new one
@@ -556,6 +615,7 @@ def _load(path: Path, key: str) -> SkinLUT | None:
                 geometry=json.loads(str(f["geometry"])),
                 key=key,
                 n_solves=int(f["n_solves"]),
+                solver=str(f["solver"]) if "solver" in f.files else "monte-carlo",
             )
     except (OSError, ValueError, KeyError) as exc:
         _log.warning("ignoring unreadable LUT cache file %s (%s)", path, exc)
@@ -570,6 +630,7 @@ def load_or_build_lut(
     *,
     grid: str | dict = "default",
     directory: str | os.PathLike | None = None,
+    solver: str = "monte-carlo",
 ) -> SkinLUT:
     """The table for a geometry: read from the disk cache, or built and written there.
 
@@ -579,6 +640,8 @@ def load_or_build_lut(
         See :func:`build_lut`.
     grid : str or dict, optional
         Grid name or spec. Default "default".
+    solver : {'monte-carlo', 'diffusion'}, optional
+        What solves the nodes (:data:`LUT_SOLVERS`). Default "monte-carlo".
     directory : path, optional
         Cache directory; :func:`cache_dir` when omitted.
 
@@ -587,16 +650,18 @@ def load_or_build_lut(
     SkinLUT
         ``build_seconds`` is 0 when it came from the cache.
     """
-    key = lut_key(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid)
+    key = lut_key(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid,
+                  solver=solver)
     path = Path(directory) if directory is not None else cache_dir()
     path = path / f"lut-{key}.npz"
     if path.exists():
         lut = _load(path, key)
         if lut is not None:
             return lut
-    _log.info("building the skin LUT %s (grid %s)", key,
-              grid if isinstance(grid, str) else "custom")
-    lut = build_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=grid)
+    _log.info("building the skin LUT %s (grid %s, solver %s)", key,
+              grid if isinstance(grid, str) else "custom", solver)
+    lut = build_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=grid,
+                    solver=solver)
     try:
         _save(lut, path)
     except OSError as exc:  # a read-only home still simulates, it just rebuilds next time
@@ -605,9 +670,10 @@ def load_or_build_lut(
 
 
 @lru_cache(maxsize=8)
-def _get_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, directory):
+def _get_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, directory,
+             solver):
     return load_or_build_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient,
-                             grid=grid, directory=directory)
+                             grid=grid, directory=directory, solver=solver)
 
 
 def get_lut(
@@ -617,6 +683,7 @@ def get_lut(
     n_ambient: float = 1.0,
     *,
     grid: str | None = None,
+    solver: str = "monte-carlo",
 ) -> SkinLUT:
     """:func:`load_or_build_lut`, memoised per process, for the current cache directory.
 
@@ -624,7 +691,7 @@ def get_lut(
     """
     grid = grid or os.environ.get("NIRGLUCOSE_LUT_GRID", "default")
     return _get_lut(float(separation_cm), float(epidermis_thickness_cm), float(n_tissue),
-                    float(n_ambient), grid, str(cache_dir()))
+                    float(n_ambient), grid, str(cache_dir()), solver)
 
 
 # ------------------------------------------------------------------------ interpolation
@@ -812,7 +879,7 @@ class NodeLUT:
         geo = self.lut.geometry
         return (_node_lut_from_recipe, (
             geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"], geo["n_ambient"],
-            self.lut.grid, self.musp_ratio.tolist(),
+            self.lut.grid, self.musp_ratio.tolist(), self.lut.solver,
         ))
 
 
@@ -861,12 +928,14 @@ def node_lut(lut: SkinLUT, musp_ratio: ArrayLike) -> NodeLUT:
     return out
 
 
-def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, ratio):
+def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, ratio,
+                          solver="monte-carlo"):
     grid = {k: tuple(v) for k, v in grid.items()}
     named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == _resolve_grid(grid)]
-    lut = (get_lut(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=named[0])
+    lut = (get_lut(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=named[0],
+                   solver=solver)
            if named else load_or_build_lut(rho_cm, epidermis_thickness_cm, n_tissue,
-                                           n_ambient, grid=grid))
+                                           n_ambient, grid=grid, solver=solver))
     return node_lut(lut, np.asarray(ratio))
 
 
@@ -1118,6 +1187,9 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Monte Carlo solves at points, with the table's geometry and settings.
 
+    For a table of the ``"diffusion"`` solver: the three-layer diffusion model at the
+    points (standard error 0).
+
     One white Monte Carlo run per distinct (``musp_ratio``, ``skin_transport_thickness``)
     among the points, with the table's seed (common random numbers), photons,
     reference absorption, roulette and detector kernel, so a solve differs from the
@@ -1147,6 +1219,12 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
        doi:10.1088/0031-9155/41/10/026
     """
     geo, grid = lut.geometry, _resolve_grid(lut.grid)
+    if lut.solver == "diffusion":  # the model the table interpolates, solved at the points
+        p = {k: np.asarray(v, dtype=float) for k, v in points.items()}
+        refl, paths = layers.three_layer_reflectance(
+            geo["rho_cm"], epidermis_thickness_cm=geo["epidermis_thickness_cm"],
+            n_tissue=geo["n_tissue"], n_ambient=geo["n_ambient"], **p)
+        return refl, np.zeros_like(refl), paths
     named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == grid]
     photons = _mc_photons(named[0] if named else grid, n_photons)
     p = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in points.items()}

@@ -87,7 +87,10 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
 
         lut = lut_mod.node_lut(
             lut_mod.get_lut(
-                sep_cm, cfg.optics.epidermis_thickness_mm / 10.0, cfg.optics.tissue_refractive_index
+                sep_cm,
+                cfg.optics.epidermis_thickness_mm / 10.0,
+                cfg.optics.tissue_refractive_index,
+                solver=cfg.optics.lut_solver,
             ),
             optics["musp_subcutis"][0] / optics["musp_dermis"][0],
         )
