@@ -15,6 +15,9 @@
 * simulator: rng_floor_ratio (benchmarks/simulate.py's method) of the paper preset with
   the default model and with optics.model = "rte-lut", on NIRGLUCOSE_BENCH_SNAPSHOTS
   snapshots (default here 200 000, fewer than benchmarks/simulate.py's 1 000 000);
+* accuracy_independent (only with NIRGLUCOSE_BENCH_REFERENCE=1, about 17 CPU-minutes):
+  the table against independent direct solves (4 000 000 photons, other random
+  numbers) at 36 points in 3 groups;
 * Monte Carlo (only with NIRGLUCOSE_BENCH_MC=1, about 2 min of CPU): the three-layer
   model against nirglucose.optics.mc_paths at a few skin states.
 
@@ -94,8 +97,8 @@ def _cohort_points(cohort, n_points: int, seed: int = 0) -> dict:
     return out
 
 
-def _errors(lut, points) -> dict:
-    err = L.lut_errors(lut, points)
+def _errors(lut, points, **kw) -> dict:
+    err = L.lut_errors(lut, points, **kw)
     r = np.abs(err["reflectance"])
     p = np.abs(err["pathlength"])
     return {
@@ -223,6 +226,11 @@ def main() -> dict:
                 "n_solves", "table_nodes", "cache_file_mb")}}
         result["accuracy_uniform"] = _errors(
             lut, L.random_lut_points(lut, 120, rng=7, groups=12))
+        if os.environ.get("NIRGLUCOSE_BENCH_REFERENCE") == "1":  # about 17 CPU-minutes
+            # independent reference: 10x the photons, other random numbers
+            result["accuracy_independent"] = _errors(
+                lut, L.random_lut_points(lut, 36, rng=21, groups=3),
+                n_photons=4_000_000, seed=12345)
         cohort = _cohort()
         result["monte_carlo_vs_diffusion"] = {
             "uniform_box": _vs_diffusion(lut, L.random_lut_points(lut, 2000, rng=5)),
