@@ -2,10 +2,11 @@
 
 Fitzpatrick I (melanosome fraction 0.015) and VI (0.135), otherwise nominal skin (dermal
 blood 2 %, SO2 0.7, water 65 %, subcutis fat 80 %, glucose 100 mg/dL, skin 1.8 mm,
-epidermis 80 um), the probe of the default config (3 mm, 6.6 mm^2 photodiode), solved
-directly with the three-layer model (nirglucose.optics.layers; the rte-lut model's
-table interpolates it). Also prints, per LED, the share of the path in the dermis and
-the glucose sensitivity d ln R / dC at literature magnitudes.
+epidermis 80 um), the probe of the default config (3 mm, 6.6 mm^2 photodiode), from the
+rte-lut model's table (Monte Carlo of the RTE, nirglucose.optics.lut; built on first use,
+about 16 CPU-minutes, then cached), with the three-layer diffusion model
+(nirglucose.optics.layers) dotted for comparison. Also prints, per LED, the share of the
+path in the dermis and the glucose sensitivity d ln R / dC at literature magnitudes.
 
 Usage: python docs/make_layered_skin_figure.py [out.png]
 (default docs/figures/layered_skin.png)
@@ -23,6 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nirglucose.constants import DEFAULT_LED_WAVELENGTHS_NM, MGDL_PER_MMOLL_GLUCOSE  # noqa: E402
+from nirglucose.optics import lut as skin_lut  # noqa: E402
 from nirglucose.optics.layers import (  # noqa: E402
     LAYER_NAMES,
     skin_layer_optics,
@@ -34,14 +36,19 @@ SKINS = {"Fitzpatrick I": 0.015, "Fitzpatrick VI": 0.135}
 GLUCOSE_MM = 100.0 / MGDL_PER_MMOLL_GLUCOSE
 
 
-def solve(wavelength_nm: np.ndarray, melanin: float, glucose_mm: float = GLUCOSE_MM):
+def solve(wavelength_nm: np.ndarray, melanin: float, glucose_mm: float = GLUCOSE_MM,
+          model: str = "rte-lut"):
     o = skin_layer_optics(wavelength_nm, melanin_fraction=melanin, glucose_mm=glucose_mm)
-    r, paths = three_layer_reflectance(
-        RHO_CM, mua_epidermis_per_cm=o["mua_epidermis"][0],
-        mua_dermis_per_cm=o["mua_dermis"][0], musp_dermis_per_cm=o["musp_dermis"][0],
-        mua_subcutis_per_cm=o["mua_subcutis"][0], musp_subcutis_per_cm=o["musp_subcutis"][0],
-        epidermis_thickness_cm=T_EPI_CM, skin_thickness_cm=T_SKIN_CM,
+    args = dict(
+        mua_epidermis_per_cm=o["mua_epidermis"][0], mua_dermis_per_cm=o["mua_dermis"][0],
+        musp_dermis_per_cm=o["musp_dermis"][0], mua_subcutis_per_cm=o["mua_subcutis"][0],
+        musp_subcutis_per_cm=o["musp_subcutis"][0], skin_thickness_cm=T_SKIN_CM,
     )
+    if model == "rte-lut":
+        r, paths = skin_lut.interpolate_lut(skin_lut.get_lut(RHO_CM, T_EPI_CM), pathlengths=True,
+                                            **args)
+    else:
+        r, paths = three_layer_reflectance(RHO_CM, epidermis_thickness_cm=T_EPI_CM, **args)
     return r * AREA_CM2, paths
 
 
@@ -69,7 +76,10 @@ def main(out: Path) -> None:
     colours = dict(zip(LAYER_NAMES, ("#8c564b", "#d62728", "#1f77b4"), strict=True))
     for name, mel in SKINS.items():
         frac, paths = solve(wl, mel)
-        axes[0].semilogy(wl, frac, styles[name], color="k", label=name)
+        axes[0].semilogy(wl, frac, styles[name], color="k", label=f"{name} (RTE, Monte Carlo)")
+        frac_d, _ = solve(wl, mel, model="diffusion")
+        axes[0].semilogy(wl, frac_d, ":", color="0.45", lw=1.0,
+                         label="diffusion model" if mel == SKINS["Fitzpatrick VI"] else None)
         for j, layer in enumerate(LAYER_NAMES):
             axes[1].semilogy(wl, paths[:, j] * 10.0, styles[name], color=colours[layer],
                              label=f"{layer}, {name.split()[1]}")
@@ -86,7 +96,7 @@ def main(out: Path) -> None:
     axes[2].set_ylabel("share of the path in the dermis")
     axes[2].set_title("Where interstitial glucose is")
     axes[2].set_ylim(0, 1)
-    axes[0].legend(frameon=False)
+    axes[0].legend(frameon=False, fontsize=8)
     axes[1].legend(frameon=False, fontsize=7, ncol=2)
     axes[2].legend(frameon=False)
     fig.suptitle("Three-layer skin (epidermis 80 um, skin 1.8 mm, fat below), source-detector "
