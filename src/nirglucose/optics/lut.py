@@ -202,10 +202,12 @@ _MIN_SKIN_OVER_EPIDERMIS = 1.25
 
 
 def _forward(kind: str, x: np.ndarray) -> np.ndarray:
-    if kind == "log":
-        return np.log(x)
-    if kind == "sqrt":
-        return np.sqrt(x)
+    # a negative input becomes NaN here, which the range check then reports by axis name
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if kind == "log":
+            return np.log(x)
+        if kind == "sqrt":
+            return np.sqrt(x)
     return x
 
 
