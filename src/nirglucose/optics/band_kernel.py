@@ -52,6 +52,16 @@ def _coefficients(b, s, w, f, c, x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, 
             max(1.0 - bs - water_sub - f, 0.0), np.exp(k_scat_per_mm * c))
 
 
+@njit(cache=True, inline="always")
+def _node_spectra(tab, der, led, p):
+    """One band node's tabulated spectra and wavelength derivatives, in :data:`_ORDER`
+    (the flat baseline without one)."""
+    return (tab[0, led, p], der[0, led, p], tab[1, led, p], der[1, led, p],
+            tab[2, led, p], der[2, led, p], tab[3, led, p], der[3, led, p],
+            tab[4, led, p], der[4, led, p], tab[5, led, p], tab[6, led, p], der[6, led, p],
+            tab[7, led, p], der[7, led, p], tab[8, led, p], der[8, led, p])
+
+
 @njit(cache=True, nogil=True)
 def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
             tab, der, weight_geometry, x_disp_per_mm, k_scat_per_mm, rho_cm, epi_cm,
@@ -81,15 +91,8 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
         sh_l = shift_t[led]
         out_l = out_t[led]
         for p in range(n_pts):
-            t_oxy, d_oxy = tab[0, led, p], der[0, led, p]
-            t_deo, d_deo = tab[1, led, p], der[1, led, p]
-            t_wat, d_wat = tab[2, led, p], der[2, led, p]
-            t_glc, d_glc = tab[3, led, p], der[3, led, p]
-            t_fat, d_fat = tab[4, led, p], der[4, led, p]
-            base = tab[5, led, p]
-            t_msd, d_msd = tab[6, led, p], der[6, led, p]
-            t_mss, d_mss = tab[7, led, p], der[7, led, p]
-            t_mel, d_mel = tab[8, led, p], der[8, led, p]
+            (t_oxy, d_oxy, t_deo, d_deo, t_wat, d_wat, t_glc, d_glc, t_fat, d_fat, base,
+             t_msd, d_msd, t_mss, d_mss, t_mel, d_mel) = _node_spectra(tab, der, led, p)
             wg = weight_geometry[led, p]
             for i in range(n):
                 sh = sh_l[i]
@@ -138,15 +141,8 @@ def _layers_kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, tab
     for led in range(n_led):
         sh_l = shift_t[led]
         for p in range(n_pts):
-            t_oxy, d_oxy = tab[0, led, p], der[0, led, p]
-            t_deo, d_deo = tab[1, led, p], der[1, led, p]
-            t_wat, d_wat = tab[2, led, p], der[2, led, p]
-            t_glc, d_glc = tab[3, led, p], der[3, led, p]
-            t_fat, d_fat = tab[4, led, p], der[4, led, p]
-            base = tab[5, led, p]
-            t_msd, d_msd = tab[6, led, p], der[6, led, p]
-            t_mss, d_mss = tab[7, led, p], der[7, led, p]
-            t_mel, d_mel = tab[8, led, p], der[8, led, p]
+            (t_oxy, d_oxy, t_deo, d_deo, t_wat, d_wat, t_glc, d_glc, t_fat, d_fat, base,
+             t_msd, d_msd, t_mss, d_mss, t_mel, d_mel) = _node_spectra(tab, der, led, p)
             first = (led * n_pts + p) * n
             for i in range(n):  # a loop free of calls: vectorised
                 sh = sh_l[i]

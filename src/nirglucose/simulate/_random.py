@@ -121,35 +121,21 @@ def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None):
     if sd <= 0:
         out = np.array(np.broadcast_to(mean if group is None else mean[group], (size,)),
                        dtype=float)
-    elif group is not None:
-        a = np.subtract(low, mean)
-        a /= sd
-        ndtr(a, out=a)
-        b = np.subtract(high, mean)
-        b /= sd
-        ndtr(b, out=b)
-        a = a[group]
-        p = b[group]
-        p -= a
-        p *= u
-        p += a
-        np.maximum(p, _P_EDGE, out=p)
-        np.minimum(p, 1 - _P_EDGE, out=p)
-        out = ndtri(p, out=p)
-        out *= sd
-        out += mean[group]
     else:
         if mean.ndim == 0:
             a = float(ndtr((low - mean) / sd))
             p = u * (float(ndtr((high - mean) / sd)) - a)
             p += a
         else:
+            # truncation probabilities, once per group when the mean is per group
             a = np.subtract(low, mean)
             a /= sd
             ndtr(a, out=a)
             p = np.subtract(high, mean)
             p /= sd
             ndtr(p, out=p)
+            if group is not None:
+                a, p = a[group], p[group]
             p -= a
             p *= u
             p += a
@@ -157,7 +143,7 @@ def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None):
         np.minimum(p, 1 - _P_EDGE, out=p)
         out = ndtri(p, out=p)
         out *= sd
-        out += mean
+        out += mean if group is None else mean[group]
     np.maximum(out, low, out=out)
     np.minimum(out, high, out=out)
     return out
