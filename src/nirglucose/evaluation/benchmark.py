@@ -55,9 +55,10 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
+from .progress import TaskProgress
 from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_PROTOCOL, STUDY_TABLE
 from .splits import Split, check_protocol, effective_layout, make_splits
-from .stats import DEFAULT_N_BOOT, cluster_bootstrap_metrics, compare_models
+from .stats import DEFAULT_N_BOOT, PAIRED_COLUMNS, cluster_bootstrap_metrics, compare_models
 
 __all__ = [
     "BenchmarkResult",
@@ -124,22 +125,7 @@ PREDICTION_COLUMNS = (
     "scored_mgdl",
 )
 #: Columns of ``comparisons.csv``.
-COMPARISON_COLUMNS = (
-    "family",
-    "model",
-    "reference_model",
-    "rmse_mgdl",
-    "reference_rmse_mgdl",
-    "rmse_diff_mgdl",
-    "ci_low",
-    "ci_high",
-    "p_value",
-    "p_holm",
-    "p_wilcoxon",
-    "p_wilcoxon_holm",
-    "significant",
-    "study_holds",
-)
+COMPARISON_COLUMNS = ("family", *PAIRED_COLUMNS, "study_holds")
 #: Columns of ``importance.csv``.
 IMPORTANCE_COLUMNS = (
     "model",
@@ -624,7 +610,7 @@ def run_benchmark(
             if on_task is not None:
                 on_task(spec, True)
 
-    bar = _Progress(len(tasks), len(results)) if progress else None
+    bar = TaskProgress("benchmark", len(tasks), len(results), "cached") if progress else None
 
     def args(i):
         spec, split, cls = tasks[i]
@@ -703,36 +689,6 @@ def run_benchmark(
     if out is not None:
         result.save(out)
     return result
-
-
-class _Progress:
-    def __init__(self, total: int, done: int) -> None:
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-        )
-
-        self.p = Progress(
-            TextColumn("[bold]benchmark[/] {task.description}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            console=Console(stderr=True),
-            transient=False,
-        )
-        self.p.start()
-        self.t = self.p.add_task(f"({done} cached)", total=total, completed=done)
-
-    def advance(self, text: str) -> None:
-        self.p.update(self.t, advance=1, description=text)
-
-    def close(self) -> None:
-        self.p.stop()
-
 
 # --------------------------------------------------------------------------- aggregation
 def _aggregate(

@@ -51,6 +51,7 @@ from ..metrics import clarke_zones, parkes_zones
 __all__ = [
     "CI_METRICS",
     "DEFAULT_N_BOOT",
+    "PAIRED_COLUMNS",
     "SubjectSums",
     "subject_sums",
     "bootstrap_weights",
@@ -60,6 +61,22 @@ __all__ = [
     "ci_stem",
     "compare_models",
 ]
+
+#: Columns of :func:`compare_models`, one row per (model, reference) pair.
+PAIRED_COLUMNS = (
+    "model",
+    "reference_model",
+    "rmse_mgdl",
+    "reference_rmse_mgdl",
+    "rmse_diff_mgdl",
+    "ci_low",
+    "ci_high",
+    "p_value",
+    "p_holm",
+    "p_wilcoxon",
+    "p_wilcoxon_holm",
+    "significant",
+)
 
 #: Resamples used by default.
 DEFAULT_N_BOOT = 2000
@@ -376,20 +393,7 @@ def compare_models(
         elif reference not in sums:
             raise ConfigError(f"reference model {reference!r} not among {models}")
         pairs = [(m, reference) for m in models if m != reference]
-    cols = [
-        "model",
-        "reference_model",
-        "rmse_mgdl",
-        "reference_rmse_mgdl",
-        "rmse_diff_mgdl",
-        "ci_low",
-        "ci_high",
-        "p_value",
-        "p_holm",
-        "p_wilcoxon",
-        "p_wilcoxon_holm",
-        "significant",
-    ]
+    cols = list(PAIRED_COLUMNS)
     if not pairs:
         return pd.DataFrame(columns=cols)
     w = bootstrap_weights(len(subjects), n_boot, seed)

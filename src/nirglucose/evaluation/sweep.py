@@ -77,6 +77,7 @@ import pandas as pd
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
 from .benchmark import METRIC_COLUMNS
+from .progress import TaskProgress
 
 __all__ = [
     "STUDIES",
@@ -1019,40 +1020,6 @@ def threshold_crossing(
 
 
 # --------------------------------------------------------------------------- runner
-class _Progress:
-    """Rich progress bar: tasks done / total, elapsed time, time left."""
-
-    def __init__(self, total: int, done: int) -> None:
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        self.p = Progress(
-            TextColumn("[bold]sweep[/] {task.description}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("tasks"),
-            TimeElapsedColumn(),
-            TextColumn("left"),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-            transient=False,
-        )
-        self.p.start()
-        self.t = self.p.add_task(f"({done} reused)", total=total, completed=done)
-
-    def advance(self, text: str) -> None:
-        self.p.update(self.t, advance=1, description=text)
-
-    def close(self) -> None:
-        self.p.stop()
-
 
 def _resolve_seeds(seeds: int | Sequence[int]) -> list[int]:
     if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
@@ -1233,7 +1200,7 @@ def run_sweep(
             if on_task is not None:
                 on_task(spec_of[key], True)
 
-    bar = _Progress(len(unique), len(results)) if progress else None
+    bar = TaskProgress("sweep", len(unique), len(results), "reused") if progress else None
     try:
         stream = run_unordered(
             run_sweep_task,

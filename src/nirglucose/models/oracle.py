@@ -115,11 +115,13 @@ def _log_ratio(cfg: ScenarioConfig, frame: pd.DataFrame) -> np.ndarray:
     return np.log(adc / ref)
 
 
-def _model_log_ratio(cfg: ScenarioConfig, frame: pd.DataFrame, glucose: np.ndarray) -> np.ndarray:
+def _model_log_ratio(
+    cfg: ScenarioConfig, frame: pd.DataFrame, glucose: np.ndarray, tables=None
+) -> np.ndarray:
     """Noise-free ln(adc / adc_ref) = ln(fraction / T_ref) for each row at ``glucose``."""
     from ..simulate.simulator import detected_fraction_given_glucose
 
-    frac = detected_fraction_given_glucose(cfg, frame, glucose)
+    frac = detected_fraction_given_glucose(cfg, frame, glucose, tables)
     return np.log(frac / cfg.hardware.reference_transmission)
 
 
@@ -265,9 +267,12 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
         lam = 1.0 / self.prior_var_ if self.prior else 0.0
         lo, hi = GLUCOSE_SEARCH_RANGE_MGDL
         g = np.full(n, float(np.clip(self.prior_mean_, lo, hi)))
+        from ..simulate.simulator import _tables
+
+        tables = _tables(cfg)  # once per call, not twice per Gauss-Newton step
         for _ in range(int(self.max_iter)):
-            m = _model_log_ratio(cfg, frame, g)
-            J = (_model_log_ratio(cfg, frame, g + _STEP_MGDL) - m) / _STEP_MGDL
+            m = _model_log_ratio(cfg, frame, g, tables)
+            J = (_model_log_ratio(cfg, frame, g + _STEP_MGDL, tables) - m) / _STEP_MGDL
             r = y_obs - m
             JW = J @ W
             num = np.einsum("ij,ij->i", JW, r) - lam * (g - self.prior_mean_)

@@ -365,15 +365,9 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
         (n_led,) each. [1/cm]
     """
     from ..optics import forward, tissue
-    from ..simulate.simulator import NOMINAL, nominal_tissue
+    from ..simulate.simulator import NOMINAL, nominal_tissue, scenario_band_spectra
 
-    spectra = tissue.band_spectra(
-        cfg.leds.wavelengths_nm,
-        cfg.leds.fwhm_nm,
-        cfg.leds.band_points,
-        cfg.optics.water_source,
-        cfg.glucose.absorptivity_per_cm_per_mm,
-    )
+    spectra = scenario_band_spectra(cfg)
     optics = tissue.tissue_optics(
         spectra,
         nominal_tissue(1),

@@ -18,8 +18,6 @@ References
 
 from __future__ import annotations
 
-import numpy as np
-
 from ._torch_base import TorchRegressor
 from .networks import SDNNNet
 from .registry import register
@@ -48,31 +46,6 @@ class SDNN(TorchRegressor):
     match the reference study's 3,713 parameters, not theirs. The loss is the base
     class's MSE (no ``get_loss`` override).
     """
-
-    def __init__(
-        self,
-        *,
-        max_epochs: int = 300,
-        batch_size: int = 32,
-        lr: float = 1e-3,
-        weight_decay: float = 0.0,
-        patience: int | None = 30,
-        val_fraction: float = 0.2,
-        lr_schedule: str = "plateau",
-        refit: bool = True,
-        random_state: int | np.random.RandomState | None = None,
-    ) -> None:
-        super().__init__(
-            max_epochs=max_epochs,
-            batch_size=batch_size,
-            lr=lr,
-            weight_decay=weight_decay,
-            patience=patience,
-            val_fraction=val_fraction,
-            lr_schedule=lr_schedule,
-            refit=refit,
-            random_state=random_state,
-        )
 
     def build_module(self) -> SDNNNet:
         """:class:`~nirglucose.models.networks.SDNNNet`."""

@@ -28,6 +28,7 @@ __all__ = [
     "simulate_frame",
     "nominal_tissue",
     "detected_fraction_given_glucose",
+    "scenario_band_spectra",
 ]
 
 #: Nominal skin (the centre of the default cohort): used to fix the Beer-Lambert
@@ -54,14 +55,19 @@ class _Tables:
     lut: object = None  # the rte-lut model's table, specialised to the band nodes
 
 
-def _tables(cfg: ScenarioConfig) -> _Tables:
-    spectra = tissue.band_spectra(
+def scenario_band_spectra(cfg: ScenarioConfig) -> tissue.BandSpectra:
+    """The chromophore tables over the scenario's LED bands."""
+    return tissue.band_spectra(
         cfg.leds.wavelengths_nm,
         cfg.leds.fwhm_nm,
         cfg.leds.band_points,
         cfg.optics.water_source,
         cfg.glucose.absorptivity_per_cm_per_mm,
     )
+
+
+def _tables(cfg: ScenarioConfig) -> _Tables:
+    spectra = scenario_band_spectra(cfg)
     optics = tissue.tissue_optics(
         spectra,
         nominal_tissue(1),
@@ -212,7 +218,7 @@ def simulate_block(
     tables: _Tables | None = None,
 ) -> tuple[dict, int]:
     """Simulate one block of subjects; returns ``(columns, n_random_variates)``."""
-    tables = tables or _tables(cfg)
+    tables = _tables(cfg) if tables is None else tables
     streams = RandomStreams(seed, block)
     n = n_sub * per_subject
     rep = np.repeat(np.arange(n_sub), per_subject)
@@ -364,7 +370,10 @@ def simulate_frame(
 
 
 def detected_fraction_given_glucose(
-    cfg: ScenarioConfig, frame: pd.DataFrame, glucose_mgdl: np.ndarray
+    cfg: ScenarioConfig,
+    frame: pd.DataFrame,
+    glucose_mgdl: np.ndarray,
+    tables: _Tables | None = None,
 ) -> np.ndarray:
     """Noise-free detected fraction for each row's true nuisance state and any glucose.
 
@@ -380,13 +389,16 @@ def detected_fraction_given_glucose(
         Rows with the ``true_*`` columns of a simulated dataset.
     glucose_mgdl : numpy.ndarray
         Glucose per row, (n,). [mg/dL]
+    tables : optional
+        The scenario's precomputed tables (``_tables(cfg)``), for callers that call
+        this repeatedly with one scenario; computed when omitted.
 
     Returns
     -------
     numpy.ndarray
         (n, n_led) fraction of LED power detected. [-]
     """
-    tables = _tables(cfg)
+    tables = _tables(cfg) if tables is None else tables
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     state = tissue.TissueState(
         frame["true_blood_fraction_detected"].to_numpy(float),
