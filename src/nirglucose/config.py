@@ -354,8 +354,8 @@ class OpticsConfig(_Model):
     lut_solver: Literal["monte-carlo", "diffusion"] = Field(
         "monte-carlo",
         description=(
-            "What fills the rte-lut model's table: Monte Carlo of the RTE (about 16 CPU-min "
-            "per probe geometry, cached) or three-layer diffusion (about 15 s, smooth)."
+            "What fills the rte-lut model's table: Monte Carlo of the RTE (about 65 CPU-min "
+            "per probe geometry, cached) or three-layer diffusion (about 35 s, smooth)."
         ),
     )
 

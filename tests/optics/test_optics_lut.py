@@ -304,22 +304,58 @@ def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     geo = L._geometry(RHO, T_EPI, 1.4, 1.0)
     coords, splits = L._solve_axes(grid, geo)
     x, q, y = coords[0], coords[1], coords[-1]
-    gx, gq, gy = np.meshgrid(x, q, y, indexing="ij")
-    # a smooth Monte Carlo / diffusion difference with a kink at tau = 1 (y = 0): inside
-    # the fit's span, so it must come back exactly
-    smooth = 0.05 * gx - 0.1 * gq * gx + 0.02 * gy**2 + 0.03 * np.maximum(gy, 0.0)
+
+    def smooth(y):  # a difference with a kink at tau = 1 (y = 0), inside the fit's span
+        gx, gq, gy = np.meshgrid(x, q, y, indexing="ij")
+        d = 0.05 * gx - 0.1 * gq * gx + 0.02 * gy**2 + 0.03 * np.maximum(gy, 0.0)
+        return d[:, :, None, None, None, :, None]
+
     shape = (x.size, q.size, 1, 1, 2, y.size, 1)
     base = np.random.default_rng(0).normal(-3.0, 0.5, shape)
-    mc = base + smooth[:, :, None, None, None, :, None]
-    got = L._smooth_towards_diffusion(mc, base, coords, splits[-1], (3, 2, 5))
-    np.testing.assert_allclose(got, mc, atol=1e-10)
-    # 1 % node noise is reduced (252 nodes, 132 terms: by about sqrt(132 / 252))
+    mc = base + smooth(y)
+    got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5))
+    np.testing.assert_allclose(got, np.broadcast_to(smooth(y), got.shape), atol=1e-10)
+    # evaluated between the thickness nodes (the table's refined thickness axis)
+    fine = L._refined_coords(y, 2, splits[-1])
+    got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5), tau_at=fine)
+    assert got.shape == shape[:-2] + (fine.size, 1)
+    np.testing.assert_allclose(got, np.broadcast_to(smooth(fine), got.shape), atol=1e-10)
+    # 1 % node noise is reduced (252 nodes, 120 terms: by about sqrt(120 / 252))
     noise = 0.01 * np.random.default_rng(1).standard_normal(shape)
-    got = L._smooth_towards_diffusion(mc + noise, base, coords, splits[-1], (3, 2, 5))
-    left = np.sqrt(np.mean((got - mc) ** 2))
+    got = L._residual_fit(mc + noise, base, coords, splits[-1], (3, 2, 5))
+    left = np.sqrt(np.mean((got - smooth(y)) ** 2))
     assert left < 0.85 * 0.01
     assert L._residual_basis(coords, splits[-1], (3, 2, 5)).shape == (x.size * q.size * y.size,
-                                                                     132)
+                                                                     120)
+
+
+def test_refined_thickness_nodes_are_those_of_the_spline_refinement():
+    grid = L._resolve_grid("default")
+    coords, splits = L._solve_axes(grid, L._geometry(RHO, T_EPI, 1.4, 1.0))
+    y = coords[-1]
+    fine = L._refined_coords(y, 3, splits[-1])
+    _, spline_nodes = L._upsample(np.zeros((y.size, 1)), 0, y, 3, splits[-1])
+    np.testing.assert_array_equal(fine, spline_nodes)
+    np.testing.assert_allclose(fine[::3], y, rtol=1e-15, atol=1e-15)  # solve node j: 3 j
+    assert np.any(fine == 0.0)  # tau = 1 stays a node
+
+
+def test_diffusion_table_solves_every_thickness_node_directly():
+    # refined thickness nodes are diffusion solves, not spline values: exact there
+    grid = dict(L.LUT_GRIDS["tiny"])
+    grid["skin_transport_thickness"] = (0.25, 13.0, 3, 3)
+    lut = L.build_lut(RHO, T_EPI, grid=grid, solver="diffusion")
+    pts = {k: lut.axis_nodes(k) for k in L.LUT_AXES}
+    tau = pts["skin_transport_thickness"]
+    assert tau.size == 7
+    musp = np.full(tau.size, pts["musp_dermis_per_cm"][1])
+    kw = dict(mua_epidermis_per_cm=np.full(tau.size, pts["mua_epidermis_per_cm"][1]),
+              mua_dermis_per_cm=np.full(tau.size, pts["mua_dermis_per_cm"][0]),
+              musp_dermis_per_cm=musp,
+              mua_subcutis_per_cm=np.full(tau.size, pts["mua_subcutis_per_cm"][1]),
+              musp_subcutis_per_cm=musp * pts["musp_ratio"][0], skin_thickness_cm=tau / musp)
+    r_dir, _ = layers.three_layer_reflectance(RHO, epidermis_thickness_cm=T_EPI, **kw)
+    np.testing.assert_allclose(L.interpolate_lut(lut, **kw)[0], r_dir, rtol=1e-5)
 
 
 def test_direct_solve_with_other_random_numbers_is_an_independent_reference(tiny):
@@ -330,3 +366,26 @@ def test_direct_solve_with_other_random_numbers_is_an_independent_reference(tiny
     np.testing.assert_array_equal(other, again)  # seeded
     assert not np.allclose(other, same, rtol=1e-9)  # other photons
     assert np.all(np.abs(other / same - 1.0) < 5.0 * np.hypot(se / same, se_o / other))
+
+
+def test_default_diffusion_table_is_within_one_percent_off_grid():
+    # the default grid's interpolation (cubic-spline refinement, then multilinear on the
+    # refined nodes) against the model it tabulates, noise-free: the part of the Monte
+    # Carlo table's error that is not Monte Carlo noise
+    lut = L.build_lut(RHO, T_EPI, solver="diffusion")
+    err = L.lut_errors(lut, n_points=300, rng=11, groups=None)
+    assert np.all(err["reflectance_se"] == 0.0)
+    assert np.max(np.abs(err["reflectance"])) <= 0.01
+    assert np.sqrt(np.mean(err["reflectance"] ** 2)) <= 0.003
+    assert np.median(np.abs(err["pathlength"])) <= 0.01
+
+
+def test_a_default_monte_carlo_build_is_announced_as_a_warning(tiny, monkeypatch, tmp_path,
+                                                               caplog):
+    # the hour-long first build must show without logging configured (a warning)
+    monkeypatch.setattr(L, "build_lut", lambda *a, **k: tiny)
+    with caplog.at_level("INFO", logger="nirglucose.optics.lut"):
+        L.load_or_build_lut(RHO, T_EPI, directory=tmp_path)
+        L.load_or_build_lut(RHO, T_EPI, directory=tmp_path, solver="diffusion")
+    levels = [(r.levelname, "about an hour" in r.getMessage()) for r in caplog.records]
+    assert levels == [("WARNING", True), ("INFO", False)]

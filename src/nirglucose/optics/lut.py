@@ -36,24 +36,27 @@ mean paths at every ``musp_dermis_per_cm`` node by scaling and at every absorpti
 by re-weighting (exact for the RTE; Kienle & Patterson 1996, Sassaroli & Fantini 2004).
 Every run uses the same random numbers (:data:`LUT_MC_SETTINGS`), so the noise is
 correlated between nodes. The point reflectance at rho is a fourth-order kernel estimate
-over rho +- 0.75 mm. The default grid (36 runs of 400 000 photons) takes about 16
-minutes of CPU (8 of wall time on 2 free cores); its nodes carry a Monte Carlo standard
-error of R of about 1 % (0.5-2 %). Common random numbers do not make that noise smooth
+over rho +- 0.75 mm. The default grid (36 runs of 1 600 000 photons) takes about 65
+minutes of CPU (38 of wall time on 2 cores); its nodes carry a Monte Carlo standard
+error of R of 0.5-1 %. Common random numbers do not make that noise smooth
 along the scattering axes (a photon's path changes with the layer boundary and the
 detector window), so the table stores the three-layer diffusion model
 (:mod:`nirglucose.optics.layers`) plus a least-squares fit of the Monte Carlo minus
 diffusion difference over the 252 scattering nodes, for every absorption node
-(:func:`_smooth_towards_diffusion`; the diffusion model supplies the shape, the
-transport solution the level). Then each axis is refined by cubic splines and the
-float32 table is interpolated multilinearly.
+(:func:`_residual_fit`; the diffusion model supplies the shape, the transport solution
+the level). The thickness axis is refined by solving the diffusion model at its refined
+nodes and evaluating the fit there; every other axis by cubic splines; the float32 table
+is interpolated multilinearly.
 
-Accuracy, against independent Monte Carlo solves with 10 times the photons (4 000 000,
-other random numbers, own standard error 0.3 %) at 66 random off-grid points: median
-0.33 %, RMS 0.45 %, maximum 1.24 %, 2 points beyond 1 % (the raw Monte Carlo nodes:
-median 0.46 %, maximum 1.55 %).
+Accuracy (README, "Layered skin optics"): interpolation, noise-free (the diffusion
+solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.19 %,
+maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.19 % (two builds, 400 000 and
+1 600 000 photons, compared); against independent Monte Carlo solves (4 000 000
+photons, other random numbers) at 102 points, median 0.26 %, maximum 1.67 %, a check
+limited by those solves' own scatter.
 Over the paper cohort the table is 0.91-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
-(about 15 s; for sweeps of the probe geometry, each of which needs its own table).
+(about 35 s; for sweeps of the probe geometry, each of which needs its own table).
 
 Cache: ``<cache dir>/lut-<key>.npz``, where the key hashes the geometry, the grid and the
 solver settings; the directory is ``$NIRGLUCOSE_CACHE``, else
@@ -120,7 +123,7 @@ __all__ = [
 _log = logging.getLogger(__name__)
 
 #: Bump when the solver or the file layout changes: old cache files are then ignored.
-_FORMAT_VERSION = 2
+_FORMAT_VERSION = 3
 
 #: Axis names, in table order, with their coordinate and unit. The thickness axis is
 #: the skin (epidermis + dermis) thickness in transport mean free paths,
@@ -138,13 +141,15 @@ LUT_AXES: dict[str, tuple[str, str]] = {
 
 #: Grids by name: per axis ``(low, high, n_solve, upsample)``. The model is solved at
 #: ``n_solve`` nodes uniform in the axis' coordinate, then each axis is refined
-#: ``upsample`` times by a cubic spline through the solved nodes (piecewise on either
-#: side of tau = 1), and the refined table is what is interpolated multilinearly. The
+#: ``upsample`` times by a cubic spline through the solved nodes, and the refined table
+#: is what is interpolated multilinearly. The thickness axis (uniform on either side of
+#: tau = 1) is not splined: the diffusion model is solved at each of its refined nodes,
+#: and the Monte Carlo correction (:func:`_residual_fit`) evaluated there. The
 #: ``default`` box covers every LED in 700-1300 nm, Fitzpatrick I-VI, the physiology
 #: presets and skin 0.4-4.2 mm; ``tiny`` covers the same box coarsely, for tests.
 LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
     "default": {
-        "musp_dermis_per_cm": (7.0, 30.0, 7, 2),
+        "musp_dermis_per_cm": (7.0, 30.0, 7, 3),
         "musp_ratio": (0.48, 0.85, 3, 3),
         "mua_dermis_per_cm": (0.05, 2.0, 7, 2),
         "mua_subcutis_per_cm": (0.01, 2.0, 7, 2),
@@ -163,7 +168,7 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
 
 #: Monte Carlo photons per (musp_ratio, skin_transport_thickness) node, by grid name
 #: (a custom grid takes the default grid's unless :func:`build_lut` is told). [-]
-LUT_MC_PHOTONS: dict[str, int] = {"default": 400_000, "tiny": 8_000}
+LUT_MC_PHOTONS: dict[str, int] = {"default": 1_600_000, "tiny": 8_000}
 
 #: Settings of the white Monte Carlo behind the table (:mod:`nirglucose.optics.mc_white`;
 #: all in the cache key). ``seed``: the common random numbers of every run;
@@ -173,7 +178,7 @@ LUT_MC_PHOTONS: dict[str, int] = {"default": 400_000, "tiny": 8_000}
 #: photon's path plays Russian roulette (3x faster; 3-4x the mean path of the light
 #: detected at the farthest rho* of the box); ``anisotropy``: Henyey-Greenstein g;
 #: ``residual_fit_degrees``: degrees (ln mus'_dermis, musp_ratio, ln tau) of the fit that
-#: removes the node noise along the scattering axes (:func:`_smooth_towards_diffusion`;
+#: removes the node noise along the scattering axes (:func:`_residual_fit`;
 #: None keeps the raw Monte Carlo nodes).
 LUT_MC_SETTINGS: dict = {
     "seed": 9,
@@ -184,9 +189,9 @@ LUT_MC_SETTINGS: dict = {
 }
 
 #: What solves the model at the table's nodes. ``"monte-carlo"`` (default): the white
-#: Monte Carlo of the RTE above, about 16 CPU-minutes for the default grid, with about
-#: 1 % noise per node. ``"diffusion"``: the three-layer diffusion model
-#: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 15 s, smooth, within
+#: Monte Carlo of the RTE above, about 65 CPU-minutes for the default grid, with 0.5-1 %
+#: noise per node. ``"diffusion"``: the three-layer diffusion model
+#: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 35 s, smooth, within
 #: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.91-1.05 x
 #: the Monte Carlo table over the paper cohort: for quick sweeps of the probe geometry.
 LUT_SOLVERS = ("monte-carlo", "diffusion")
@@ -426,23 +431,31 @@ def _solve_axes(grid: dict, geo: dict) -> tuple[list[np.ndarray], list[int | Non
     return coords, splits
 
 
+def _refined_coords(u: np.ndarray, m: int, split: int | None) -> np.ndarray:
+    """An axis' solve coordinates refined m times (uniformly on each side of ``split``).
+
+    Solve node j is refined node j * m.
+    """
+    pieces = [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
+    fine = [np.linspace(u[a], u[b], (b - a) * m + 1)[(1 if k else 0):]
+            for k, (a, b) in enumerate(pieces)]
+    return np.concatenate(fine)
+
+
 def _upsample(values: np.ndarray, axis: int, u: np.ndarray, m: int,
               split: int | None) -> tuple[np.ndarray, np.ndarray]:
     """Refine one axis m times with cubic splines (separately on each side of ``split``)."""
     from scipy.interpolate import make_interp_spline
 
     pieces = [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
-    out, fine_u = [], []
-    for a, b in pieces:
-        k = min(3, b - a)
+    fine_u = _refined_coords(u, m, split)
+    out = []
+    for k, (a, b) in enumerate(pieces):
         spline = make_interp_spline(u[a:b + 1], values.take(range(a, b + 1), axis=axis),
-                                    k=k, axis=axis)
-        fine = np.linspace(u[a], u[b], (b - a) * m + 1)
-        if out:
-            fine = fine[1:]
-        out.append(spline(fine))
-        fine_u.append(fine)
-    return np.concatenate(out, axis=axis), np.concatenate(fine_u)
+                                    k=min(3, b - a), axis=axis)
+        at = fine_u[a * m + (1 if k else 0):b * m + 1]
+        out.append(spline(at))
+    return np.concatenate(out, axis=axis), fine_u
 
 
 def build_lut(
@@ -507,57 +520,82 @@ def build_lut(
     names = list(LUT_AXES)
     coords, splits = _solve_axes(grid, geo)
     ax = {k: _inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)}
-    if solver == "diffusion":
-        values = _diffusion_nodes(ax, geo)
+    degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
+    shape = tuple(c.size for c in coords)
+    n_solves = int(np.prod(shape))
+    if solver == "monte-carlo" and degrees is None:  # raw Monte Carlo nodes, splined
+        values, dense = _monte_carlo_nodes(ax, grid, geo, photons), {}
     else:
-        values = _monte_carlo_nodes(ax, grid, geo, photons)
-        degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
-        if degrees is not None:
-            values = _smooth_towards_diffusion(values, _diffusion_nodes(ax, geo), coords,
-                                               splits[-1], degrees)
-    shape = values.shape[:-1]
+        # the diffusion model is solved at every refined thickness node (no spline
+        # through the kink-bearing thickness axis); the Monte Carlo correction is a
+        # smooth fit, evaluated there directly
+        tau_u = _refined_coords(coords[-1], grid[names[-1]][3], splits[-1])
+        values = _diffusion_nodes({**ax, names[-1]: _inverse(LUT_AXES[names[-1]][0], tau_u)},
+                                  geo)
+        if solver == "monte-carlo":
+            at_solve = values.take(np.arange(shape[-1]) * grid[names[-1]][3], axis=-2)
+            values += _residual_fit(_monte_carlo_nodes(ax, grid, geo, photons), at_solve,
+                                    coords, splits[-1], degrees, tau_at=tau_u)
+        dense = {len(names) - 1: tau_u}
+        if solver == "diffusion":
+            n_solves = int(np.prod(shape[:-1])) * tau_u.size
     nodes = []
     for i, name in enumerate(names):
         m = grid[name][3]
         u = coords[i]
-        if m > 1:
+        if i in dense:
+            u = dense[i]
+        elif m > 1:
             values, u = _upsample(values, i, u, m, splits[i])
         nodes.append(u)
     key = lut_key(geo["rho_cm"], geo["epidermis_thickness_cm"], geo["n_tissue"],
                   geo["n_ambient"], grid, n_photons=photons, solver=solver)
     return SkinLUT(
         np.ascontiguousarray(values, dtype=np.float32), tuple(nodes), values.shape[:-1],
-        grid, geo, key, time.perf_counter() - start, int(np.prod(shape)), solver,
+        grid, geo, key, time.perf_counter() - start, n_solves, solver,
     )
 
 
 def _residual_basis(coords: list[np.ndarray], split: int | None,
-                    degrees: tuple[int, int, int]) -> np.ndarray:
+                    degrees: tuple[int, int, int],
+                    at: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Least-squares basis over the scattering axes (mus'_dermis, musp_ratio, thickness).
 
     Tensor products of polynomials in ln mus'_dermis and musp_ratio with, along ln tau,
     a polynomial plus truncated powers (u - u_1)_+^k at tau = 1 (u_1), where the
     diffusion model's point source crosses into the subcutis and its R has a kink that
-    the transport solution does not have. Coordinates scaled to [-1, 1]; each degree
-    capped at the axis' node count - 1. Returns (n_musp * n_q * n_tau, n_terms).
+    the transport solution does not have. Coordinates scaled to [-1, 1] over the solve
+    nodes ``coords``; each degree capped at the axis' node count - 1, along ln tau on
+    each side of tau = 1 (so the basis has full rank at the solve nodes, and the fit
+    is unique between them). Evaluated at the
+    solve nodes, or at the coordinates ``at`` (mus'_dermis, musp_ratio, thickness).
+    Returns (n_musp * n_q * n_tau, n_terms).
     """
-    def scaled(u):
-        half = np.ptp(u) / 2.0
-        return (u - u.mean()) / half if half > 0 else np.zeros_like(u)
+    axes = (coords[0], coords[1], coords[-1])
+    points = axes if at is None else at
 
-    x, q, y = scaled(coords[0]), scaled(coords[1]), scaled(coords[-1])
-    dx, dq, dy = (min(int(d), u.size - 1) for d, u in zip(degrees, (x, q, y), strict=True))
+    def scaled(u, nodes):
+        half = np.ptp(nodes) / 2.0
+        mid = (nodes.max() + nodes.min()) / 2.0
+        return (u - mid) / half if half > 0 else np.zeros_like(u)
+
+    x, q, y = (scaled(p, n) for p, n in zip(points, axes, strict=True))
+    dx, dq, dy = (min(int(d), n.size - 1) for d, n in zip(degrees, axes, strict=True))
     gx, gq, gy = np.meshgrid(x, q, y, indexing="ij")
-    along_tau = [gy**k for k in range(dy + 1)]
-    if split is not None:
-        along_tau += [np.maximum(gy - y[split], 0.0)**k for k in range(1, dy + 1)]
+    if split is None:
+        along_tau = [gy**k for k in range(dy + 1)]
+    else:  # the degree on either side of the knot capped by that side's nodes (full rank)
+        knot = scaled(axes[2][split], axes[2])
+        along_tau = [gy**k for k in range(min(dy, split) + 1)]
+        along_tau += [np.maximum(gy - knot, 0.0)**k
+                      for k in range(1, min(dy, axes[2].size - 1 - split) + 1)]
     cols = [gx**i * gq**j * t for i in range(dx + 1) for j in range(dq + 1) for t in along_tau]
     return np.stack([c.ravel() for c in cols], axis=1)
 
 
-def _smooth_towards_diffusion(mc: np.ndarray, diffusion: np.ndarray, coords: list,
-                              split: int | None, degrees) -> np.ndarray:
-    """Monte Carlo nodes with their noise along the scattering axes fitted away.
+def _residual_fit(mc: np.ndarray, diffusion: np.ndarray, coords: list, split: int | None,
+                  degrees, tau_at: np.ndarray | None = None) -> np.ndarray:
+    """Monte Carlo minus diffusion, with its noise along the scattering axes fitted away.
 
     The table stores ln R and ln paths of the diffusion model plus a least-squares fit
     (:func:`_residual_basis`) of the Monte Carlo minus diffusion difference over the
@@ -568,13 +606,20 @@ def _smooth_towards_diffusion(mc: np.ndarray, diffusion: np.ndarray, coords: lis
     that a few dozen terms describe: the fit averages the noise over the 252 scattering
     nodes of the default grid. A control-variate use of the diffusion model (it only
     supplies the shape; the level comes from the transport solution).
+
+    Returns the fitted difference at the solve nodes, or, with ``tau_at``, at those
+    thickness coordinates instead of the solve nodes' (the fit is a smooth function of
+    ln tau, so the table's thickness axis needs no spline through the Monte Carlo
+    nodes).
     """
     basis = _residual_basis(coords, split, tuple(degrees))
     d = np.moveaxis(mc - diffusion, -2, 2)  # (musp, q, tau, mua_d, mua_s, mua_e, C)
-    flat = d.reshape(basis.shape[0], -1)
-    coef, *_ = np.linalg.lstsq(basis, flat, rcond=None)
-    fitted = np.moveaxis((basis @ coef).reshape(d.shape), 2, -2)
-    return diffusion + fitted
+    coef, *_ = np.linalg.lstsq(basis, d.reshape(basis.shape[0], -1), rcond=None)
+    if tau_at is not None:
+        basis = _residual_basis(coords, split, tuple(degrees),
+                                at=(coords[0], coords[1], tau_at))
+    shape = d.shape[:2] + (basis.shape[0] // (d.shape[0] * d.shape[1]),) + d.shape[3:]
+    return np.moveaxis((basis @ coef).reshape(shape), 2, -2)
 
 
 def _diffusion_nodes(ax: dict, geo: dict) -> np.ndarray:
@@ -725,8 +770,13 @@ def load_or_build_lut(
         lut = _load(path, key)
         if lut is not None:
             return lut
-    _log.info("building the skin LUT %s (grid %s, solver %s)", key,
-              grid if isinstance(grid, str) else "custom", solver)
+    if solver == "monte-carlo" and grid == "default":  # long: say so where it shows
+        _log.warning("building the rte-lut skin table %s by Monte Carlo: about an hour of "
+                     "CPU, once per probe geometry (cached in %s); "
+                     "optics.lut_solver=diffusion builds one in about 35 s", key, path.parent)
+    else:
+        _log.info("building the skin LUT %s (grid %s, solver %s)", key,
+                  grid if isinstance(grid, str) else "custom", solver)
     lut = build_lut(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=grid,
                     solver=solver)
     try:
