@@ -54,7 +54,7 @@ maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.19 % (two builds, 400 0
 1 600 000 photons, compared); against independent Monte Carlo solves (4 000 000
 photons, other random numbers) at 102 points, median 0.26 %, maximum 1.67 %, a check
 limited by those solves' own scatter.
-Over the paper cohort the table is 0.91-1.05 x the diffusion model (median 0.98).
+Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
 (about 35 s; for sweeps of the probe geometry, each of which needs its own table).
 
@@ -192,7 +192,7 @@ LUT_MC_SETTINGS: dict = {
 #: Monte Carlo of the RTE above, about 65 CPU-minutes for the default grid, with 0.5-1 %
 #: noise per node. ``"diffusion"``: the three-layer diffusion model
 #: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 35 s, smooth, within
-#: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.91-1.05 x
+#: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.90-1.05 x
 #: the Monte Carlo table over the paper cohort: for quick sweeps of the probe geometry.
 LUT_SOLVERS = ("monte-carlo", "diffusion")
 
