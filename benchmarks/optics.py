@@ -6,7 +6,7 @@
 * accuracy: table / direct solve - 1 at 120 random off-grid points uniform in each axis'
   coordinate over the table's box, in 12 groups sharing (musp_ratio, thickness) (one
   Monte Carlo run each); "direct solve" is nirglucose.optics.lut.direct_solve, a run at
-  the point with the table's settings and common random numbers (about 30 CPU-minutes
+  the point with the table's settings and common random numbers (about 45 CPU-minutes
   at the default table's 1.6 million photons per run); with the direct solve's own
   standard error;
 * monte_carlo_vs_diffusion: the MC table / the layered diffusion model
