@@ -431,14 +431,18 @@ def _solve_axes(grid: dict, geo: dict) -> tuple[list[np.ndarray], list[int | Non
     return coords, splits
 
 
+def _pieces(u: np.ndarray, split: int | None) -> list[tuple[int, int]]:
+    """First and last solve node of each piece of an axis (two when split at tau = 1)."""
+    return [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
+
+
 def _refined_coords(u: np.ndarray, m: int, split: int | None) -> np.ndarray:
     """An axis' solve coordinates refined m times (uniformly on each side of ``split``).
 
     Solve node j is refined node j * m.
     """
-    pieces = [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
     fine = [np.linspace(u[a], u[b], (b - a) * m + 1)[(1 if k else 0):]
-            for k, (a, b) in enumerate(pieces)]
+            for k, (a, b) in enumerate(_pieces(u, split))]
     return np.concatenate(fine)
 
 
@@ -447,10 +451,9 @@ def _upsample(values: np.ndarray, axis: int, u: np.ndarray, m: int,
     """Refine one axis m times with cubic splines (separately on each side of ``split``)."""
     from scipy.interpolate import make_interp_spline
 
-    pieces = [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
     fine_u = _refined_coords(u, m, split)
     out = []
-    for k, (a, b) in enumerate(pieces):
+    for k, (a, b) in enumerate(_pieces(u, split)):
         spline = make_interp_spline(u[a:b + 1], values.take(range(a, b + 1), axis=axis),
                                     k=min(3, b - a), axis=axis)
         at = fine_u[a * m + (1 if k else 0):b * m + 1]
@@ -521,30 +524,32 @@ def build_lut(
     coords, splits = _solve_axes(grid, geo)
     ax = {k: _inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)}
     degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
-    shape = tuple(c.size for c in coords)
-    n_solves = int(np.prod(shape))
+    tau_name = names[-1]
+    tau_u = None  # the thickness axis' refined nodes, where they are solved directly
     if solver == "monte-carlo" and degrees is None:  # raw Monte Carlo nodes, splined
-        values, dense = _monte_carlo_nodes(ax, grid, geo, photons), {}
+        values = _monte_carlo_nodes(ax, grid, geo, photons)
     else:
         # the diffusion model is solved at every refined thickness node (no spline
         # through the kink-bearing thickness axis); the Monte Carlo correction is a
         # smooth fit, evaluated there directly
-        tau_u = _refined_coords(coords[-1], grid[names[-1]][3], splits[-1])
-        values = _diffusion_nodes({**ax, names[-1]: _inverse(LUT_AXES[names[-1]][0], tau_u)},
+        m_tau = grid[tau_name][3]
+        tau_u = _refined_coords(coords[-1], m_tau, splits[-1])
+        values = _diffusion_nodes({**ax, tau_name: _inverse(LUT_AXES[tau_name][0], tau_u)},
                                   geo)
         if solver == "monte-carlo":
-            at_solve = values.take(np.arange(shape[-1]) * grid[names[-1]][3], axis=-2)
+            at_solve = values.take(np.arange(coords[-1].size) * m_tau, axis=-2)
             values += _residual_fit(_monte_carlo_nodes(ax, grid, geo, photons), at_solve,
                                     coords, splits[-1], degrees, tau_at=tau_u)
-        dense = {len(names) - 1: tau_u}
-        if solver == "diffusion":
-            n_solves = int(np.prod(shape[:-1])) * tau_u.size
+    # model solves: the Monte Carlo runs' nodes, or every diffusion node of the table
+    n_solves = int(np.prod([c.size for c in coords]))
+    if solver == "diffusion":
+        n_solves = n_solves // coords[-1].size * tau_u.size
     nodes = []
     for i, name in enumerate(names):
         m = grid[name][3]
         u = coords[i]
-        if i in dense:
-            u = dense[i]
+        if name == tau_name and tau_u is not None:
+            u = tau_u
         elif m > 1:
             values, u = _upsample(values, i, u, m, splits[i])
         nodes.append(u)
@@ -567,9 +572,8 @@ def _residual_basis(coords: list[np.ndarray], split: int | None,
     the transport solution does not have. Coordinates scaled to [-1, 1] over the solve
     nodes ``coords``; each degree capped at the axis' node count - 1, along ln tau on
     each side of tau = 1 (so the basis has full rank at the solve nodes, and the fit
-    is unique between them). Evaluated at the
-    solve nodes, or at the coordinates ``at`` (mus'_dermis, musp_ratio, thickness).
-    Returns (n_musp * n_q * n_tau, n_terms).
+    is unique between them). Evaluated at the solve nodes, or at the coordinates ``at``
+    (mus'_dermis, musp_ratio, thickness). Returns (n_musp * n_q * n_tau, n_terms).
     """
     axes = (coords[0], coords[1], coords[-1])
     points = axes if at is None else at
@@ -615,10 +619,10 @@ def _residual_fit(mc: np.ndarray, diffusion: np.ndarray, coords: list, split: in
     basis = _residual_basis(coords, split, tuple(degrees))
     d = np.moveaxis(mc - diffusion, -2, 2)  # (musp, q, tau, mua_d, mua_s, mua_e, C)
     coef, *_ = np.linalg.lstsq(basis, d.reshape(basis.shape[0], -1), rcond=None)
-    if tau_at is not None:
-        basis = _residual_basis(coords, split, tuple(degrees),
-                                at=(coords[0], coords[1], tau_at))
-    shape = d.shape[:2] + (basis.shape[0] // (d.shape[0] * d.shape[1]),) + d.shape[3:]
+    if tau_at is None:
+        return np.moveaxis((basis @ coef).reshape(d.shape), 2, -2)
+    basis = _residual_basis(coords, split, tuple(degrees), at=(coords[0], coords[1], tau_at))
+    shape = d.shape[:2] + (tau_at.size,) + d.shape[3:]
     return np.moveaxis((basis @ coef).reshape(shape), 2, -2)
 
 
@@ -770,10 +774,13 @@ def load_or_build_lut(
         lut = _load(path, key)
         if lut is not None:
             return lut
-    if solver == "monte-carlo" and grid == "default":  # long: say so where it shows
-        _log.warning("building the rte-lut skin table %s by Monte Carlo: about an hour of "
-                     "CPU, once per probe geometry (cached in %s); "
-                     "optics.lut_solver=diffusion builds one in about 35 s", key, path.parent)
+    if solver == "monte-carlo":  # minutes to an hour: say so where it shows
+        spec = _resolve_grid(grid)
+        runs = spec["musp_ratio"][2] * spec["skin_transport_thickness"][2]
+        _log.warning("building the rte-lut skin table %s by Monte Carlo: %d runs of %d "
+                     "photons (the default grid: about an hour of CPU), once per probe "
+                     "geometry, cached in %s; optics.lut_solver=diffusion builds one in "
+                     "about 35 s", key, runs, _mc_photons(grid, None), path.parent)
     else:
         _log.info("building the skin LUT %s (grid %s, solver %s)", key,
                   grid if isinstance(grid, str) else "custom", solver)
