@@ -355,7 +355,7 @@ class OpticsConfig(_Model):
         "monte-carlo",
         description=(
             "What fills the rte-lut model's table: Monte Carlo of the RTE (about 65 CPU-min "
-            "per probe geometry, cached) or three-layer diffusion (about 35 s, smooth)."
+            "per probe geometry, cached) or three-layer diffusion (about 40 s, smooth)."
         ),
     )
 

@@ -305,7 +305,7 @@ def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     coords, splits = L._solve_axes(grid, geo)
     x, q, y = coords[0], coords[1], coords[-1]
 
-    def smooth(y):  # a difference with a kink at tau = 1 (y = 0), inside the fit's span
+    def smooth(y, q=q):  # a difference with a kink at tau = 1 (y = 0), inside the fit's span
         gx, gq, gy = np.meshgrid(x, q, y, indexing="ij")
         d = 0.05 * gx - 0.1 * gq * gx + 0.02 * gy**2 + 0.03 * np.maximum(gy, 0.0)
         return d[:, :, None, None, None, :, None]
@@ -315,11 +315,12 @@ def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     mc = base + smooth(y)
     got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5))
     np.testing.assert_allclose(got, np.broadcast_to(smooth(y), got.shape), atol=1e-10)
-    # evaluated between the thickness nodes (the table's refined thickness axis)
-    fine = L._refined_coords(y, 2, splits[-1])
-    got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5), tau_at=fine)
-    assert got.shape == shape[:-2] + (fine.size, 1)
-    np.testing.assert_allclose(got, np.broadcast_to(smooth(fine), got.shape), atol=1e-10)
+    # evaluated between the ratio and thickness nodes (the table's refined axes)
+    fine, fine_q = L._refined_coords(y, 2, splits[-1]), L._refined_coords(q, 3, None)
+    got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5), at=(x, fine_q, fine))
+    assert got.shape == (x.size, fine_q.size) + shape[2:-2] + (fine.size, 1)
+    np.testing.assert_allclose(got, np.broadcast_to(smooth(fine, fine_q), got.shape),
+                               atol=1e-10)
     # 1 % node noise is reduced (252 nodes, 120 terms: by about sqrt(120 / 252))
     noise = 0.01 * np.random.default_rng(1).standard_normal(shape)
     got = L._residual_fit(mc + noise, base, coords, splits[-1], (3, 2, 5))
@@ -340,20 +341,24 @@ def test_refined_thickness_nodes_are_those_of_the_spline_refinement():
     assert np.any(fine == 0.0)  # tau = 1 stays a node
 
 
-def test_diffusion_table_solves_every_thickness_node_directly():
-    # refined thickness nodes are diffusion solves, not spline values: exact there
+@pytest.mark.parametrize("axis", ["skin_transport_thickness", "musp_ratio"])
+def test_diffusion_table_solves_every_refined_scattering_node_directly(axis):
+    # refined thickness and ratio nodes are diffusion solves, not spline values: exact there
     grid = dict(L.LUT_GRIDS["tiny"])
-    grid["skin_transport_thickness"] = (0.25, 13.0, 3, 3)
+    grid[axis] = grid[axis][:2] + (3, 3)
     lut = L.build_lut(RHO, T_EPI, grid=grid, solver="diffusion")
-    pts = {k: lut.axis_nodes(k) for k in L.LUT_AXES}
-    tau = pts["skin_transport_thickness"]
-    assert tau.size == 7
-    musp = np.full(tau.size, pts["musp_dermis_per_cm"][1])
-    kw = dict(mua_epidermis_per_cm=np.full(tau.size, pts["mua_epidermis_per_cm"][1]),
-              mua_dermis_per_cm=np.full(tau.size, pts["mua_dermis_per_cm"][0]),
-              musp_dermis_per_cm=musp,
-              mua_subcutis_per_cm=np.full(tau.size, pts["mua_subcutis_per_cm"][1]),
-              musp_subcutis_per_cm=musp * pts["musp_ratio"][0], skin_thickness_cm=tau / musp)
+    nodes = {k: lut.axis_nodes(k) for k in L.LUT_AXES}
+    moving = nodes[axis]
+    assert moving.size == 7
+    pts = {k: np.full(moving.size, v[1] if v.size > 1 else v[0]) for k, v in nodes.items()}
+    pts["mua_dermis_per_cm"][:] = nodes["mua_dermis_per_cm"][0]
+    pts[axis] = moving
+    musp = pts["musp_dermis_per_cm"]
+    kw = dict(mua_epidermis_per_cm=pts["mua_epidermis_per_cm"],
+              mua_dermis_per_cm=pts["mua_dermis_per_cm"], musp_dermis_per_cm=musp,
+              mua_subcutis_per_cm=pts["mua_subcutis_per_cm"],
+              musp_subcutis_per_cm=musp * pts["musp_ratio"],
+              skin_thickness_cm=pts["skin_transport_thickness"] / musp)
     r_dir, _ = layers.three_layer_reflectance(RHO, epidermis_thickness_cm=T_EPI, **kw)
     np.testing.assert_allclose(L.interpolate_lut(lut, **kw)[0], r_dir, rtol=1e-5)
 

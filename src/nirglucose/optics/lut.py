@@ -44,9 +44,9 @@ detector window), so the table stores the three-layer diffusion model
 (:mod:`nirglucose.optics.layers`) plus a least-squares fit of the Monte Carlo minus
 diffusion difference over the 252 scattering nodes, for every absorption node
 (:func:`_residual_fit`; the diffusion model supplies the shape, the transport solution
-the level). The thickness axis is refined by solving the diffusion model at its refined
-nodes and evaluating the fit there; every other axis by cubic splines; the float32 table
-is interpolated multilinearly.
+the level). The thickness and ratio axes are refined by solving the diffusion model at
+their refined nodes and evaluating the fit there; every other axis by cubic splines; the
+float32 table is interpolated multilinearly.
 
 Accuracy (README, "Layered skin optics"): interpolation, noise-free (the diffusion
 solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.19 %,
@@ -56,7 +56,7 @@ photons, other random numbers) at 102 points, median 0.26 %, maximum 1.67 %, a c
 limited by those solves' own scatter.
 Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
-(about 35 s; for sweeps of the probe geometry, each of which needs its own table).
+(about 40 s; for sweeps of the probe geometry, each of which needs its own table).
 
 Cache: ``<cache dir>/lut-<key>.npz``, where the key hashes the geometry, the grid and the
 solver settings; the directory is ``$NIRGLUCOSE_CACHE``, else
@@ -123,7 +123,7 @@ __all__ = [
 _log = logging.getLogger(__name__)
 
 #: Bump when the solver or the file layout changes: old cache files are then ignored.
-_FORMAT_VERSION = 3
+_FORMAT_VERSION = 4
 
 #: Axis names, in table order, with their coordinate and unit. The thickness axis is
 #: the skin (epidermis + dermis) thickness in transport mean free paths,
@@ -143,8 +143,9 @@ LUT_AXES: dict[str, tuple[str, str]] = {
 #: ``n_solve`` nodes uniform in the axis' coordinate, then each axis is refined
 #: ``upsample`` times by a cubic spline through the solved nodes, and the refined table
 #: is what is interpolated multilinearly. The thickness axis (uniform on either side of
-#: tau = 1) is not splined: the diffusion model is solved at each of its refined nodes,
-#: and the Monte Carlo correction (:func:`_residual_fit`) evaluated there. The
+#: tau = 1) and the ratio axis are not splined (:data:`_SOLVED_AXES`): the diffusion
+#: model is solved at each of their refined nodes, and the Monte Carlo correction
+#: (:func:`_residual_fit`) evaluated there. The
 #: ``default`` box covers every LED in 700-1300 nm, Fitzpatrick I-VI, the physiology
 #: presets and skin 0.4-4.2 mm; ``tiny`` covers the same box coarsely, for tests.
 LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
@@ -191,10 +192,20 @@ LUT_MC_SETTINGS: dict = {
 #: What solves the model at the table's nodes. ``"monte-carlo"`` (default): the white
 #: Monte Carlo of the RTE above, about 65 CPU-minutes for the default grid, with 0.5-1 %
 #: noise per node. ``"diffusion"``: the three-layer diffusion model
-#: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 35 s, smooth, within
+#: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 40 s, smooth, within
 #: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.90-1.05 x
 #: the Monte Carlo table over the paper cohort: for quick sweeps of the probe geometry.
 LUT_SOLVERS = ("monte-carlo", "diffusion")
+
+#: Scattering axes (table positions): those the white Monte Carlo runs or scales over,
+#: along which :func:`_residual_fit` smooths the Monte Carlo noise.
+_SCATTERING = (0, 1, 5)
+
+#: Axes at whose refined nodes the diffusion model is solved (and the Monte Carlo fit
+#: evaluated) instead of splined through the solve nodes: the thickness axis, where R
+#: has the kink at tau = 1, and the ratio axis, whose 3 solve nodes give only a
+#: quadratic spline where thin skin makes R depend strongly on the subcutis.
+_SOLVED_AXES = ("musp_ratio", "skin_transport_thickness")
 
 #: Output channels of :attr:`SkinLUT.values`.
 _CHANNELS = ("ln_reflectance", "ln_path_epidermis", "ln_path_dermis", "ln_path_subcutis")
@@ -499,8 +510,11 @@ def build_lut(
     :func:`~nirglucose.optics.mc_white.white_mc_tally` turns it into R and the mean
     paths at every ``musp_dermis_per_cm`` node (scaling) and every absorption node
     (re-weighting), exactly for the RTE up to Monte Carlo noise. Every run uses the
-    same random numbers (:data:`LUT_MC_SETTINGS` ``seed``). The refinement by cubic
-    splines then runs as before, on the axes whose ``upsample`` exceeds 1.
+    same random numbers (:data:`LUT_MC_SETTINGS` ``seed``). The table holds the
+    three-layer diffusion model plus a smooth fit of the Monte Carlo minus diffusion
+    difference (:func:`_residual_fit`); on the axes of :data:`_SOLVED_AXES` both are
+    evaluated at every refined node, the other axes whose ``upsample`` exceeds 1 are
+    refined by cubic splines.
 
     References
     ----------
@@ -524,32 +538,36 @@ def build_lut(
     coords, splits = _solve_axes(grid, geo)
     ax = {k: _inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)}
     degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
-    tau_name = names[-1]
-    tau_u = None  # the thickness axis' refined nodes, where they are solved directly
     if solver == "monte-carlo" and degrees is None:  # raw Monte Carlo nodes, splined
         values = _monte_carlo_nodes(ax, grid, geo, photons)
+        solved = {}
     else:
-        # the diffusion model is solved at every refined thickness node (no spline
-        # through the kink-bearing thickness axis); the Monte Carlo correction is a
-        # smooth fit, evaluated there directly
-        m_tau = grid[tau_name][3]
-        tau_u = _refined_coords(coords[-1], m_tau, splits[-1])
-        values = _diffusion_nodes({**ax, tau_name: _inverse(LUT_AXES[tau_name][0], tau_u)},
-                                  geo)
+        # the diffusion model is solved at every refined node of the scattering axes
+        # that it resolves better than a spline (_SOLVED_AXES); the Monte Carlo
+        # correction is a smooth fit over the scattering axes, evaluated there directly
+        solved = {i: _refined_coords(coords[i], grid[k][3], splits[i])
+                  for i, k in enumerate(names) if k in _SOLVED_AXES}
+        values = _diffusion_nodes(
+            {k: _inverse(LUT_AXES[k][0], solved[i]) if i in solved else ax[k]
+             for i, k in enumerate(names)}, geo)
         if solver == "monte-carlo":
-            at_solve = values.take(np.arange(coords[-1].size) * m_tau, axis=-2)
+            at_solve = values
+            for i in solved:  # solve node j is refined node j * upsample
+                at_solve = at_solve.take(np.arange(coords[i].size) * grid[names[i]][3],
+                                         axis=i)
+            at = tuple(solved.get(i, coords[i]) for i in _SCATTERING)
             values += _residual_fit(_monte_carlo_nodes(ax, grid, geo, photons), at_solve,
-                                    coords, splits[-1], degrees, tau_at=tau_u)
+                                    coords, splits[-1], degrees, at=at)
     # model solves: the Monte Carlo runs' nodes, or every diffusion node of the table
     n_solves = int(np.prod([c.size for c in coords]))
     if solver == "diffusion":
-        n_solves = n_solves // coords[-1].size * tau_u.size
+        n_solves = int(np.prod([solved.get(i, c).size for i, c in enumerate(coords)]))
     nodes = []
     for i, name in enumerate(names):
         m = grid[name][3]
         u = coords[i]
-        if name == tau_name and tau_u is not None:
-            u = tau_u
+        if i in solved:
+            u = solved[i]
         elif m > 1:
             values, u = _upsample(values, i, u, m, splits[i])
         nodes.append(u)
@@ -598,7 +616,8 @@ def _residual_basis(coords: list[np.ndarray], split: int | None,
 
 
 def _residual_fit(mc: np.ndarray, diffusion: np.ndarray, coords: list, split: int | None,
-                  degrees, tau_at: np.ndarray | None = None) -> np.ndarray:
+                  degrees, at: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                  ) -> np.ndarray:
     """Monte Carlo minus diffusion, with its noise along the scattering axes fitted away.
 
     The table stores ln R and ln paths of the diffusion model plus a least-squares fit
@@ -611,18 +630,19 @@ def _residual_fit(mc: np.ndarray, diffusion: np.ndarray, coords: list, split: in
     nodes of the default grid. A control-variate use of the diffusion model (it only
     supplies the shape; the level comes from the transport solution).
 
-    Returns the fitted difference at the solve nodes, or, with ``tau_at``, at those
-    thickness coordinates instead of the solve nodes' (the fit is a smooth function of
-    ln tau, so the table's thickness axis needs no spline through the Monte Carlo
-    nodes).
+    Returns the fitted difference at the solve nodes, or, with ``at``, at the
+    coordinates (ln mus'_dermis, musp_ratio, ln tau) given there (the fit is a smooth
+    function of them, so the table's refined scattering axes need no spline through
+    the Monte Carlo nodes).
     """
     basis = _residual_basis(coords, split, tuple(degrees))
-    d = np.moveaxis(mc - diffusion, -2, 2)  # (musp, q, tau, mua_d, mua_s, mua_e, C)
+    # (musp, q, tau, mua_d, mua_s, mua_e, C): the scattering axes first
+    d = np.moveaxis(mc - diffusion, -2, 2)
     coef, *_ = np.linalg.lstsq(basis, d.reshape(basis.shape[0], -1), rcond=None)
-    if tau_at is None:
+    if at is None:
         return np.moveaxis((basis @ coef).reshape(d.shape), 2, -2)
-    basis = _residual_basis(coords, split, tuple(degrees), at=(coords[0], coords[1], tau_at))
-    shape = d.shape[:2] + (tau_at.size,) + d.shape[3:]
+    basis = _residual_basis(coords, split, tuple(degrees), at=at)
+    shape = tuple(a.size for a in at) + d.shape[3:]
     return np.moveaxis((basis @ coef).reshape(shape), 2, -2)
 
 
@@ -780,7 +800,7 @@ def load_or_build_lut(
         _log.warning("building the rte-lut skin table %s by Monte Carlo: %d runs of %d "
                      "photons (the default grid: about an hour of CPU), once per probe "
                      "geometry, cached in %s; optics.lut_solver=diffusion builds one in "
-                     "about 35 s", key, runs, _mc_photons(grid, None), path.parent)
+                     "about 40 s", key, runs, _mc_photons(grid, None), path.parent)
     else:
         _log.info("building the skin LUT %s (grid %s, solver %s)", key,
                   grid if isinstance(grid, str) else "custom", solver)
