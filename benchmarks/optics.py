@@ -19,7 +19,8 @@
   snapshots (default here 200 000, fewer than benchmarks/simulate.py's 1 000 000);
 * accuracy_independent (only with NIRGLUCOSE_BENCH_REFERENCE=1, about 17 CPU-minutes):
   the table against independent direct solves (4 000 000 photons, other random
-  numbers) at 36 points in 3 groups;
+  numbers) at 36 points in 3 groups (one solve per point: too noisy to judge 1 % at a
+  point; benchmarks/optics_reference.py averages seeds for that);
 * Monte Carlo (only with NIRGLUCOSE_BENCH_MC=1, about 2 min of CPU): the three-layer
   model against nirglucose.optics.mc_paths at a few skin states.
 

@@ -49,11 +49,12 @@ their refined nodes and evaluating the fit there; every other axis by cubic spli
 float32 table is interpolated multilinearly.
 
 Accuracy (README, "Layered skin optics"): interpolation, noise-free (the diffusion
-solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.19 %,
+solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.17 %,
 maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.19 % (two builds, 400 000 and
-1 600 000 photons, compared); against independent Monte Carlo solves (4 000 000
-photons, other random numbers) at 102 points, median 0.26 %, maximum 1.67 %, a check
-limited by those solves' own scatter.
+1 600 000 photons, compared); against independent references (the mean of two
+4 000 000-photon solves with other seeds, standard error 0.21 %) at 108 random off-grid
+points (``benchmarks/optics_reference.py``), median 0.23 %, RMS 0.40 %, maximum 1.29 %,
+three points beyond 1 % but none by more than two reference standard errors.
 Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
 (about 40 s; for sweeps of the probe geometry, each of which needs its own table).
