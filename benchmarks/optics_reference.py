@@ -88,7 +88,7 @@ def _solve(task: tuple) -> tuple[int, int]:
     os.environ["NIRGLUCOSE_CACHE"] = lut_dir
     from nirglucose.optics import lut as L
 
-    lut = L.load_or_build_lut(RHO_CM, T_EPI_CM, N_TISSUE)
+    lut = L.get_lut(RHO_CM, T_EPI_CM, N_TISSUE)  # memoised: read once per worker
     r, se, paths = L.direct_solve(lut, group_pts, n_photons=photons, seed=seed)
     tmp = Path(str(path) + ".tmp.npz")
     np.savez(tmp, r=r, se=se, paths=paths)
@@ -97,11 +97,10 @@ def _solve(task: tuple) -> tuple[int, int]:
 
 
 def _reference(runs: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean over the seeds, its within-seed standard error, and the seeds' variance."""
+    """Mean over the seeds (two or more), its within-seed standard error, the seeds' variance."""
     r = np.stack([x["r"] for x in runs])
     own = np.sqrt(np.mean(np.stack([x["se"] for x in runs]) ** 2, axis=0))
-    between = r.var(axis=0, ddof=1) if len(runs) > 1 else np.full(r.shape[1], np.nan)
-    return r.mean(axis=0), own, between
+    return r.mean(axis=0), own, r.var(axis=0, ddof=1)
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -121,9 +120,17 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
     from nirglucose.optics import lut as L
 
-    seeds = [int(s) for s in args.seeds.split(",")]
+    try:
+        seeds = [int(s) for s in args.seeds.split(",")]
+    except ValueError:
+        ap.error(f"--seeds {args.seeds!r}: give integers separated by commas, e.g. 1001,1002")
     if int(L.LUT_MC_SETTINGS["seed"]) in seeds or len(set(seeds)) < 2:
         ap.error(f"give at least two seeds, none the table's ({L.LUT_MC_SETTINGS['seed']})")
+    for name in ("groups", "per_group", "photons", "workers"):
+        if getattr(args, name) < 1:
+            ap.error(f"--{name.replace('_', '-')} must be at least 1")
+    if args.thin_groups < 0:
+        ap.error("--thin-groups must be at least 0")
     lut = _table()  # sets NIRGLUCOSE_CACHE from NIRGLUCOSE_BENCH_LUT_CACHE
     n_groups = args.groups + args.thin_groups
     pts, group = _points(lut, args.groups, args.per_group, args.rng, args.thin_groups)
@@ -134,8 +141,7 @@ def main(argv: list[str] | None = None) -> dict:
         return work / (f"ref-rng{args.rng}-g{g}of{args.groups}+{args.thin_groups}"
                        f"x{args.per_group}-p{args.photons}-s{seed}.npz")
 
-    lut_dir = os.environ.get("NIRGLUCOSE_CACHE", str(L.cache_dir()))
-    tasks = [(lut_dir, {k: v[group == g] for k, v in pts.items()}, args.photons, seed,
+    tasks = [(str(L.cache_dir()), {k: v[group == g] for k, v in pts.items()}, args.photons, seed,
               path(g, seed))
              for seed in seeds for g in range(n_groups) if not path(g, seed).exists()]
     if tasks:

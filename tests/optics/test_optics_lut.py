@@ -374,8 +374,8 @@ def test_direct_solve_with_other_random_numbers_is_an_independent_reference(tiny
 
 
 def test_default_diffusion_table_is_within_one_percent_off_grid():
-    # the default grid's interpolation (cubic-spline refinement, then multilinear on the
-    # refined nodes) against the model it tabulates, noise-free: the part of the Monte
+    # the default grid's interpolation (refined nodes solved or splined, then
+    # multilinear) against the model it tabulates, noise-free: the part of the Monte
     # Carlo table's error that is not Monte Carlo noise
     lut = L.build_lut(RHO, T_EPI, solver="diffusion")
     err = L.lut_errors(lut, n_points=300, rng=11, groups=None)

@@ -202,7 +202,8 @@ LUT_SOLVERS = ("monte-carlo", "diffusion")
 
 #: Scattering axes (table positions): those the white Monte Carlo runs or scales over,
 #: along which :func:`_residual_fit` smooths the Monte Carlo noise.
-_SCATTERING = (0, 1, 5)
+_SCATTERING = tuple(list(LUT_AXES).index(k) for k in
+                    ("musp_dermis_per_cm", "musp_ratio", "skin_transport_thickness"))
 
 #: Axes at whose refined nodes the diffusion model is solved (and the Monte Carlo fit
 #: evaluated) instead of splined through the solve nodes: the thickness axis, where R
@@ -562,9 +563,8 @@ def build_lut(
             values += _residual_fit(_monte_carlo_nodes(ax, grid, geo, photons), at_solve,
                                     coords, splits[-1], degrees, at=at)
     # model solves: the Monte Carlo runs' nodes, or every diffusion node of the table
-    n_solves = int(np.prod([c.size for c in coords]))
-    if solver == "diffusion":
-        n_solves = int(np.prod([solved.get(i, c).size for i, c in enumerate(coords)]))
+    solved_nodes = solved if solver == "diffusion" else {}
+    n_solves = int(np.prod([solved_nodes.get(i, c).size for i, c in enumerate(coords)]))
     nodes = []
     for i, name in enumerate(names):
         m = grid[name][3]
