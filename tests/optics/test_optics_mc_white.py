@@ -77,6 +77,27 @@ def test_same_seed_same_bytes_for_any_thread_count():
     assert not np.array_equal(a.radius[:50], c.radius[:50])
 
 
+def test_disjoint_photon_ranges_are_independent_and_make_up_the_whole_run():
+    kw = dict(seed=5, mua_ref=0.01, g=0.9, n_threads=2)
+    args = (2.0, 0.6, [0.2, 0.3], (1.0, 4.0))
+    whole = white_mc_run(*args, n_photons=10_000, **kw)
+    a = white_mc_run(*args, n_photons=6_000, **kw)
+    b = white_mc_run(*args, n_photons=4_000, first_photon=6_000, **kw)
+    # the same photons, recorded in the same order
+    np.testing.assert_array_equal(np.concatenate([a.radius, b.radius]), whole.radius)
+    np.testing.assert_array_equal(np.concatenate([a.path, b.path]), whole.path)
+    assert b.batch.min() == 0 and b.n_batches == 1  # standard errors within the range
+    tally = [white_mc_tally(r, 0.2, 0.05, [10.0, 15.0], [5.0], [0.3], [0.2])
+             for r in (whole, a, b)]
+    mean = (6_000 * tally[1]["reflectance_per_cm2"] + 4_000 * tally[2]["reflectance_per_cm2"]
+            ) / 10_000
+    np.testing.assert_allclose(mean, tally[0]["reflectance_per_cm2"], rtol=1e-12)
+    assert not np.allclose(tally[1]["reflectance_per_cm2"], tally[2]["reflectance_per_cm2"])
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ConfigError, match="first_photon"):
+            white_mc_run(*args, n_photons=10, first_photon=bad, **kw)
+
+
 def test_tally_reweighting_is_the_microscopic_beer_lambert_law():
     run = white_mc_run(3.0, 0.6, [0.16, 0.3], (1.0, 12.0), n_photons=20_000, seed=3,
                        mua_ref=0.01 / 30)

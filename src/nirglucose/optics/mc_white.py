@@ -367,6 +367,7 @@ def white_mc_run(
     n_ambient: float = 1.0,
     path_split: float = np.inf,
     n_threads: int | None = None,
+    first_photon: int = 0,
 ) -> WhiteRun:
     r"""Trace photons through skin over subcutis, in transport units, without absorption.
 
@@ -396,6 +397,11 @@ def white_mc_run(
     n_threads : int, optional
         Threads; default ``$NIRGLUCOSE_MC_THREADS`` or the available cores (at most 8).
         The result does not depend on it. [-]
+    first_photon : int, optional
+        Index of the first photon: the run traces photons ``first_photon`` to
+        ``first_photon + n_photons - 1`` of the seed's streams, so runs over disjoint
+        ranges are independent, and their tallies' photon-weighted mean is the run over
+        the union (a build extended, or split in two for cross-validation). Default 0. [-]
 
     Returns
     -------
@@ -440,16 +446,21 @@ def white_mc_run(
             raise ConfigError(f"{name} = {v!r} is out of range; valid range is {valid} [-]")
     if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
         raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
+    if isinstance(first_photon, bool) or not isinstance(first_photon, int | np.integer) \
+            or first_photon < 0:
+        raise ConfigError(f"first_photon = {first_photon!r} is invalid; expected an integer "
+                          f">= 0 [-]")
     if float(mua_ref) == 0.0 and q > 0.0:
         raise ConfigError("mua_ref = 0 never ends a photon in a semi-infinite medium; "
                           "valid range is (0, inf) when musp_ratio > 0 [-]")
     n_rel = float(n_tissue) / float(n_ambient)
-    n = int(n_photons)
-    starts = list(range(0, n, _BATCH_PHOTONS))
+    n, first = int(n_photons), int(first_photon)
+    starts = list(range(first, first + n, _BATCH_PHOTONS))
 
     def one(start: int):
-        return _trace(int(seed), start, min(_BATCH_PHOTONS, n - start), tau, q, float(g),
-                      n_rel, float(mua_ref), dep, r_lo, r_hi, min(float(path_split), _BIG))
+        return _trace(int(seed), start, min(_BATCH_PHOTONS, first + n - start), tau, q,
+                      float(g), n_rel, float(mua_ref), dep, r_lo, r_hi,
+                      min(float(path_split), _BIG))
 
     threads = min(_n_threads(n_threads), len(starts))
     if threads > 1:
@@ -462,7 +473,7 @@ def white_mc_run(
         radius=np.concatenate([p[0] for p in parts]),
         path=np.concatenate([p[2] for p in parts]),
         weight=np.concatenate([p[3] for p in parts]),
-        batch=np.concatenate([p[1] for p in parts]) // _BATCH_PHOTONS,
+        batch=(np.concatenate([p[1] for p in parts]) - first) // _BATCH_PHOTONS,
         depths=dep,
         n_photons=n,
         n_batches=n_batches,
@@ -470,7 +481,8 @@ def white_mc_run(
         transmitted=float(sum(p[5] for p in parts)) / n,
         settings={"seed": int(seed), "tau": tau, "q": q, "g": float(g),
                   "n_tissue": float(n_tissue), "n_ambient": float(n_ambient),
-                  "mua_ref": float(mua_ref), "path_split": float(path_split)},
+                  "mua_ref": float(mua_ref), "path_split": float(path_split),
+                  "first_photon": first},
     )
 
 
