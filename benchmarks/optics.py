@@ -1,14 +1,14 @@
 """The rte-lut forward model: LUT build time, accuracy, interpolation speed, simulator cost.
 
 * build: the default table built from scratch by white Monte Carlo in a temporary cache
-  directory (wall and CPU seconds, number of nodes solved; about an hour of CPU), or
+  directory (wall and CPU seconds, number of nodes solved; about 2 hours of CPU), or
   reused from NIRGLUCOSE_BENCH_LUT_CACHE;
 * accuracy: table / direct solve - 1 at 120 random off-grid points uniform in each axis'
   coordinate over the table's box, in 12 groups sharing (musp_ratio, thickness) (one
   Monte Carlo run each); "direct solve" is nirglucose.optics.lut.direct_solve, a run at
-  the point with the table's settings and common random numbers (about 45 CPU-minutes
-  at the default table's 1.6 million photons per run); with the direct solve's own
-  standard error;
+  the point with the table's settings and common random numbers (at the default
+  table's 3.2 million photons per run about 90 CPU-minutes: 45 measured at 1.6 million);
+  with the direct solve's own standard error;
 * monte_carlo_vs_diffusion: the MC table / the layered diffusion model
   (nirglucose.optics.layers) over the box and over the paper preset's cohort;
 * throughput: points per CPU second of the generic interpolation and of the simulator's

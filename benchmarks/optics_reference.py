@@ -21,7 +21,7 @@ Protocol (a hold-out check: these points and seeds took part in no choice of the
   (default ``optics-reference/`` in the nirglucose cache directory) as it finishes, so
   an interrupted run resumes;
 * the table: the default ``rte-lut`` table, from ``NIRGLUCOSE_BENCH_LUT_CACHE`` when set
-  (else the user cache; a cold cache builds it: about an hour of CPU).
+  (else the user cache; a cold cache builds it: about 2 hours of CPU).
 
 The default (8 + 1 groups x 12 points, 2 seeds x 4 000 000 photons) took 157
 CPU-minutes on the development machine (per seed: about 9 CPU-minutes a group on

@@ -4,7 +4,7 @@ Fitzpatrick I (melanosome fraction 0.015) and VI (0.135), otherwise nominal skin
 blood 2 %, SO2 0.7, water 65 %, subcutis fat 80 %, glucose 100 mg/dL, skin 1.8 mm,
 epidermis 80 um), the probe of the default config (3 mm, 6.6 mm^2 photodiode), from the
 rte-lut model's table (Monte Carlo of the RTE, nirglucose.optics.lut; built on first use,
-about an hour of CPU, then cached), with the three-layer diffusion model
+about 2 hours of CPU, then cached), with the three-layer diffusion model
 (nirglucose.optics.layers) dotted for comparison. Also prints, per LED, the share of the
 path in the dermis and the glucose sensitivity d ln R / dC at literature magnitudes.
 

@@ -354,7 +354,7 @@ class OpticsConfig(_Model):
     lut_solver: Literal["monte-carlo", "diffusion"] = Field(
         "monte-carlo",
         description=(
-            "What fills the rte-lut model's table: Monte Carlo of the RTE (about 65 CPU-min "
+            "What fills the rte-lut model's table: Monte Carlo of the RTE (about 2 CPU-hours "
             "per probe geometry, cached) or three-layer diffusion (about 40 s, smooth)."
         ),
     )

@@ -304,6 +304,7 @@ def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     geo = L._geometry(RHO, T_EPI, 1.4, 1.0)
     coords, splits = L._solve_axes(grid, geo)
     x, q, y = coords[0], coords[1], coords[-1]
+    deg = L.LUT_MC_SETTINGS["residual_fit_degrees"]
 
     def smooth(y, q=q):  # a difference with a kink at tau = 1 (y = 0), inside the fit's span
         gx, gq, gy = np.meshgrid(x, q, y, indexing="ij")
@@ -313,21 +314,23 @@ def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     shape = (x.size, q.size, 1, 1, 2, y.size, 1)
     base = np.random.default_rng(0).normal(-3.0, 0.5, shape)
     mc = base + smooth(y)
-    got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5))
+    got = L._residual_fit(mc, base, coords, splits[-1], deg)
     np.testing.assert_allclose(got, np.broadcast_to(smooth(y), got.shape), atol=1e-10)
     # evaluated between the ratio and thickness nodes (the table's refined axes)
     fine, fine_q = L._refined_coords(y, 2, splits[-1]), L._refined_coords(q, 3, None)
-    got = L._residual_fit(mc, base, coords, splits[-1], (3, 2, 5), at=(x, fine_q, fine))
+    got = L._residual_fit(mc, base, coords, splits[-1], deg, at=(x, fine_q, fine))
     assert got.shape == (x.size, fine_q.size) + shape[2:-2] + (fine.size, 1)
     np.testing.assert_allclose(got, np.broadcast_to(smooth(fine, fine_q), got.shape),
                                atol=1e-10)
-    # 1 % node noise is reduced (252 nodes, 120 terms: by about sqrt(120 / 252))
+    # 1 % node noise is reduced (252 nodes, 150 terms: by about sqrt(150 / 252))
     noise = 0.01 * np.random.default_rng(1).standard_normal(shape)
-    got = L._residual_fit(mc + noise, base, coords, splits[-1], (3, 2, 5))
+    got = L._residual_fit(mc + noise, base, coords, splits[-1], deg)
     left = np.sqrt(np.mean((got - smooth(y)) ** 2))
     assert left < 0.85 * 0.01
-    assert L._residual_basis(coords, splits[-1], (3, 2, 5)).shape == (x.size * q.size * y.size,
-                                                                     120)
+    # full rank (a unique fit between the nodes): 5 x 3 x (5 left of tau = 1 + 5 right)
+    basis = L._residual_basis(coords, splits[-1], deg)
+    assert basis.shape == (x.size * q.size * y.size, 150)
+    assert np.linalg.matrix_rank(basis) == 150
 
 
 def test_refined_thickness_nodes_are_those_of_the_spline_refinement():
@@ -387,10 +390,10 @@ def test_default_diffusion_table_is_within_one_percent_off_grid():
 
 def test_a_default_monte_carlo_build_is_announced_as_a_warning(tiny, monkeypatch, tmp_path,
                                                                caplog):
-    # the hour-long first build must show without logging configured (a warning)
+    # the hours-long first build must show without logging configured (a warning)
     monkeypatch.setattr(L, "build_lut", lambda *a, **k: tiny)
     with caplog.at_level("INFO", logger="nirglucose.optics.lut"):
         L.load_or_build_lut(RHO, T_EPI, directory=tmp_path)
         L.load_or_build_lut(RHO, T_EPI, directory=tmp_path, solver="diffusion")
-    levels = [(r.levelname, "about an hour" in r.getMessage()) for r in caplog.records]
+    levels = [(r.levelname, "about 2 hours" in r.getMessage()) for r in caplog.records]
     assert levels == [("WARNING", True), ("INFO", False)]

@@ -36,27 +36,27 @@ mean paths at every ``musp_dermis_per_cm`` node by scaling and at every absorpti
 by re-weighting (exact for the RTE; Kienle & Patterson 1996, Sassaroli & Fantini 2004).
 Every run uses the same random numbers (:data:`LUT_MC_SETTINGS`), so the noise is
 correlated between nodes. The point reflectance at rho is a fourth-order kernel estimate
-over rho +- 0.75 mm. The default grid (36 runs of 1 600 000 photons) takes about 65
-minutes of CPU (38 of wall time on 2 cores); its nodes carry a Monte Carlo standard
-error of R of 0.5-1 %. Common random numbers do not make that noise smooth
+over rho +- 0.75 mm. The default grid (36 runs of 3 200 000 photons) takes about 2
+hours of CPU (about 70 minutes of wall time on 2 cores); its nodes carry a Monte Carlo
+standard error of R of 0.3-0.7 %. Common random numbers do not make that noise smooth
 along the scattering axes (a photon's path changes with the layer boundary and the
 detector window), so the table stores the three-layer diffusion model
 (:mod:`nirglucose.optics.layers`) plus a least-squares fit of the Monte Carlo minus
 diffusion difference over the 252 scattering nodes, for every absorption node
 (:func:`_residual_fit`; the diffusion model supplies the shape, the transport solution
-the level). The thickness and ratio axes are refined by solving the diffusion model at
+the level; its degrees chosen by cross-validation between two independent halves of the
+photons). The thickness and ratio axes are refined by solving the diffusion model at
 their refined nodes and evaluating the fit there; every other axis by cubic splines; the
 float32 table is interpolated multilinearly.
 
 Accuracy (README, "Layered skin optics"): interpolation, noise-free (the diffusion
 solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.17 %,
-maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.19 % (two builds, 400 000 and
-1 600 000 photons, compared); against independent references (the mean of two
-4 000 000-photon solves with other seeds, standard error 0.21 %) at 108 random off-grid
-points (``benchmarks/optics_reference.py``), median 0.23 %, RMS 0.40 %, maximum 1.29 %,
-three points beyond 1 % but none by more than two reference standard errors; in
-thin skin (0.37-0.44 mm) with a low subcutis/dermis ratio and much melanin, up to
-1.46 % low.
+maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.17 % (two tables from
+disjoint halves of the photons compared); against independent references (the mean of
+two 4 000 000-photon solves with other seeds, standard error 0.2 %) at random off-grid
+points (``benchmarks/optics_reference.py``), see the README: within 1 % to within the
+references' uncertainty; in thin skin (0.37-0.44 mm, below the presets' range) with a
+low subcutis/dermis ratio and much melanin, up to 1.13 % low.
 Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
 (about 40 s; for sweeps of the probe geometry, each of which needs its own table).
@@ -171,8 +171,11 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
 }
 
 #: Monte Carlo photons per (musp_ratio, skin_transport_thickness) node, by grid name
-#: (a custom grid takes the default grid's unless :func:`build_lut` is told). [-]
-LUT_MC_PHOTONS: dict[str, int] = {"default": 1_600_000, "tiny": 8_000}
+#: (a custom grid takes the default grid's unless :func:`build_lut` is told). The
+#: default's 3.2 million: at 1.6 million the table's own noise exceeds 1 % at about 1 %
+#: of random points of the box (0.13 % at 3.2 million; two tables from disjoint halves
+#: of the photons compared, README). [-]
+LUT_MC_PHOTONS: dict[str, int] = {"default": 3_200_000, "tiny": 8_000}
 
 #: Settings of the white Monte Carlo behind the table (:mod:`nirglucose.optics.mc_white`;
 #: all in the cache key). ``seed``: the common random numbers of every run;
@@ -183,17 +186,20 @@ LUT_MC_PHOTONS: dict[str, int] = {"default": 1_600_000, "tiny": 8_000}
 #: detected at the farthest rho* of the box); ``anisotropy``: Henyey-Greenstein g;
 #: ``residual_fit_degrees``: degrees (ln mus'_dermis, musp_ratio, ln tau) of the fit that
 #: removes the node noise along the scattering axes (:func:`_residual_fit`;
-#: None keeps the raw Monte Carlo nodes).
+#: None keeps the raw Monte Carlo nodes); chosen by cross-validation between two
+#: disjoint halves of the default build's photons (fit one half, predict the other's
+#: nodes, and along ln tau its nodes left out one at a time): 4 in ln mus' (3 leaves
+#: a 0.3 % bias at the nodes), 5 along ln tau (6 or more oscillate between the nodes).
 LUT_MC_SETTINGS: dict = {
     "seed": 9,
     "half_width_cm": 0.075,
     "path_split": 300.0,
     "anisotropy": mc_white.SKIN_ANISOTROPY,
-    "residual_fit_degrees": (3, 2, 5),
+    "residual_fit_degrees": (4, 2, 5),
 }
 
 #: What solves the model at the table's nodes. ``"monte-carlo"`` (default): the white
-#: Monte Carlo of the RTE above, about 65 CPU-minutes for the default grid, with 0.5-1 %
+#: Monte Carlo of the RTE above, about 2 CPU-hours for the default grid, with 0.3-0.7 %
 #: noise per node. ``"diffusion"``: the three-layer diffusion model
 #: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 40 s, smooth, within
 #: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.90-1.05 x
@@ -670,8 +676,14 @@ def _diffusion_nodes(ax: dict, geo: dict) -> np.ndarray:
     return np.concatenate([np.log(refl)[..., None], np.log(paths)], axis=-1)
 
 
-def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int) -> np.ndarray:
-    """ln R and ln paths at the solve nodes from white Monte Carlo runs (see build_lut)."""
+def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int,
+                       first_photon: int = 0) -> np.ndarray:
+    """ln R and ln paths at the solve nodes from white Monte Carlo runs (see build_lut).
+
+    ``first_photon``: trace photons ``first_photon .. first_photon + photons - 1`` of each
+    run (:func:`~nirglucose.optics.mc_white.white_mc_run`); disjoint ranges give
+    independent node values (``benchmarks/optics_fit_degrees.py``).
+    """
     musp = ax["musp_dermis_per_cm"]
     rho, half = geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"])
     if not half < rho:
@@ -685,7 +697,7 @@ def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int) -> np.ndar
     for iq, q in enumerate(ax["musp_ratio"]):
         for it, tau in enumerate(ax["skin_transport_thickness"]):
             run = mc_white.white_mc_run(tau, q, musp * geo["epidermis_thickness_cm"], band,
-                                        **run_kw)
+                                        first_photon=first_photon, **run_kw)
             t = mc_white.white_mc_tally(run, rho, half, musp, ax["mua_epidermis_per_cm"],
                                         ax["mua_dermis_per_cm"], ax["mua_subcutis_per_cm"])
             refl = t["reflectance_per_cm2"]  # (musp, mua_e, mua_d, mua_s)
@@ -797,11 +809,11 @@ def load_or_build_lut(
         lut = _load(path, key)
         if lut is not None:
             return lut
-    if solver == "monte-carlo":  # minutes to an hour: say so where it shows
+    if solver == "monte-carlo":  # minutes to hours: say so where it shows
         spec = _resolve_grid(grid)
         runs = spec["musp_ratio"][2] * spec["skin_transport_thickness"][2]
         _log.warning("building the rte-lut skin table %s by Monte Carlo: %d runs of %d "
-                     "photons (the default grid: about an hour of CPU), once per probe "
+                     "photons (the default grid: about 2 hours of CPU), once per probe "
                      "geometry, cached in %s; optics.lut_solver=diffusion builds one in "
                      "about 40 s", key, runs, _mc_photons(grid, None), path.parent)
     else:
