@@ -5,7 +5,8 @@ medium whose optical properties mix the dermis and the subcutis in proportion to
 share of the photon path spent in each. That share follows from the mean photon
 penetration depth of diffuse reflectance at a source-detector separation rho
 (Weiss, Nossal & Bonner 1989): z ~ sqrt(rho / mu_eff) / (2 sqrt 2). The
-``rte-lut`` model replaces this approximation with an adding-doubling solution.
+``rte-lut`` model replaces this approximation with a Monte Carlo solution of light
+transport in three layers (:mod:`nirglucose.optics.lut`).
 
 References
 ----------
