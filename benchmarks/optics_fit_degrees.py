@@ -70,9 +70,8 @@ def _half_path(work: Path, grid: dict, geo: dict, first: int, photons: int) -> P
     return work / f"nodes-{key}-first{first}-n{photons}.npz"
 
 
-def _halves(work: Path) -> tuple[np.ndarray, np.ndarray]:
+def _halves(work: Path, L, grid: dict, geo: dict, ax: dict) -> tuple[np.ndarray, np.ndarray]:
     """ln R at the solve nodes from each half of the default table's photons."""
-    L, grid, geo, _, _, ax = _setup()
     photons = L.LUT_MC_PHOTONS["default"] // 2
     out = []
     for first in (0, photons):
@@ -92,10 +91,14 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--work", default=None,
                     help="directory of the halves' node values (resumable)")
     args = ap.parse_args(argv)
-    L, _, geo, coords, split, ax = _setup()
+    L, grid, geo, coords, split, ax = _setup()
     work = Path(args.work) if args.work else L.cache_dir() / "optics-fit-degrees"
-    work.mkdir(parents=True, exist_ok=True)
-    va, vb = _halves(work)
+    try:
+        work.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        ap.error(f"--work {str(work)!r} cannot be a directory here ({exc.strerror}); "
+                 f"give a writable directory")
+    va, vb = _halves(work, L, grid, geo, ax)
     diff = L._diffusion_nodes(ax, geo)[..., :1]
     n_tau = coords[-1].size
 
@@ -110,6 +113,7 @@ def main(argv: list[str] | None = None) -> dict:
         for j in range(1, n_tau - 1):
             if j == split:
                 continue
+            # (a side of tau = 1 with one node fewer caps its degree one lower)
             keep = [i for i in range(n_tau) if i != j]
             c = [*coords[:-1], coords[-1][keep]]
             at = (coords[0], coords[1], coords[-1][[j]])

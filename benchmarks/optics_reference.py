@@ -135,7 +135,11 @@ def main(argv: list[str] | None = None) -> dict:
     n_groups = args.groups + args.thin_groups
     pts, group = _points(lut, args.groups, args.per_group, args.rng, args.thin_groups)
     work = Path(args.work) if args.work else L.cache_dir() / "optics-reference"
-    work.mkdir(parents=True, exist_ok=True)
+    try:
+        work.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        ap.error(f"--work {str(work)!r} cannot be a directory here ({exc.strerror}); "
+                 f"give a writable directory")
 
     def path(g: int, seed: int) -> Path:
         return work / (f"ref-rng{args.rng}-g{g}of{args.groups}+{args.thin_groups}"
