@@ -376,6 +376,30 @@ def test_direct_solve_with_other_random_numbers_is_an_independent_reference(tiny
     assert np.all(np.abs(other / same - 1.0) < 5.0 * np.hypot(se / same, se_o / other))
 
 
+def test_direct_solve_runs_once_per_group_despite_round_off(tiny, monkeypatch):
+    # a group of random_lut_points shares (ratio, thickness); recovered from the solver
+    # arguments (tau = skin x mus') they differ in the last bits, which must not split
+    # the group into several runs (each a full Monte Carlo run)
+    pts = L.random_lut_points(tiny, 60, rng=3, groups=2)
+    musp = pts["musp_dermis_per_cm"]
+    tau = pts["skin_thickness_cm"] * musp
+    assert np.unique(np.stack([pts["musp_subcutis_per_cm"] / musp, tau], 1), axis=0).shape[0] > 2
+    calls = []
+    real = L.mc_white.white_mc_points
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs["skin_transport_thickness"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(L.mc_white, "white_mc_points", counted)
+    r, se, _ = L.direct_solve(tiny, pts, n_photons=9000)
+    assert len(calls) == 2
+    assert np.all(r > 0) and np.all(np.isfinite(se))
+    # a group solved alone gives the same values as within the whole set
+    first = {k: v[:30] for k, v in pts.items()}
+    np.testing.assert_array_equal(L.direct_solve(tiny, first, n_photons=9000)[0], r[:30])
+
+
 def test_default_diffusion_table_is_within_one_percent_off_grid():
     # the default grid's interpolation (refined nodes solved or splined, then
     # multilinear) against the model it tabulates, noise-free: the part of the Monte

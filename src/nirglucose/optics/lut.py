@@ -1351,9 +1351,10 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
     points (standard error 0).
 
     One white Monte Carlo run per distinct (``musp_ratio``, ``skin_transport_thickness``)
-    among the points, with the table's seed (common random numbers), photons,
-    reference absorption, roulette and detector kernel, so a solve differs from the
-    table's nodes only by where it is.
+    among the points (to 12 significant digits: the round-off of recovering them from
+    the solver arguments does not split a group of :func:`random_lut_points`), with the
+    table's seed (common random numbers), photons, reference absorption, roulette and
+    detector kernel, so a solve differs from the table's nodes only by where it is.
 
     Parameters
     ----------
@@ -1395,9 +1396,15 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
     q = p["musp_subcutis_per_cm"] / musp
     tau = p["skin_thickness_cm"] * musp
     refl, se, paths = np.empty(musp.size), np.empty(musp.size), np.empty((musp.size, 3))
-    pairs = np.unique(np.stack([q, tau], axis=1), axis=0)
-    for qq, tt in pairs:
-        sel = np.flatnonzero((q == qq) & (tau == tt))
+    # points that share (ratio, thickness) share a run; recovering both from the solver
+    # arguments rounds (tau = skin x mus'), so they are matched to 12 significant digits
+    pair = np.stack([q, tau], axis=1)
+    scale = 10.0 ** np.floor(np.log10(np.where(pair > 0, np.abs(pair), 1.0)))
+    _, first, which = np.unique(np.round(pair / scale, 11) * scale, axis=0,
+                                return_index=True, return_inverse=True)
+    for k, j in enumerate(first):
+        sel = np.flatnonzero(which.ravel() == k)
+        qq, tt = q[j], tau[j]
         refl[sel], se[sel], paths[sel] = mc_white.white_mc_points(
             geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"]),
             geo["epidermis_thickness_cm"],
