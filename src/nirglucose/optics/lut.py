@@ -53,10 +53,11 @@ Accuracy (README, "Layered skin optics"): interpolation, noise-free (the diffusi
 solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.17 %,
 maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.17 % (two tables from
 disjoint halves of the photons compared); against independent references (the mean of
-two 4 000 000-photon solves with other seeds, standard error 0.2 %) at random off-grid
-points (``benchmarks/optics_reference.py``), see the README: within 1 % to within the
-references' uncertainty; in thin skin (0.37-0.44 mm, below the presets' range) with a
-low subcutis/dermis ratio and much melanin, up to 1.13 % low.
+four 4 000 000-photon solves with other seeds, standard error 0.15 %) at 156 random
+off-grid points (``benchmarks/optics_reference.py``), see the README: RMS 0.40 %, two
+points 1.1-1.2 % off, each within about one reference standard error of 1 %; in thin
+skin (0.37-0.44 mm, below the presets' range) with a low subcutis/dermis ratio and much
+melanin, up to 1.13 % low.
 Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
 (about 40 s; for sweeps of the probe geometry, each of which needs its own table).
