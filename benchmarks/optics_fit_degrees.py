@@ -39,6 +39,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+from _workdir import work_dir
 
 RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 
@@ -92,12 +93,7 @@ def main(argv: list[str] | None = None) -> dict:
                     help="directory of the halves' node values (resumable)")
     args = ap.parse_args(argv)
     L, grid, geo, coords, split, ax = _setup()
-    work = Path(args.work) if args.work else L.cache_dir() / "optics-fit-degrees"
-    try:
-        work.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        ap.error(f"--work {str(work)!r} cannot be a directory here ({exc.strerror}); "
-                 f"give a writable directory")
+    work = work_dir(ap, args.work, L.cache_dir() / "optics-fit-degrees")
     va, vb = _halves(work, L, grid, geo, ax)
     diff = L._diffusion_nodes(ax, geo)[..., :1]
     n_tau = coords[-1].size

@@ -49,6 +49,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from _workdir import work_dir
 
 RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 
@@ -57,13 +58,11 @@ RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 THIN_TAU = 0.6
 
 
-def _table():
-    from nirglucose.optics import lut as L
-
+def _use_bench_cache() -> None:
+    """Point the nirglucose cache at NIRGLUCOSE_BENCH_LUT_CACHE when it is set."""
     cache = os.environ.get("NIRGLUCOSE_BENCH_LUT_CACHE")
     if cache:
         os.environ["NIRGLUCOSE_CACHE"] = cache
-    return L.load_or_build_lut(RHO_CM, T_EPI_CM, N_TISSUE)
 
 
 def _points(lut, groups: int, per_group: int, rng: int, thin_groups: int,
@@ -133,15 +132,12 @@ def main(argv: list[str] | None = None) -> dict:
             ap.error(f"--{name.replace('_', '-')} must be at least 1")
     if args.thin_groups < 0:
         ap.error("--thin-groups must be at least 0")
-    lut = _table()  # sets NIRGLUCOSE_CACHE from NIRGLUCOSE_BENCH_LUT_CACHE
+    _use_bench_cache()
+    # the work directory checked before the table, whose cold build takes hours
+    work = work_dir(ap, args.work, L.cache_dir() / "optics-reference")
+    lut = L.load_or_build_lut(RHO_CM, T_EPI_CM, N_TISSUE)
     n_groups = args.groups + args.thin_groups
     pts, group = _points(lut, args.groups, args.per_group, args.rng, args.thin_groups)
-    work = Path(args.work) if args.work else L.cache_dir() / "optics-reference"
-    try:
-        work.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        ap.error(f"--work {str(work)!r} cannot be a directory here ({exc.strerror}); "
-                 f"give a writable directory")
 
     def path(g: int, seed: int) -> Path:
         return work / (f"ref-rng{args.rng}-g{g}of{args.groups}+{args.thin_groups}"
