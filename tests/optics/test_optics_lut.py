@@ -345,8 +345,10 @@ def test_refined_thickness_nodes_are_those_of_the_spline_refinement():
 
 
 @pytest.mark.parametrize("axis", ["skin_transport_thickness", "musp_ratio"])
-def test_diffusion_table_solves_every_refined_scattering_node_directly(axis):
-    # refined thickness and ratio nodes are diffusion solves, not spline values: exact there
+def test_diffusion_table_solves_every_refined_scattering_node_directly(axis, monkeypatch):
+    # refined thickness and ratio nodes are diffusion solves, not spline values: exact
+    # there before the table's node values are centred (checked on its own below)
+    monkeypatch.setattr(L, "_centre_nodes", lambda values, splits: values)
     grid = dict(L.LUT_GRIDS["tiny"])
     grid[axis] = grid[axis][:2] + (3, 3)
     lut = L.build_lut(RHO, T_EPI, grid=grid, solver="diffusion")
@@ -404,12 +406,53 @@ def test_default_diffusion_table_is_within_one_percent_off_grid():
     # the default grid's interpolation (refined nodes solved or splined, then
     # multilinear) against the model it tabulates, noise-free: the part of the Monte
     # Carlo table's error that is not Monte Carlo noise
+    # (measured: max 0.37 %, RMS 0.080 %, mean -0.003 %; with the solver's own node
+    # values instead of centred ones: max 0.59 %, RMS 0.167 %, mean -0.095 %)
     lut = L.build_lut(RHO, T_EPI, solver="diffusion")
     err = L.lut_errors(lut, n_points=300, rng=11, groups=None)
     assert np.all(err["reflectance_se"] == 0.0)
-    assert np.max(np.abs(err["reflectance"])) <= 0.01
-    assert np.sqrt(np.mean(err["reflectance"] ** 2)) <= 0.003
+    assert np.max(np.abs(err["reflectance"])) <= 0.005
+    assert np.sqrt(np.mean(err["reflectance"] ** 2)) <= 0.0011
+    assert abs(np.mean(err["reflectance"])) <= 0.0003  # unbiased: no sign of the curvature
     assert np.median(np.abs(err["pathlength"])) <= 0.01
+
+
+def test_centred_nodes_make_multilinear_interpolation_unbiased_over_each_cell():
+    from scipy.interpolate import RegularGridInterpolator
+
+    # f = a x^2 + b y^2: through its node values the bilinear interpolant errs by
+    # a hx^2 t (1 - t) + b hy^2 s (1 - s), with the sign of the curvature everywhere;
+    # through the centred values by the same less (a hx^2 + b hy^2) / 6: zero on
+    # average over every cell, -(a hx^2 + b hy^2) / 6 at the nodes and
+    # +(a hx^2 + b hy^2) / 12 in the middle
+    x, y = np.linspace(0.0, 1.0, 6), np.linspace(-1.0, 2.0, 5)
+    a, b = 1.3, -0.4
+    hx2, hy2 = (x[1] - x[0]) ** 2, (y[1] - y[0]) ** 2
+
+    def f(xx, yy):
+        return a * xx**2 + b * yy**2
+
+    nodes = f(x[:, None], y[None, :])[..., None] * np.ones(2)  # two channels
+    centred = L._centre_nodes(nodes, [None, None])
+    interp = RegularGridInterpolator((x, y), centred[..., 1])
+    t = (np.arange(40) + 0.5) / 40  # a fine midpoint grid over each cell
+    for i in range(x.size - 1):  # every cell, the edge cells included
+        for j in range(y.size - 1):
+            gx, gy = np.meshgrid(x[i] + t * (x[1] - x[0]), y[j] + t * (y[1] - y[0]))
+            err = interp(np.stack([gx.ravel(), gy.ravel()], 1)) - f(gx.ravel(), gy.ravel())
+            assert abs(err.mean()) < 1e-4 * (abs(a) * hx2 + abs(b) * hy2)
+    mid = interp([[0.5 * (x[2] + x[3]), 0.5 * (y[1] + y[2])]])[0]
+    np.testing.assert_allclose(mid - f(0.5 * (x[2] + x[3]), 0.5 * (y[1] + y[2])),
+                               (a * hx2 + b * hy2) / 12, rtol=1e-9)
+    np.testing.assert_allclose(centred[..., 0] - nodes[..., 0], -(a * hx2 + b * hy2) / 6,
+                               rtol=1e-9)
+    # a kink where an axis is split (tau = 1) leaks no shift: |x - x_3| is linear on
+    # either side; a two-node piece, with no curvature to see, is left as it is
+    kink = np.abs(x - x[3])[:, None] * np.ones((1, 2))
+    np.testing.assert_allclose(L._centre_nodes(kink, [3]), kink, atol=1e-15)
+    assert not np.allclose(L._centre_nodes(kink, [None]), kink)
+    two = np.array([[0.0, 1.0], [4.0, 1.0], [1.0, 1.0]])
+    np.testing.assert_array_equal(L._centre_nodes(two, [1]), two)
 
 
 def test_a_default_monte_carlo_build_is_announced_as_a_warning(tiny, monkeypatch, tmp_path,
