@@ -54,14 +54,13 @@ interpolant's error zero on average over every cell; Blu, Thevenaz & Unser 2004)
 float32 table is interpolated multilinearly. It is therefore not exact at its nodes.
 
 Accuracy (README, "Layered skin optics"): interpolation, noise-free (the diffusion
-solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.17 %,
-maximum 0.81 %; the table's own Monte Carlo noise, RMS 0.17 % (two tables from
-disjoint halves of the photons compared); against independent references (the mean of
-four 4 000 000-photon solves with other seeds, standard error 0.15 %) at 156 random
-off-grid points (``benchmarks/optics_reference.py``), see the README: RMS 0.40 %, two
-points 1.1-1.2 % off, each within about one reference standard error of 1 %; in thin
-skin (0.37-0.44 mm, below the presets' range) with a low subcutis/dermis ratio and much
-melanin, up to 1.13 % low.
+solver's table against the diffusion model at 3 000 random off-grid points), RMS 0.077 %,
+maximum 0.41 % (0.17 % and 0.85 % through uncentred node values); the table's own Monte
+Carlo noise, RMS 0.18 % (two tables from disjoint halves of the photons compared);
+against independent references (the mean of four 4 000 000-photon solves with other
+seeds, standard error 0.15 %) at 204 random off-grid points in three sets
+(``benchmarks/optics_reference.py``) and 24 at the thin-skin weak spot: median 0.30 %,
+RMS 0.40 %, maximum 0.98 %, none beyond 1 %.
 Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
 (about 40 s; for sweeps of the probe geometry, each of which needs its own table).
