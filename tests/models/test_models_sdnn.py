@@ -35,6 +35,10 @@ def test_parameter_count_is_the_studys_3713():
 
 
 def test_front_end_sees_absorbances_only():
+    # seeded: with unseeded weights and inputs, every ReLU of the stack can be dead for
+    # both inputs now and then (both outputs are then the last bias), which made this
+    # test fail at random
+    torch.manual_seed(0)
     net = SDNNNet()
     nir = torch.randn(3, 4)
     with torch.no_grad():
