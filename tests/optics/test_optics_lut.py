@@ -402,7 +402,7 @@ def test_direct_solve_runs_once_per_group_despite_round_off(tiny, monkeypatch):
     np.testing.assert_array_equal(L.direct_solve(tiny, first, n_photons=9000)[0], r[:30])
 
 
-def test_default_diffusion_table_is_within_one_percent_off_grid():
+def test_default_diffusion_table_is_unbiased_and_within_half_a_percent_off_grid():
     # the default grid's interpolation (refined nodes solved or splined, then
     # multilinear) against the model it tabulates, noise-free: the part of the Monte
     # Carlo table's error that is not Monte Carlo noise

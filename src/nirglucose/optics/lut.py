@@ -459,9 +459,9 @@ def _solve_axes(grid: dict, geo: dict) -> tuple[list[np.ndarray], list[int | Non
     return coords, splits
 
 
-def _pieces(u: np.ndarray, split: int | None) -> list[tuple[int, int]]:
-    """First and last solve node of each piece of an axis (two when split at tau = 1)."""
-    return [(0, u.size - 1)] if split is None else [(0, split), (split, u.size - 1)]
+def _pieces(n: int, split: int | None) -> list[tuple[int, int]]:
+    """First and last node of each piece of an axis of n nodes (two when split at tau = 1)."""
+    return [(0, n - 1)] if split is None else [(0, split), (split, n - 1)]
 
 
 def _refined_coords(u: np.ndarray, m: int, split: int | None) -> np.ndarray:
@@ -470,7 +470,7 @@ def _refined_coords(u: np.ndarray, m: int, split: int | None) -> np.ndarray:
     Solve node j is refined node j * m.
     """
     fine = [np.linspace(u[a], u[b], (b - a) * m + 1)[(1 if k else 0):]
-            for k, (a, b) in enumerate(_pieces(u, split))]
+            for k, (a, b) in enumerate(_pieces(u.size, split))]
     return np.concatenate(fine)
 
 
@@ -481,7 +481,7 @@ def _upsample(values: np.ndarray, axis: int, u: np.ndarray, m: int,
 
     fine_u = _refined_coords(u, m, split)
     out = []
-    for k, (a, b) in enumerate(_pieces(u, split)):
+    for k, (a, b) in enumerate(_pieces(u.size, split)):
         spline = make_interp_spline(u[a:b + 1], values.take(range(a, b + 1), axis=axis),
                                     k=min(3, b - a), axis=axis)
         at = fine_u[a * m + (1 if k else 0):b * m + 1]
@@ -635,7 +635,7 @@ def _centre_nodes(values: np.ndarray, splits: list[int | None]) -> np.ndarray:
         n = values.shape[axis]
         total = np.zeros((n,) + tuple(np.delete(values.shape, axis)))
         count = np.zeros(n)
-        for a, b in _pieces(np.empty(n), splits[axis]):
+        for a, b in _pieces(n, splits[axis]):
             count[a:b + 1] += 1.0
             if b - a < 2:
                 continue
