@@ -13,8 +13,11 @@ The device takes a reference reading of each LED at start-up (the subject's sess
 through a neutral attenuator of known transmission, and an offset-cancellation current
 that nulls the dark current at that temperature. Drift between then and each
 measurement (LED temperature, ageing, dark current) is what the reference cannot
-remove. Ambient light is removed by an LED-off reading; its flicker between the two
-readings and its shot noise remain.
+remove. With a monitor photodiode (``device.monitor_photodiode``) the reference is
+instead read at every measurement from the same LED pulse, with the monitor's own
+shot, Johnson and conversion noise: LED power drift, ageing and flicker cancel in
+adc / adc_ref, the thermal wavelength shift does not. Ambient light is removed by an
+LED-off reading; its flicker between the two readings and its shot noise remain.
 
 References
 ----------
@@ -214,7 +217,9 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
     Returns
     -------
     dict
-        ``adc`` and ``adc_ref`` (n, n_led) int64 codes, ``signal_v`` (n, n_led) the
+        ``adc`` and ``adc_ref`` (n, n_led) int64 codes (``adc_ref`` the start-up
+        reference, or with ``device.monitor_photodiode`` the monitor reading of each
+        measurement), ``signal_v`` (n, n_led) the
         noise-free analog voltage, ``detected_power_w`` (n, n_led).
     """
     hw = cfg.hardware
@@ -299,6 +304,21 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         * (temps["board_cal_c"][:, None] - 25.0)
     )
     adc_ref = adc_convert(v_ref, hw.adc_vref_v, hw.adc_bits, inl, offset_ref)[subject_index]
+    if cfg.device.monitor_photodiode:
+        # A monitor photodiode reads the same LED pulse through the reference path's
+        # attenuation: the LED power of this reading (drift, ageing, flicker included),
+        # with the monitor's own dark-current residual, shot and Johnson noise and its
+        # own conversion (quantisation, INL, offset at this board temperature).
+        i_mon = resp * p_led * hw.reference_transmission
+        shot_mon = cfg.noise_factor("shot") * shot_noise_sd_a(i_mon + dark_now, hw.bandwidth_hz)
+        shot_mon = shot_mon * streams("monitor.shot").normal(size=(n, n_led))
+        johnson_mon = (
+            cfg.noise_factor("johnson")
+            * johnson_noise_sd_a(temps["board_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
+            * streams("monitor.johnson").normal(size=(n, n_led))
+        )
+        v_mon = (i_mon + i_dark_residual + shot_mon + johnson_mon) * hw.tia_gain_ohm
+        adc_ref = adc_convert(v_mon, hw.adc_vref_v, hw.adc_bits, inl, offset)
     signal_v = resp * (p0 * detected_fraction_led) * hw.tia_gain_ohm
     return {
         "adc": adc,

@@ -13,7 +13,7 @@ import numpy as np
 from ..config import ScenarioConfig
 from ._random import RandomStreams
 
-__all__ = ["PMF_COLUMNS", "measure_physiology"]
+__all__ = ["PMF_COLUMNS", "PPG_COLUMNS", "measure_physiology", "measure_ppg"]
 
 #: The measured physiological vector, in the order models and the C export use.
 PMF_COLUMNS = (
@@ -30,6 +30,10 @@ PMF_COLUMNS = (
     "humidity_pct",
     "pressure_mbar",
 )
+
+#: Columns of the PPG perfusion and saturation estimates (``device.ppg_perfusion_spo2``),
+#: present only when that capability is on.
+PPG_COLUMNS = ("blood_volume_pct", "spo2_pct")
 
 #: Measured column -> the truth it measures.
 _TRUTH = {
@@ -52,9 +56,15 @@ _FLOORS = {"melanin_fraction": 0.0, "skin_thickness_mm": 0.1, "bmi_kgm2": 10.0}
 
 
 def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams) -> dict:
-    """Return the measured physiological vector (:data:`PMF_COLUMNS`) from the truth."""
+    """Return the measured physiological vector (:data:`PMF_COLUMNS`) from the truth.
+
+    With ``device.physiology = "exact"`` every column equals its truth (age not
+    rounded, Fitzpatrick type not misclassified); the random draws are made either way,
+    so no other stream changes.
+    """
     m = cfg.measurement
-    f = cfg.noise_factor("pmf_measurement")
+    exact = cfg.device.physiology == "exact"
+    f = 0.0 if exact else cfg.noise_factor("pmf_measurement")
     rng = streams("pmf_measurement")
     n = len(truth["true_age_yr"])
     out = {}
@@ -64,9 +74,47 @@ def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams)
         if col in _FLOORS:
             value = np.maximum(value, _FLOORS[col])
         out[col] = value
-    out["age_yr"] = np.floor(out["age_yr"])  # recorded in whole years
+    if not exact:
+        out["age_yr"] = np.floor(out["age_yr"])  # recorded in whole years
     off = rng.random(size=n) < f * m.fitzpatrick_misclass
     step = np.where(rng.random(size=n) < 0.5, -1, 1)
     fitz = truth["true_fitzpatrick_type"] + np.where(off, step, 0)
     out["fitzpatrick_type"] = np.clip(fitz, 1, 6).astype(np.int64)
     return {col: out[col] for col in PMF_COLUMNS}
+
+
+def measure_ppg(
+    cfg: ScenarioConfig, blood_fraction: np.ndarray, saturation: np.ndarray, streams: RandomStreams
+) -> dict:
+    """Perfusion and oxygen saturation as a PPG front end would report them.
+
+    ``blood_volume_pct`` = 100 f_b exp(s_b z1) and ``spo2_pct`` = 100 S + s_S z2, clipped
+    to 0-100 %, with f_b the detected dermal blood volume fraction, S the dermal
+    saturation the optics see, s_b = ``device.blood_volume_error_rel`` and s_S =
+    ``device.spo2_error_pct`` (pulse-oximeter A_rms, FDA 2013 premarket guidance;
+    ISO 80601-2-61:2017), both scaled by the ``pmf_measurement`` noise source and zero
+    with ``device.physiology = "exact"``. The log-normal blood-volume error keeps the
+    estimate positive.
+
+    Parameters
+    ----------
+    cfg : ScenarioConfig
+        Scenario.
+    blood_fraction : numpy.ndarray
+        Detected dermal blood volume fraction (after contact blanching), (n,). [-]
+    saturation : numpy.ndarray
+        Dermal oxygen saturation, (n,). [-]
+    streams : RandomStreams
+        Random generators of the block (stream ``ppg``).
+
+    Returns
+    -------
+    dict
+        ``blood_volume_pct`` and ``spo2_pct``, (n,) each. [%]
+    """
+    f = 0.0 if cfg.device.physiology == "exact" else cfg.noise_factor("pmf_measurement")
+    z = streams("ppg").normal(size=(2, len(blood_fraction)))
+    d = cfg.device
+    blood_pct = 100.0 * np.asarray(blood_fraction) * np.exp(f * d.blood_volume_error_rel * z[0])
+    spo2_pct = np.clip(100.0 * np.asarray(saturation) + f * d.spo2_error_pct * z[1], 0.0, 100.0)
+    return {"blood_volume_pct": blood_pct, "spo2_pct": spo2_pct}

@@ -41,6 +41,10 @@ NOMINAL = {
     "glucose_mm": 100.0 / MGDL_PER_MMOLL_GLUCOSE,
     "skin_thickness_mm": 1.8,
 }
+#: Contact pressure of a constant-force probe (``device.constant_force_probe``), as a
+#: share of full scale: the mean of the Beta(2, 2) draw of a hand-placed probe, so the
+#: cohort's mean blanching and compression are unchanged. [-]
+CONSTANT_FORCE_CONTACT = 0.5
 #: Hours between a subject's start-up reference and each measurement (snapshots taken
 #: over up to three days). [h]
 HOURS_SINCE_REFERENCE = (0.0, 72.0)
@@ -236,8 +240,17 @@ def simulate_block(
     rng_contact = streams("contact_pressure")
     contact = rng_contact.beta(2.0, 2.0, size=n)
     coupling_z = rng_contact.normal(size=n)
+    if cfg.device.constant_force_probe:  # held at the mean: no variation between readings
+        contact = np.full(n, CONSTANT_FORCE_CONTACT)
+        coupling_z = np.zeros(n)
     lo, hi = cfg.environment.humidity_pct
     wet = (env["true_humidity_pct"] - lo) / (hi - lo)
+    truth_out = {**phys, **env}
+    pmf = measurement.measure_physiology(cfg, truth_out, streams)
+    if cfg.device.humidity_compensation:
+        # firmware divides out the coupling-vs-RH curve at the RH sensor's reading: what
+        # remains is the curve at the sensor's error
+        wet = wet - (pmf["humidity_pct"] - lo) / (hi - lo)
     coupling = np.exp(
         f_contact * cfg.contact.coupling_sd * coupling_z
         - cfg.noise_factor("humidity_coupling") * cfg.environment.humidity_coupling_loss * wet
@@ -303,8 +316,8 @@ def simulate_block(
         "ambient_flicker": flick,
     }
     hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
-    truth_out = {**phys, **env}
-    pmf = measurement.measure_physiology(cfg, truth_out, streams)
+    if cfg.device.ppg_perfusion_spo2:
+        pmf.update(measurement.measure_ppg(cfg, blood, phys["true_saturation"], streams))
 
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     cols: dict[str, np.ndarray] = {
