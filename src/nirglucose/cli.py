@@ -63,7 +63,7 @@ SetOption = Annotated[
 def simulate(
     out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
     preset: Annotated[
-        str, typer.Option(help="Scenario preset: paper, physical, lab, field.")
+        str, typer.Option(help="Scenario preset: paper, wearable, physical, lab, field.")
     ] = "paper",
     subjects: Annotated[int, typer.Option(help="Number of subjects.")] = 80,
     per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
@@ -103,14 +103,16 @@ def simulate(
 @app.command()
 def keys() -> None:
     """List every config key accepted by --set, with its default on the paper preset."""
-    from .config import resolve_config, valid_keys
+    from .config import key_description, resolve_config, valid_keys
 
     data = resolve_config("paper").model_dump(mode="json")
     for key in valid_keys():
         node = data
         for part in key.split("."):
             node = node[part]
-        out_console.print(f"{key} = {node}", highlight=False, soft_wrap=True)
+        doc = key_description(key)
+        out_console.print(f"{key} = {node}" + (f"  # {doc}" if doc else ""), highlight=False,
+                          soft_wrap=True)
 
 
 @app.command()

@@ -45,6 +45,7 @@ __all__ = [
     "apply_overrides",
     "parse_override",
     "valid_keys",
+    "key_description",
 ]
 
 #: Forward optical models selectable by name (``optics.model``).
@@ -255,7 +256,8 @@ class GlucoseConfig(_Model):
         1.0,
         gt=0,
         description="Multiplies all three glucose optical effects. 1 keeps literature "
-        "magnitudes; the paper preset raises it to reach the study's correlation. [-]",
+        "magnitudes; the presets raise it to reach the study's correlation (PAPER_SIGNAL_GAIN, "
+        "WEARABLE_SIGNAL_GAIN). [-]",
     )
 
     @model_validator(mode="after")
@@ -727,6 +729,25 @@ def valid_keys(model: type[BaseModel] = ScenarioConfig, prefix: str = "") -> lis
         else:
             keys.append(f"{prefix}{name}")
     return keys
+
+
+def key_description(key: str) -> str:
+    """The documented description (with its unit) of a dotted key; "" when it has none.
+
+    Examples
+    --------
+    >>> key_description("device.spo2_error_pct").endswith("[%]")
+    True
+    """
+    model: type[BaseModel] = ScenarioConfig
+    parts = key.split(".")
+    for part in parts[:-1]:
+        if part not in model.model_fields:
+            raise ConfigError(f"unknown config key {key!r} (run `nirglucose keys`)")
+        model = model.model_fields[part].annotation  # type: ignore[assignment]
+    if parts[-1] not in model.model_fields:
+        raise ConfigError(f"unknown config key {key!r} (run `nirglucose keys`)")
+    return model.model_fields[parts[-1]].description or ""
 
 
 def parse_override(text: str) -> tuple[str, Any]:

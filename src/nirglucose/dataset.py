@@ -96,6 +96,9 @@ COLUMN_UNITS = {
     "skin_temp_c": "degC",
     "humidity_pct": "% RH",
     "pressure_mbar": "mbar",
+    # PPG estimates, present only with device.ppg_perfusion_spo2 (config.DeviceConfig)
+    "blood_volume_pct": "% detected dermal blood volume fraction",
+    "spo2_pct": "% dermal oxygen saturation",
     "ambient_lux": "lx",
     **{c: "ADC code" for c in adc_columns() + ref_columns()},
 }
