@@ -26,6 +26,10 @@ Studies (:data:`STUDIES`)
         20–25 °C ambient, test at 20–25 °C and at 5–35 °C. Training and test cohorts
         are simulated separately (the test seed is derived from the task's seed), so
         no subject is in both. :func:`shift_effects` gives the ΔRMSE of the shift.
+    ``device``
+        Each device capability (:data:`~nirglucose.config.DEVICE_CAPABILITIES`)
+        switched off alone in ``paper`` and on alone in ``wearable``, besides both
+        presets as they are; each scenario sets every key distinguishing the two.
     Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
     Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
 
@@ -105,7 +109,7 @@ __all__ = [
 ]
 
 #: Built-in studies (``--study``).
-STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort")
+STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device")
 #: The varied key and default values of the one-key studies.
 STUDY_GRIDS: dict[str, tuple[str, tuple[float, ...]]] = {
     "noise-scale": ("noise_scale", (0.25, 0.5, 1.0, 2.0, 4.0)),
@@ -397,6 +401,8 @@ def study_scenarios(study: str, values: Sequence[Any] | None = None) -> list[Sce
             for s in NOISE_SOURCES
         ]
         return out
+    if study == "device":
+        return _device_scenarios()
     out = []
     for shift, d in COHORT_SHIFTS.items():
         train_label, train = d["train"]
@@ -422,6 +428,32 @@ def study_scenarios(study: str, values: Sequence[Any] | None = None) -> list[Sce
                 )
             else:
                 out.append(Scenario(name, labels, {d["key"]: list(train)}, {d["key"]: list(test)}))
+    return out
+
+
+def _device_scenarios() -> list[Scenario]:
+    """The ``device`` study: each capability off alone in ``paper``, on alone in ``wearable``.
+
+    Every scenario sets all the keys that distinguish the two presets (the glucose gain
+    and each :data:`~nirglucose.config.DEVICE_CAPABILITIES` key), so it is the same
+    scenario on either base preset.
+    """
+    from ..config import DEVICE_CAPABILITIES, PRESETS
+
+    keys = ["glucose.signal_gain"] + [key for key, _, _ in DEVICE_CAPABILITIES.values()]
+
+    def scenario(base, switch, capability):
+        over = {k: PRESETS[base][k] for k in keys}
+        if capability is not None:
+            key, v_on, v_off = DEVICE_CAPABILITIES[capability]
+            over[key] = v_on if switch == "on" else v_off
+        name = base if capability is None else f"{base}:{switch}:{capability}"
+        labels = {"base": base, "switch": switch, "capability": capability or "none"}
+        return Scenario(name, labels, over)
+
+    out = [scenario("paper", "base", None), scenario("wearable", "base", None)]
+    out += [scenario("paper", "off", c) for c in DEVICE_CAPABILITIES]
+    out += [scenario("wearable", "on", c) for c in DEVICE_CAPABILITIES]
     return out
 
 
