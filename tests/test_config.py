@@ -5,9 +5,16 @@ from __future__ import annotations
 import pytest
 
 from nirglucose.config import (
+    DEVICE_CAPABILITIES,
     NOISE_SOURCES,
+    PAPER_SIGNAL_GAIN,
+    PRESET_CAPABILITIES,
+    PRESET_DESCRIPTIONS,
     PRESETS,
+    WEARABLE_SIGNAL_GAIN,
     ScenarioConfig,
+    device_capabilities,
+    key_description,
     parse_override,
     resolve_config,
     valid_keys,
@@ -38,7 +45,7 @@ def test_unknown_noise_source():
 
 
 def test_unknown_preset_lists_valid():
-    with pytest.raises(ConfigError, match="valid: paper, physical, lab, field"):
+    with pytest.raises(ConfigError, match="valid: paper, wearable, physical, lab, field"):
         resolve_config("papr")
 
 
@@ -86,3 +93,36 @@ def test_config_json_round_trip():
     cfg = resolve_config("field", {"hardware.adc_bits": 14})
     again = ScenarioConfig.model_validate_json(cfg.to_json())
     assert again == cfg
+
+
+@pytest.mark.parametrize("preset", list(PRESETS))
+def test_every_preset_is_described_with_its_capabilities(preset):
+    assert PRESET_DESCRIPTIONS[preset].strip()
+    assert set(PRESET_CAPABILITIES[preset]) <= set(DEVICE_CAPABILITIES)
+    # the capability list kept as data matches what the preset's config switches on
+    assert device_capabilities(resolve_config(preset)) == PRESET_CAPABILITIES[preset]
+
+
+def test_paper_and_wearable_differ_only_in_gain_and_capabilities():
+    paper = resolve_config("paper").model_dump()
+    wearable = resolve_config("wearable").model_dump()
+    assert paper["glucose"].pop("signal_gain") == PAPER_SIGNAL_GAIN
+    assert wearable["glucose"].pop("signal_gain") == WEARABLE_SIGNAL_GAIN
+    for cfg in (paper, wearable):
+        cfg.pop("preset")
+        cfg.pop("device")
+    assert paper == wearable
+    assert PRESET_CAPABILITIES["wearable"] == ()
+    assert set(PRESET_CAPABILITIES["paper"]) == set(DEVICE_CAPABILITIES)
+
+
+def test_device_keys_are_sweepable_and_documented():
+    cfg = resolve_config("wearable", {"device.monitor_photodiode": True})
+    assert device_capabilities(cfg) == ("monitor_photodiode",)
+    assert '"device"' in cfg.to_json()  # recorded in every output's config
+    for key in [k for k in valid_keys() if k.startswith("device.")]:
+        assert key_description(key).rstrip().endswith("]"), key  # description with a unit
+    with pytest.raises(ConfigError):
+        resolve_config("paper", {"device.physiology": "guessed"})
+    with pytest.raises(ConfigError):
+        key_description("device.nope")
