@@ -30,7 +30,7 @@ class _Counting:
 
 @pytest.fixture(scope="module")
 def small():
-    return ng.simulate("paper", n_subjects=6, per_subject=2, seed=0)
+    return ng.simulate("wearable", n_subjects=6, per_subject=2, seed=0)
 
 
 def test_latency_keys_and_counts(small):
