@@ -7,7 +7,9 @@ and recorded, resolved, in every dataset and result the package writes.
 Every numeric default names its source in the field description; a value that is an
 assumption of this package (there is no published number for it) says so. The
 ``noise`` section has one switch and one scale per noise source (:data:`NOISE_SOURCES`);
-the global ``noise_scale`` multiplies them all, for sweeps.
+the global ``noise_scale`` multiplies them all, for sweeps. The ``device`` section
+holds the hardware capabilities a wearable team chooses (:data:`DEVICE_CAPABILITIES`);
+:data:`PRESET_DESCRIPTIONS` and :data:`PRESET_CAPABILITIES` describe each preset.
 """
 
 from __future__ import annotations
