@@ -773,10 +773,15 @@ def enhanced_beer_lambert(
     schema = DeviceSchema.infer(frame, adc_bits)
     if isinstance(frame, Dataset):
         frame = frame.frame
-    m = schema.measurements(frame)
+    Xa = schema.raw(frame)
     table = feature_table(schema)
+    if schema.is_study:
+        values = ebl_feature_matrix(Xa)
+    else:
+        m = schema.split(Xa)
+        values = compute_features(table, schema, m.absorbance, m.physiology)
     return pd.DataFrame(
-        compute_features(table, schema, m.absorbance, m.physiology),
+        values,
         columns=[f.name for f in table],
         index=frame.index,
     )

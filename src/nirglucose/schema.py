@@ -464,27 +464,43 @@ class MeasurementTransformer(TransformerMixin, BaseEstimator):
         return np.asarray([f"A_{w}" for w in s.labels] + list(s.physiology), dtype=object)
 
 
+def _is_device_frame(frame: pd.DataFrame) -> bool:
+    """True when a frame names any schema column (a device's file, perhaps malformed)."""
+    known = set(KNOWN_PHYSIOLOGY) | {"glucose_mgdl", "subject_id", "measurement_id"}
+    return any(
+        isinstance(c, str) and (c.startswith(("adc_", "true_")) or c in known)
+        for c in frame.columns
+    )
+
+
 def fit_schema(est: Any, X: Any, adc_bits: int | None = None) -> DeviceSchema:
     """The schema of fitting input ``X`` (and record ``n_features_in_`` on ``est``).
 
-    Frames and Datasets give a device schema from their column names; arrays a plain one
-    (after :func:`sklearn.utils.check_array`, for scikit-learn's standard messages).
+    Datasets and frames that name any schema column give a device schema from their
+    column names; arrays, and frames naming none (generic tables), a plain one
+    (through :func:`sklearn.utils.validation.validate_data`, for scikit-learn's
+    standard messages and feature-name bookkeeping).
     """
-    if isinstance(X, pd.DataFrame | Dataset):
+    frame = X.frame if isinstance(X, Dataset) else X
+    if isinstance(frame, pd.DataFrame) and (isinstance(X, Dataset) or _is_device_frame(frame)):
         schema = DeviceSchema.infer(X, adc_bits)
         est.n_features_in_ = len(schema.raw_columns)
         est.feature_names_in_ = np.asarray(schema.raw_columns, dtype=object)
         return schema
-    from sklearn.utils import check_array
+    from sklearn.utils.validation import validate_data
 
-    Xa = check_array(X, dtype=np.float64, estimator=est, input_name="X")
     est.__dict__.pop("feature_names_in_", None)
-    est.n_features_in_ = Xa.shape[1]
+    Xa = validate_data(est, frame, reset=True, dtype=np.float64)
     return DeviceSchema.plain(Xa.shape[1])
 
 
 def as_raw_input(est: Any, X: Any, schema: DeviceSchema) -> Any:
-    """X for :meth:`DeviceSchema.raw`: frames as they are, arrays through check_array."""
+    """X for :meth:`DeviceSchema.raw`: device frames as they are, arrays checked."""
+    if schema.is_plain:
+        from sklearn.utils.validation import validate_data
+
+        frame = X.frame if isinstance(X, Dataset) else X
+        return validate_data(est, frame, reset=False, dtype=np.float64)
     if isinstance(X, pd.DataFrame | Dataset):
         return X
     if type(X) is np.ndarray and X.dtype == np.float64 and X.ndim == 2 and X.size:

@@ -755,18 +755,6 @@ class _FoldedKernel:
         return out
 
 
-def _pls_inputs(Xa: np.ndarray) -> np.ndarray:
-    """The PLS inputs: 4 log absorbances and the 12 measured PMF entries, (n, 16)."""
-    adc, ref = Xa[:, :_N_CH], Xa[:, _N_CH : 2 * _N_CH]
-    if not ((adc > 0) & (ref > 0)).all():
-        rows = np.flatnonzero(~((adc > 0) & (ref > 0)).all(axis=1))
-        raise DataError(
-            f"ADC and reference codes must be positive; {len(rows)} rows are "
-            f"not, first row {int(rows[0])}"
-        )
-    return np.hstack([np.log10(ref / adc), Xa[:, 2 * _N_CH :]])
-
-
 @register("pls")
 class PLSBaseline(_LinearBase):
     """PLS regression on the 4 log absorbances and the 12 measured PMF entries.
