@@ -331,7 +331,7 @@ class DeviceSchema:
         Plain schemas pass their columns through as the absorbances.
         """
         if self.is_plain:
-            return Measurements(Xa, Xa[:, :0])
+            return Measurements(np.array(Xa, dtype=float), Xa[:, :0])
         k = self.n_channels
         adc = Xa[:, :k]
         if self.reference:
