@@ -12,10 +12,11 @@ A device's file holds
   (all or none); without them the ADC's full scale 2^bits - 1 plays I0;
 * any of the known physiological columns (:data:`~nirglucose.dataset.KNOWN_PHYSIOLOGY`).
 
-The ADC resolution comes from the declared option (``adc_bits=``), else the file's
-scenario (``hardware.adc_bits``) or metadata (``adc_bits``), else the package default
-(12 bits, the study's). Absorbance is computed here and only here:
-A = log10(I0 / I) (the modified Beer–Lambert law, Cope & Delpy 1988 [1]_).
+The ADC resolution comes from the declared option (the linear models' ``adc_bits=``
+parameter, or a Dataset's ``metadata["adc_bits"]`` for any model), else the file's
+scenario (``hardware.adc_bits``), else the package default (12 bits, the study's).
+Absorbance is computed here and only here: A = log10(I0 / I) (the modified
+Beer–Lambert law, Cope & Delpy 1988 [1]_).
 
 A plain numeric array carries no column names, hence no device: the schema fitted on it
 is *plain*, and its columns are taken as generic spectral inputs (absorbance-like, on
@@ -126,8 +127,9 @@ class DeviceSchema:
         X : Dataset or pandas.DataFrame
             A device's measurements.
         adc_bits : int, optional
-            Declared ADC resolution; else the scenario's ``hardware.adc_bits``, the
-            metadata's ``adc_bits``, or 12. [bit]
+            Declared ADC resolution; else the Dataset's ``metadata["adc_bits"]`` (what
+            ``nirglucose fit --adc-bits`` sets), the scenario's ``hardware.adc_bits``,
+            or 12. [bit]
 
         Raises
         ------
@@ -139,10 +141,10 @@ class DeviceSchema:
         frame = X
         if isinstance(X, Dataset):
             frame = X.frame
-            if bits is None and X.config is not None:
-                bits = int(X.config.hardware.adc_bits)
             if bits is None and X.metadata.get("adc_bits") is not None:
                 bits = X.metadata["adc_bits"]
+            if bits is None and X.config is not None:
+                bits = int(X.config.hardware.adc_bits)
         if bits is None:
             bits = DEFAULT_ADC_BITS
         if isinstance(bits, bool) or not isinstance(bits, int | np.integer) or not 1 <= bits <= 32:
