@@ -29,7 +29,14 @@ from ..schema import (
     fit_schema,
 )
 
-__all__ = ["MEASURED_COLUMNS", "N_MEASURED", "fit_input", "predict_input", "target_of"]
+__all__ = [
+    "MEASURED_COLUMNS",
+    "N_MEASURED",
+    "as_measurements",
+    "fit_input",
+    "predict_input",
+    "target_of",
+]
 
 #: The study device's measured columns (4 ADC codes, 4 references, 12 physiological).
 MEASURED_COLUMNS = tuple(measured_columns(DEFAULT_LED_WAVELENGTHS_NM))
@@ -98,3 +105,40 @@ def predict_input(est, X) -> np.ndarray:
     """The fitted device's raw columns of ``X``, validated, (n, width)."""
     schema = est.schema_
     return schema.raw(as_raw_input(est, X, schema))
+
+
+def as_measurements(X, y=None, *, require_target: bool = False):
+    """``(X (n, 20), y, groups)``: the study device's measured columns (compatibility).
+
+    For code written against the study's fixed layout (4 LEDs with references, the
+    12-entry vector); estimators read any device through :func:`fit_input`.
+
+    Raises
+    ------
+    DataError
+        Missing columns, bad values, a wrong width, or no target when one is required.
+    """
+    schema = DeviceSchema()
+    groups = None
+    frame = X.frame if isinstance(X, Dataset) else X
+    if isinstance(frame, pd.DataFrame):
+        Xa = schema.raw(frame)
+        if y is None and "glucose_mgdl" in frame.columns:
+            y = frame["glucose_mgdl"]
+        if "subject_id" in frame.columns:
+            groups = frame["subject_id"].to_numpy()
+    else:
+        Xa = np.asarray(X, dtype=float)
+        if Xa.ndim != 2 or Xa.shape[1] != N_MEASURED:
+            raise DataError(
+                f"expected a 2-D array with {N_MEASURED} measured columns "
+                f"({', '.join(MEASURED_COLUMNS)}), got shape {Xa.shape}"
+            )
+        Xa = schema.raw(Xa)
+    if y is not None:
+        y = np.asarray(y, dtype=float).ravel()
+        if len(y) != len(Xa) or not np.all(np.isfinite(y)):
+            raise DataError(f"y must be {len(Xa)} finite values, got {len(y)}")
+    elif require_target:
+        raise DataError("fitting needs reference glucose: a 'glucose_mgdl' column or y")
+    return Xa, y, groups
