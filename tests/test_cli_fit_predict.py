@@ -45,7 +45,12 @@ def test_fit_predict_export_happy_path(files, capsys, tmp_path):
     )
     assert code == 0, err
     table = pd.read_csv(pred)
-    assert list(table.columns) == ["measurement_id", "subject_id", "predicted_glucose_mgdl"]
+    assert list(table.columns) == [
+        "measurement_id",
+        "subject_id",
+        "predicted_glucose_mgdl",
+        "flag",
+    ]
     np.testing.assert_allclose(
         table["predicted_glucose_mgdl"], load_model(model).predict(new.frame), rtol=1e-12
     )

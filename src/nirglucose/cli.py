@@ -336,9 +336,13 @@ def fit_model(
     model: Annotated[str, typer.Option(help="Registered model name, e.g. ebl, pls, sdnn.")],
     data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv) with glucose_mgdl.")],
     out: Annotated[Path, typer.Option(help="Model file to write (.json).")],
+    adc_bits: Annotated[
+        int | None,
+        typer.Option(help="The device's ADC resolution [bit] (default: the file's, else 12)."),
+    ] = None,
 ) -> None:
-    """Fit a model on your own measurements and save it."""
-    from .dataset import load_dataset, validate_measurements
+    """Fit a model on your own measurements (any LEDs, any ADC) and save it."""
+    from .dataset import load_dataset
     from .models import make_model
 
     if out.suffix != ".json":
@@ -347,10 +351,18 @@ def fit_model(
         raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
     estimator = make_model(model)  # unknown names raise with the valid ones
     ds = load_dataset(data)
-    validate_measurements(ds.frame, require_target=True)
+    if adc_bits is not None:
+        ds.metadata["adc_bits"] = adc_bits  # the declared resolution, read by the schema
+    if model != "oracle":
+        from .schema import DeviceSchema
+
+        DeviceSchema.infer(ds, adc_bits)  # a device file: adc_<nm> columns (DataError)
     estimator.fit(ds)
     estimator.save(out)
-    out_console.print(f"fitted {model!r} on {len(ds)} measurements; wrote {out}")
+    device = estimator.schema_.describe() if hasattr(estimator, "schema_") else "simulated"
+    out_console.print(
+        f"fitted {model!r} on {len(ds)} measurements ({device}); wrote {out}", highlight=False
+    )
 
 
 @app.command("predict")
@@ -359,11 +371,16 @@ def predict_glucose(
     data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv).")],
     out: Annotated[Path, typer.Option(help="Predictions to write (.csv).")],
 ) -> None:
-    """Predict glucose for your own measurements; writes predicted_glucose_mgdl."""
+    """Predict glucose for your own measurements; writes predicted_glucose_mgdl and flag.
+
+    ``flag`` is ``LO`` / ``HI`` where the estimate lies below 20 / above 600 mg/dL, as a
+    meter shows it (the number itself is kept).
+    """
     import pandas as pd
 
-    from .dataset import atomic_write, load_dataset, validate_measurements
+    from .dataset import atomic_write, load_dataset
     from .models import load_model
+    from .schema import meter_flags
 
     if out.suffix != ".csv":
         raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
@@ -371,13 +388,15 @@ def predict_glucose(
         raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
     estimator = load_model(model)
     ds = load_dataset(data)
-    validate_measurements(ds.frame)
     pred = estimator.predict(ds)
     ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
     table = ds.frame[ids].reset_index(drop=True).copy()
     table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
+    table["flag"] = meter_flags(pred)
     atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
-    out_console.print(f"predicted {len(table)} measurements; wrote {out}")
+    n_flag = int((table["flag"] != "").sum())
+    flagged = f" ({n_flag} outside 20-600 mg/dL, flagged LO/HI)" if n_flag else ""
+    out_console.print(f"predicted {len(table)} measurements{flagged}; wrote {out}")
 
 
 @app.command("export-c")

@@ -132,14 +132,14 @@ References
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .constants import DEFAULT_LED_WAVELENGTHS_NM
-from .dataset import PMF_COLUMNS, Dataset, measured_columns, validate_measurements
+from .dataset import PMF_COLUMNS, Dataset, measured_columns
 from .exceptions import DataError
 
 __all__ = [
@@ -164,6 +164,9 @@ __all__ = [
     "perfusion_index",
     "features_markdown",
     "EnhancedBeerLambertFeatures",
+    "feature_table",
+    "compute_features",
+    "nuisance_alphas",
 ]
 
 #: Channel labels in measured-column order. [nm]
@@ -236,6 +239,10 @@ class FeatureSpec:
     formula: str
     category: str
     rationale: str
+    #: How to compute it from (A, physiology): ``("A", k)``, ``("lin", ((k, w), ...))``,
+    #: ``("AA", i, j)``, ``("w", k, a_skin, a_perf, a_mel)``, ``("envA", sym, k)``,
+    #: ``("pmf", m)``, ``("env2", sym1, sym2)``; sym in dT, dH, dP.
+    op: tuple = field(default=(), compare=False, repr=False)
 
 
 def _build_table() -> tuple[FeatureSpec, ...]:
@@ -509,25 +516,250 @@ def ebl_feature_matrix(X, out: np.ndarray | None = None) -> np.ndarray:
     return out.T
 
 
-def enhanced_beer_lambert(frame: pd.DataFrame | Dataset) -> pd.DataFrame:
-    """The 56 Enhanced Beer–Lambert features of a frame of measurements.
+# ----------------------------------------------------------------- any device
+
+
+#: Environment symbols, the column each needs, and its centring (x - c) / s.
+_ENV = {
+    "dT": ("skin_temp_c", SKIN_TEMP_CENTER_C, 1.0),
+    "dH": ("hydration_pct", HYDRATION_CENTER_PCT, HYDRATION_CENTER_PCT),
+    "dP": ("pressure_mbar", PRESSURE_CENTER_MBAR, PRESSURE_CENTER_MBAR),
+}
+_W_COLUMNS = (
+    "skin_thickness_mm",
+    "melanin_fraction",
+    "skin_temp_c",
+    "systolic_bp_mmhg",
+    "pressure_mbar",
+)
+_ENV2 = (("dT", "dT"), ("dH", "dH"), ("dP", "dP"), ("dT", "dH"), ("dT", "dP"), ("dH", "dP"))
+
+
+def nuisance_alphas(wavelength_nm: float) -> tuple[float, float, float]:
+    """(α_skin, α_perf, α_mel) of the PMF weight w at one LED wavelength.
+
+    The study's four LEDs use the tabulated :data:`ALPHA_SKIN_PER_MM`, :data:`ALPHA_PERF`
+    and :data:`ALPHA_MEL`; any other wavelength computes them the same way from the
+    packaged tables: 0.1 (0.65 μa_water + 0.33 μa_baseline) per mm of skin (Kou 1993
+    water, Jacques 1998 baseline), 0.02 μa_blood(SO2 0.7) over 1 mm (Bosschaart 2014),
+    μa_melanosome over a round trip through 80 μm of epidermis (Jacques 1998).
+
+    Parameters
+    ----------
+    wavelength_nm : float
+        LED wavelength. [nm]
+
+    Returns
+    -------
+    tuple of float
+        α_skin [1/mm], α_perf [-], α_mel [-].
+    """
+    study = [float(w) for w in DEFAULT_LED_WAVELENGTHS_NM]
+    if float(wavelength_nm) in study:
+        k = study.index(float(wavelength_nm))
+        return ALPHA_SKIN_PER_MM[k], ALPHA_PERF[k], ALPHA_MEL[k]
+    from .optics.absorption import (
+        blood_mua_per_cm,
+        melanosome_mua_per_cm,
+        skin_baseline_mua_per_cm,
+        water_mua_per_cm,
+    )
+
+    wl = np.array([float(wavelength_nm)])
+    skin = 0.1 * (0.65 * water_mua_per_cm(wl) + 0.33 * skin_baseline_mua_per_cm(wl))
+    perf = 0.02 * blood_mua_per_cm(wl, 0.7) * 0.1
+    mel = melanosome_mua_per_cm(wl) * 2 * 0.008
+    return float(skin[0]), float(perf[0]), float(mel[0])
+
+
+def feature_table(schema) -> tuple[FeatureSpec, ...]:
+    """The Enhanced Beer–Lambert features of any device (its :class:`DeviceSchema`).
+
+    Blocks, each where the device's columns allow it: k absorbances; all k(k-1)/2
+    pairwise differences (the study's contrasts first at its four LEDs); k - 2
+    curvatures; k(k+1)/2 products; PMF-weighted absorbances (needs skin thickness,
+    melanin, skin temperature, systolic BP and pressure); temperature, hydration and
+    pressure x A_k (each needs its column); every physiological column; the
+    second-order temperature/hydration/pressure terms among those present. At the
+    study's four LEDs with its 12-entry vector this is exactly :data:`FEATURE_TABLE`.
+    A plain schema's channels sit one (100 nm) unit apart for the curvature.
+    """
+    if schema.is_study:
+        return FEATURE_TABLE
+    lab = schema.labels
+    k = len(lab)
+    a = [f"A_{w}" for w in lab]
+    rows: list[FeatureSpec] = []
+    for i in range(k):
+        rows.append(
+            FeatureSpec(
+                a[i],
+                f"log10(I0_{lab[i]}/I_{lab[i]})",
+                "absorbance",
+                "absorbance at this LED",
+                ("A", i),
+            )
+        )
+    for i in range(k):
+        for j in range(i):
+            rows.append(
+                FeatureSpec(
+                    f"dA_{lab[i]}_{lab[j]}",
+                    f"{a[i]} - {a[j]}",
+                    "difference",
+                    "cancels coupling and LED-power offsets",
+                    ("lin", ((i, 1.0), (j, -1.0))),
+                )
+            )
+    if k >= 3:
+        x = (
+            np.asarray(schema.wavelengths_nm, dtype=float)
+            if not schema.is_plain
+            else 100.0 * np.arange(k)
+        )
+        cw = _curvature_weights(x)
+        for m in range(1, k - 1):
+            rows.append(
+                FeatureSpec(
+                    f"d2A_{lab[m]}",
+                    f"d2A/dλ² ({lab[m - 1]},{lab[m]},{lab[m + 1]})",
+                    "curvature",
+                    "removes linear scatter baseline",
+                    ("lin", tuple((c, float(cw[m - 1, c])) for c in (m - 1, m, m + 1))),
+                )
+            )
+    for i in range(k):
+        for j in range(i, k):
+            formula = f"{a[i]}^2" if i == j else f"{a[i]} {a[j]}"
+            rows.append(
+                FeatureSpec(
+                    f"{a[i]}_x_{a[j]}", formula, "product", "path-length nonlinearity", ("AA", i, j)
+                )
+            )
+    phys = schema.physiology
+    if all(c in phys for c in _W_COLUMNS):
+        for i, w in enumerate(schema.wavelengths_nm):
+            rows.append(
+                FeatureSpec(
+                    f"w_x_{a[i]}",
+                    f"w_{lab[i]} {a[i]}",
+                    "pmf-weight",
+                    "skin/blood/melanin path weight",
+                    ("w", i, *nuisance_alphas(w)),
+                )
+            )
+    syms = [s for s in _ENV if _ENV[s][0] in phys]
+    cat = {
+        "dT": ("temp", "LED/water-band thermal drift"),
+        "dH": ("hydration", "water share of absorbance"),
+        "dP": ("pressure", "perfusion/contact with pressure"),
+    }
+    for s in syms:
+        for i in range(k):
+            rows.append(FeatureSpec(f"{s}_x_{a[i]}", f"{s} {a[i]}", *cat[s], ("envA", s, i)))
+    for m, c in enumerate(phys):
+        rows.append(FeatureSpec(c, c, "pmf", "measured physiology", ("pmf", m)))
+    for s1, s2 in _ENV2:
+        if s1 in syms and s2 in syms:
+            name = f"{s1}_sq" if s1 == s2 else f"{s1}_x_{s2}"
+            formula = f"{s1}^2" if s1 == s2 else f"{s1} {s2}"
+            rows.append(
+                FeatureSpec(name, formula, "env-2nd", "second-order environment", ("env2", s1, s2))
+            )
+    return tuple(rows)
+
+
+def _study_ops() -> None:
+    """Attach the ops to the study's fixed table (same numbers as ebl_feature_matrix)."""
+    ops: list[tuple] = [("A", k) for k in range(_N_CH)]
+    ops += [("lin", ((i, 1.0), (j, -1.0))) for i, j in CONTRAST_PAIRS + DIFFERENCE_PAIRS]
+    for m in range(len(CURVATURE_WEIGHTS)):
+        ops.append(("lin", tuple((c, float(CURVATURE_WEIGHTS[m, c])) for c in (m, m + 1, m + 2))))
+    ops += [("AA", i, j) for i, j in PRODUCT_PAIRS]
+    ops += [("w", k, ALPHA_SKIN_PER_MM[k], ALPHA_PERF[k], ALPHA_MEL[k]) for k in range(_N_CH)]
+    ops += [("envA", s, k) for s in ("dT", "dH", "dP") for k in range(_N_CH)]
+    ops += [("pmf", m) for m in range(_N_PMF)]
+    ops += [("env2", s1, s2) for s1, s2 in _ENV2]
+    for spec, op in zip(FEATURE_TABLE, ops, strict=True):
+        object.__setattr__(spec, "op", op)
+
+
+_study_ops()
+
+
+def compute_features(table, schema, absorbance, physiology) -> np.ndarray:
+    """Evaluate a :func:`feature_table` on absorbances and physiology, (n, p).
+
+    Parameters
+    ----------
+    table : sequence of FeatureSpec
+        The features.
+    schema : DeviceSchema
+        The device (names the physiological columns).
+    absorbance : numpy.ndarray
+        (n, k) decadic absorbances. [-]
+    physiology : numpy.ndarray
+        (n, m) physiological columns in ``schema.physiology`` order. [column units]
+    """
+    A = np.asarray(absorbance, dtype=float).T
+    P = np.asarray(physiology, dtype=float).T
+    col = {c: P[m] for m, c in enumerate(schema.physiology)}
+    env = {s: (col[c] - c0) / sc for s, (c, c0, sc) in _ENV.items() if c in col}
+    perf = None
+    out = np.empty((len(table), A.shape[1]))
+    for r, spec in enumerate(table):
+        op = spec.op
+        kind = op[0]
+        if kind == "A":
+            out[r] = A[op[1]]
+        elif kind == "lin":
+            out[r] = sum(w * A[c] for c, w in op[1])
+        elif kind == "AA":
+            out[r] = A[op[1]] * A[op[2]]
+        elif kind == "w":
+            if perf is None:
+                perf = perfusion_index(
+                    col["skin_temp_c"], col["systolic_bp_mmhg"], col["pressure_mbar"]
+                )
+            _, k, a_s, a_p, a_m = op
+            out[r] = (
+                a_s * col["skin_thickness_mm"] + a_p * perf + a_m * col["melanin_fraction"]
+            ) * A[k]
+        elif kind == "envA":
+            out[r] = env[op[1]] * A[op[2]]
+        elif kind == "pmf":
+            out[r] = P[op[1]]
+        elif kind == "env2":
+            out[r] = env[op[1]] * env[op[2]]
+        else:  # pragma: no cover - tables are built here
+            raise ValueError(f"unknown feature op {op!r}")
+    return out.T
+
+
+def enhanced_beer_lambert(
+    frame: pd.DataFrame | Dataset, adc_bits: int | None = None
+) -> pd.DataFrame:
+    """The Enhanced Beer–Lambert features of a device's measurements.
 
     Parameters
     ----------
     frame : pandas.DataFrame or Dataset
-        Measurements with the schema's measured columns (other columns, including
-        ``true_*`` ones, are ignored).
+        Measurements with ``adc_<nm>`` columns (any LEDs), optional ``adc_ref_<nm>``
+        and any known physiological columns; other columns (``true_*``) are ignored.
+    adc_bits : int, optional
+        Declared ADC resolution (else the file's, or 12). [bit]
 
     Returns
     -------
     pandas.DataFrame
-        (n, 56), columns :data:`FEATURE_NAMES`, the input's index.
+        (n, p) features of :func:`feature_table` (56 at the study's device), the
+        input's index.
 
     Raises
     ------
     DataError
-        Missing columns, non-numeric cells, NaN, or ADC codes out of range (the message
-        lists the offending columns and rows).
+        Missing columns, non-numeric cells, NaN, ADC codes out of range, implausible
+        physiology (the message names the column and rows).
 
     Examples
     --------
@@ -536,11 +768,23 @@ def enhanced_beer_lambert(frame: pd.DataFrame | Dataset) -> pd.DataFrame:
     >>> enhanced_beer_lambert(ds).shape
     (4, 56)
     """
+    from .schema import DeviceSchema
+
+    schema = DeviceSchema.infer(frame, adc_bits)
     if isinstance(frame, Dataset):
         frame = frame.frame
-    checked = validate_measurements(frame)
-    X = checked[list(_MEASURED)].to_numpy(dtype=float)
-    return pd.DataFrame(ebl_feature_matrix(X), columns=list(FEATURE_NAMES), index=frame.index)
+    Xa = schema.raw(frame)
+    table = feature_table(schema)
+    if schema.is_study:
+        values = ebl_feature_matrix(Xa)
+    else:
+        m = schema.split(Xa)
+        values = compute_features(table, schema, m.absorbance, m.physiology)
+    return pd.DataFrame(
+        values,
+        columns=[f.name for f in table],
+        index=frame.index,
+    )
 
 
 def features_markdown() -> str:
@@ -602,10 +846,17 @@ def features_markdown() -> str:
 
 
 class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
-    """scikit-learn transformer: 20 measured columns -> the 56 EBL features.
+    """scikit-learn transformer: a device's measured columns -> its EBL features.
 
-    Stateless (``fit`` only records the input width and column names), so it can sit
-    in a :class:`~sklearn.pipeline.Pipeline` before a scaler and a regressor.
+    ``fit`` records the device (:class:`~nirglucose.schema.DeviceSchema`: from the
+    column names of a frame, or plain for an array) and the feature table
+    (:func:`feature_table`; 56 features at the study's device), so it can sit in a
+    :class:`~sklearn.pipeline.Pipeline` before a scaler and a regressor.
+
+    Parameters
+    ----------
+    adc_bits : int, optional
+        Declared ADC resolution (else the data's, or 12). [bit]
 
     Examples
     --------
@@ -616,33 +867,37 @@ class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
     ((4, 56), 'dA_1150_940')
     """
 
-    def _as_array(self, X) -> np.ndarray:
-        if isinstance(X, Dataset):
-            X = X.frame
-        if isinstance(X, pd.DataFrame):
-            return validate_measurements(X)[list(_MEASURED)].to_numpy(dtype=float)
-        from sklearn.utils import check_array
-
-        return _check_array(check_array(X, dtype=np.float64, estimator=self, input_name="X"))
+    def __init__(self, adc_bits: int | None = None):
+        self.adc_bits = adc_bits
 
     def fit(self, X, y=None):
-        """Check the input; returns self."""
-        self._as_array(X)
-        self.n_features_in_ = len(_MEASURED)
+        """Record the device's schema and feature table; returns self."""
+        from .schema import fit_schema
+
+        self.schema_ = fit_schema(self, X, self.adc_bits)
+        self.table_ = feature_table(self.schema_)
         if isinstance(X, pd.DataFrame | Dataset):
-            self.feature_names_in_ = np.asarray(_MEASURED, dtype=object)
+            self.schema_.raw(X)
         return self
 
     def transform(self, X) -> np.ndarray:
-        """The (n, 56) feature matrix."""
+        """The (n, p) feature matrix."""
         from .models._checks import require_fitted
+        from .schema import as_raw_input
 
-        require_fitted(self, "n_features_in_")
-        return ebl_feature_matrix(self._as_array(X))
+        require_fitted(self, "schema_")
+        Xa = self.schema_.raw(as_raw_input(self, X, self.schema_))
+        if self.schema_.is_study:
+            return ebl_feature_matrix(Xa)
+        m = self.schema_.split(Xa)
+        return compute_features(self.table_, self.schema_, m.absorbance, m.physiology)
 
     def get_feature_names_out(self, input_features=None) -> np.ndarray:
-        """The 56 feature names."""
-        return np.asarray(FEATURE_NAMES, dtype=object)
+        """The feature names."""
+        from .models._checks import require_fitted
+
+        require_fitted(self, "schema_")
+        return np.asarray([f.name for f in self.table_], dtype=object)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

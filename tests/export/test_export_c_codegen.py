@@ -136,3 +136,90 @@ def test_only_fitted_linear_models_export(fitted, tmp_path):
         "nirglucose_model.c",
         "nirglucose_model.h",
     ]
+
+
+def _driver(schema) -> str:
+    """A driver reading rows of the device's raw columns (float32) and printing glucose."""
+    k, m, w = schema.n_channels, len(schema.physiology), len(schema.raw_columns)
+    args = ["row"]
+    if schema.reference:
+        args.append(f"row + {k}")
+    if m:
+        args.append(f"row + {w - m}")
+    return f"""
+#include <stdio.h>
+#include "nirglucose_model.h"
+int main(int argc, char **argv)
+{{
+    float row[{w}];
+    FILE *f;
+    if (argc != 2 || !(f = fopen(argv[1], "rb"))) return 1;
+    while (fread(row, sizeof(float), {w}, f) == {w})
+        printf("%.9g\\n", (double)nirglucose_predict({", ".join(args)}));
+    fclose(f);
+    return 0;
+}}
+"""
+
+
+@pytest.mark.skipif(GCC is None, reason="gcc is not installed")
+@pytest.mark.parametrize("name", ["ebl", "pls"])
+@pytest.mark.parametrize(
+    ("n_leds", "bits", "keep"),
+    [(1, 10, "none"), (1, 12, "all"), (3, 14, "all"), (3, 12, "some"), (4, 16, "all")],
+)
+def test_any_device_compiles_and_matches_python(name, n_leds, bits, keep, tmp_path):
+    """gcc parity at N = 1, 3 and 4 LEDs, with and without references and physiology."""
+    from device_data import device_overrides
+
+    wl = (850.0, 940.0, 1050.0, 1150.0) if n_leds == 4 else None
+    if wl is None:
+        from device_data import LED_SETS
+
+        wl = LED_SETS[n_leds]
+    train = ng.simulate("paper", 30, 3, seed=1, overrides=device_overrides(wl, bits))
+    test = ng.simulate("paper", 200, 3, seed=2, overrides=device_overrides(wl, bits))
+    f = train.frame
+    if keep == "none":  # a bare one-LED device: no reference codes, no physiology
+        cols = [c for c in f if c.startswith("adc_") and not c.startswith("adc_ref")]
+    elif keep == "some":
+        cols = [c for c in f if c.startswith("adc_")] + ["age_yr", "skin_temp_c", "pressure_mbar"]
+    else:
+        cols = list(f.columns)
+    model = (EnhancedBeerLambert if name == "ebl" else PLSBaseline)(adc_bits=bits)
+    model.fit(f[[*cols, "glucose_mgdl", "subject_id"]] if keep != "all" else train)
+    s = model.schema_
+    assert s.n_channels == n_leds and s.adc_bits == bits
+    out = tmp_path / "fw"
+    export_c(model, out)
+    header = (out / "nirglucose_model.h").read_text()
+    assert f"#define NIRGLUCOSE_N_CHANNELS {n_leds}\n" in header
+    assert f"#define NIRGLUCOSE_ADC_BITS {bits}\n" in header
+    (tmp_path / "driver.c").write_text(_driver(s))
+    subprocess.run(
+        [GCC, *CFLAGS, "-c", str(out / "nirglucose_model.c"), "-o", str(tmp_path / "m.o")],
+        check=True,
+        capture_output=True,
+    )
+    exe = tmp_path / "driver"
+    subprocess.run(
+        [GCC, "-std=c99", "-O2", "-I", str(out), str(tmp_path / "driver.c"),
+         str(tmp_path / "m.o"), "-o", str(exe), "-lm"],
+        check=True,
+        capture_output=True,
+    )  # fmt: skip
+    X = test.frame[list(s.raw_columns)].to_numpy(np.float32)
+    data = tmp_path / "x.f32"
+    X.tofile(data)
+    res = subprocess.run([str(exe), str(data)], check=True, capture_output=True, text=True)
+    c_pred = np.array(res.stdout.split(), dtype=float)
+    py_pred = model.predict(X.astype(np.float64))
+    assert c_pred.shape == (len(X),)
+    np.testing.assert_allclose(c_pred, py_pred, rtol=0, atol=0.01)
+
+
+def test_plain_array_models_do_not_export(tmp_path):
+    rng = np.random.default_rng(0)
+    m = PLSBaseline().fit(rng.normal(size=(30, 3)), rng.normal(size=30))
+    with pytest.raises(DataError, match="plain array"):
+        export_c(m, tmp_path / "fw")

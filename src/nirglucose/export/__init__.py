@@ -10,6 +10,7 @@ from .c_codegen import (
     c_float,
     export_c,
     generate_c,
+    prototype,
 )
 
 __all__ = [
@@ -17,6 +18,7 @@ __all__ = [
     "HEADER_NAME",
     "SOURCE_NAME",
     "PROTOTYPE",
+    "prototype",
     "c_float",
     "export_c",
     "generate_c",

@@ -1,54 +1,128 @@
-"""What every estimator shares: reading a Dataset, a DataFrame or an array.
+"""What every estimator shares: reading its input through the one schema boundary.
 
-Estimators take a :class:`~nirglucose.dataset.Dataset`, a DataFrame with the schema's
-measured columns, or a 2-D array whose columns are
-:func:`~nirglucose.dataset.measured_columns` in order (ADC codes, reference codes,
-physiological vector). They read the measured columns only, never ``true_*`` ones
-(except :class:`~nirglucose.models.oracle.Oracle`).
+Estimators take a :class:`~nirglucose.dataset.Dataset` or a DataFrame of any device
+(``adc_<nm>`` for any LEDs, optional ``adc_ref_<nm>``, any known physiological
+columns; :class:`~nirglucose.schema.DeviceSchema` reads them), or a plain 2-D numeric
+array. ``fit`` records the device as ``schema_``; ``predict`` requires the same columns
+(an array: the schema's :attr:`~nirglucose.schema.DeviceSchema.raw_columns` in order).
+They read measured columns only, never ``true_*`` ones (except
+:class:`~nirglucose.models.oracle.Oracle`). Every model applies the same fitting-size
+policy (:func:`~nirglucose.schema.check_fit_size`) and refuses reference glucose a meter
+would not report (:func:`~nirglucose.schema.check_reference_glucose`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from sklearn.utils import check_array
+from sklearn.utils.validation import column_or_1d
 
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
-from ..dataset import Dataset, measured_columns, validate_measurements
+from ..dataset import Dataset, measured_columns
 from ..exceptions import DataError
+from ..schema import (
+    DeviceSchema,
+    as_raw_input,
+    check_fit_size,
+    check_reference_glucose,
+    fit_schema,
+)
 
-__all__ = ["MEASURED_COLUMNS", "N_MEASURED", "as_measurements"]
+__all__ = [
+    "MEASURED_COLUMNS",
+    "N_MEASURED",
+    "as_measurements",
+    "fit_input",
+    "predict_input",
+    "target_of",
+]
 
+#: The study device's measured columns (4 ADC codes, 4 references, 12 physiological).
 MEASURED_COLUMNS = tuple(measured_columns(DEFAULT_LED_WAVELENGTHS_NM))
 N_MEASURED = len(MEASURED_COLUMNS)
 
 
-def as_measurements(X, y=None, *, require_target: bool = False):
-    """Return ``(X, y, groups)``: measured columns as float64 (n, 20), target, subject ids.
+def target_of(est, y, n: int) -> np.ndarray:
+    """``y`` as a finite float64 (n,) array (a column vector warns, as scikit-learn does)."""
+    y = check_array(y, ensure_2d=False, dtype=np.float64, input_name="y", estimator=est)
+    if y.ndim == 2 and y.shape[1] == 1:
+        y = column_or_1d(y, warn=True)
+    if y.ndim != 1 or len(y) != n:
+        raise DataError(f"y must be one value per row of X ({n}), got shape {y.shape}")
+    return y
+
+
+def fit_input(est, X, y=None, groups=None, adc_bits: int | None = None):
+    """``(schema, X raw (n, width), y, groups)`` for ``fit``, validated.
 
     Parameters
     ----------
+    est : estimator
+        Gets ``n_features_in_`` (and ``feature_names_in_`` for frames).
     X : Dataset, pandas.DataFrame or array_like
         Measurements.
     y : array_like, optional
-        Reference glucose [mg/dL]; taken from ``glucose_mgdl`` when X is a
-        Dataset/DataFrame that has it and ``y`` is None.
-    require_target : bool
-        Raise if no target is found.
+        Reference glucose; ``glucose_mgdl`` of a frame when omitted. [mg/dL]
+    groups : array_like, optional
+        Subject ids (else the frame's ``subject_id``).
+    adc_bits : int, optional
+        Declared ADC resolution. [bit]
 
-    Returns
-    -------
-    X : numpy.ndarray, (n, 20)
-    y : numpy.ndarray or None
-    groups : numpy.ndarray or None
-        ``subject_id`` when present (for subject-grouped inner CV).
+    Raises
+    ------
+    DataError
+        Bad columns or values, no target, too few rows or subjects, reference glucose
+        outside 20-600 mg/dL (device data).
     """
+    schema: DeviceSchema = fit_schema(est, X, adc_bits)
+    frame = X.frame if isinstance(X, Dataset) else X
+    if isinstance(frame, pd.DataFrame):
+        if y is None:
+            if "glucose_mgdl" not in frame.columns:
+                raise DataError("fitting needs reference glucose: a 'glucose_mgdl' column or y")
+            y = pd.to_numeric(frame["glucose_mgdl"], errors="coerce")
+        if groups is None and "subject_id" in frame.columns:
+            groups = frame["subject_id"].to_numpy()
+    elif y is None:
+        raise DataError(
+            f"{type(est).__name__} requires y to be passed, but the target y is None (give y, "
+            "or a DataFrame/Dataset with a glucose_mgdl column)"
+        )
+    Xa = schema.raw(as_raw_input(est, X, schema))
+    y = target_of(est, y, len(Xa))
+    if groups is not None:
+        groups = np.asarray(groups)
+        if len(groups) != len(Xa):
+            raise DataError(f"groups has {len(groups)} entries but X has {len(Xa)} rows")
+    check_fit_size(len(Xa), groups)
+    if not schema.is_plain:
+        check_reference_glucose(y)
+    return schema, Xa, y, groups
+
+
+def predict_input(est, X) -> np.ndarray:
+    """The fitted device's raw columns of ``X``, validated, (n, width)."""
+    schema = est.schema_
+    return schema.raw(as_raw_input(est, X, schema))
+
+
+def as_measurements(X, y=None, *, require_target: bool = False):
+    """``(X (n, 20), y, groups)``: the study device's measured columns (compatibility).
+
+    For code written against the study's fixed layout (4 LEDs with references, the
+    12-entry vector); estimators read any device through :func:`fit_input`.
+
+    Raises
+    ------
+    DataError
+        Missing columns, bad values, a wrong width, or no target when one is required.
+    """
+    schema = DeviceSchema()
     groups = None
-    if isinstance(X, Dataset):
-        X = X.frame
-    if isinstance(X, pd.DataFrame):
-        frame = X
-        checked = validate_measurements(frame)
-        Xa = checked[list(MEASURED_COLUMNS)].to_numpy(dtype=float)
+    frame = X.frame if isinstance(X, Dataset) else X
+    if isinstance(frame, pd.DataFrame):
+        Xa = schema.raw(frame)
         if y is None and "glucose_mgdl" in frame.columns:
             y = frame["glucose_mgdl"]
         if "subject_id" in frame.columns:
@@ -56,22 +130,15 @@ def as_measurements(X, y=None, *, require_target: bool = False):
     else:
         Xa = np.asarray(X, dtype=float)
         if Xa.ndim != 2 or Xa.shape[1] != N_MEASURED:
-            shape = Xa.shape
             raise DataError(
                 f"expected a 2-D array with {N_MEASURED} measured columns "
-                f"({', '.join(MEASURED_COLUMNS)}), got shape {shape}"
+                f"({', '.join(MEASURED_COLUMNS)}), got shape {Xa.shape}"
             )
-        if not np.all(np.isfinite(Xa)):
-            bad = np.flatnonzero(~np.isfinite(Xa).all(axis=1))
-            raise DataError(
-                f"input has NaN or infinite values in {len(bad)} rows, first row {bad[0]}"
-            )
+        Xa = schema.raw(Xa)
     if y is not None:
         y = np.asarray(y, dtype=float).ravel()
-        if len(y) != len(Xa):
-            raise DataError(f"X has {len(Xa)} rows but y has {len(y)}")
-        if not np.all(np.isfinite(y)):
-            raise DataError("target glucose_mgdl has NaN or infinite values")
+        if len(y) != len(Xa) or not np.all(np.isfinite(y)):
+            raise DataError(f"y must be {len(Xa)} finite values, got {len(y)}")
     elif require_target:
         raise DataError("fitting needs reference glucose: a 'glucose_mgdl' column or y")
     return Xa, y, groups

@@ -68,13 +68,13 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
 from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit
-from sklearn.utils import check_array, check_random_state
+from sklearn.utils import check_random_state
 from torch import nn
 
-from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError, NotFittedError
-from ._base import N_MEASURED, as_measurements
+from ..schema import DeviceSchema
+from ._base import fit_input, predict_input, target_of
 from .networks import count_parameters
 
 __all__ = ["TorchRegressor", "LR_SCHEDULES", "FORMAT_VERSION", "NUMPY_ROWS", "nir_pmf_features"]
@@ -86,7 +86,6 @@ LR_SCHEDULES = ("plateau", "cosine", "none")
 #: Version of the saved-model JSON layout.
 FORMAT_VERSION = 1
 
-_N_LED = len(DEFAULT_LED_WAVELENGTHS_NM)
 _PREDICT_CHUNK = 65536
 #: Batches up to this many rows are predicted through the NumPy closure.
 NUMPY_ROWS = 8
@@ -99,37 +98,37 @@ class _UnfittedError(NotFittedError, _SklearnNotFittedError):
     scikit-learn tools as theirs (it subclasses both)."""
 
 
-def nir_pmf_features(Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Decadic absorbances and the physiological vector from the 20 measured columns.
+def nir_pmf_features(
+    Xa: np.ndarray, schema: DeviceSchema | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Decadic absorbances and the physiological vector from a device's raw columns.
 
     Parameters
     ----------
     Xa : numpy.ndarray
-        (n, 20) measured columns in ``MEASURED_COLUMNS`` order (ADC codes, reference
-        codes, physiological vector).
+        (n, width) raw columns in ``schema.raw_columns`` order (ADC codes, reference
+        codes where the device has them, physiological columns).
+    schema : DeviceSchema, optional
+        The device (the study's when None).
 
     Returns
     -------
     absorbance : numpy.ndarray
-        :math:`A_\\lambda = \\log_{10}(\\mathrm{adc\\_ref}_\\lambda / \\mathrm{adc}_\\lambda)`,
-        (n, 4). [-]
+        :math:`A_\\lambda = \\log_{10}(I_0 / I)`, (n, k); a device without
+        reference codes uses the ADC's full scale as :math:`I_0`. [-]
     pmf : numpy.ndarray
-        (n, 12) physiological vector. [column units]
+        (n, m) physiological columns; one column of zeros when the device records none
+        (the networks' physiology branch then sees a constant). [column units]
 
     Raises
     ------
     DataError
         If any ADC or reference code is not positive (no absorbance exists).
     """
-    adc = Xa[:, :_N_LED]
-    ref = Xa[:, _N_LED : 2 * _N_LED]
-    if not (Xa[:, : 2 * _N_LED] > 0).all():
-        row = int(np.flatnonzero((Xa[:, : 2 * _N_LED] <= 0).any(axis=1))[0])
-        raise DataError(
-            f"ADC and reference codes must be > 0 to form absorbances log10(adc_ref/adc); "
-            f"row {row} has adc={adc[row].tolist()}, adc_ref={ref[row].tolist()}"
-        )
-    return np.log10(ref / adc), Xa[:, 2 * _N_LED :]
+    a, pmf = (schema or DeviceSchema()).split(np.asarray(Xa, dtype=float))
+    if pmf.shape[1] == 0:
+        pmf = np.zeros((len(a), 1))
+    return a, pmf
 
 
 def _smoothed_argmin(values: list[float], window: int) -> int:
@@ -213,7 +212,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
     physics_ : dict
         Constants of the physics terms (JSON-serialisable), empty for the SDNN.
     n_features_in_ : int
-        20, the measured columns.
+        Width of the device's raw columns (20 for the study's device).
+    schema_ : DeviceSchema
+        The device fitted on (LEDs, reference codes, ADC bits, physiological columns).
     """
 
     #: Set by :func:`~nirglucose.models.registry.register`.
@@ -378,66 +379,45 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         need(isinstance(self.refit, bool | np.bool_), "refit", "must be True or False")
         self._validate_extra_params()
 
-    def _check_study_leds(self, X: Any) -> None:
-        if isinstance(X, Dataset):
-            wl = tuple(float(w) for w in X.wavelengths_nm)
-        elif isinstance(X, pd.DataFrame):
-            wl = tuple(
-                float(c[4:])
-                for c in X.columns
-                if isinstance(c, str)
-                and c.startswith("adc_")
-                and c[4:].replace(".", "", 1).isdigit()
-            )
-        else:
-            return
-        if wl and tuple(sorted(wl)) != tuple(DEFAULT_LED_WAVELENGTHS_NM):
-            raise DataError(
-                f"{type(self).__name__} needs exactly the study's four LEDs "
-                f"({', '.join(f'{w:g}' for w in DEFAULT_LED_WAVELENGTHS_NM)} nm): its input "
-                f"layer takes their four absorbances; the data has LEDs "
-                f"({', '.join(f'{w:g}' for w in wl)}) nm"
-            )
+    def _measurements(
+        self, X: Any, y: Any = None, *, require_target: bool = False, fit: bool = False
+    ):
+        """``(raw columns, y, groups)`` through the schema boundary.
 
-    def _measurements(self, X: Any, y: Any = None, *, require_target: bool = False):
-        """``as_measurements`` after the LED check and, for arrays, sklearn's checks.
-
-        Arrays other than a dense float64 (n, 20) one (the common case, kept cheap for
-        single-sample latency) first go through :func:`sklearn.utils.check_array` so
-        that sparse, complex, NaN/inf, empty and too-narrow input fail with
-        scikit-learn's standard messages; the exact width (20 measured columns) and
-        finiteness are then checked by :func:`~nirglucose.models._base.as_measurements`.
+        ``fit=True`` records the device (``schema_``) from X; otherwise X must carry the
+        fitted device's columns (a validation set, or data to predict).
         """
-        self._check_study_leds(X)
-        dense = (
-            type(X) is np.ndarray
-            and X.dtype == np.float64
-            and X.ndim == 2
-            and X.shape[1] == N_MEASURED
-            and len(X) >= 1
-        )
-        if dense and not (require_target and (y is None or len(X) < 2)):
-            pass  # dense float64 (n, 20) already: as_measurements checks NaN/inf
-        elif not isinstance(X, Dataset | pd.DataFrame):
-            if require_target and y is None:
-                raise DataError(
-                    f"{type(self).__name__} requires y to be passed, but the target y is None "
-                    f"(or pass a Dataset/DataFrame with a 'glucose_mgdl' column)"
-                )
-            X = check_array(
-                X,
-                dtype=np.float64,
-                accept_sparse=False,
-                ensure_all_finite=True,
-                ensure_min_samples=2 if require_target else 1,
-                ensure_min_features=N_MEASURED,
-            )
-        return as_measurements(X, y, require_target=require_target)
+        if fit:
+            self.schema_, Xa, y, groups = fit_input(self, X, y)
+            return Xa, y, groups
+        Xa = predict_input(self, X)
+        frame = X.frame if isinstance(X, Dataset) else X
+        groups = None
+        if isinstance(frame, pd.DataFrame):
+            if y is None and "glucose_mgdl" in frame.columns:
+                y = frame["glucose_mgdl"]
+            if "subject_id" in frame.columns:
+                groups = frame["subject_id"].to_numpy()
+        if y is not None:
+            y = target_of(self, y, len(Xa))
+        elif require_target:
+            raise DataError("validation data needs reference glucose: glucose_mgdl or y_val")
+        return Xa, y, groups
+
+    def _nir_pmf(self, Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return nir_pmf_features(Xa, self.schema_)
+
+    def _input_widths(self) -> dict[str, int]:
+        """``n_nir``, ``n_pmf`` of the network: the device's, or the study's before fit."""
+        s = self.__dict__.get("schema_")
+        if s is None:
+            return {"n_nir": 4, "n_pmf": 12}
+        return {"n_nir": s.n_channels, "n_pmf": max(len(s.physiology), 1)}
 
     # ------------------------------------------------------------------ scaling
 
     def _transform(self, Xa: np.ndarray) -> dict[str, np.ndarray]:
-        a, pmf = nir_pmf_features(Xa)
+        a, pmf = self._nir_pmf(Xa)
         s = self.scaler_
         return {
             "nir": (a - s["nir_mean"]) / s["nir_scale"],
@@ -473,7 +453,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         """
         self._validate_params()
         self.__dict__.pop("_fast", None)  # a previous fit's snapshot
-        Xa, y, groups = self._measurements(X, y, require_target=True)
+        Xa, y, groups = self._measurements(X, y, require_target=True, fit=True)
         if len(Xa) < 2:
             raise DataError(f"fitting needs at least 2 samples, got {len(Xa)}")
         rs = check_random_state(self.random_state)
@@ -490,7 +470,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
 
         # Scaling and physics constants from every row given for training (an internal
         # validation split is part of the training data; an explicit X_val is not).
-        a_train, pmf_train = nir_pmf_features(Xa)
+        a_train, pmf_train = self._nir_pmf(Xa)
         self.scaler_ = {
             "nir_mean": a_train.mean(axis=0),
             "nir_scale": _scale_of(a_train),
@@ -525,7 +505,6 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         finally:
             self.__dict__.pop("_optimizer", None)
         self.refit_epochs_ = len(self.refit_history_)
-        self.n_features_in_ = N_MEASURED
         self._build_fast_path()
         return self
 
@@ -666,7 +645,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
 
     def _inputs32(self, Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Standardised float32 network inputs ``(nir, pmf)`` from measured columns."""
-        a, pmf = nir_pmf_features(Xa)
+        a, pmf = self._nir_pmf(Xa)
         s = self.scaler_
         nir = ((a - s["nir_mean"]) / s["nir_scale"]).astype(np.float32)
         return nir, ((pmf - s["pmf_mean"]) / s["pmf_scale"]).astype(np.float32)
@@ -693,11 +672,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         Xa, _, _ = self._measurements(X)
         fast = self.__dict__.get("_fast")
         if len(Xa) <= NUMPY_ROWS and fast is not None and fast["fn"] is not None:
-            if not (Xa[:, : 2 * _N_LED] > 0).all():
-                nir_pmf_features(Xa)  # raises the detailed DataError
-            x = np.concatenate(
-                (np.log10(Xa[:, _N_LED : 2 * _N_LED] / Xa[:, :_N_LED]), Xa[:, 2 * _N_LED :]), axis=1
-            )
+            x = np.concatenate(self._nir_pmf(Xa), axis=1)
             x -= fast["mu"]
             x *= fast["inv_scale"]
             out = self._glucose(fast["fn"](x.astype(np.float32))).astype(np.float64)
@@ -726,11 +701,11 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         Parameters
         ----------
         adc : array_like
-            The four ADC codes (850, 940, 1050, 1150 nm). [code]
-        adc_ref : array_like
-            The four reference codes. [code]
+            The device's ADC codes, one per LED in ``schema_`` order. [code]
+        adc_ref : array_like or None
+            Its reference codes (None for a device without them). [code]
         pmf : array_like
-            The 12 physiological values in ``PMF_COLUMNS`` order. [column units]
+            Its physiological values in ``schema_.physiology`` order. [column units]
 
         Returns
         -------
@@ -739,14 +714,21 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         """
         self._check_fitted()
         fast = self._fast
-        with np.errstate(divide="ignore", invalid="ignore"):
-            a = np.log10(np.asarray(adc_ref, dtype=np.float64) / np.asarray(adc, dtype=np.float64))
-        p = np.asarray(pmf, dtype=np.float64)
-        if a.shape != (_N_LED,) or p.shape != (N_MEASURED - 2 * _N_LED,):
+        sch = self.schema_
+        k = sch.n_channels
+        i = np.asarray(adc, dtype=np.float64)
+        r = np.asarray(adc_ref, dtype=np.float64) if sch.reference else float(sch.full_scale)
+        p = np.asarray(pmf if pmf is not None else [], dtype=np.float64)
+        if i.shape != (k,) or np.shape(r) not in ((k,), ()) or p.shape != (len(sch.physiology),):
             raise DataError(
-                f"predict_one takes 4 ADC codes, 4 reference codes and 12 physiological "
-                f"values; got shapes {np.shape(adc)}, {np.shape(adc_ref)}, {p.shape}"
+                f"predict_one takes {k} ADC codes, {k if sch.reference else 'no'} reference "
+                f"codes and {len(sch.physiology)} physiological values; got shapes "
+                f"{np.shape(adc)}, {np.shape(adc_ref)}, {p.shape}"
             )
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.log10(r / i)
+        if not sch.physiology:
+            p = np.zeros(1)
         u = np.concatenate((a, p))
         u -= fast["mu"]
         u *= fast["inv_scale"]
@@ -759,7 +741,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         else:
             with torch.inference_mode():
                 t = torch.from_numpy(x)
-                g = self._glucose(self.module_(t[:, :_N_LED], t[:, _N_LED:]))
+                g = self._glucose(self.module_(t[:, :k], t[:, k:]))
         return float(g[0]) * fast["y_scale"] + fast["y_mean"]
 
     def _build_fast_path(self) -> None:
@@ -769,12 +751,16 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         numpy_forward = getattr(self.module_, "numpy_forward", None)
         self._fast = {
             "fn": numpy_forward() if callable(numpy_forward) else None,
-            "x": np.zeros((1, N_MEASURED - _N_LED), dtype=np.float32),
+            "x": np.zeros((1, len(self._fast_mu())), dtype=np.float32),
             "mu": np.concatenate((s["nir_mean"], s["pmf_mean"])).astype(np.float64),
             "inv_scale": 1.0 / np.concatenate((s["nir_scale"], s["pmf_scale"])).astype(np.float64),
             "y_mean": float(s["y_mean"]),
             "y_scale": float(s["y_scale"]),
         }
+
+    def _fast_mu(self) -> np.ndarray:
+        s = self.scaler_
+        return np.concatenate((s["nir_mean"], s["pmf_mean"]))
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
@@ -834,6 +820,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             "model": self.registry_name,
             "nirglucose_version": __version__,
             "params": self._json_params(),
+            "schema": self.schema_.to_json(),
             "scaler": {k: np.asarray(v).tolist() for k, v in self.scaler_.items()},
             "physics": self.physics_,
             "history": self.history_,
@@ -888,6 +875,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         if unknown:
             raise DataError(f"{str(path)!r}: unknown parameters {unknown}; valid: {sorted(valid)}")
         est = cls(**params)
+        # Files written before the schema was saved are the study's device.
+        est.schema_ = DeviceSchema.from_json(doc["schema"]) if "schema" in doc else DeviceSchema()
         est.scaler_ = {
             k: (float(v) if k.startswith("y_") else np.asarray(v, dtype=np.float64))
             for k, v in doc["scaler"].items()
@@ -898,7 +887,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         est.n_epochs_ = doc.get("n_epochs", len(est.history_))
         est.refit_history_ = doc.get("refit_history", [])
         est.refit_epochs_ = len(est.refit_history_)
-        est.n_features_in_ = N_MEASURED
+        est.n_features_in_ = len(est.schema_.raw_columns)
+        if not est.schema_.is_plain:
+            est.feature_names_in_ = np.asarray(est.schema_.raw_columns, dtype=object)
         module = est.build_module()
         state = _read_weights(path, doc["weights_file"])
         expected = module.state_dict()

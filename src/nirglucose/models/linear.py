@@ -37,12 +37,11 @@ from numbers import Integral
 from typing import NamedTuple
 
 import numpy as np
-import pandas as pd
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.model_selection import GroupKFold, KFold
 from threadpoolctl import threadpool_limits
 
-from ..dataset import PMF_COLUMNS, Dataset
+from ..dataset import PMF_COLUMNS
 from ..exceptions import ConfigError, DataError
 from ..features import (
     ALPHA_MEL,
@@ -52,17 +51,19 @@ from ..features import (
     CURVATURE_WEIGHTS,
     DIFFERENCE_PAIRS,
     HYDRATION_CENTER_PCT,
-    N_FEATURES,
     PERFUSION_COEFFS,
     PRESSURE_CENTER_MBAR,
     PRODUCT_PAIRS,
     SKIN_TEMP_CENTER_C,
+    compute_features,
     ebl_feature_matrix,
+    feature_table,
     log10_absorbance,
     perfusion_index,
 )
-from ._base import MEASURED_COLUMNS, N_MEASURED, as_measurements
-from ._checks import EstimatorNotFittedError, measured_input, require_fitted
+from ..schema import DeviceSchema
+from ._base import fit_input, predict_input
+from ._checks import EstimatorNotFittedError, require_fitted
 from ._json_io import JsonModelMixin
 from .registry import register
 
@@ -129,10 +130,25 @@ class _LinearBase(JsonModelMixin, RegressorMixin, BaseEstimator):
         if "coef_" not in self.__dict__:  # cheap test first: this sits on the hot path
             require_fitted(self, "coef_")
 
-    def _record_input(self, X) -> None:
-        self.n_features_in_ = N_MEASURED
-        if isinstance(X, pd.DataFrame | Dataset):
-            self.feature_names_in_ = np.asarray(MEASURED_COLUMNS, dtype=object)
+    def _state_dict(self):
+        schema = self.schema_
+        self.__dict__["schema_"] = schema.to_json()  # the JSON form, for saving only
+        try:
+            return super()._state_dict()
+        finally:
+            self.__dict__["schema_"] = schema
+
+    def _restore_schema(self) -> None:
+        if isinstance(self.schema_, dict):  # loaded from JSON
+            self.schema_ = DeviceSchema.from_json(self.schema_)
+        s = self.schema_
+        self.n_features_in_ = len(s.raw_columns)
+        if not s.is_plain:
+            self.feature_names_in_ = np.asarray(s.raw_columns, dtype=object)
+
+    def _features(self, Xa: np.ndarray) -> np.ndarray:
+        """Model inputs (n, p) from the fitted device's raw columns."""
+        raise NotImplementedError
 
     @property
     def n_parameters(self) -> int:
@@ -199,21 +215,30 @@ class EnhancedBeerLambert(_LinearBase):
     """
 
     _STATE = {
+        "schema_": "json",
         "alpha_": None,
         "cv_mse_": (-1,),
-        "scaler_mean_": (N_FEATURES,),
-        "scaler_scale_": (N_FEATURES,),
-        "coef_": (N_FEATURES,),
+        "scaler_mean_": (-1,),
+        "scaler_scale_": (-1,),
+        "coef_": (-1,),
         "intercept_": None,
     }
 
     #: Batches up to this size are predicted row by row in plain Python (lower latency).
     SMALL_BATCH = 8
 
-    def __init__(self, alphas=None, cv: int = 5, random_state=None):
+    def __init__(self, alphas=None, cv: int = 5, random_state=None, adc_bits=None):
         self.alphas = alphas
         self.cv = cv
         self.random_state = random_state
+        self.adc_bits = adc_bits
+
+    def _features(self, Xa: np.ndarray) -> np.ndarray:
+        s = self.schema_
+        if s.is_study:
+            return ebl_feature_matrix(Xa)
+        m = s.split(Xa)
+        return compute_features(self.table_, s, m.absorbance, m.physiology)
 
     @classmethod
     def _params_from_json(cls, params):
@@ -250,14 +275,11 @@ class EnhancedBeerLambert(_LinearBase):
         """
         alphas = self._alpha_grid()
         cv = _check_cv(self.cv)
-        Xa, y, g = measured_input(self, X, y, fit=True)
-        if groups is not None:
-            g = np.asarray(groups)
-            if len(g) != len(Xa):
-                raise DataError(f"groups has {len(g)} entries but X has {len(Xa)} rows")
+        self.schema_, Xa, y, g = fit_input(self, X, y, groups, self.adc_bits)
+        self.table_ = feature_table(self.schema_)
         folds = _fold_ids(len(Xa), g, cv, self.random_state) if len(alphas) > 1 else None
         fit = _fit_standardized_cv(
-            lambda rows: ebl_feature_matrix(Xa[rows]).T,
+            lambda rows: np.ascontiguousarray(self._features(Xa[rows]).T),
             len(Xa),
             y,
             folds,
@@ -278,13 +300,23 @@ class EnhancedBeerLambert(_LinearBase):
         self.scaler_scale_ = fit.scale
         self.coef_ = beta / fit.scale
         self.intercept_ = float(fit.ybar - self.coef_ @ fit.mean)
-        self._record_input(X)
         self._restore()
         return self
 
     def _restore(self) -> None:
-        self.folded_ = _fold_ebl(self.coef_, self.intercept_)
-        self._kernel = _FoldedKernel(self.folded_)
+        self._restore_schema()
+        self.table_ = feature_table(self.schema_)
+        if len(self.coef_) != len(self.table_):
+            raise DataError(
+                f"model has {len(self.coef_)} coefficients but its device has "
+                f"{len(self.table_)} features; refit the model"
+            )
+        if self.schema_.is_study:  # the study's device: the folded fast paths
+            self.folded_ = _fold_ebl(self.coef_, self.intercept_)
+            self._kernel = _FoldedKernel(self.folded_)
+        else:
+            self.__dict__.pop("folded_", None)
+            self._kernel = None
 
     def predict(self, X) -> np.ndarray:
         """Glucose for each row of measurements. [mg/dL]
@@ -295,8 +327,12 @@ class EnhancedBeerLambert(_LinearBase):
         per-call overhead would exceed the arithmetic.
         """
         self._require_fitted()
-        # NaN/inf in an array is caught through the output (cheaper than scanning X).
-        Xa, _, _ = measured_input(self, X, fit=False, finite=False)
+        Xa = predict_input(self, X)
+        if self._kernel is None:
+            pred = self._features(Xa) @ self.coef_ + self.intercept_
+            if not np.isfinite(pred).all():
+                raise DataError("input gives non-finite predictions; check for extreme values")
+            return pred
         if len(Xa) <= self.SMALL_BATCH:
             one = self.predict_one
             vals = [one(r[:4], r[4:8], r[8:]) for r in Xa.tolist()]
@@ -307,7 +343,6 @@ class EnhancedBeerLambert(_LinearBase):
                 pred = self._kernel(Xa)
             finite = bool(np.isfinite(pred).all())
         if not finite:
-            as_measurements(Xa)  # names the rows with NaN or infinite values
             raise DataError("input gives non-finite predictions; check for extreme values")
         return pred
 
@@ -332,7 +367,13 @@ class EnhancedBeerLambert(_LinearBase):
         -------
         float
             Glucose. [mg/dL]
+
+        Other devices (not the study's four LEDs and 12-entry vector) take their own
+        LEDs' codes (``adc_ref=None`` without reference codes) and physiological
+        columns in ``schema_`` order, through :meth:`predict` on one row.
         """
+        if self.__dict__.get("_kernel", 0) is None:
+            return _predict_one_row(self, adc, adc_ref, pmf)
         try:
             (
                 b,
@@ -481,6 +522,22 @@ _PC_T = PERFUSION_COEFFS["temp"]
 _PC_S = PERFUSION_COEFFS["sbp"]
 _PC_S0 = PERFUSION_COEFFS["sbp_center"]
 _PC_P = PERFUSION_COEFFS["pressure"]
+
+
+def _predict_one_row(model, adc, adc_ref, pmf) -> float:
+    """predict_one for any device: one raw row through :meth:`predict`."""
+    s = model.schema_
+    parts = [np.ravel(np.asarray(adc, dtype=float))]
+    if s.reference:
+        parts.append(np.ravel(np.asarray(adc_ref, dtype=float)))
+    parts.append(np.ravel(np.asarray(pmf if pmf is not None else [], dtype=float)))
+    row = np.concatenate(parts)
+    if row.size != len(s.raw_columns):
+        raise DataError(
+            f"predict_one takes {len(s.raw_columns)} values for this device "
+            f"({', '.join(s.raw_columns)}), got {row.size}"
+        )
+    return float(model.predict(row[None, :])[0])
 
 
 class _StandardizedFit(NamedTuple):
@@ -698,18 +755,6 @@ class _FoldedKernel:
         return out
 
 
-def _pls_inputs(Xa: np.ndarray) -> np.ndarray:
-    """The PLS inputs: 4 log absorbances and the 12 measured PMF entries, (n, 16)."""
-    adc, ref = Xa[:, :_N_CH], Xa[:, _N_CH : 2 * _N_CH]
-    if not ((adc > 0) & (ref > 0)).all():
-        rows = np.flatnonzero(~((adc > 0) & (ref > 0)).all(axis=1))
-        raise DataError(
-            f"ADC and reference codes must be positive; {len(rows)} rows are "
-            f"not, first row {int(rows[0])}"
-        )
-    return np.hstack([np.log10(ref / adc), Xa[:, 2 * _N_CH :]])
-
-
 @register("pls")
 class PLSBaseline(_LinearBase):
     """PLS regression on the 4 log absorbances and the 12 measured PMF entries.
@@ -759,18 +804,37 @@ class PLSBaseline(_LinearBase):
     """
 
     _STATE = {
+        "schema_": "json",
         "n_components_": None,
         "cv_mse_": (-1,),
-        "x_mean_": (len(PLS_INPUT_NAMES),),
-        "coef_": (len(PLS_INPUT_NAMES),),
+        "x_mean_": (-1,),
+        "coef_": (-1,),
         "intercept_": None,
     }
 
-    def __init__(self, n_components=None, max_components: int = 16, cv: int = 5, random_state=None):
+    def __init__(
+        self,
+        n_components=None,
+        max_components: int = 16,
+        cv: int = 5,
+        random_state=None,
+        adc_bits=None,
+    ):
         self.n_components = n_components
         self.max_components = max_components
         self.cv = cv
         self.random_state = random_state
+        self.adc_bits = adc_bits
+
+    def _features(self, Xa: np.ndarray) -> np.ndarray:
+        m = self.schema_.split(Xa)
+        return np.hstack([m.absorbance, m.physiology])
+
+    @property
+    def input_names_(self) -> tuple[str, ...]:
+        """Names of the PLS inputs: ``A_<nm>`` per LED, then the physiological columns."""
+        s = self.schema_
+        return tuple(f"A_{w}" for w in s.labels) + s.physiology
 
     def fit(self, X, y=None, groups=None):
         """Fit on measurements (same inputs as :meth:`EnhancedBeerLambert.fit`)."""
@@ -781,12 +845,8 @@ class PLSBaseline(_LinearBase):
         nc = self.n_components
         if nc is not None and (isinstance(nc, bool) or not isinstance(nc, Integral) or nc < 1):
             raise ConfigError(f"n_components must be None or a positive integer, got {nc!r}")
-        Xa, y, g = measured_input(self, X, y, fit=True)
-        if groups is not None:
-            g = np.asarray(groups)
-            if len(g) != len(Xa):
-                raise DataError(f"groups has {len(g)} entries but X has {len(Xa)} rows")
-        U = _pls_inputs(Xa)
+        self.schema_, Xa, y, g = fit_input(self, X, y, groups, self.adc_bits)
+        U = self._features(Xa)
         n, p = U.shape
         # No more components than inputs, nor than the rows can support.
         limit = max(1, min(p, n - 1))
@@ -812,14 +872,16 @@ class PLSBaseline(_LinearBase):
         self.x_mean_ = fit.mean
         self.coef_ = beta / fit.scale
         self.intercept_ = float(fit.ybar - self.coef_ @ fit.mean)
-        self._record_input(X)
+        self._restore()
         return self
 
     def _restore(self) -> None:
+        self._restore_schema()
         self.n_components_ = int(self.n_components_)
+        if len(self.coef_) != len(self.input_names_) or len(self.x_mean_) != len(self.coef_):
+            raise DataError("model's coefficients do not match its device; refit the model")
 
     def predict(self, X) -> np.ndarray:
         """Glucose for each row of measurements. [mg/dL]"""
         self._require_fitted()
-        Xa, _, _ = measured_input(self, X, fit=False)
-        return _pls_inputs(Xa) @ self.coef_ + self.intercept_
+        return self._features(predict_input(self, X)) @ self.coef_ + self.intercept_

@@ -193,10 +193,10 @@ class OriginalPINNNet(nn.Module):
     PMF_SIZES = (12, 16, 32, 16)
     HEAD_SIZES = (48, 128, 64, 1)
 
-    def __init__(self) -> None:
+    def __init__(self, n_nir: int = 4, n_pmf: int = 12) -> None:
         super().__init__()
-        self.nir = mlp(self.NIR_SIZES)
-        self.pmf = mlp(self.PMF_SIZES)
+        self.nir = mlp((n_nir, *self.NIR_SIZES[1:]))
+        self.pmf = mlp((n_pmf, *self.PMF_SIZES[1:]))
         self.head = mlp(self.HEAD_SIZES, final_activation=False)
 
     def forward(self, x_nir: torch.Tensor, x_pmf: torch.Tensor) -> torch.Tensor:
@@ -238,11 +238,18 @@ class OptimizedPINNNet(nn.Module):
     decay" and reports 89,000 parameters; ``d_model=64``, 4 heads gives 76,225.
     """
 
-    def __init__(self, d_model: int = 64, n_heads: int = 4, dropout: float = 0.1) -> None:
+    def __init__(
+        self,
+        d_model: int = 64,
+        n_heads: int = 4,
+        dropout: float = 0.1,
+        n_nir: int = 4,
+        n_pmf: int = 12,
+    ) -> None:
         super().__init__()
         d = d_model
-        self.nir = mlp((4, d, d, d), dropout=dropout)
-        self.pmf = mlp((12, d, d, d), dropout=dropout)
+        self.nir = mlp((n_nir, d, d, d), dropout=dropout)
+        self.pmf = mlp((n_pmf, d, d, d), dropout=dropout)
         self.token_type = nn.Parameter(torch.zeros(2, d))
         self.attn = nn.MultiheadAttention(d, n_heads, dropout=dropout, batch_first=True)
         self.norm1 = nn.LayerNorm(d)
@@ -333,6 +340,8 @@ class RTEPINNNet(nn.Module):
         nominal_musp_per_cm: Sequence[float],
         mua_floor_per_cm: float = 1e-3,
         musp_floor_per_cm: float = 0.5,
+        n_nir: int = 4,
+        n_pmf: int = 12,
     ) -> None:
         super().__init__()
         k = len(nominal_mua_per_cm)
@@ -341,8 +350,8 @@ class RTEPINNNet(nn.Module):
         self.n_wavelengths = k
         self.mua_floor = float(mua_floor_per_cm)
         self.musp_floor = float(musp_floor_per_cm)
-        self.nir = mlp((4, 128, 128))
-        self.pmf = mlp((12, 64, 64))
+        self.nir = mlp((n_nir, 128, 128))
+        self.pmf = mlp((n_pmf, 64, 64))
         self.trunk = mlp((192, 256, 256, 128))
         self.optics = mlp((128, 64, 2 * k), final_activation=False)
         self.glucose = mlp((128 + 2 * k, 64, 1), final_activation=False)
@@ -404,10 +413,12 @@ class SDNNNet(nn.Module):
     FRONT_SIZES = (4, 16)
     STACK_SIZES = (28, 48, 32, 16, 8, 1)
 
-    def __init__(self) -> None:
+    def __init__(self, n_nir: int = 4, n_pmf: int = 12) -> None:
         super().__init__()
-        self.front = mlp(self.FRONT_SIZES)
-        self.stack = mlp(self.STACK_SIZES, final_activation=False)
+        self.n_nir = n_nir
+        front = self.FRONT_SIZES[1]
+        self.front = mlp((n_nir, front))
+        self.stack = mlp((front + n_pmf, *self.STACK_SIZES[1:]), final_activation=False)
 
     def forward(self, x_nir: torch.Tensor, x_pmf: torch.Tensor) -> torch.Tensor:
         return self.stack(torch.cat((self.front(x_nir), x_pmf), dim=-1)).squeeze(-1)
@@ -415,8 +426,9 @@ class SDNNNet(nn.Module):
     def numpy_forward(self) -> NumpyForward:
         """NumPy closure of :meth:`forward` (eval mode, current weights)."""
         front, stack = numpy_mlp(self.front), numpy_mlp(self.stack)
+        k = self.n_nir
 
         def run(x: np.ndarray) -> np.ndarray:
-            return stack(np.concatenate((front(x[:, :4]), x[:, 4:]), axis=-1))[:, 0]
+            return stack(np.concatenate((front(x[:, :k]), x[:, k:]), axis=-1))[:, 0]
 
         return run

@@ -47,6 +47,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from ..config import ScenarioConfig
 from ..dataset import Dataset, adc_columns, ref_columns, validate_measurements
 from ..exceptions import ConfigError, DataError
+from ..schema import check_fit_size, check_reference_glucose
 from ._checks import require_fitted
 from ._json_io import JsonModelMixin
 from .registry import register
@@ -230,6 +231,9 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
         y = np.asarray(y, dtype=float).ravel()
         if len(y) != len(frame) or not np.all(np.isfinite(y)):
             raise DataError("the target must be finite, one value per row")
+        groups = frame["subject_id"].to_numpy() if "subject_id" in frame.columns else None
+        check_fit_size(len(y), groups)  # the one policy of every model
+        check_reference_glucose(y)
         resid = _log_ratio(cfg, frame) - _model_log_ratio(cfg, frame, y)
         n_led = resid.shape[1]
         self.offset_ = resid.mean(axis=0)

@@ -70,11 +70,30 @@ __all__ = [
 PHYSICS_FORMS = ("absolute", "relative")
 
 
-def _scenario(source: Any) -> tuple[ScenarioConfig, str]:
-    """The data's scenario, or the ``paper`` preset for data without one."""
+def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig | None, str]:
+    """The data's scenario, or the ``paper`` preset at the data's LEDs for data without one.
+
+    ``(None, why)`` when the paper preset cannot describe those LEDs (outside the optics
+    tables): the physics term is then switched off.
+    """
     if isinstance(source, Dataset) and source.config is not None:
         return source.config, "dataset"
-    return resolve_config("paper"), "paper preset (the data carries no scenario)"
+    base = resolve_config("paper")
+    wl = tuple(float(w) for w in (wavelengths_nm or base.leds.wavelengths_nm))
+    if wl == tuple(base.leds.wavelengths_nm):
+        return base, "paper preset (the data carries no scenario)"
+    n = len(wl)
+    hw = base.hardware
+    overrides = {
+        "leds.wavelengths_nm": wl,
+        "leds.fwhm_nm": (float(np.mean(base.leds.fwhm_nm)),) * n,
+        "hardware.led_power_mw": (float(np.mean(hw.led_power_mw)),) * n,
+        "hardware.responsivity_a_per_w": (float(np.mean(hw.responsivity_a_per_w)),) * n,
+    }
+    try:
+        return resolve_config("paper", overrides), "paper preset at the data's LEDs"
+    except ConfigError as exc:
+        return None, f"none: {exc}"
 
 
 def _positive_or_none(est: Any, name: str) -> None:
@@ -110,21 +129,29 @@ class _BeerLambertPINN(TorchRegressor):
         gain = self.signal_gain
         peak = cfg.glucose.absorptivity_per_cm_per_mm if peak is None else float(peak)
         gain = cfg.glucose.signal_gain if gain is None else float(gain)
-        eps = glucose_absorptivity_per_cm_per_mgdl(DEFAULT_LED_WAVELENGTHS_NM, peak, gain)
+        schema = self.__dict__.get("schema_")
+        enabled = schema is None or not schema.is_plain
+        # The physics takes its wavelengths from the data (a plain array has none: off).
+        wl = DEFAULT_LED_WAVELENGTHS_NM if schema is None else schema.wavelengths_nm
+        k = len(wl) if enabled else schema.n_channels
+        eps = glucose_absorptivity_per_cm_per_mgdl(wl, peak, gain) if enabled else np.zeros(k)
+        if not enabled:
+            origin = "none: a plain array has no wavelengths (physics term off)"
         return {
-            "wavelengths_nm": list(DEFAULT_LED_WAVELENGTHS_NM),
+            "enabled": enabled,
+            "wavelengths_nm": [float(w) for w in wl],
             "absorptivity_per_cm_per_mgdl": eps.tolist(),
             "glucose_peak_per_cm_per_mm": peak,
             "signal_gain": gain,
             "pathlength_cm": 1.0,
             "form": self.physics_form,
-            "absorbance_ref": [0.0] * len(DEFAULT_LED_WAVELENGTHS_NM),
+            "absorbance_ref": [0.0] * k,
             "glucose_ref_mgdl": 0.0,
             "constants_from": origin,
         }
 
     def _fit_physics(self, source: Any, absorbance: np.ndarray, y: np.ndarray) -> dict:
-        cfg, origin = _scenario(source)
+        cfg, origin = _scenario(source)  # glucose constants only: any LEDs
         phys = self._physics_constants(cfg, origin)
         if self.physics_form == "relative":
             phys["absorbance_ref"] = absorbance.mean(axis=0).tolist()
@@ -134,6 +161,7 @@ class _BeerLambertPINN(TorchRegressor):
     def _prepare_physics_tensors(self) -> None:
         p = self.physics_
         self._phys = {
+            "enabled": bool(p.get("enabled", True)),
             "eps": torch.tensor(p["absorptivity_per_cm_per_mgdl"], dtype=torch.float32),
             "a_ref": torch.tensor(p["absorbance_ref"], dtype=torch.float32),
             "c_ref": float(p["glucose_ref_mgdl"]),
@@ -146,6 +174,9 @@ class _BeerLambertPINN(TorchRegressor):
         """MSE plus ``lambda_phys`` times the Beer-Lambert residual (see class notes)."""
         total, terms = super().get_loss(y_pred, y_true, batch)
         ph = self._phys
+        if not ph["enabled"]:
+            terms["physics"] = torch.zeros(())
+            return total, terms
         c_hat = self._glucose(y_pred) * ph["y_scale"] + ph["y_mean"]
         physics = beer_lambert_loss(
             batch["absorbance"],
@@ -253,7 +284,7 @@ class OriginalPINN(_BeerLambertPINN):
 
     def build_module(self) -> OriginalPINNNet:
         """:class:`~nirglucose.models.networks.OriginalPINNNet`."""
-        return OriginalPINNNet()
+        return OriginalPINNNet(**self._input_widths())
 
 
 @register("optimized-pinn")
@@ -340,7 +371,9 @@ class OptimizedPINN(_BeerLambertPINN):
 
     def build_module(self) -> OptimizedPINNNet:
         """:class:`~nirglucose.models.networks.OptimizedPINNNet`."""
-        return OptimizedPINNNet(int(self.d_model), int(self.n_heads), float(self.dropout))
+        return OptimizedPINNNet(
+            int(self.d_model), int(self.n_heads), float(self.dropout), **self._input_widths()
+        )
 
 
 # ============================================================================ RTE
@@ -424,11 +457,31 @@ class _RTEPINNBase(TorchRegressor):
         if not (isinstance(v, float | int) and math.isfinite(v) and v >= 0):
             raise ConfigError(f"{type(self).__name__}: stability_weight={v!r}; must be >= 0")
 
+    def _regularised(self, wavelengths_nm: tuple[float, ...]) -> list[int]:
+        """Indices of the data's LEDs the optical heads cover (all of them here)."""
+        return list(range(len(wavelengths_nm)))
+
     def _physics_from(
-        self, cfg: ScenarioConfig, origin: str, absorbance: np.ndarray | None
+        self,
+        cfg: ScenarioConfig | None,
+        origin: str,
+        absorbance: np.ndarray | None,
+        wavelengths_nm: tuple[float, ...] = DEFAULT_LED_WAVELENGTHS_NM,
+        n_channels: int | None = None,
     ) -> dict:
-        idx = [list(DEFAULT_LED_WAVELENGTHS_NM).index(w) for w in self.REGULARISED_NM]
-        mua0, musp0 = (v[idx] for v in nominal_optics(cfg))
+        enabled = cfg is not None
+        if enabled:
+            wl = tuple(float(w) for w in wavelengths_nm)
+            idx = self._regularised(wl)
+            mua0, musp0 = (v[idx] for v in nominal_optics(cfg))
+        else:
+            # No optics for these channels (a plain array, or LEDs outside the tables):
+            # the heads start at the paper device's mean nominal skin, the term is off.
+            cfg = resolve_config("paper")
+            idx = list(range(n_channels or len(wavelengths_nm)))
+            mua_p, musp_p = nominal_optics(cfg)
+            mua0 = np.full(len(idx), float(mua_p.mean()))
+            musp0 = np.full(len(idx), float(musp_p.mean()))
         rho = cfg.optics.source_detector_mm / 10.0
         area = cfg.optics.detector_area_mm2 / 100.0
         n_t = cfg.optics.tissue_refractive_index
@@ -439,7 +492,8 @@ class _RTEPINNBase(TorchRegressor):
             a = absorbance[:, idx]
             a_mean, a_scale = a.mean(axis=0), np.maximum(a.std(axis=0), 1e-3)
         return {
-            "wavelengths_nm": list(self.REGULARISED_NM),
+            "enabled": enabled,
+            "wavelengths_nm": [wl[i] for i in idx] if enabled else list(wavelengths_nm),
             "led_index": idx,
             "rho_cm": rho,
             "detector_area_cm2": area,
@@ -455,15 +509,24 @@ class _RTEPINNBase(TorchRegressor):
         }
 
     def _fit_physics(self, source: Any, absorbance: np.ndarray, y: np.ndarray) -> dict:
-        cfg, origin = _scenario(source)
-        return self._physics_from(cfg, origin, absorbance)
+        schema = self.schema_
+        if schema.is_plain:
+            why = "none: a plain array has no wavelengths (physics term off)"
+            return self._physics_from(None, why, absorbance, (), schema.n_channels)
+        cfg, origin = _scenario(source, schema.wavelengths_nm)
+        if cfg is not None and tuple(cfg.leds.wavelengths_nm) != schema.wavelengths_nm:
+            cfg, origin = _scenario(None, schema.wavelengths_nm)
+        return self._physics_from(cfg, origin, absorbance, schema.wavelengths_nm)
 
     def _default_physics(self) -> dict:
-        return self._physics_from(resolve_config("paper"), "paper preset", None)
+        return self._physics_from(
+            resolve_config("paper"), "paper preset", None, DEFAULT_LED_WAVELENGTHS_NM
+        )
 
     def _prepare_physics_tensors(self) -> None:
         p = self.physics_
         self._phys = {
+            "enabled": bool(p.get("enabled", True)),
             "idx": torch.tensor(p["led_index"], dtype=torch.long),
             "offset": torch.tensor(p["absorbance_offset"], dtype=torch.float32),
             "scale": torch.tensor(p["absorbance_scale"], dtype=torch.float32),
@@ -476,13 +539,17 @@ class _RTEPINNBase(TorchRegressor):
     def build_module(self) -> RTEPINNNet:
         """:class:`~nirglucose.models.networks.RTEPINNNet` started at nominal optics."""
         p = self._physics_or_default()
-        return RTEPINNNet(p["nominal_mua_per_cm"], p["nominal_musp_per_cm"])
+        return RTEPINNNet(p["nominal_mua_per_cm"], p["nominal_musp_per_cm"], **self._input_widths())
 
     def get_loss(self, y_pred, y_true, batch):
         """MSE plus ``lambda_phys`` (reflectance residual + stability x scattering prior)."""
         total, terms = super().get_loss(y_pred, y_true, batch)
         _, mua, musp = y_pred
         ph = self._phys
+        if not ph["enabled"]:
+            zero = torch.zeros(())
+            terms.update({"reflectance": zero, "scattering_prior": zero, "physics": zero})
+            return total, terms
         absorbance = batch["absorbance"].index_select(1, ph["idx"])
         reflectance = diffusion_reflectance_loss(
             absorbance,
@@ -578,3 +645,15 @@ class SelectiveRTEPINN(_RTEPINNBase):
     )
 
     REGULARISED_NM = (1050.0, 1150.0)
+
+    def _regularised(self, wavelengths_nm: tuple[float, ...]) -> list[int]:
+        """The glucose-sensitive LEDs: 1050 and 1150 nm where the device has them, else
+        those at or beyond 1000 nm, else its longest wavelength."""
+        for keep in (
+            lambda w: w in self.REGULARISED_NM,
+            lambda w: w >= 1000.0,
+        ):
+            idx = [i for i, w in enumerate(wavelengths_nm) if keep(w)]
+            if idx:
+                return idx
+        return [int(np.argmax(wavelengths_nm))]

@@ -49,4 +49,4 @@ class SDNN(TorchRegressor):
 
     def build_module(self) -> SDNNNet:
         """:class:`~nirglucose.models.networks.SDNNNet`."""
-        return SDNNNet()
+        return SDNNNet(**self._input_widths())

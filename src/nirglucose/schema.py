@@ -1,0 +1,519 @@
+"""The one schema boundary: any device's measured columns -> named absorbances and physiology.
+
+Every estimator reads its input through :class:`DeviceSchema` (and the scikit-learn
+transformer :class:`MeasurementTransformer` around it); nothing after it knows how many
+LEDs a device has, whether it records a reference reading, its ADC resolution, or which
+physiological columns it measures.
+
+A device's file holds
+
+* ``adc_<nm>``: ADC codes for any set of LED wavelengths (one or more);
+* ``adc_ref_<nm>``: the device's reference codes for the same LEDs, where it has them
+  (all or none); without them the ADC's full scale 2^bits - 1 plays I0;
+* any of the known physiological columns (:data:`~nirglucose.dataset.KNOWN_PHYSIOLOGY`).
+
+The ADC resolution comes from the declared option (the linear models' ``adc_bits=``
+parameter, or a Dataset's ``metadata["adc_bits"]`` for any model), else the file's
+scenario (``hardware.adc_bits``), else the package default (12 bits, the study's).
+Absorbance is computed here and only here: A = log10(I0 / I) (the modified
+Beer–Lambert law, Cope & Delpy 1988 [1]_).
+
+A plain numeric array carries no column names, hence no device: the schema fitted on it
+is *plain*, and its columns are taken as generic spectral inputs (absorbance-like, on
+equally spaced channels, no physiology). This is what scikit-learn's estimator checks
+exercise. An array given to a model fitted on a device's frame is read as that device's
+:attr:`DeviceSchema.raw_columns`, in order.
+
+References
+----------
+.. [1] M. Cope, D. T. Delpy, Med. Biol. Eng. Comput. 26, 289-294 (1988),
+   doi:10.1007/BF02447083 (modified Beer–Lambert law).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+import pandas as pd
+from sklearn.base import BaseEstimator, TransformerMixin
+
+from .constants import DEFAULT_LED_WAVELENGTHS_NM
+from .dataset import (
+    DEFAULT_ADC_BITS,
+    GLUCOSE_REPORTING_RANGE_MGDL,
+    KNOWN_PHYSIOLOGY,
+    MIN_FIT_ROWS,
+    MIN_FIT_SUBJECTS,
+    PHYSIOLOGICAL_RANGES,
+    Dataset,
+)
+from .exceptions import DataError
+
+__all__ = [
+    "DeviceSchema",
+    "Measurements",
+    "MeasurementTransformer",
+    "check_fit_size",
+    "check_reference_glucose",
+    "meter_flags",
+]
+
+_ADC_RE = re.compile(r"^adc_(\d+(?:\.\d+)?)$")
+
+
+def _first_rows(mask: np.ndarray, limit: int = 5) -> str:
+    rows = np.flatnonzero(mask)
+    shown = ", ".join(str(int(r)) for r in rows[:limit])
+    more = f" and {len(rows) - limit} more" if len(rows) > limit else ""
+    return f"rows {shown}{more}"
+
+
+class Measurements(NamedTuple):
+    """What the schema gives every estimator.
+
+    Attributes
+    ----------
+    absorbance : numpy.ndarray
+        (n, k) decadic absorbances A = log10(I0 / I), one column per LED. [-]
+    physiology : numpy.ndarray
+        (n, m) the physiological columns in :attr:`DeviceSchema.physiology` order.
+        [column units]
+    """
+
+    absorbance: np.ndarray
+    physiology: np.ndarray
+
+
+@dataclass(frozen=True)
+class DeviceSchema:
+    """A device's measured columns.
+
+    Parameters
+    ----------
+    wavelengths_nm : tuple of float
+        LED wavelengths, ascending (empty for a plain schema). [nm]
+    reference : bool
+        Whether the device records reference codes ``adc_ref_<nm>``.
+    adc_bits : int
+        ADC resolution. [bit]
+    physiology : tuple of str
+        The known physiological columns the device records, in canonical order.
+    n_plain : int
+        Width of a plain schema (0 for a device).
+    """
+
+    wavelengths_nm: tuple[float, ...] = tuple(DEFAULT_LED_WAVELENGTHS_NM)
+    reference: bool = True
+    adc_bits: int = DEFAULT_ADC_BITS
+    physiology: tuple[str, ...] = field(default_factory=lambda: tuple(KNOWN_PHYSIOLOGY[:12]))
+    n_plain: int = 0
+
+    # ------------------------------------------------------------------ construction
+
+    @classmethod
+    def plain(cls, width: int) -> DeviceSchema:
+        """The schema of a plain numeric array of ``width`` columns."""
+        return cls(wavelengths_nm=(), reference=False, adc_bits=0, physiology=(), n_plain=width)
+
+    @classmethod
+    def infer(cls, X: Any, adc_bits: int | None = None) -> DeviceSchema:
+        """The schema of a Dataset or DataFrame from its column names.
+
+        Parameters
+        ----------
+        X : Dataset or pandas.DataFrame
+            A device's measurements.
+        adc_bits : int, optional
+            Declared ADC resolution; else the Dataset's ``metadata["adc_bits"]`` (what
+            ``nirglucose fit --adc-bits`` sets), the scenario's ``hardware.adc_bits``,
+            or 12. [bit]
+
+        Raises
+        ------
+        DataError
+            No ``adc_<nm>`` column, reference codes for some LEDs only, or a bad
+            resolution.
+        """
+        bits = adc_bits
+        frame = X
+        if isinstance(X, Dataset):
+            frame = X.frame
+            if bits is None and X.metadata.get("adc_bits") is not None:
+                bits = X.metadata["adc_bits"]
+            if bits is None and X.config is not None:
+                bits = int(X.config.hardware.adc_bits)
+        if bits is None:
+            bits = DEFAULT_ADC_BITS
+        if isinstance(bits, bool) or not isinstance(bits, int | np.integer) or not 1 <= bits <= 32:
+            raise DataError(f"adc_bits must be an integer from 1 to 32, got {bits!r}")
+        cols = [c for c in frame.columns if isinstance(c, str)]
+        wl = sorted(float(m.group(1)) for c in cols if (m := _ADC_RE.match(c)))
+        if not wl:
+            raise DataError(
+                "no ADC columns: a device file needs at least one 'adc_<nm>' column "
+                "(e.g. adc_940); see docs/user_data.md"
+            )
+        labels = [f"{w:g}" for w in wl]
+        refs = [f"adc_ref_{w}" in frame.columns for w in labels]
+        if any(refs) and not all(refs):
+            missing = [f"adc_ref_{w}" for w, r in zip(labels, refs, strict=True) if not r]
+            raise DataError(
+                f"reference codes for some LEDs only: missing {missing}; give adc_ref_<nm> "
+                "for every LED or for none"
+            )
+        physio = tuple(c for c in KNOWN_PHYSIOLOGY if c in frame.columns)
+        return cls(tuple(wl), all(refs), int(bits), physio, 0)
+
+    @classmethod
+    def from_json(cls, doc: Any) -> DeviceSchema:
+        """Rebuild from :meth:`to_json` (validated; DataError when malformed)."""
+        try:
+            s = cls(
+                tuple(float(w) for w in doc["wavelengths_nm"]),
+                bool(doc["reference"]),
+                int(doc["adc_bits"]),
+                tuple(str(c) for c in doc["physiology"]),
+                int(doc.get("n_plain", 0)),
+            )
+        except (KeyError, TypeError, ValueError):
+            raise DataError("model file has a malformed 'schema' entry") from None
+        unknown = [c for c in s.physiology if c not in KNOWN_PHYSIOLOGY]
+        if unknown or (s.n_plain == 0 and not s.wavelengths_nm):
+            raise DataError(f"model file's schema names unknown columns {unknown}")
+        return s
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-ready dict."""
+        return {
+            "wavelengths_nm": list(self.wavelengths_nm),
+            "reference": self.reference,
+            "adc_bits": self.adc_bits,
+            "physiology": list(self.physiology),
+            "n_plain": self.n_plain,
+        }
+
+    # ------------------------------------------------------------------ description
+
+    @property
+    def is_plain(self) -> bool:
+        """True for the schema of a plain array (no column names)."""
+        return self.n_plain > 0
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Channel labels: wavelengths as ``'940'``, or ``'x0'``.. for a plain schema."""
+        if self.is_plain:
+            return tuple(f"x{i}" for i in range(self.n_plain))
+        return tuple(f"{w:g}" for w in self.wavelengths_nm)
+
+    @property
+    def n_channels(self) -> int:
+        """Number of absorbance channels."""
+        return self.n_plain if self.is_plain else len(self.wavelengths_nm)
+
+    @property
+    def full_scale(self) -> int:
+        """Largest ADC code, 2^bits - 1. [ADC code]"""
+        return 2**self.adc_bits - 1
+
+    @property
+    def raw_columns(self) -> tuple[str, ...]:
+        """The columns read, in the order an array must give them."""
+        if self.is_plain:
+            return self.labels
+        adc = tuple(f"adc_{w}" for w in self.labels)
+        ref = tuple(f"adc_ref_{w}" for w in self.labels) if self.reference else ()
+        return adc + ref + self.physiology
+
+    @property
+    def is_study(self) -> bool:
+        """The study's device: four LEDs 850-1150 nm, references, the 12-entry vector."""
+        return (
+            not self.is_plain
+            and self.wavelengths_nm == tuple(float(w) for w in DEFAULT_LED_WAVELENGTHS_NM)
+            and self.reference
+            and self.physiology == tuple(KNOWN_PHYSIOLOGY[:12])
+        )
+
+    def describe(self) -> str:
+        """One line naming the device."""
+        if self.is_plain:
+            return f"a plain array of {self.n_plain} columns"
+        ref = "with" if self.reference else "without"
+        return (
+            f"LEDs {', '.join(self.labels)} nm at {self.adc_bits} bits {ref} reference codes, "
+            f"physiology [{', '.join(self.physiology)}]"
+        )
+
+    # ------------------------------------------------------------------ reading
+
+    def raw(self, X: Any) -> np.ndarray:
+        """The raw columns of X as a float64 (n, width) array, validated.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like
+            A frame with (at least) :attr:`raw_columns`, or an array of exactly them.
+
+        Raises
+        ------
+        DataError
+            Missing columns, non-numeric, NaN/inf, ADC codes outside 1 .. 2^bits - 1,
+            physiology outside physiological ranges.
+        """
+        if isinstance(X, Dataset):
+            X = X.frame
+        cols = self.raw_columns
+        if isinstance(X, pd.DataFrame):
+            if self.is_plain:
+                Xa = X.to_numpy(dtype=float) if X.shape[1] == self.n_plain else None
+                if Xa is None:
+                    raise DataError(f"expected {self.n_plain} columns, got {X.shape[1]}")
+            else:
+                missing = [c for c in cols if c not in X.columns]
+                if missing:
+                    raise DataError(
+                        f"missing columns {missing}: the model was fitted on {self.describe()}"
+                    )
+                if len(X) == 0:
+                    raise DataError("no rows: the data holds no measurements")
+                parts = []
+                for c in cols:
+                    num = pd.to_numeric(X[c], errors="coerce")
+                    bad = num.isna().to_numpy() & X[c].notna().to_numpy()
+                    if bad.any():
+                        raise DataError(f"column {c!r} has non-numeric cells at {_first_rows(bad)}")
+                    parts.append(num.to_numpy(dtype=float))
+                Xa = np.column_stack(parts) if parts else np.empty((len(X), 0))
+        else:
+            Xa = np.asarray(X, dtype=float)
+            if Xa.ndim != 2 or Xa.shape[1] != len(cols):
+                raise DataError(
+                    f"expected a 2-D array with {len(cols)} columns ({', '.join(cols)}), "
+                    f"got shape {Xa.shape}"
+                )
+        bad = ~np.isfinite(Xa)
+        if bad.any():
+            j = int(np.flatnonzero(bad.any(axis=0))[0])
+            raise DataError(
+                f"column {cols[j]!r} has NaN or infinite values at {_first_rows(bad[:, j])}"
+            )
+        self._check_ranges(Xa)
+        return Xa
+
+    def _check_ranges(self, Xa: np.ndarray) -> None:
+        if self.is_plain:
+            return
+        k = self.n_channels * (2 if self.reference else 1)
+        cols = self.raw_columns
+        codes = Xa[:, :k]
+        bad = (codes < 1) | (codes > self.full_scale)
+        if bad.any():
+            j = int(np.flatnonzero(bad.any(axis=0))[0])
+            raise DataError(
+                f"column {cols[j]!r} has ADC codes outside 1-{self.full_scale} "
+                f"({self.adc_bits}-bit ADC) at {_first_rows(bad[:, j])}; declare the "
+                "device's resolution (adc_bits) if it is not that"
+            )
+        for j, c in enumerate(self.physiology, start=k):
+            lo, hi, _ = PHYSIOLOGICAL_RANGES[c]
+            bad = (Xa[:, j] < lo) | (Xa[:, j] > hi)
+            if bad.any():
+                raise DataError(
+                    f"column {c!r} has values outside the physiological range {lo:g}-{hi:g} "
+                    f"at {_first_rows(bad)} (ranges and sources: docs/user_data.md)"
+                )
+
+    def split(self, Xa: np.ndarray) -> Measurements:
+        """Absorbances and physiology from raw columns (already validated by :meth:`raw`).
+
+        Plain schemas pass their columns through as the absorbances.
+        """
+        if self.is_plain:
+            return Measurements(np.array(Xa, dtype=float), Xa[:, :0])
+        k = self.n_channels
+        adc = Xa[:, :k]
+        if self.reference:
+            ref = Xa[:, k : 2 * k]
+            start = 2 * k
+        else:
+            ref = float(self.full_scale)
+            start = k
+        if not (adc > 0).all() or not np.all(np.asarray(ref) > 0):
+            raise DataError("ADC and reference codes must be > 0 to form absorbances log10(I0/I)")
+        with np.errstate(divide="ignore"):
+            a = np.log10(ref / adc)
+        return Measurements(a, Xa[:, start:])
+
+    def measurements(self, X: Any) -> Measurements:
+        """:meth:`raw` then :meth:`split`."""
+        return self.split(self.raw(X))
+
+
+def check_fit_size(n_rows: int, groups: Any = None) -> None:
+    """The one fitting-size policy of every model.
+
+    At least :data:`~nirglucose.dataset.MIN_FIT_ROWS` rows, and, where subject ids are
+    known, at least :data:`~nirglucose.dataset.MIN_FIT_SUBJECTS` subjects.
+
+    Raises
+    ------
+    DataError
+        Too few rows or subjects (a ValueError, as scikit-learn expects).
+    """
+    if n_rows < MIN_FIT_ROWS:
+        raise DataError(
+            f"too few rows to fit: {n_rows} sample(s); every model needs at least {MIN_FIT_ROWS}"
+        )
+    if groups is not None:
+        n_sub = len(np.unique(np.asarray(groups)))
+        if n_sub < MIN_FIT_SUBJECTS:
+            raise DataError(
+                f"too few subjects to fit: {n_sub}; every model needs at least "
+                f"{MIN_FIT_SUBJECTS} (its validation is grouped by subject)"
+            )
+
+
+def check_reference_glucose(y: np.ndarray) -> None:
+    """Refuse reference glucose no meter reports (outside 20-600 mg/dL).
+
+    Raises
+    ------
+    DataError
+        Any value outside :data:`~nirglucose.dataset.GLUCOSE_REPORTING_RANGE_MGDL`.
+    """
+    lo, hi = GLUCOSE_REPORTING_RANGE_MGDL
+    y = np.asarray(y, dtype=float)
+    bad = ~((y >= lo) & (y <= hi))
+    if bad.any():
+        raise DataError(
+            f"reference glucose_mgdl outside what a meter reports ({lo:g}-{hi:g} mg/dL) at "
+            f"{_first_rows(bad)}"
+        )
+
+
+def meter_flags(glucose_mgdl: Any) -> np.ndarray:
+    """``'LO'`` below 20 mg/dL, ``'HI'`` above 600 mg/dL, ``''`` otherwise, as a meter shows.
+
+    Parameters
+    ----------
+    glucose_mgdl : array_like
+        Predicted glucose. [mg/dL]
+
+    Returns
+    -------
+    numpy.ndarray
+        One string per value.
+
+    Examples
+    --------
+    >>> meter_flags([5.0, 100.0, 900.0]).tolist()
+    ['LO', '', 'HI']
+    """
+    g = np.asarray(glucose_mgdl, dtype=float)
+    lo, hi = GLUCOSE_REPORTING_RANGE_MGDL
+    out = np.full(g.shape, "", dtype=object)
+    out[g < lo] = "LO"
+    out[g > hi] = "HI"
+    return out
+
+
+class MeasurementTransformer(TransformerMixin, BaseEstimator):
+    """scikit-learn transformer: a device's columns -> [absorbances | physiology].
+
+    ``fit`` records the device (:class:`DeviceSchema`, from the column names, or plain
+    for an array); ``transform`` returns the (n, k + m) float64 array of the k
+    absorbances and the m physiological columns.
+
+    Parameters
+    ----------
+    adc_bits : int, optional
+        Declared ADC resolution (else from the data's scenario/metadata, or 12). [bit]
+
+    Examples
+    --------
+    >>> import nirglucose as ng
+    >>> ds = ng.simulate("paper", n_subjects=2, per_subject=2, seed=0)
+    >>> t = MeasurementTransformer().fit(ds)
+    >>> t.transform(ds).shape, t.get_feature_names_out()[0]
+    ((4, 16), 'A_850')
+    """
+
+    def __init__(self, adc_bits: int | None = None):
+        self.adc_bits = adc_bits
+
+    def fit(self, X, y=None):
+        """Record the device's schema; returns self."""
+        self.schema_ = fit_schema(self, X, self.adc_bits)
+        if isinstance(X, pd.DataFrame | Dataset):
+            self.schema_.raw(X)  # validate the device's columns now
+        return self
+
+    def transform(self, X) -> np.ndarray:
+        """(n, k + m) absorbances then physiology."""
+        from .models._checks import require_fitted
+
+        require_fitted(self, "schema_")
+        m = self.schema_.measurements(as_raw_input(self, X, self.schema_))
+        return np.hstack([m.absorbance, m.physiology])
+
+    def get_feature_names_out(self, input_features=None) -> np.ndarray:
+        """``A_<nm>`` for each LED, then the physiological column names."""
+        s = self.schema_
+        return np.asarray([f"A_{w}" for w in s.labels] + list(s.physiology), dtype=object)
+
+
+def _is_device_frame(frame: pd.DataFrame) -> bool:
+    """True when a frame names any schema column (a device's file, perhaps malformed)."""
+    known = set(KNOWN_PHYSIOLOGY) | {"glucose_mgdl", "subject_id", "measurement_id"}
+    return any(
+        isinstance(c, str) and (c.startswith(("adc_", "true_")) or c in known)
+        for c in frame.columns
+    )
+
+
+def fit_schema(est: Any, X: Any, adc_bits: int | None = None) -> DeviceSchema:
+    """The schema of fitting input ``X`` (and record ``n_features_in_`` on ``est``).
+
+    Datasets and frames that name any schema column give a device schema from their
+    column names; arrays, and frames naming none (generic tables), a plain one
+    (through :func:`sklearn.utils.validation.validate_data`, for scikit-learn's
+    standard messages and feature-name bookkeeping).
+    """
+    frame = X.frame if isinstance(X, Dataset) else X
+    if isinstance(frame, pd.DataFrame) and (isinstance(X, Dataset) or _is_device_frame(frame)):
+        schema = DeviceSchema.infer(X, adc_bits)
+        est.n_features_in_ = len(schema.raw_columns)
+        est.feature_names_in_ = np.asarray(schema.raw_columns, dtype=object)
+        return schema
+    from sklearn.utils.validation import validate_data
+
+    est.__dict__.pop("feature_names_in_", None)
+    Xa = validate_data(est, frame, reset=True, dtype=np.float64)
+    return DeviceSchema.plain(Xa.shape[1])
+
+
+def as_raw_input(est: Any, X: Any, schema: DeviceSchema) -> Any:
+    """X for :meth:`DeviceSchema.raw`: device frames as they are, arrays checked."""
+    if schema.is_plain:
+        from sklearn.utils.validation import validate_data
+
+        frame = X.frame if isinstance(X, Dataset) else X
+        return validate_data(est, frame, reset=False, dtype=np.float64)
+    if isinstance(X, pd.DataFrame | Dataset):
+        return X
+    if type(X) is np.ndarray and X.dtype == np.float64 and X.ndim == 2 and X.size:
+        Xa = X  # the common case, without check_array's overhead on one row
+    else:
+        from sklearn.utils import check_array
+
+        Xa = check_array(X, dtype=np.float64, estimator=est, input_name="X")
+    if Xa.shape[1] != len(schema.raw_columns):
+        raise DataError(
+            f"X has {Xa.shape[1]} features, but {type(est).__name__} is expecting "
+            f"{len(schema.raw_columns)} features as input ({schema.describe()})"
+        )
+    return Xa

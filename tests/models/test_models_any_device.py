@@ -1,0 +1,146 @@
+"""Every estimator on any device: 1, 3 and 6 LEDs at 10, 12, 14 and 16 bits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import nirglucose as ng
+from device_data import LED_SETS, simulate_device
+from nirglucose.exceptions import DataError
+from nirglucose.models import available_models, load_model, make_model
+from nirglucose.schema import DeviceSchema, MeasurementTransformer, meter_flags
+
+NETWORKS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn", "sdnn")
+FAST_NET = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
+
+
+def _make(name):
+    return make_model(name, **(FAST_NET if name in NETWORKS else {}))
+
+
+def test_every_registered_model_is_covered():
+    assert set(available_models()) == {"ebl", "pls", "oracle", *NETWORKS}
+
+
+@pytest.mark.parametrize("bits", [10, 12, 14, 16])
+@pytest.mark.parametrize("n_leds", [1, 3, 6])
+def test_every_model_fits_predicts_and_round_trips(n_leds, bits, tmp_path):
+    ds = simulate_device(n_leds, bits)
+    codes = ds.frame[[c for c in ds.frame if c.startswith("adc_")]].to_numpy()
+    assert codes.max() <= 2**bits - 1
+    if bits > 12:
+        assert codes.max() > 4095  # codes a 12-bit lock would have refused
+    for name in available_models():
+        m = _make(name).fit(ds)
+        pred = m.predict(ds)
+        assert pred.shape == (len(ds),) and np.isfinite(pred).all(), name
+        path = m.save(tmp_path / f"{name}.json")
+        back = load_model(path)
+        np.testing.assert_allclose(back.predict(ds), pred, rtol=1e-6, atol=1e-6, err_msg=name)
+        if name == "oracle":
+            continue
+        s = m.schema_
+        assert s.wavelengths_nm == LED_SETS[n_leds] and s.adc_bits == bits, name
+        assert back.schema_ == s, name
+        X = ds.frame[list(s.raw_columns)].to_numpy(float)
+        np.testing.assert_allclose(m.predict(X[:5]), pred[:5], rtol=1e-4, err_msg=name)
+
+
+def test_networks_take_their_widths_from_the_device():
+    ds = simulate_device(3, 12)
+    m = make_model("sdnn", **FAST_NET).fit(ds)
+    assert m.module_.front[0].in_features == 3
+    assert m.module_.stack[0].in_features == 16 + 12
+    rte = make_model("rte-pinn", **FAST_NET).fit(ds)
+    assert rte.physics_["wavelengths_nm"] == [850.0, 940.0, 1150.0]
+    sel = make_model("selective-rte-pinn", **FAST_NET).fit(ds)
+    assert sel.physics_["wavelengths_nm"] == [1150.0]  # 1050 nm is absent on this device
+    bl = make_model("original-pinn", **FAST_NET).fit(ds)
+    assert bl.physics_["wavelengths_nm"] == [850.0, 940.0, 1150.0]
+    assert len(bl.physics_["absorptivity_per_cm_per_mgdl"]) == 3
+
+
+def test_device_without_reference_or_physiology(tmp_path):
+    """A one-LED, 10-bit device that records neither reference codes nor physiology."""
+    ds = simulate_device(1, 10)
+    frame = ds.frame[["subject_id", "adc_940", "glucose_mgdl"]]
+    for name in ("ebl", "pls", "sdnn", "original-pinn", "rte-pinn"):
+        m = _make(name).fit(
+            frame,
+        )
+        assert not m.schema_.reference and m.schema_.physiology == ()
+        # without a declared resolution the file is read at the default 12 bits
+        assert m.schema_.adc_bits == 12
+        p = m.predict(frame)
+        np.testing.assert_allclose(
+            load_model(m.save(tmp_path / "m.json")).predict(frame), p, rtol=1e-6
+        )
+    with pytest.raises(DataError, match="missing columns"):
+        m.predict(frame.drop(columns="adc_940"))
+
+
+def test_physiology_used_is_what_is_present_at_fit_and_required_at_predict():
+    ds = simulate_device(3, 12)
+    some = ds.frame.drop(columns=["bmi_kgm2", "heart_rate_bpm"])
+    m = make_model("ebl").fit(some)
+    assert "bmi_kgm2" not in m.schema_.physiology and "age_yr" in m.schema_.physiology
+    m.predict(ds.frame)  # extra columns are ignored
+    with pytest.raises(DataError, match="missing columns \\['age_yr'\\]"):
+        m.predict(some.drop(columns=["age_yr"]))
+
+
+def test_declared_adc_bits_and_range_checks():
+    ds = simulate_device(3, 14)
+    frame = ds.frame  # a CSV would lose the scenario: only the frame's columns remain
+    with pytest.raises(DataError, match="outside 1-4095 \\(12-bit ADC\\)"):
+        make_model("ebl").fit(frame)
+    m = make_model("ebl", adc_bits=14).fit(frame)
+    assert m.schema_.full_scale == 16383
+    assert make_model("ebl").fit(ds).schema_.adc_bits == 14  # from the scenario
+
+
+def test_refuses_values_no_device_produces():
+    ds = simulate_device(3, 12)
+    f = ds.frame.copy()
+    f.loc[4, "systolic_bp_mmhg"] = 20.0
+    with pytest.raises(DataError, match="systolic_bp_mmhg.*physiological range 50-300.*rows 4"):
+        make_model("pls").fit(f)
+    f = ds.frame.copy()
+    f.loc[7, "glucose_mgdl"] = 700.0
+    for name in ("ebl", "sdnn", "oracle"):
+        data = ng.Dataset(f, config=ds.config) if name == "oracle" else f
+        with pytest.raises(DataError, match="20-600 mg/dL.*rows 7"):
+            _make(name).fit(data)
+
+
+@pytest.mark.parametrize("name", ["ebl", "pls", "sdnn", "oracle"])
+def test_one_fit_size_policy(name):
+    ds = simulate_device(3, 12, n_subjects=1, per_subject=4)
+    with pytest.raises(DataError, match="too few rows to fit: 4 sample"):
+        _make(name).fit(ds)
+    ds = simulate_device(3, 12, n_subjects=1, per_subject=6)
+    with pytest.raises(DataError, match="too few subjects to fit: 1"):
+        _make(name).fit(ds)
+
+
+def test_meter_flags():
+    assert meter_flags([19.9, 20.0, 600.0, 600.1, -4e5]).tolist() == ["LO", "", "", "HI", "LO"]
+
+
+def test_measurement_transformer_is_the_one_boundary():
+    ds = simulate_device(3, 16)
+    t = MeasurementTransformer().fit(ds)
+    out = t.transform(ds)
+    names = list(t.get_feature_names_out())
+    assert names[:3] == ["A_850", "A_940", "A_1150"] and out.shape == (len(ds), 3 + 12)
+    f = ds.frame
+    np.testing.assert_allclose(out[:, 0], np.log10(f.adc_ref_850 / f.adc_850))
+    assert t.schema_ == DeviceSchema.infer(ds)
+    assert DeviceSchema.from_json(t.schema_.to_json()) == t.schema_
+    bad = f.drop(columns="adc_ref_940")
+    with pytest.raises(DataError, match="reference codes for some LEDs only"):
+        MeasurementTransformer().fit(bad)
+    with pytest.raises(DataError, match="no ADC columns"):
+        MeasurementTransformer().fit(pd.DataFrame({"glucose_mgdl": [100.0]}))
