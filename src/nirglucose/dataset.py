@@ -200,8 +200,6 @@ COLUMN_UNITS = {
     "blood_volume_pct": "% detected dermal blood volume fraction",
     "spo2_pct": "% dermal oxygen saturation",
     "ambient_lux": "lx",
-    "blood_volume_pct": "% of tissue volume",
-    "spo2_pct": "%",
     **{c: "ADC code" for c in adc_columns() + ref_columns()},
 }
 
