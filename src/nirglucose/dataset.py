@@ -29,7 +29,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .config import ScenarioConfig
-from .constants import DEFAULT_LED_WAVELENGTHS_NM
+from .constants import DEFAULT_LED_WAVELENGTHS_NM, PHYSIOLOGICAL_RANGES
 from .exceptions import DataError
 from .simulate.measurement import PMF_COLUMNS
 
@@ -104,79 +104,6 @@ MIN_FIT_ROWS = 5
 #: Fewest subjects any model fits on when subject ids are known (subject-grouped inner
 #: validation holds out at least one subject). [-]
 MIN_FIT_SUBJECTS = 2
-
-#: Values a measuring device can produce for each physiological column:
-#: (low, high, source). Values outside are refused as a device or transcription fault.
-PHYSIOLOGICAL_RANGES: dict[str, tuple[float, float, str]] = {
-    "age_yr": (
-        0.0,
-        125.0,
-        "oldest verified human 122 yr (Robine & Allard, Science 279, 1834 (1998))",
-    ),
-    "bmi_kgm2": (
-        10.0,
-        100.0,
-        "WHO BMI classes (severe thinness < 16, obesity III >= 40); "
-        "recorded extremes lie within 10-100 kg/m^2",
-    ),
-    "fitzpatrick_type": (1.0, 6.0, "Fitzpatrick, Arch. Dermatol. 124, 869 (1988): types I-VI"),
-    "melanin_fraction": (
-        0.0,
-        0.5,
-        "epidermal melanosome volume fraction 1.3-43 % "
-        "(Jacques, Oregon Med. Laser Center news (1998))",
-    ),
-    "skin_thickness_mm": (
-        0.1,
-        10.0,
-        "skin (epidermis + dermis) 0.5-4 mm over the body "
-        "(Laurent et al., Skin Res. Technol. 13, 163 (2007))",
-    ),
-    "hydration_pct": (
-        0.0,
-        200.0,
-        "percent of nominal dermal water: positive, and no tissue holds twice its nominal water",
-    ),
-    "systolic_bp_mmhg": (
-        50.0,
-        300.0,
-        "below 50 mmHg is circulatory collapse; highest "
-        "recorded ~370 mmHg during exercise (MacDougall, J. Appl. Physiol. "
-        "58, 785 (1985)); automated cuffs read up to 280-300 mmHg",
-    ),
-    "heart_rate_bpm": (
-        20.0,
-        300.0,
-        "ISO 80601-2-61 / IEC 60601-2-27 heart-rate display ranges (about 30-300 /min)",
-    ),
-    "resp_rate_bpm": (
-        2.0,
-        80.0,
-        "adult 12-20 /min, neonates up to 60 /min (WHO IMCI); capnograph ranges to 80-150 /min",
-    ),
-    "skin_temp_c": (
-        15.0,
-        45.0,
-        "skin temperature 20-40 C in normal environments (Webb, "
-        "J. Appl. Physiol. 1992); beyond 45 C burns",
-    ),
-    "humidity_pct": (0.0, 100.0, "relative humidity, by definition 0-100 %"),
-    "pressure_mbar": (
-        300.0,
-        1100.0,
-        "Everest summit ~337 mbar; record sea-level high 1084 mbar (WMO)",
-    ),
-    "blood_volume_pct": (
-        0.0,
-        100.0,
-        "a volume fraction in percent (dermal blood ~0.2-10 %, Jacques 2013)",
-    ),
-    "spo2_pct": (
-        0.0,
-        100.0,
-        "oxygen saturation in percent; ISO 80601-2-61 pulse-oximeter display range",
-    ),
-}
 
 #: Units of the schema's named columns (``true_*`` columns carry theirs in the name).
 COLUMN_UNITS = {

@@ -185,3 +185,23 @@ def test_paper_is_deterministic_across_chunks_and_workers(monkeypatch):
     pd.testing.assert_frame_equal(one, two)
     small = simulate_frame(cfg, 20, 2, 9)
     pd.testing.assert_frame_equal(small, one.iloc[: len(small)].reset_index(drop=True))
+
+
+def test_measured_physiology_stays_within_instrument_display_ranges():
+    """At measurement errors scaled far beyond the instruments' (noise_scale 8) the
+    reported values stay inside the display ranges, so every estimator accepts the data;
+    without the clip systolic pressure and humidity left them (44 mmHg, 101 %RH)."""
+    from nirglucose.constants import PHYSIOLOGICAL_RANGES
+
+    ds = ng.simulate(
+        preset="paper", n_subjects=60, per_subject=3, seed=3,
+        overrides={"noise_scale": 8, "device.physiology": "measured"},
+    )
+    for col, (lo, hi, _) in PHYSIOLOGICAL_RANGES.items():
+        if col in ds.frame:
+            values = ds.frame[col].to_numpy(float)
+            assert values.min() >= lo and values.max() <= hi, col
+    # and the errors are really that large: some value sits at a range end
+    assert (ds.frame["humidity_pct"] == 100.0).any() or (ds.frame["humidity_pct"] == 0).any() or (
+        ds.frame["systolic_bp_mmhg"].min() == PHYSIOLOGICAL_RANGES["systolic_bp_mmhg"][0]
+    )

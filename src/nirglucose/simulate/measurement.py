@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import ScenarioConfig
+from ..constants import PHYSIOLOGICAL_RANGES
 from ._random import RandomStreams
 
 __all__ = ["PMF_COLUMNS", "PPG_COLUMNS", "measure_physiology", "measure_ppg"]
@@ -50,8 +51,8 @@ _TRUTH = {
     "pressure_mbar": "true_pressure_mbar",
 }
 
-#: Bounds that keep a measured value physically meaningful (a device reports none
-#: outside them). [column unit]
+#: Bounds that keep a measured value physically meaningful, tighter than the display
+#: ranges of :data:`~nirglucose.constants.PHYSIOLOGICAL_RANGES`. [column unit]
 _FLOORS = {"melanin_fraction": 0.0, "skin_thickness_mm": 0.1, "bmi_kgm2": 10.0}
 
 
@@ -73,7 +74,10 @@ def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams)
         value = truth[true_col] + f * getattr(m, col) * draws[i]
         if col in _FLOORS:
             value = np.maximum(value, _FLOORS[col])
-        out[col] = value
+        # An instrument reports within its display range (PHYSIOLOGICAL_RANGES); only
+        # errors scaled far beyond the instruments' (noise_scale >> 1) reach its ends.
+        lo, hi, _ = PHYSIOLOGICAL_RANGES[col]
+        out[col] = np.clip(value, lo, hi)
     if not exact:
         out["age_yr"] = np.floor(out["age_yr"])  # recorded in whole years
     off = rng.random(size=n) < f * m.fitzpatrick_misclass
@@ -115,6 +119,8 @@ def measure_ppg(
     f = 0.0 if cfg.device.physiology == "exact" else cfg.noise_factor("pmf_measurement")
     z = streams("ppg").normal(size=(2, len(blood_fraction)))
     d = cfg.device
-    blood_pct = 100.0 * np.asarray(blood_fraction) * np.exp(f * d.blood_volume_error_rel * z[0])
+    blood_pct = np.minimum(
+        100.0 * np.asarray(blood_fraction) * np.exp(f * d.blood_volume_error_rel * z[0]), 100.0
+    )
     spo2_pct = np.clip(100.0 * np.asarray(saturation) + f * d.spo2_error_pct * z[1], 0.0, 100.0)
     return {"blood_volume_pct": blood_pct, "spo2_pct": spo2_pct}
