@@ -98,9 +98,11 @@ def _check_out_file(out: Path, what: str = "--out") -> None:
         raise UserError(f"{what} {str(out)!r}: directory {str(parent)!r} is not writable")
 
 
-#: Peak memory of the in-memory simulation per snapshot, measured with
-#: ``benchmarks/cli_memory.py`` (peak RSS over 20,000 snapshots, rounded up). [B]
-SIM_BYTES_PER_SNAPSHOT = 40_000
+#: Memory a simulated snapshot needs: ``simulate_frame`` peaks at 1,125 B per snapshot
+#: (``benchmarks/cli_memory.py``, slope of peak RSS between 9,000 and 90,000
+#: snapshots), times about 3.5 for the copies made on saving, summarising and
+#: benchmarking. Only used to refuse runs that cannot fit, before they start. [B]
+SIM_BYTES_PER_SNAPSHOT = 4_000
 
 
 def _check_size(subjects: int, per_subject: int) -> None:
@@ -241,7 +243,9 @@ def list_models() -> None:
 @_tidy_out
 def benchmark(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
-    preset: Annotated[str, typer.Option(help="Scenario preset to simulate.")] = "paper",
+    preset: Annotated[
+        str, typer.Option(help="Scenario preset to simulate: paper, physical, lab, field.")
+    ] = "paper",
     data: Annotated[
         Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
     ] = None,
@@ -278,6 +282,8 @@ def benchmark(
         raise UserError(f"--seed must be non-negative, got {seed}")
     check_protocol(protocol)
     _check_jobs(jobs)
+    if data is None:
+        _check_size(subjects, per_subject)
     names = None
     if models is not None:
         names = [m.strip() for m in models.split(",") if m.strip()]
@@ -351,7 +357,9 @@ def sweep(
     study: Annotated[
         str | None, typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort.")
     ] = None,
-    preset: Annotated[str, typer.Option(help="Scenario preset every task starts from.")] = "paper",
+    preset: Annotated[
+        str, typer.Option(help="Preset every task starts from: paper, physical, lab, field.")
+    ] = "paper",
     seeds: Annotated[int, typer.Option(help="Seeds per scenario (seed, seed+1, ...).")] = 5,
     seed: Annotated[int, typer.Option(help="First seed.")] = 0,
     models: Annotated[
@@ -387,6 +395,7 @@ def sweep(
         _check_jobs(jobs)
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
+    _check_size(subjects, per_subject)
     if study is None and not vary:
         raise UserError("give --vary KEY=V1,V2,... or --study NAME")
     grid: dict = {}
@@ -557,9 +566,9 @@ def _check_results_dir(results: Path) -> None:
             f"{str(results)!r} is a file, not a results directory; give the --out "
             "directory of `nirglucose benchmark`"
         )
-    if not (results / "meta.json").is_file():
+    if not any((results / f).is_file() for f in ("meta.json", "metrics.csv", "metrics.json")):
         raise UserError(
-            f"{str(results)!r} holds no meta.json; it is not the output of "
+            f"{str(results)!r} holds no meta.json or metrics; it is not the output of "
             "`nirglucose benchmark` (run it first)"
         )
 
@@ -618,6 +627,14 @@ def _interrupted(signals: _Signals) -> int:
     return 130
 
 
+def _user_path(name: object) -> str:
+    """The file the user named, for an atomic write's temporary ``DIR/.NAME.xxxx.tmp``."""
+    import re
+
+    m = re.fullmatch(r"(.*/)?\.(.+)\.[A-Za-z0-9_]+\.tmp", str(name))
+    return f"{m.group(1) or ''}{m.group(2)}" if m else str(name)
+
+
 def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
@@ -657,7 +674,7 @@ def main(argv: list[str] | None = None) -> int:
             _say("error: out of memory; use fewer subjects, measurements or jobs")
             return 2
         except OSError as exc:  # a file the user named cannot be read or written
-            where = f" {str(exc.filename)!r}" if exc.filename else ""
+            where = f" {_user_path(exc.filename)!r}" if exc.filename else ""
             _say(f"error: cannot access{where}: {exc.strerror or _one_line(exc)}")
             return 2
     code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0

@@ -188,7 +188,12 @@ def validate_measurements(
     for c in adc_columns(wavelengths_nm) + ref_columns(wavelengths_nm):
         bad = (out[c] < 1) | (out[c] > full)
         if bad.any():
-            raise DataError(f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}")
+            top = float(out[c].max())
+            why = (f"; codes up to {top:.0f} need a {int(np.ceil(np.log2(top + 1)))}-bit ADC, "
+                   f"this expects {adc_bits}-bit" if top > full else "")
+            raise DataError(
+                f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}{why}"
+            )
     if require_target:
         bad = out["glucose_mgdl"] <= 0
         if bad.any():
