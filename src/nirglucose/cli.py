@@ -98,28 +98,11 @@ def _check_out_file(out: Path, what: str = "--out") -> None:
         raise UserError(f"{what} {str(out)!r}: directory {str(parent)!r} is not writable")
 
 
-#: Memory a simulated snapshot needs: ``simulate_frame`` peaks at 1,125 B per snapshot
-#: (``benchmarks/cli_memory.py``, slope of peak RSS between 9,000 and 90,000
-#: snapshots), times about 3.5 for the copies made on saving, summarising and
-#: benchmarking. Only used to refuse runs that cannot fit, before they start. [B]
-SIM_BYTES_PER_SNAPSHOT = 4_000
-
-
 def _check_size(subjects: int, per_subject: int) -> None:
     """Refuse a simulation that cannot fit in memory, before allocating anything."""
-    n = subjects * per_subject
-    try:
-        total = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
-        return
-    need = n * SIM_BYTES_PER_SNAPSHOT
-    if need > total:
-        raise UserError(
-            f"{subjects} subjects x {per_subject} measurements need about "
-            f"{need / 2**30:,.0f} GiB of memory, more than this machine's "
-            f"{total / 2**30:,.0f} GiB; simulate fewer, or write a directory "
-            "(partitioned Parquet) with `simulate`"
-        )
+    from .resources import check_simulation_size
+
+    check_simulation_size(subjects, per_subject)
 
 
 def _check_jobs(jobs: int | None) -> None:

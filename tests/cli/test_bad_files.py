@@ -116,3 +116,22 @@ def test_results_json_of_the_wrong_shape(cli, tmp_path, name, doc):
 def test_missing_data_file(cli, workdir):
     code, _, err = cli("fit", "--model", "ebl", "--data", "nothere.csv", "--out", "m.json")
     assert_one_line_error(code, err, contains=["nothere.csv"])
+
+
+def test_api_refuses_huge_simulation_up_front():
+    """In a subprocess capped at 4 GiB, so a regression fails instead of exhausting memory."""
+    import resource
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    def cap():
+        resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))
+
+    code = ("import nirglucose as ng\n"
+            "try:\n    ng.simulate('paper', 10**12, 3)\n"
+            "except ng.ConfigError as e:\n    print('refused:', e)\n")
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         preexec_fn=cap, timeout=120, env={"PYTHONPATH": src, "PATH": ""})
+    assert res.stdout.startswith("refused:") and "GiB" in res.stdout, res.stderr[-500:]
