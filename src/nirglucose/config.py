@@ -63,11 +63,26 @@ NOISE_SOURCES = (
 )
 
 
+#: Magnitude no setting may exceed, whatever its own bounds: the largest default is
+#: 1e5 (ambient lux, TIA gain in ohm); beyond 1e9 a value can only overflow the
+#: simulation (exp, squares) into garbage codes (issue 20). [-]
+MAX_ABS_VALUE = 1e9
+
+
 class _Model(BaseModel):
     # every value finite: NaN or infinity would reach the ADC as garbage codes (issue 20)
     model_config = ConfigDict(
         extra="forbid", frozen=True, validate_default=True, allow_inf_nan=False
     )
+
+    @field_validator("*")
+    @classmethod
+    def _bounded(cls, v: Any) -> Any:
+        items = v.values() if isinstance(v, dict) else v if isinstance(v, tuple) else (v,)
+        for x in items:
+            if isinstance(x, int | float) and not isinstance(x, bool) and abs(x) > MAX_ABS_VALUE:
+                raise ValueError(f"must lie within +-{MAX_ABS_VALUE:.0e}")
+        return v
 
 
 def _check_range(value: tuple[float, float], name: str) -> tuple[float, float]:

@@ -60,3 +60,19 @@ def test_loud_noise_gives_valid_codes_or_one_line(cli, workdir, preset, scale):
         return
     adc = pd.read_csv(workdir / "a.csv").filter(regex=r"^adc_").to_numpy()
     assert adc.min() >= 0 and adc.max() <= 2**10 - 1
+
+
+HUGE = ["hardware.adc_vref_v=1e300", "hardware.tia_gain_ohm=1e300", "glucose.signal_gain=1e308",
+        "environment.pressure_mbar_sd=1e308", "hardware.bandwidth_hz=1e308",
+        "hardware.led_age_h=[0,1e308]", "contact.coupling_sd=1e9",
+        "physiology.variation_scale=1e308",
+        "hardware.led_power_mw=[1e308,1,1,1]", "measurement.age_yr=1e308"]
+
+
+@pytest.mark.parametrize("setting", HUGE)
+def test_absurd_magnitudes_are_one_line(cli, workdir, setting):
+    """Beyond 1e9 always refused; below it, overflow is refused at the ADC: one line."""
+    code, _, err = cli("simulate", "--out", "a.csv", "--subjects", 2, "--set", setting)
+    assert_one_line_error(code, err, contains=[setting.split("=")[0].split(".")[-1]]
+                          if "1e30" in setting else [])
+    assert not (workdir / "a.csv").exists()
