@@ -52,6 +52,7 @@ def simulate(
     >>> len(ds), ds.frame["adc_850"].dtype.kind
     (8, 'i')
     """
+    from .resources import check_simulation_size
     from .simulate.simulator import simulate_frame
 
     for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
@@ -59,6 +60,7 @@ def simulate(
             raise ConfigError(f"{name} must be a positive integer, got {value!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    check_simulation_size(n_subjects, per_subject)  # refuse up front, not by OOM (issue 20)
     all_overrides = dict(overrides or {})
     all_overrides.update({k.replace("__", "."): v for k, v in dotted.items()})
     cfg = resolve_config(preset, all_overrides)

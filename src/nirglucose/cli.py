@@ -1,18 +1,25 @@
 """Command-line interface: parses into a config, calls the library, maps errors to exit 2.
 
-Every error a user can cause (bad option, unknown preset or key, malformed data file)
-ends the program with exit status 2 and one line on stderr saying what is wrong and
-how to fix it; no traceback.
+Every error a user can cause (bad option, unknown preset or key, malformed data file,
+an output path that cannot be written) ends the program with exit status 2 and one
+line on stderr saying what is wrong and how to fix it; no traceback. Ctrl-C ends it
+with status 130 and SIGTERM with 143, each with one line; worker processes never
+outlive the command (:func:`nirglucose.evaluation.executors.worker_guard`). Text
+that came from the user or a file is printed without Rich markup.
 """
 
 from __future__ import annotations
 
+import functools
+import os
+import signal
 import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 from typer.exceptions import TyperException
 
@@ -30,8 +37,24 @@ app = typer.Typer(
 console = Console(stderr=True)
 
 
+def _version_callback(value: bool) -> None:
+    if value:
+        from . import __version__
+
+        out_console.print(f"nirglucose {__version__}", markup=False, highlight=False)
+        raise typer.Exit(0)
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", help="Print the version and exit.", callback=_version_callback,
+            is_eager=True,
+        ),
+    ] = False,
+) -> None:
     """Simulate a noise-stressed NIR glucose sensor and benchmark estimators on it."""
 
 
@@ -45,7 +68,73 @@ class UserError(NirGlucoseError, ValueError):
 def _parse_sets(values: list[str] | None) -> dict:
     from .config import parse_override
 
-    return dict(parse_override(v) for v in (values or []))
+    pairs = [parse_override(v) for v in (values or [])]
+    for key, _ in pairs:
+        if key == "preset":
+            raise UserError(
+                "--set preset=... would only relabel the data; choose the scenario with "
+                "--preset NAME"
+            )
+    return dict(pairs)
+
+
+def _say(text: str, *, err: bool = True) -> None:
+    """Print one plain line (no markup, no highlighting) to stderr or stdout."""
+    (console if err else out_console).print(
+        text, markup=False, highlight=False, soft_wrap=True
+    )
+
+
+def _check_out_file(out: Path, what: str = "--out") -> None:
+    """Refuse an output file path that names a directory or lies in no writable one."""
+    if out.is_dir():
+        raise UserError(f"{what} {str(out)!r} is a directory; give a file name")
+    parent = out.parent
+    if not parent.exists():
+        raise UserError(f"output directory {str(parent)!r} does not exist; create it first")
+    if not parent.is_dir():
+        raise UserError(f"{what} {str(out)!r}: {str(parent)!r} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise UserError(f"{what} {str(out)!r}: directory {str(parent)!r} is not writable")
+
+
+def _check_size(subjects: int, per_subject: int) -> None:
+    """Refuse a simulation that cannot fit in memory, before allocating anything."""
+    from .resources import check_simulation_size
+
+    check_simulation_size(subjects, per_subject)
+
+
+def _check_jobs(jobs: int | None) -> None:
+    """Warn (one line) when more workers are asked for than there are cores."""
+    from .evaluation.executors import available_cores
+
+    cores = available_cores()
+    if jobs is not None and jobs > cores:
+        _say(f"warning: --jobs {jobs} exceeds the {cores} available cores; "
+             "the run is not faster and uses more memory")
+
+
+def _tidy_out(command):
+    """On failure or interrupt, remove the empty ``OUT/.tasks`` (and ``OUT`` if this
+    command created it and left it empty); finished task files are kept."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        out = kwargs.get("out")
+        existed = out is None or Path(out).exists()
+        try:
+            return command(*args, **kwargs)
+        except BaseException:
+            if out is not None:
+                for d in (Path(out) / ".tasks", *(() if existed else (Path(out),))):
+                    try:
+                        d.rmdir()  # only when empty
+                    except OSError:
+                        pass
+            raise
+
+    return wrapper
 
 
 def _positive(name: str, value: int) -> None:
@@ -80,16 +169,22 @@ def simulate(
     _positive("--jobs", jobs)
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
+    _check_jobs(jobs)
     cfg = resolve_config(preset, _parse_sets(set_))
     if out.suffix and out.suffix not in (".parquet", ".csv"):
         raise UserError(f"--out {str(out)!r}: use a .parquet or .csv file, or a directory")
-    if not out.parent.exists():
+    if out.suffix:
+        _check_out_file(out)
+        _check_size(subjects, per_subject)
+    elif out.exists() and not out.is_dir():
+        raise UserError(f"--out {str(out)!r} exists and is not a directory")
+    elif not out.parent.exists():
         raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
     if not out.suffix:
         from .simulate.partitioned import write_partitioned
 
         n = write_partitioned(cfg, out, subjects, per_subject, seed, n_jobs=jobs)
-        out_console.print(f"wrote {n} snapshots to {out}/ (partitioned Parquet)")
+        _say(f"wrote {n} snapshots to {out}/ (partitioned Parquet)", err=False)
         return
     from .simulate.simulator import simulate_frame
 
@@ -97,28 +192,43 @@ def simulate(
     ds = Dataset(frame, config=cfg, seed=seed)
     ds.save(out)
     _print_summary(ds)
-    out_console.print(f"wrote {len(ds)} snapshots to {out}")
+    _say(f"wrote {len(ds)} snapshots to {out}", err=False)
 
 
 @app.command()
 def keys() -> None:
-    """List every config key accepted by --set, with its default on the paper preset."""
-    from .config import key_description, resolve_config, valid_keys
+    """List every config key accepted by --set: default on the paper preset, unit, meaning."""
+    from .config import resolve_config, valid_keys
+    from .config_keys import key_info
 
     data = resolve_config("paper").model_dump(mode="json")
     for key in valid_keys():
         node = data
         for part in key.split("."):
             node = node[part]
-        doc = key_description(key)
-        out_console.print(f"{key} = {node}" + (f"  # {doc}" if doc else ""), highlight=False,
-                          soft_wrap=True)
+        info = key_info(key)
+        unit = f" [{info.unit}]" if info.unit else ""
+        desc = f"  # {info.description}" if info.description else ""
+        _say(f"{key} = {node}{unit}{desc}", err=False)
+
+
+@app.command("models")
+def list_models() -> None:
+    """List the registered model names, one line each."""
+    from .models.registry import available_models, get_model_class
+
+    for name in available_models():
+        doc = (get_model_class(name).__doc__ or "").strip().splitlines()
+        _say(f"{name:<20} {doc[0] if doc else ''}".rstrip(), err=False)
 
 
 @app.command()
+@_tidy_out
 def benchmark(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
-    preset: Annotated[str, typer.Option(help="Scenario preset to simulate.")] = "paper",
+    preset: Annotated[
+        str, typer.Option(help="Scenario preset to simulate: paper, physical, lab, field.")
+    ] = "paper",
     data: Annotated[
         Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
     ] = None,
@@ -154,6 +264,9 @@ def benchmark(
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
     check_protocol(protocol)
+    _check_jobs(jobs)
+    if data is None:
+        _check_size(subjects, per_subject)
     names = None
     if models is not None:
         names = [m.strip() for m in models.split(",") if m.strip()]
@@ -186,19 +299,20 @@ def benchmark(
             seed=seed,
             out=out,
             jobs=jobs,
-            progress=sys.stderr.isatty(),
+            progress=True,
             n_boot=resamples,
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
-        console.print(f"warning: {msg}", highlight=False, soft_wrap=True)
+        _say(f"warning: {msg}")
     from rich import box
 
-    table = Table(title=f"benchmark ({res.meta['protocol']}): {ds!r}", box=box.SIMPLE_HEAD)
+    table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
+                  box=box.SIMPLE_HEAD)
     for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "params", "ms"):
         table.add_column(col, justify="left" if col == "model" else "right", no_wrap=True)
     for _, r in res.metrics.iterrows():
         table.add_row(
-            r["model"],
+            escape(str(r["model"])),
             f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
             f"{r['mard_pct']:.1f}",
             f"{r['clarke_a_pct']:.1f}",
@@ -208,15 +322,15 @@ def benchmark(
     # not a terminal (a log file, make): wide enough that no column is truncated
     (out_console if out_console.is_terminal else Console(width=110)).print(table)
     m = res.meta
-    out_console.print(
+    _say(
         f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "
         f"{m['tasks_cached']} reused, {m['wall_time_s']:.0f} s)",
-        highlight=False,
-        soft_wrap=True,
+        err=False,
     )
 
 
 @app.command()
+@_tidy_out
 def sweep(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
     vary: Annotated[
@@ -226,7 +340,9 @@ def sweep(
     study: Annotated[
         str | None, typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort.")
     ] = None,
-    preset: Annotated[str, typer.Option(help="Scenario preset every task starts from.")] = "paper",
+    preset: Annotated[
+        str, typer.Option(help="Preset every task starts from: paper, physical, lab, field.")
+    ] = "paper",
     seeds: Annotated[int, typer.Option(help="Seeds per scenario (seed, seed+1, ...).")] = 5,
     seed: Annotated[int, typer.Option(help="First seed.")] = 0,
     models: Annotated[
@@ -259,8 +375,10 @@ def sweep(
         _positive(name, value)
     if jobs is not None:
         _positive("--jobs", jobs)
+        _check_jobs(jobs)
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
+    _check_size(subjects, per_subject)
     if study is None and not vary:
         raise UserError("give --vary KEY=V1,V2,... or --study NAME")
     grid: dict = {}
@@ -286,22 +404,22 @@ def sweep(
                         overrides=_parse_sets(set_), protocol=protocol, n_splits=folds,
                         repeats=repeats, n_subjects=subjects, per_subject=per_subject,
                         n_boot=resamples, out=out, jobs=jobs, scheduler=scheduler,
-                        progress=sys.stderr.isatty())
+                        progress=True)
         if figures:
             from .report.sweep import save_sweep_figures
 
             save_sweep_figures(out)
     msgs = [str(w.message) for w in caught] + res.meta["warnings"]
     for msg in dict.fromkeys(m.replace("\n", " ") for m in msgs):
-        console.print(f"warning: {msg}", highlight=False, soft_wrap=True)
+        _say(f"warning: {msg}")
     meta = res.meta
     s = res.summary
-    table = Table(title=f"sweep {meta['study']}: mean over {len(meta['seeds'])} seeds "
-                  "[95 % CI over seeds]")
+    table = Table(title=escape(f"sweep {meta['study']}: mean over {len(meta['seeds'])} seeds "
+                               "[95 % CI over seeds]"))
     for col in ("scenario", "model", "RMSE mg/dL", "MARD %", "Clarke A %"):
         table.add_column(col, justify="left" if col in ("scenario", "model") else "right")
     for _, r in s.iterrows():
-        table.add_row(str(r["scenario"]), str(r["model"]),
+        table.add_row(escape(str(r["scenario"])), escape(str(r["model"])),
                       f"{r['rmse_mgdl_mean']:.1f} [{r['rmse_mgdl_ci_low']:.1f}, "
                       f"{r['rmse_mgdl_ci_high']:.1f}]", f"{r['mard_pct_mean']:.1f}",
                       f"{r['clarke_a_pct_mean']:.1f}")
@@ -312,23 +430,22 @@ def sweep(
             where = {"crosses": f"crosses 15 % at {key} = {r['crossing']:.2f}",
                      "above at every x": f"is above 15 % at every {key}",
                      "below at every x": f"stays below 15 % at every {key}"}[r["status"]]
-            out_console.print(f"{r['model']}: MARD {where}", highlight=False)
+            _say(f"{r['model']}: MARD {where}", err=False)
     if res.effects is not None and "source" in res.effects and len(res.effects):
         for model, g in res.effects.groupby("model", sort=False):
             top = g.iloc[0]
             alone = g.sort_values("delta_only", ascending=False).iloc[0]
-            out_console.print(
+            _say(
                 f"{model}: costliest source {top['source']} (ΔRMSE {top['delta_off']:+.2f} "
                 f"mg/dL when switched off); alone: {alone['source']} "
-                f"({alone['delta_only']:+.2f} mg/dL)", highlight=False)
+                f"({alone['delta_only']:+.2f} mg/dL)", err=False)
     if res.effects is not None and "shift" in res.effects:
         for _, r in res.effects.iterrows():
-            out_console.print(
+            _say(
                 f"{r['model']}: {r['shift']} shift (train {r['train_domain']}, test "
-                f"{r['test_domain']}) ΔRMSE {r['delta']:+.1f} mg/dL", highlight=False)
-    out_console.print(f"wrote {out}/sweep.csv ({meta['tasks_computed']} tasks computed, "
-                      f"{meta['tasks_cached']} reused, {meta['wall_time_s']:.0f} s)",
-                      highlight=False)
+                f"{r['test_domain']}) ΔRMSE {r['delta']:+.1f} mg/dL", err=False)
+    _say(f"wrote {out}/sweep.csv ({meta['tasks_computed']} tasks computed, "
+         f"{meta['tasks_cached']} reused, {meta['wall_time_s']:.0f} s)", err=False)
 
 
 @app.command("fit")
@@ -347,8 +464,7 @@ def fit_model(
 
     if out.suffix != ".json":
         raise UserError(f"--out {str(out)!r}: the model file must end in .json")
-    if not out.parent.exists():
-        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    _check_out_file(out)
     estimator = make_model(model)  # unknown names raise with the valid ones
     ds = load_dataset(data)
     if adc_bits is not None:
@@ -360,9 +476,7 @@ def fit_model(
     estimator.fit(ds)
     estimator.save(out)
     device = estimator.schema_.describe() if hasattr(estimator, "schema_") else "simulated"
-    out_console.print(
-        f"fitted {model!r} on {len(ds)} measurements ({device}); wrote {out}", highlight=False
-    )
+    _say(f"fitted {model!r} on {len(ds)} measurements ({device}); wrote {out}", err=False)
 
 
 @app.command("predict")
@@ -380,15 +494,15 @@ def predict_glucose(
 
     from .dataset import atomic_write, load_dataset
     from .models import load_model
+    from .models._validate import check_predictions
     from .schema import meter_flags
 
     if out.suffix != ".csv":
         raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
-    if not out.parent.exists():
-        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    _check_out_file(out)
     estimator = load_model(model)
     ds = load_dataset(data)
-    pred = estimator.predict(ds)
+    pred = check_predictions(estimator.predict(ds), model)
     ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
     table = ds.frame[ids].reset_index(drop=True).copy()
     table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
@@ -396,7 +510,7 @@ def predict_glucose(
     atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
     n_flag = int((table["flag"] != "").sum())
     flagged = f" ({n_flag} outside 20-600 mg/dL, flagged LO/HI)" if n_flag else ""
-    out_console.print(f"predicted {len(table)} measurements{flagged}; wrote {out}")
+    _say(f"predicted {len(table)} measurements{flagged}; wrote {out}", err=False)
 
 
 @app.command("export-c")
@@ -409,7 +523,7 @@ def export_c_source(
     from .models import load_model
 
     header, source = export_c(load_model(model), out)
-    out_console.print(f"wrote {header} and {source}")
+    _say(f"wrote {header} and {source}", err=False)
 
 
 @app.command()
@@ -429,19 +543,41 @@ def report(
     """Write the figures and tables of a benchmark run as one self-contained HTML file."""
     from .report import build_report
 
+    _check_results_dir(results)
+    if out is not None:
+        _check_out_file(out)
     for d in sweep or []:
         if not (d / "sweep.csv").exists():
             raise UserError(f"--sweep {str(d)!r} holds no sweep.csv; run `nirglucose sweep` first")
     path = build_report(results, out if out is not None else results / "report.html",
                         figures_dir=figures, sweep_dirs=sweep or [])
-    out_console.print(f"wrote {path}", highlight=False, soft_wrap=True)
+    _say(f"wrote {path}", err=False)
+
+
+def _check_results_dir(results: Path) -> None:
+    """Name the real problem with a `report` RESULTS argument."""
+    if not results.exists():
+        raise UserError(
+            f"results directory {str(results)!r} does not exist; give the --out directory "
+            "of `nirglucose benchmark`"
+        )
+    if not results.is_dir():
+        raise UserError(
+            f"{str(results)!r} is a file, not a results directory; give the --out "
+            "directory of `nirglucose benchmark`"
+        )
+    if not any((results / f).is_file() for f in ("meta.json", "metrics.csv", "metrics.json")):
+        raise UserError(
+            f"{str(results)!r} holds no meta.json or metrics; it is not the output of "
+            "`nirglucose benchmark` (run it first)"
+        )
 
 
 def _print_summary(ds) -> None:
     import numpy as np
 
     frame = ds.frame
-    table = Table(title=f"{ds!r}")
+    table = Table(title=escape(f"{ds!r}"))
     for col in ("column", "mean", "sd", "min", "max", "r(glucose, log ADC)"):
         table.add_column(col, justify="right" if col != "column" else "left")
     g = frame["glucose_mgdl"].to_numpy(float)
@@ -451,34 +587,104 @@ def _print_summary(ds) -> None:
         if c.startswith("adc_") and not c.startswith("adc_ref") and np.std(v) > 0:
             r = f"{np.corrcoef(g, np.log(v))[0, 1]:+.3f}"
         table.add_row(
-            c, f"{v.mean():.1f}", f"{v.std(ddof=1):.1f}", f"{v.min():.0f}", f"{v.max():.0f}", r
+            escape(c), f"{v.mean():.1f}", f"{v.std(ddof=1):.1f}", f"{v.min():.0f}",
+            f"{v.max():.0f}", r,
         )
     out_console.print(table)
 
 
+class _Signals:
+    """Turns SIGINT / SIGTERM into KeyboardInterrupt once, remembering which came."""
+
+    def __init__(self) -> None:
+        self.received: int | None = None
+        self.saved: dict[int, object] = {}
+
+    def _handler(self, signum, frame) -> None:
+        if self.received is not None:  # a second signal while stopping: keep stopping
+            return
+        self.received = signum
+        raise KeyboardInterrupt
+
+    def __enter__(self) -> _Signals:
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self.saved[sig] = signal.signal(sig, self._handler)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for sig, old in self.saved.items():
+            signal.signal(sig, old)
+
+
+def _interrupted(signals: _Signals) -> int:
+    if signals.received == signal.SIGTERM:
+        _say("error: terminated (SIGTERM); finished results were kept, rerun to resume")
+        return 128 + signal.SIGTERM
+    _say("error: interrupted; finished results were kept, rerun to resume")
+    return 130
+
+
+def _user_path(name: object) -> str:
+    """The file the user named, for an atomic write's temporary ``DIR/.NAME.xxxx.tmp``."""
+    import re
+
+    m = re.fullmatch(r"(.*/)?\.(.+)\.[A-Za-z0-9_]+\.tmp", str(name))
+    return f"{m.group(1) or ''}{m.group(2)}" if m else str(name)
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``nirglucose`` console script."""
-    try:
-        app(args=argv, standalone_mode=False)
-    except typer.Exit as exc:
-        return int(getattr(exc, "exit_code", 0) or 0)
-    except typer.Abort:
-        console.print("error: aborted")
-        return 130
-    except TyperException as exc:
-        fmt = getattr(exc, "format_message", None)
-        msg = (fmt() if fmt else str(exc)).replace("\n", " ").strip()
-        if not msg:  # help was shown for a bare command
+    """Entry point of the ``nirglucose`` console script.
+
+    Returns
+    -------
+    int
+        0 on success, 2 for any user error (one line on stderr), 130 after Ctrl-C,
+        143 after SIGTERM.
+    """
+    import numpy as np
+
+    from .evaluation.executors import worker_guard
+
+    with _Signals() as signals:
+        try:
+            # numpy's overflow chatter would add lines; a result that overflowed is
+            # refused by the library (non-finite ADC input, model checks) in one line
+            with worker_guard(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                rv = app(args=argv, standalone_mode=False)
+        except typer.Exit as exc:
+            return int(getattr(exc, "exit_code", 0) or 0)
+        except typer.Abort:
+            return _interrupted(signals)
+        except TyperException as exc:
+            fmt = getattr(exc, "format_message", None)
+            msg = _one_line(fmt() if fmt else exc)
+            if not msg:  # help was shown for a bare command
+                return 2
+            _say(f"error: {msg} (see `nirglucose --help`)")
             return 2
-        console.print(f"error: {msg} (see `nirglucose --help`)", highlight=False, soft_wrap=True)
-        return 2
-    except NirGlucoseError as exc:
-        console.print(f"error: {exc}", highlight=False, soft_wrap=True)
-        return 2
-    except KeyboardInterrupt:
-        console.print("error: interrupted; finished results were kept, rerun to resume")
-        return 130
-    return 0
+        except NirGlucoseError as exc:
+            _say(f"error: {_one_line(exc)}")
+            return 2
+        except KeyboardInterrupt:
+            return _interrupted(signals)
+        except MemoryError:
+            _say("error: out of memory; use fewer subjects, measurements or jobs")
+            return 2
+        except OSError as exc:  # a file the user named cannot be read or written
+            where = f" {_user_path(exc.filename)!r}" if exc.filename else ""
+            _say(f"error: cannot access{where}: {exc.strerror or _one_line(exc)}")
+            return 2
+    code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
+    if code == 130:  # typer turns KeyboardInterrupt into exit 130 and returns it
+        return _interrupted(signals)
+    return code
 
 
 if __name__ == "__main__":

@@ -47,7 +47,6 @@ __all__ = [
     "apply_overrides",
     "parse_override",
     "valid_keys",
-    "key_description",
 ]
 
 #: Forward optical models selectable by name (``optics.model``).
@@ -72,8 +71,26 @@ NOISE_SOURCES = (
 )
 
 
+#: Magnitude no setting may exceed, whatever its own bounds: the largest default is
+#: 1e5 (ambient lux, TIA gain in ohm); beyond 1e9 a value can only overflow the
+#: simulation (exp, squares) into garbage codes (issue 20). [-]
+MAX_ABS_VALUE = 1e9
+
+
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+    # every value finite: NaN or infinity would reach the ADC as garbage codes (issue 20)
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, validate_default=True, allow_inf_nan=False
+    )
+
+    @field_validator("*")
+    @classmethod
+    def _bounded(cls, v: Any) -> Any:
+        items = v.values() if isinstance(v, dict) else v if isinstance(v, tuple) else (v,)
+        for x in items:
+            if isinstance(x, int | float) and not isinstance(x, bool) and abs(x) > MAX_ABS_VALUE:
+                raise ValueError(f"must lie within +-{MAX_ABS_VALUE:.0e}")
+        return v
 
 
 def _check_range(value: tuple[float, float], name: str) -> tuple[float, float]:
@@ -309,7 +326,10 @@ class EnvironmentConfig(_Model):
         le=0.5,
         description="Coupling-efficiency loss at the top of the RH range (issue: up to 3 %). [-]",
     )
-    pressure_mbar_mean: float = Field(1013.25, description="Mean barometric pressure. [mbar]")
+    # 300-1100 mbar: Everest summit (~337 mbar, West 1983) to the Dead Sea shore (~1065 mbar)
+    pressure_mbar_mean: float = Field(
+        1013.25, ge=300, le=1100, description="Mean barometric pressure. [mbar]"
+    )
     pressure_mbar_sd: float = Field(12.0, ge=0, description="SD of pressure. [mbar]")
     pressure_mbar: tuple[float, float] = Field((950.0, 1050.0), description="Range. [mbar]")
     perfusion_per_mbar: float = Field(
@@ -462,7 +482,7 @@ class NoiseSource(_Model):
     """One noise source's switch and scale."""
 
     enabled: bool = True
-    scale: float = Field(1.0, ge=0)
+    scale: float = Field(1.0, ge=0, le=100)  # as noise_scale
 
 
 class NoiseConfig(_Model):
@@ -567,7 +587,10 @@ class ScenarioConfig(_Model):
     """A complete, resolved simulation scenario."""
 
     preset: str = "paper"
-    noise_scale: float = Field(1.0, ge=0, description="Multiplies every noise source. [-]")
+    # at most 100: the harshest preset uses 2 and the noise-scale study 4 (issue 20)
+    noise_scale: float = Field(
+        1.0, ge=0, le=100, description="Multiplies every noise source. [-]"
+    )
     leds: LEDConfig = LEDConfig()
     physiology: PhysiologyConfig = PhysiologyConfig()
     glucose: GlucoseConfig = GlucoseConfig()
@@ -726,30 +749,13 @@ def valid_keys(model: type[BaseModel] = ScenarioConfig, prefix: str = "") -> lis
     keys = []
     for name, field in model.model_fields.items():
         ann = field.annotation
+        if not prefix and name == "preset":  # a label set by the preset, not a setting
+            continue
         if isinstance(ann, type) and issubclass(ann, BaseModel):
             keys.extend(valid_keys(ann, f"{prefix}{name}."))
         else:
             keys.append(f"{prefix}{name}")
     return keys
-
-
-def key_description(key: str) -> str:
-    """The documented description (with its unit) of a dotted key; "" when it has none.
-
-    Examples
-    --------
-    >>> key_description("device.spo2_error_pct").endswith("[%]")
-    True
-    """
-    model: type[BaseModel] = ScenarioConfig
-    parts = key.split(".")
-    for part in parts[:-1]:
-        if part not in model.model_fields:
-            raise ConfigError(f"unknown config key {key!r} (run `nirglucose keys`)")
-        model = model.model_fields[part].annotation  # type: ignore[assignment]
-    if parts[-1] not in model.model_fields:
-        raise ConfigError(f"unknown config key {key!r} (run `nirglucose keys`)")
-    return model.model_fields[parts[-1]].description or ""
 
 
 def parse_override(text: str) -> tuple[str, Any]:
@@ -782,8 +788,10 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
     keys = set(valid_keys())
     for dotted, value in overrides.items():
         if dotted not in keys:
-            close = [k for k in keys if k.split(".")[-1] == dotted.split(".")[-1]]
-            hint = f"; did you mean {', '.join(sorted(close))}?" if close else ""
+            from .config_keys import suggest_keys
+
+            close = suggest_keys(dotted, keys)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
             raise ConfigError(
                 f"unknown config key {dotted!r}{hint} (run `nirglucose keys` for the valid keys)"
             )
@@ -831,6 +839,10 @@ def resolve_config(
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = ".".join(str(p) for p in err["loc"]) or "config"
+        from .config_keys import unit_of
+
+        unit = unit_of(loc)
         raise ConfigError(
-            f"invalid value for {loc}: {err['msg']} (got {err.get('input')!r})"
+            f"invalid value for {loc}: {err['msg']}{f' [{unit}]' if unit else ''} "
+            f"(got {err.get('input')!r})"
         ) from None

@@ -218,7 +218,12 @@ def validate_measurements(
     for c in adc_columns(wavelengths_nm) + ref_columns(wavelengths_nm):
         bad = (out[c] < 1) | (out[c] > full)
         if bad.any():
-            raise DataError(f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}")
+            top = float(out[c].max())
+            why = (f"; codes up to {top:.0f} need a {int(np.ceil(np.log2(top + 1)))}-bit ADC, "
+                   f"this expects {adc_bits}-bit" if top > full else "")
+            raise DataError(
+                f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}{why}"
+            )
     if require_target:
         bad = out["glucose_mgdl"] <= 0
         if bad.any():
@@ -331,7 +336,7 @@ def load_dataset(path: str | os.PathLike) -> Dataset:
     DataError
         Missing file, unknown suffix, unreadable content or malformed metadata.
     """
-    from .config import resolve_config
+    from .dataset_meta import parse_meta
 
     path = Path(path)
     if not path.exists():
@@ -355,21 +360,9 @@ def load_dataset(path: str | os.PathLike) -> Dataset:
         raise
     except (OSError, ValueError, pa.ArrowException) as exc:
         raise DataError(f"cannot read {str(path)!r}: {exc}") from None
-    if _META_KEY in raw:
-        try:
-            meta = json.loads(raw[_META_KEY])
-        except json.JSONDecodeError:
-            raise DataError(f"{str(path)!r} has malformed nirglucose metadata") from None
-    config = None
-    if meta.get("config"):
-        cfg = meta["config"]
-        config = (
-            resolve_config(ScenarioConfig.model_validate(cfg)) if isinstance(cfg, dict) else None
-        )
+    meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
-    return Dataset(
-        frame, config=config, seed=meta.get("seed"), metadata={**extra, "source": str(path)}
-    )
+    return Dataset(frame, config=config, seed=seed, metadata={**extra, "source": str(path)})
 
 
 def scan_dataset(path: str | os.PathLike):

@@ -25,13 +25,23 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import os
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from ..exceptions import ConfigError
 
-__all__ = ["BACKENDS", "available_cores", "resolve_backend", "run_unordered"]
+__all__ = [
+    "BACKENDS",
+    "available_cores",
+    "resolve_backend",
+    "run_unordered",
+    "watch_parent",
+    "worker_guard",
+]
 
 #: Backend names :func:`resolve_backend` returns.
 BACKENDS = ("serial", "processes", "dask")
@@ -84,6 +94,59 @@ def resolve_backend(jobs: int | None, scheduler: Any = None) -> tuple[str, int]:
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ConfigError(f"jobs must be a positive integer, got {jobs!r}")
     return ("serial", 1) if jobs == 1 else ("processes", int(jobs))
+
+
+#: How often a worker checks that its parent still runs. [s]
+PARENT_POLL_S = 0.2
+
+_watching: list[int] = []
+
+
+def _watch_loop(parent_pid: int, poll_s: float) -> None:  # pragma: no cover - in a worker
+    while True:
+        time.sleep(poll_s)
+        if os.getppid() != parent_pid:  # re-parented: the parent died (even by SIGKILL)
+            os._exit(1)
+
+
+def watch_parent(parent_pid: int, poll_s: float = PARENT_POLL_S) -> None:
+    """Make this (worker) process exit as soon as ``parent_pid`` is no longer its parent.
+
+    A pool initializer: a daemon thread polls :func:`os.getppid`, which changes when
+    the parent dies, however it died (SIGKILL included), so no worker outlives the
+    run that started it. Calling it again in the same process does nothing.
+
+    Parameters
+    ----------
+    parent_pid : int
+        Process id of the parent, taken in the parent (``os.getpid()``).
+    poll_s : float
+        Polling interval. [s]
+    """
+    if _watching or os.getpid() == parent_pid:
+        return
+    _watching.append(parent_pid)
+    if os.getppid() != parent_pid:
+        os._exit(1)
+    threading.Thread(
+        target=_watch_loop, args=(parent_pid, poll_s), name="nirglucose-parent-watch",
+        daemon=True,
+    ).start()
+
+
+@contextlib.contextmanager
+def worker_guard() -> Iterator[None]:
+    """Within it, every joblib/loky worker started exits when this process dies.
+
+    Sets joblib's default backend to loky with :func:`watch_parent` as the worker
+    initializer; the CLI runs every command inside it, and :func:`run_unordered`
+    runs its pools inside it. Loky itself kills the workers when a run is
+    interrupted (an exception or a signal turned into one).
+    """
+    from joblib import parallel_config
+
+    with parallel_config(backend="loky", initializer=watch_parent, initargs=(os.getpid(),)):
+        yield
 
 
 def _indexed(fn: Callable[[Any], Any], i: int, item: Any) -> tuple[int, Any]:
@@ -141,8 +204,9 @@ def run_unordered(
     else:
         from joblib import Parallel, delayed
 
-        parallel = Parallel(n_jobs=min(n, len(items)), return_as="generator_unordered")
-        yield from parallel(delayed(_indexed)(fn, i, item) for i, item in enumerate(items))
+        with worker_guard():
+            parallel = Parallel(n_jobs=min(n, len(items)), return_as="generator_unordered")
+            yield from parallel(delayed(_indexed)(fn, i, item) for i, item in enumerate(items))
 
 
 def _run_dask(

@@ -1,8 +1,25 @@
-"""A rich progress bar for task runners (benchmark, sweep), on standard error."""
+"""Progress of task runners (benchmark, sweep) on standard error.
+
+On a terminal: a rich progress bar. Otherwise (a log file, CI, ``make``): one plain
+line per finished task, throttled so that a long run writes at most about
+:data:`MAX_LINES` lines, so a log still shows how far a run got and how fast.
+"""
 
 from __future__ import annotations
 
-__all__ = ["TaskProgress"]
+import sys
+import time
+
+__all__ = ["MAX_LINES", "TaskProgress"]
+
+#: Most progress lines a run writes when standard error is not a terminal (besides
+#: its first and last). [-]
+MAX_LINES = 50
+
+
+def _clock(seconds: float) -> str:
+    seconds = int(round(seconds))
+    return f"{seconds // 3600}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
 
 
 class TaskProgress:
@@ -11,17 +28,36 @@ class TaskProgress:
     Parameters
     ----------
     label : str
-        What runs (shown in bold first), e.g. ``"benchmark"``.
+        What runs (shown first), e.g. ``"benchmark"``.
     total : int
         Number of tasks, those already done included.
     done : int
         Tasks already done before the run (read back from disk).
     done_word : str
         How those are described, e.g. ``"cached"`` or ``"reused"``.
+    stream : file-like, optional
+        Where lines go when it is not a terminal (default ``sys.stderr``).
     """
 
-    def __init__(self, label: str, total: int, done: int, done_word: str) -> None:
+    def __init__(
+        self, label: str, total: int, done: int, done_word: str, stream=None
+    ) -> None:
+        self.label, self.total, self.done = label, int(total), int(done)
+        self.start_done = self.done
+        self.stream = sys.stderr if stream is None else stream
+        self.t0 = time.perf_counter()
+        isatty = getattr(self.stream, "isatty", None)
+        self.p = None
+        if stream is None and isatty is not None and isatty():
+            self._start_bar(label, done_word)
+        else:
+            todo = max(self.total - self.done, 1)
+            self.every = max(1, -(-todo // MAX_LINES))
+            self._line(f"{self.done}/{self.total} tasks ({self.done} {done_word}); starting")
+
+    def _start_bar(self, label: str, done_word: str) -> None:
         from rich.console import Console
+        from rich.markup import escape
         from rich.progress import (
             BarColumn,
             MofNCompleteColumn,
@@ -32,7 +68,7 @@ class TaskProgress:
         )
 
         self.p = Progress(
-            TextColumn(f"[bold]{label}[/] {{task.description}}"),
+            TextColumn(f"[bold]{escape(label)}[/] {{task.description}}"),
             BarColumn(),
             MofNCompleteColumn(),
             TextColumn("tasks"),
@@ -43,10 +79,33 @@ class TaskProgress:
             transient=False,
         )
         self.p.start()
-        self.t = self.p.add_task(f"({done} {done_word})", total=total, completed=done)
+        self.t = self.p.add_task(escape(f"({self.done} {done_word})"), total=self.total,
+                                 completed=self.done)
+
+    def _line(self, text: str) -> None:
+        print(f"{self.label}: {text}", file=self.stream, flush=True)
 
     def advance(self, text: str) -> None:
-        self.p.update(self.t, advance=1, description=text)
+        """Count one finished task, described by ``text``."""
+        self.done += 1
+        if self.p is not None:
+            from rich.markup import escape
+
+            self.p.update(self.t, advance=1, description=escape(text))
+            return
+        new = self.done - self.start_done
+        if new % self.every and self.done != self.total:
+            return
+        elapsed = time.perf_counter() - self.t0
+        left = elapsed / new * (self.total - self.done)
+        self._line(f"{self.done}/{self.total} tasks ({text}); {_clock(elapsed)} elapsed, "
+                   f"{_clock(left)} left")
 
     def close(self) -> None:
-        self.p.stop()
+        """Stop the bar (a terminal) or write the final line (otherwise)."""
+        if self.p is not None:
+            self.p.stop()
+        else:
+            word = "done" if self.done >= self.total else "stopped"
+            self._line(f"{self.done}/{self.total} tasks; {word} after "
+                       f"{_clock(time.perf_counter() - self.t0)}")

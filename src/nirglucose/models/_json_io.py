@@ -22,6 +22,7 @@ import numpy as np
 
 from ..dataset import atomic_write
 from ..exceptions import DataError
+from ._validate import check_array
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "JsonModelMixin"]
 
@@ -144,7 +145,10 @@ class JsonModelMixin:
             raise DataError(
                 f"{str(path)!r} has unknown parameters {unknown}; valid: {sorted(valid)}"
             )
-        model = cls(**cls._params_from_json(params))
+        try:
+            model = cls(**cls._params_from_json(params))
+        except (TypeError, ValueError) as exc:
+            raise DataError(f"{str(path)!r}: invalid parameters: {exc}") from None
         for key, shape in cls._STATE.items():
             if key not in state:
                 raise DataError(f"{str(path)!r} lacks state {key!r}")
@@ -152,10 +156,8 @@ class JsonModelMixin:
             if shape == "json":
                 setattr(model, key, value)
                 continue
-            try:
-                arr = np.asarray(value, dtype=float)
-            except (TypeError, ValueError):
-                raise DataError(f"{str(path)!r}: state {key!r} is not numeric") from None
+            positive = key.endswith(("scale_", "var_"))  # scales and variances
+            arr = check_array(path, f"state {key}", value, positive=positive)
             if shape is None:
                 ok = arr.ndim == 0 and math.isfinite(float(arr))
                 value = float(arr) if ok else None

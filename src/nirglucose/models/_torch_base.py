@@ -75,6 +75,7 @@ from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError, NotFittedError
 from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
+from ._validate import check_torch_doc, check_weights
 from .networks import count_parameters
 
 __all__ = ["TorchRegressor", "LR_SCHEDULES", "FORMAT_VERSION", "NUMPY_ROWS", "nir_pmf_features"]
@@ -869,6 +870,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         missing = [k for k in required if k not in doc]
         if missing:
             raise DataError(f"{str(path)!r} lacks {missing}")
+        check_torch_doc(doc, path)  # types, finite values, positive scales (issue 20)
         params = doc["params"]
         valid = cls().get_params(deep=False)
         unknown = sorted(set(params) - set(valid))
@@ -907,6 +909,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                 f"weights for {cls.registry_name!r}: {k} has shape {tuple(state[k].shape)}, "
                 f"the network needs {tuple(expected[k].shape)}"
             )
+        check_weights(state, path)  # finite, sane magnitudes (issue 20)
         module.load_state_dict(
             {k: state[k].to(dtype=expected[k].dtype) for k in expected}, strict=True
         )

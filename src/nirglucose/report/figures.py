@@ -303,7 +303,10 @@ def load_results(results_dir: str | Path) -> Results:
     predictions = predictions.assign(model=predictions["model"].astype(str))
 
     if (d / "meta.json").is_file():
-        meta = {**meta, **(_read_json(d / "meta.json") or {})}
+        doc = _read_json(d / "meta.json") or {}
+        if not isinstance(doc, dict):  # issue 20: one line, not a TypeError
+            raise DataError(f"meta.json in {str(d)!r} must hold an object, not a list or value")
+        meta = {**meta, **doc}
     elif not meta:
         notes.append("No run metadata (meta.json, or meta in metrics.json): configuration, "
                      "seed, dataset hash and version are unknown.")
@@ -320,6 +323,8 @@ def load_results(results_dir: str | Path) -> Results:
         notes.append("No comparisons.csv: no paired model comparisons to report.")
     if (d / "histories.json").is_file():
         raw = _read_json(d / "histories.json")
+        if raw is not None and not isinstance(raw, dict):  # issue 20
+            raise DataError(f"histories.json in {str(d)!r} must map model names to lists")
         res.histories = {
             str(m): pd.DataFrame(h) for m, h in (raw or {}).items()
             if isinstance(h, list) and h

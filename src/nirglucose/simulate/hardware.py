@@ -41,6 +41,7 @@ from ..constants import (
     LED_THERMAL_COEFF_PER_C,
     ZERO_CELSIUS_K,
 )
+from ..exceptions import ConfigError
 
 __all__ = [
     "led_power_w",
@@ -191,6 +192,11 @@ def adc_convert(voltage_v, vref_v: float, bits: int, inl_peak_lsb: float, offset
     full = 2**bits - 1
     ideal = np.asarray(voltage_v, dtype=float) / vref_v * full
     code = ideal + adc_inl_lsb(ideal, full, inl_peak_lsb) + np.asarray(offset_lsb)
+    if not np.all(np.isfinite(code)):  # NaN would cast to -2^63 (issue 20)
+        raise ConfigError(
+            "the simulated ADC input is not finite: the noise settings drive the simulation "
+            "outside its physical range; lower noise_scale or noise.*.scale"
+        )
     return np.clip(np.rint(code), 0, full).astype(np.int64)
 
 

@@ -256,7 +256,7 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
     DataError
         No parts, a malformed manifest or metadata, a missing part.
     """
-    from ..config import resolve_config
+    from ..dataset_meta import parse_meta
 
     path = Path(path)
     parts, manifest = _part_paths(path)
@@ -266,19 +266,11 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
                   sum(pq.ParquetFile(p).metadata.num_rows for p in parts))
     except (OSError, ValueError, KeyError, TypeError, pa.ArrowException) as exc:
         raise DataError(f"cannot read {str(path)!r}: {exc}") from None
-    meta: dict[str, Any] = {}
-    if _META_KEY in raw:
-        try:
-            meta = json.loads(raw[_META_KEY])
-        except json.JSONDecodeError:
-            raise DataError(f"{str(path)!r} has malformed nirglucose metadata") from None
-    config = None
-    if isinstance(meta.get("config"), dict):
-        config = resolve_config(ScenarioConfig.model_validate(meta["config"]))
+    meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     if manifest is not None:
         extra.update(n_subjects=manifest.get("n_subjects"), per_subject=manifest.get("per_subject"))
-    return PartitionedDataset(path, parts, config, meta.get("seed"),
+    return PartitionedDataset(path, parts, config, seed,
                               {**extra, "source": str(path)}, n_rows)
 
 

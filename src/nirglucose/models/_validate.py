@@ -1,0 +1,146 @@
+"""Checks on what a model file holds, so a loaded model cannot predict nonsense.
+
+A model file that parses can still hold NaN weights, a zero or huge target scale or a
+coefficient of 1e308; its predictions would then be NaN, constant or +-1e299. These
+helpers refuse such files with one :class:`~nirglucose.exceptions.DataError` line
+naming the file, the entry and what is wrong. They never execute anything.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import DataError
+
+__all__ = [
+    "MAX_ABS_STATE",
+    "MAX_Y_SCALE_MGDL",
+    "check_array",
+    "check_predictions",
+    "check_torch_doc",
+    "check_weights",
+]
+
+#: Largest magnitude any stored number may have. Fitted coefficients act on
+#: standardised features or on log absorbances and ADC-derived features (at most
+#: 2^24 codes), so a magnitude beyond 1e12 can only come from a corrupt or forged
+#: file; 1e12 x 2^24 still leaves float64 some 280 orders of magnitude from overflow. [-]
+MAX_ABS_STATE = 1e12
+
+#: Largest target (glucose) scale a network may store: the SD of glucose over a
+#: training set cannot exceed the width of the physiological 0-1000 mg/dL range. [mg/dL]
+MAX_Y_SCALE_MGDL = 1000.0
+
+#: Predictions beyond this magnitude mean a broken model, whatever the input. [mg/dL]
+MAX_ABS_PREDICTION_MGDL = 1e5
+
+
+def _where(path: str | Path) -> str:
+    return repr(str(path))
+
+
+def check_array(path: str | Path, name: str, value: Any, *, positive: bool = False) -> np.ndarray:
+    """A stored array as float64, refused if non-numeric, non-finite or absurd.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The model file (for the message).
+    name : str
+        The entry's name in the file.
+    value : array_like
+        The stored value.
+    positive : bool
+        Whether every element must be > 0 (scales, variances).
+
+    Returns
+    -------
+    numpy.ndarray
+        The value as a float64 array.
+
+    Raises
+    ------
+    DataError
+        Not numeric, NaN or infinite, beyond :data:`MAX_ABS_STATE`, or not positive
+        where it must be.
+    """
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise DataError(f"{_where(path)}: {name!r} is not numeric") from None
+    if arr.dtype == object:  # pragma: no cover - asarray(float) never yields object
+        raise DataError(f"{_where(path)}: {name!r} is not numeric")
+    if not np.all(np.isfinite(arr)):
+        raise DataError(f"{_where(path)}: {name!r} has NaN or infinite values; refit the model")
+    if arr.size and float(np.max(np.abs(arr))) > MAX_ABS_STATE:
+        raise DataError(
+            f"{_where(path)}: {name!r} has a value of magnitude "
+            f"{float(np.max(np.abs(arr))):.3g}, beyond {MAX_ABS_STATE:.0e}; the file is "
+            "corrupt, refit the model"
+        )
+    if positive and arr.size and not bool(np.all(arr > 0)):
+        raise DataError(f"{_where(path)}: {name!r} must be positive; the file is corrupt")
+    return arr
+
+
+def check_torch_doc(doc: dict[str, Any], path: str | Path) -> None:
+    """Types and values of a network's JSON document (params, scaler, history).
+
+    Raises
+    ------
+    DataError
+        ``params`` not an object, a scaler entry missing, non-numeric, of the wrong
+        length, non-finite, a non-positive scale, or a target scale outside
+        (0, :data:`MAX_Y_SCALE_MGDL`] mg/dL; ``history`` not a list.
+    """
+    if not isinstance(doc.get("params"), dict):
+        raise DataError(f"{_where(path)}: 'params' must be an object")
+    scaler = doc.get("scaler")
+    if not isinstance(scaler, dict):
+        raise DataError(f"{_where(path)}: 'scaler' must be an object")
+    for key in ("nir_mean", "nir_scale", "pmf_mean", "pmf_scale", "y_mean", "y_scale"):
+        if key not in scaler:
+            raise DataError(f"{_where(path)}: scaler lacks {key!r}")
+        arr = check_array(path, f"scaler.{key}", scaler[key], positive=key.endswith("scale"))
+        scalar = key.startswith("y_")
+        if scalar != (arr.ndim == 0):
+            shape = "a number" if scalar else "a list"
+            raise DataError(f"{_where(path)}: scaler.{key} must be {shape}")
+    for a, b in (("nir_mean", "nir_scale"), ("pmf_mean", "pmf_scale")):
+        if np.shape(scaler[a]) != np.shape(scaler[b]):
+            raise DataError(f"{_where(path)}: scaler.{a} and scaler.{b} differ in length")
+    y_scale = float(scaler["y_scale"])
+    if not 0 < y_scale <= MAX_Y_SCALE_MGDL:
+        raise DataError(
+            f"{_where(path)}: scaler.y_scale {y_scale:.3g} mg/dL is outside "
+            f"(0, {MAX_Y_SCALE_MGDL:.0f}] mg/dL; the file is corrupt"
+        )
+    for key in ("history", "refit_history"):
+        if key in doc and not isinstance(doc[key], list):
+            raise DataError(f"{_where(path)}: {key!r} must be a list")
+    if not isinstance(doc.get("physics", {}), dict):
+        raise DataError(f"{_where(path)}: 'physics' must be an object")
+
+
+def check_weights(state: dict[str, Any], path: str | Path) -> None:
+    """Every weight tensor finite and of sane magnitude (see :func:`check_array`)."""
+    for key, tensor in state.items():
+        arr = tensor.detach().cpu().double().numpy() if hasattr(tensor, "detach") else tensor
+        check_array(path, f"weights {key}", arr)
+
+
+def check_predictions(pred: Any, path: str | Path) -> np.ndarray:
+    """Refuse predictions that only a broken model makes (NaN, infinite, beyond 1e5 mg/dL)."""
+    arr = np.asarray(pred, dtype=np.float64)
+    if not np.all(np.isfinite(arr)):
+        raise DataError(f"model {_where(path)} predicted NaN or infinite glucose; refit it")
+    if arr.size and float(np.max(np.abs(arr))) > MAX_ABS_PREDICTION_MGDL:
+        worst = float(np.max(np.abs(arr)))
+        raise DataError(
+            f"model {_where(path)} predicted {worst:.3g} mg/dL, beyond "
+            f"{MAX_ABS_PREDICTION_MGDL:.0e} mg/dL; the model file is corrupt, refit it"
+        )
+    return arr
