@@ -15,8 +15,9 @@ from nirglucose.models import load_model
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("user")
-    train = ng.simulate("paper", 20, 3, seed=0)
-    new = ng.simulate("paper", 4, 2, seed=1)
+    # the study's device (its 12-entry physiological vector): measured_columns()
+    train = ng.simulate("wearable", 20, 3, seed=0)
+    new = ng.simulate("wearable", 4, 2, seed=1)
     train.save(d / "train.parquet")
     # A user's CSV: measured columns and ids only, no truth, no reference glucose.
     new.frame[["measurement_id", "subject_id", *measured_columns()]].to_csv(

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 
+import nirglucose as ng
 from nirglucose.cli import main
 from nirglucose.features import enhanced_beer_lambert
 
@@ -20,9 +21,13 @@ def test_readme_starts_with_the_two_commands():
 
 
 def test_readme_lists_every_feature(paper_small):
+    """The study's 56 at its device (the wearable records its 12-entry vector), plus the
+    PPG entries the paper preset's device records; the README lists every one."""
     text = README.read_text()
+    study = ng.simulate("wearable", n_subjects=4, per_subject=1, seed=0)
+    assert len(enhanced_beer_lambert(study.frame).columns) == 56
     names = enhanced_beer_lambert(paper_small.frame.head(3)).columns
-    assert len(names) == 56
+    assert len(names) == 58
     missing = [n for n in names if f"`{n}`" not in text]
     assert not missing, missing
 

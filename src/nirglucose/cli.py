@@ -23,9 +23,14 @@ from rich.markup import escape
 from rich.table import Table
 from typer.exceptions import TyperException
 
+from .config import PRESETS
 from .exceptions import NirGlucoseError
 
 __all__ = ["app", "main"]
+
+
+#: Preset names for the --preset help texts.
+_PRESET_NAMES = ", ".join(PRESETS)
 
 app = typer.Typer(
     name="nirglucose",
@@ -152,7 +157,7 @@ SetOption = Annotated[
 def simulate(
     out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
     preset: Annotated[
-        str, typer.Option(help="Scenario preset: paper, wearable, physical, lab, field.")
+        str, typer.Option(help=f"Scenario preset: {_PRESET_NAMES}.")
     ] = "paper",
     subjects: Annotated[int, typer.Option(help="Number of subjects.")] = 80,
     per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
@@ -227,7 +232,7 @@ def list_models() -> None:
 def benchmark(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
     preset: Annotated[
-        str, typer.Option(help="Scenario preset to simulate: paper, physical, lab, field.")
+        str, typer.Option(help=f"Scenario preset to simulate: {_PRESET_NAMES}.")
     ] = "paper",
     data: Annotated[
         Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
@@ -341,7 +346,7 @@ def sweep(
         str | None, typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort.")
     ] = None,
     preset: Annotated[
-        str, typer.Option(help="Preset every task starts from: paper, physical, lab, field.")
+        str, typer.Option(help=f"Preset every task starts from: {_PRESET_NAMES}.")
     ] = "paper",
     seeds: Annotated[int, typer.Option(help="Seeds per scenario (seed, seed+1, ...).")] = 5,
     seed: Annotated[int, typer.Option(help="First seed.")] = 0,

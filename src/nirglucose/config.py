@@ -508,7 +508,11 @@ class ContactConfig(_Model):
     """Probe contact pressure: changes coupling, blood content and optical path."""
 
     coupling_sd: float = Field(
-        0.03, ge=0, description="Relative SD of optical coupling between placements. [-]"
+        0.03,
+        ge=0,
+        le=1,
+        description="Relative SD of optical coupling between placements (at most 1: a "
+        "relative SD beyond 100 % has no physical meaning for a coupling factor). [-]",
     )
     blanching: float = Field(
         0.3, ge=0, le=1, description="Blood-volume loss at full contact pressure (assumption). [-]"

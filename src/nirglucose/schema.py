@@ -313,10 +313,17 @@ class DeviceSchema:
         bad = (codes < 1) | (codes > self.full_scale)
         if bad.any():
             j = int(np.flatnonzero(bad.any(axis=0))[0])
+            top = float(codes[:, j].max())
+            why = (
+                f"codes up to {top:.0f} need a {int(np.ceil(np.log2(top + 1)))}-bit ADC; "
+                "declare the device's resolution (fit --adc-bits, or adc_bits in the "
+                "file's metadata)"
+                if top > self.full_scale
+                else "a code of 0 or below is a dead or disconnected channel"
+            )
             raise DataError(
                 f"column {cols[j]!r} has ADC codes outside 1-{self.full_scale} "
-                f"({self.adc_bits}-bit ADC) at {_first_rows(bad[:, j])}; declare the "
-                "device's resolution (adc_bits) if it is not that"
+                f"({self.adc_bits}-bit ADC) at {_first_rows(bad[:, j])}: {why}"
             )
         for j, c in enumerate(self.physiology, start=k):
             lo, hi, _ = PHYSIOLOGICAL_RANGES[c]
@@ -390,7 +397,7 @@ def check_reference_glucose(y: np.ndarray) -> None:
     bad = ~((y >= lo) & (y <= hi))
     if bad.any():
         raise DataError(
-            f"reference glucose_mgdl outside what a meter reports ({lo:g}-{hi:g} mg/dL) at "
+            f"reference glucose_mgdl outside what a meter reports, {lo:g}-{hi:g} [mg/dL], at "
             f"{_first_rows(bad)}"
         )
 
