@@ -634,6 +634,10 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         if Xv is not None and len(Xv):
             val = self._tensors({**self._transform(Xv), "y": self._scale_y(yv)})
 
+        # Subnormal floats (weights, gradients and Adam moments that strong weight decay
+        # drives towards 0) are 10-100x slower on x86 CPUs: flush them to 0 while
+        # training (RTE PINN at weight_decay=10: 2.8 -> 1.1 s per fit). Restored after.
+        flushing = torch.set_flush_denormal(True)
         try:
             with torch.random.fork_rng(devices=[]):
                 torch.manual_seed(init_seed)
@@ -651,6 +655,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                     plan = [r["lr"] for r in self.history_[: self.best_epoch_]]
                     self.refit_history_, _ = self._train(every, None, shuffle_seed, lr_plan=plan)
         finally:
+            if flushing:
+                torch.set_flush_denormal(False)  # torch's default
             self.__dict__.pop("_optimizer", None)
             self.__dict__.pop("_whitening", None)
         self.refit_epochs_ = len(self.refit_history_)
