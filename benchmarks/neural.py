@@ -49,7 +49,13 @@ STUDY_LATENCY_MS = {
     "selective-rte-pinn": 6.1,
     "sdnn": 0.8,
 }
-LARGE_SETTINGS = {"batch_size": 512, "max_epochs": 40, "patience": 5, "refit": False}
+LARGE_SETTINGS = {
+    "batch_size": 512,
+    "max_epochs": 40,
+    "patience": 5,
+    "val_fraction": 0.2,
+    "refit": False,
+}
 
 
 def _latency_us(fns: dict, calls: int, warmup: int = 200, blocks: int = 10) -> dict:

@@ -18,6 +18,7 @@ from nirglucose.models import (
     load_model,
     make_model,
 )
+from nirglucose.models._torch_base import TorchRegressor
 from nirglucose.models.networks import OriginalPINNNet, RTEPINNNet
 from nirglucose.models.physics_losses import (
     beer_lambert_loss,
@@ -254,3 +255,26 @@ def test_lambda_phys_changes_the_fit(small):
     a = OriginalPINN(**FAST).fit(small).predict(small)
     b = OriginalPINN(lambda_phys=100.0, **FAST).fit(small).predict(small)
     assert not np.allclose(a, b)
+
+
+def _plain(cls):
+    """``cls`` with the base class's loss: the plain network, no physics term at all."""
+    return type(f"Plain{cls.__name__}", (cls,), {"get_loss": TorchRegressor.get_loss})
+
+
+@pytest.mark.parametrize("name", sorted(PINNS))
+def test_lambda_zero_is_exactly_the_plain_network(small, name):
+    # The benchmark's physics ablation pairs the tuned lambda_phys against 0: at 0 the
+    # network must be the plain one bit for bit (same init, same data path, same steps).
+    cls = PINNS[name]
+    kw = {"max_epochs": 4, "dropout": 0.1, "random_state": 3, "lambda_phys": 0.0}
+    ablated = cls(**kw).fit(small)
+    plain = _plain(cls)(**kw).fit(small)
+    wa, wb = ablated.module_.state_dict(), plain.module_.state_dict()
+    assert wa.keys() == wb.keys()
+    assert all(torch.equal(wa[k], wb[k]) for k in wa)
+    np.testing.assert_array_equal(ablated.predict(small), plain.predict(small))
+    # The physics term is still computed and logged at 0, and a weight > 0 changes the fit.
+    assert np.isfinite(ablated.history_[-1]["train_physics"])
+    weighted = cls(**{**kw, "lambda_phys": 1.0}).fit(small)
+    assert not np.array_equal(weighted.predict(small), ablated.predict(small))

@@ -23,7 +23,13 @@ from nirglucose.models import (
     load_model,
 )
 from nirglucose.models._base import MEASURED_COLUMNS
-from nirglucose.models._torch_base import NUMPY_ROWS, TorchRegressor, nir_pmf_features
+from nirglucose.models._torch_base import (
+    NUMPY_ROWS,
+    WHITENING_KEY,
+    TorchRegressor,
+    nir_pmf_features,
+    zca_whitening,
+)
 from nirglucose.models.networks import (
     OptimizedPINNNet,
     OriginalPINNNet,
@@ -34,6 +40,9 @@ from nirglucose.models.networks import (
 )
 
 FAST = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
+#: Early stopping on an internal subject split (no longer the default: full batch,
+#: fixed tuned epochs, no split).
+ES = {"val_fraction": 0.2}
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -52,7 +61,7 @@ def small():
 
 @pytest.fixture(scope="module")
 def fitted(small):
-    return OriginalPINN(max_epochs=6, batch_size=16, patience=None, random_state=0).fit(small)
+    return OriginalPINN(max_epochs=6, batch_size=16, patience=None, random_state=0, **ES).fit(small)
 
 
 def _weights(model):
@@ -142,14 +151,14 @@ def test_no_validation_trains_on_train_loss(small):
 
 
 def test_early_stopping_stops(small):
-    m = SDNN(max_epochs=200, patience=2, lr=0.05, refit=False, random_state=0).fit(small)
+    m = SDNN(max_epochs=200, patience=2, lr=0.05, refit=False, random_state=0, **ES).fit(small)
     assert m.n_epochs_ < 200
     assert m.n_epochs_ - m.best_epoch_ == 2
     assert m.refit_epochs_ == 0 and m.refit_history_ == []
 
 
 def test_refit_on_all_rows_for_the_selected_epochs(small):
-    kw = {"max_epochs": 12, "patience": None, "random_state": 0}
+    kw = {"max_epochs": 12, "patience": None, "random_state": 0, **ES}
     m = OriginalPINN(**kw).fit(small)
     assert m.refit_epochs_ == m.best_epoch_ == len(m.refit_history_)
     assert [r["lr"] for r in m.refit_history_] == [r["lr"] for r in m.history_[: m.best_epoch_]]
@@ -174,7 +183,8 @@ def test_smoothed_selection_ignores_a_lucky_epoch():
 
 @pytest.mark.parametrize("schedule", ["plateau", "cosine", "none"])
 def test_lr_schedules(small, schedule):
-    m = SDNN(max_epochs=4, lr_schedule=schedule, patience=None, random_state=0).fit(small)
+    m = SDNN(max_epochs=4, lr=1e-3, lr_schedule=schedule, patience=None, random_state=0, **ES)
+    m.fit(small)
     lrs = [r["lr"] for r in m.history_]
     assert lrs[0] == pytest.approx(1e-3)
     if schedule == "cosine":
@@ -187,10 +197,56 @@ def test_training_lowers_the_loss_on_a_learnable_problem():
     # The lab preset (one nominal 'subject', quiet instrument) with the noise off:
     # glucose is the main thing that moves the absorbance.
     ds = ng.simulate("lab", n_subjects=20, per_subject=4, seed=0, overrides={"noise_scale": 0.0})
-    m = OriginalPINN(max_epochs=60, patience=None, lr=3e-3, random_state=0).fit(ds)
+    m = OriginalPINN(max_epochs=60, patience=None, lr=3e-3, random_state=0, **ES).fit(ds)
     h = m.history_
     assert h[-1]["train_mse"] < 0.5 * h[0]["train_mse"]
     assert h[m.best_epoch_ - 1]["val_mse"] < 0.5 * h[0]["val_mse"]
+
+
+def test_full_batch_is_the_default_and_one_step_per_epoch(small):
+    m = SDNN(max_epochs=4, random_state=0)
+    assert m.batch_size is None and m.val_fraction == 0 and m.patience is None
+    steps = []
+    original = m.train_step
+    m.train_step = lambda batch: steps.append(len(batch["y"])) or original(batch)
+    m.fit(small)
+    assert steps == [len(small)] * 4  # every row, once per epoch
+    assert m.best_epoch_ == m.n_epochs_ == 4  # no split: the last weights are kept
+    # A batch size at least the row count is the same full-batch training.
+    big = SDNN(max_epochs=4, batch_size=10_000, random_state=0).fit(small)
+    np.testing.assert_array_equal(
+        big.predict(small), SDNN(max_epochs=4, random_state=0).fit(small).predict(small)
+    )
+
+
+def test_zca_whitening_decorrelates():
+    rng = np.random.default_rng(0)
+    z = rng.normal(size=(500, 3)) @ np.array([[1.0, 0.9, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 2.0]])
+    w = zca_whitening(z)
+    np.testing.assert_allclose(w, w.T)
+    np.testing.assert_allclose(np.cov(z @ w, rowvar=False), np.eye(3), atol=1e-10)
+    # A constant column maps to 0 instead of dividing by 0.
+    w0 = zca_whitening(np.column_stack((z[:, 0], np.zeros(500))))
+    assert np.isfinite(w0).all() and np.all(w0[1] == 0) and np.all(w0[:, 1] == 0)
+
+
+def test_whitened_inputs_are_a_buffer_saved_with_the_weights(small, tmp_path):
+    m = SDNN(max_epochs=3, random_state=0).fit(small)
+    state = m.module_.state_dict()
+    assert WHITENING_KEY in state and state[WHITENING_KEY].shape == (16, 16)
+    assert m.n_parameters == SDNN(whiten_inputs=False).n_parameters == 3713
+    back = SDNN.load(m.save(tmp_path / "m.json"))
+    np.testing.assert_array_equal(back.predict(small), m.predict(small))
+    row = small.frame.iloc[0]
+    one = back.predict_one(
+        row[["adc_850", "adc_940", "adc_1050", "adc_1150"]].to_numpy(float),
+        row[["adc_ref_850", "adc_ref_940", "adc_ref_1050", "adc_ref_1150"]].to_numpy(float),
+        row[list(MEASURED_COLUMNS[8:])].to_numpy(float),
+    )
+    assert one == pytest.approx(m.predict(small)[0], rel=1e-5)
+    plain = SDNN(max_epochs=3, whiten_inputs=False, random_state=0).fit(small)
+    assert WHITENING_KEY not in plain.module_.state_dict()
+    assert not np.allclose(plain.predict(small), m.predict(small))
 
 
 # ----------------------------------------------------------------- determinism
@@ -389,6 +445,10 @@ def test_too_few_rows_raise(small):
         {"val_fraction": 1.0},
         {"lr_schedule": "step"},
         {"weight_decay": -1},
+        {"dropout": 1.0},
+        {"dropout": -0.1},
+        {"batch_size": 0},
+        {"whiten_inputs": "yes"},
     ],
 )
 def test_bad_params_raise_config_error(small, params):

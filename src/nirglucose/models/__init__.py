@@ -6,6 +6,7 @@ Classes are imported lazily (torch loads only when a network is used).
 from __future__ import annotations
 
 from .registry import available_models, get_model_class, load_model, make_model, register
+from .tuning import tuned_params
 
 __all__ = [
     "available_models",
@@ -13,6 +14,7 @@ __all__ = [
     "load_model",
     "make_model",
     "register",
+    "tuned_params",
     "EnhancedBeerLambert",
     "PLSBaseline",
     "Oracle",

@@ -19,11 +19,13 @@ ADC codes into decadic absorbances :math:`A = \\log_{10}(I_0/I)` (robust to the 
 power and gain), standardise the absorbances, the physiological vector and the target
 on the training rows, hold out a validation set by subject (``GroupShuffleSplit`` on
 ``subject_id``, or a random split when there are no subject ids, or the ``X_val`` the
-caller passes), and train with Adam [2]_, a learning-rate schedule and early stopping
-on the validation MSE, keeping the best weights and a per-epoch history
-(``history_``). With an internal split the model is then refitted on every training
-row for the selected number of epochs (``refit``; the epoch count is the minimum of
-the smoothed validation curve), so the held-out subjects are not lost on small data.
+caller passes), and train with AdamW [2]_ [3]_ (full batch by default: one step per
+epoch), a learning-rate schedule and, when a validation set exists, early stopping on
+the validation MSE, keeping the best weights and a per-epoch history (``history_``).
+With an internal split the model is then refitted on every training row for the
+selected number of epochs (``refit``; the epoch count is the minimum of the smoothed
+validation curve), so the held-out subjects are not lost on small data. The default
+has no split: a fixed, tuned number of full-batch epochs with cosine annealing.
 
 Prediction: batches run through the module under :func:`torch.inference_mode` in
 float32; up to :data:`NUMPY_ROWS` rows (and :meth:`TorchRegressor.predict_one`) run
@@ -50,6 +52,13 @@ References
    train_step, validation_step).
 .. [2] D. P. Kingma and J. Ba, "Adam: a method for stochastic optimization",
    ICLR (2015). arXiv:1412.6980
+.. [3] I. Loshchilov and F. Hutter, "Decoupled weight decay regularization",
+   ICLR (2019). arXiv:1711.05101
+.. [4] A. Kessy, A. Lewin and K. Strimmer, "Optimal whitening and decorrelation",
+   Am. Stat. 72, 309-314 (2018). :doi:`10.1080/00031305.2016.1277159`
+.. [5] Y. LeCun, L. Bottou, G. B. Orr and K.-R. Mueller, "Efficient BackProp", in
+   Neural Networks: Tricks of the Trade, LNCS 1524, 9-50 (1998), sec. 4.3
+   (decorrelated inputs). :doi:`10.1007/3-540-49430-8_2`
 """
 
 from __future__ import annotations
@@ -78,7 +87,15 @@ from ._base import fit_input, predict_input, target_of
 from ._validate import check_torch_doc, check_weights
 from .networks import count_parameters
 
-__all__ = ["TorchRegressor", "LR_SCHEDULES", "FORMAT_VERSION", "NUMPY_ROWS", "nir_pmf_features"]
+__all__ = [
+    "TorchRegressor",
+    "LR_SCHEDULES",
+    "FORMAT_VERSION",
+    "NUMPY_ROWS",
+    "WHITENING_KEY",
+    "nir_pmf_features",
+    "zca_whitening",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -92,6 +109,13 @@ _PREDICT_CHUNK = 65536
 NUMPY_ROWS = 8
 _MIN_IMPROVEMENT = 1e-4  # relative improvement that resets the early-stopping counter
 _SMOOTHING_EPOCHS = 5  # window of the validation curve's moving average (refit only)
+#: Default training: full-batch AdamW for a fixed number of epochs with cosine annealing
+#: and no validation split (the epoch count, lr and weight decay are hyper-parameters,
+#: chosen per preset by ``benchmarks/tune.py``; see :func:`nirglucose.models.tuned_params`).
+#: These untuned defaults are mid-grid values of that search's space.
+DEFAULT_EPOCHS = 300
+DEFAULT_LR = 3e-3
+DEFAULT_WEIGHT_DECAY = 1e-3
 
 
 class _UnfittedError(NotFittedError, _SklearnNotFittedError):
@@ -152,6 +176,70 @@ def _scale_of(x: np.ndarray) -> np.ndarray:
     return np.where(s > 1e-12 * np.maximum(np.abs(np.mean(x, axis=0)), 1.0), s, 1.0)
 
 
+#: Eigenvalue floor of the whitening, relative to the largest eigenvalue of the inputs'
+#: correlation matrix: a numerical guard (float32 has ~7 significant digits), so that
+#: an exactly constant or collinear column maps to 0 instead of dividing by 0.
+_WHITENING_FLOOR = 1e-6
+#: State-dict key of the whitening matrix (a buffer, not a trained parameter).
+WHITENING_KEY = "whitening"
+
+
+def zca_whitening(z: np.ndarray) -> np.ndarray:
+    """ZCA whitening matrix of standardised inputs, ``W = C^{-1/2}``.
+
+    ZCA after Kessy, Lewin and Strimmer (2018) (module reference [4]).
+
+    ``z @ W`` has (up to the eigenvalue floor) the identity as covariance and stays as
+    close as possible to ``z`` (no rotation): each column keeps its meaning.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        (n, d) standardised training inputs. [-]
+
+    Returns
+    -------
+    numpy.ndarray
+        (d, d) symmetric matrix. [-]
+    """
+    cov = np.atleast_2d(np.cov(z, rowvar=False))
+    w, v = np.linalg.eigh(cov)
+    w_max = max(float(w.max()), 1e-300)
+    inv_sqrt = np.where(w > _WHITENING_FLOOR * w_max, 1.0 / np.sqrt(np.maximum(w, 1e-300)), 0.0)
+    return (v * inv_sqrt) @ v.T
+
+
+class _WhitenedInputs(nn.Module):
+    """A fixed linear map on ``[x_nir | x_pmf]`` before the network (see ``whiten_inputs``).
+
+    The matrix is a buffer (saved with the weights, never trained, not counted in
+    ``n_parameters``); the wrapped network sees the whitened columns split as before.
+    """
+
+    def __init__(self, inner: nn.Module, matrix: np.ndarray, n_nir: int) -> None:
+        super().__init__()
+        self.inner = inner
+        self.n_nir = int(n_nir)
+        self.register_buffer(WHITENING_KEY, torch.as_tensor(matrix, dtype=torch.float32))
+
+    def forward(self, x_nir: torch.Tensor, x_pmf: torch.Tensor) -> Any:
+        z = torch.cat((x_nir, x_pmf), dim=-1) @ getattr(self, WHITENING_KEY)
+        return self.inner(z[:, : self.n_nir], z[:, self.n_nir :])
+
+    def numpy_forward(self) -> Any:
+        """NumPy closure: the whitening, then the network's own closure (None if none)."""
+        inner = getattr(self.inner, "numpy_forward", None)
+        if not callable(inner):
+            return None
+        fn = inner()
+        m = getattr(self, WHITENING_KEY).detach().numpy().copy()
+
+        def run(x: np.ndarray):
+            return fn(x @ m)
+
+        return run
+
+
 class TorchRegressor(RegressorMixin, BaseEstimator):
     """Base of the network estimators: one seeded training loop, save/load, fast predict.
 
@@ -161,20 +249,36 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
     Parameters
     ----------
     max_epochs : int
-        Upper bound on training epochs. [-]
-    batch_size : int
-        Mini-batch size. [-]
+        Training epochs (an upper bound when early stopping is on). [-]
+    batch_size : int or None
+        Mini-batch size; None (default) takes one full-batch step per epoch, which on
+        the study's few hundred rows is both faster (one Python round trip per epoch)
+        and a smoother optimisation than mini-batches. [-]
     lr : float
-        Adam learning rate. [-]
+        AdamW learning rate. [-]
     weight_decay : float
-        Adam L2 weight decay. [-]
+        AdamW decoupled weight decay [3]_. [-]
+    dropout : float
+        Dropout probability after the hidden activations, in [0, 1). [-]
+    whiten_inputs : bool
+        Train on ZCA-whitened inputs [4]_ [5]_: a fixed linear map (a buffer of the
+        module, from the training rows) decorrelates the standardised absorbances and
+        physiological vector before the network. Glucose lives in low-variance
+        directions of those inputs (the LEDs' absorbances move together with the
+        tissue); without decorrelation gradient descent learns the high-variance
+        directions first and memorises the training subjects before it finds them
+        (on a quiet regime, 80 subjects x 3, grouped 5-fold: SDNN 39 -> 16 mg/dL, the
+        training mean 58; ``benchmarks/tune.py``). False gives the plain study
+        network on standardised inputs.
     patience : int or None
         Stop after this many epochs without a relative improvement of 1e-4 in the
         monitored loss (validation MSE, or training loss without a validation set);
-        None trains all ``max_epochs``. [-]
+        None (default) trains all ``max_epochs``. [-]
     val_fraction : float
         Share of subjects (or rows, without subject ids) held out for early stopping
-        when no ``X_val`` is passed to :meth:`fit`; 0 disables the split. [-]
+        when no ``X_val`` is passed to :meth:`fit`; 0 (default) disables the split:
+        the epoch count is then a hyper-parameter chosen by cross-validation, not by a
+        20 % hold-out of a 192-row training set. [-]
     lr_schedule : {'plateau', 'cosine', 'none'}
         Halve the learning rate when the monitored loss stalls for ``patience // 4``
         epochs (``ReduceLROnPlateau``), cosine annealing over ``max_epochs``, or
@@ -199,8 +303,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         ``train_physics``), plus ``val_rmse_mgdl``. Losses are in standardised target
         units; ``val_*`` are None without a validation set.
     best_epoch_ : int
-        Epoch with the lowest monitored loss (whose weights were kept, or how many
-        epochs the refit ran).
+        With a validation set: the epoch with the lowest validation MSE (whose weights
+        were kept) or, after a refit, how many epochs the refit ran. Without one: the
+        last epoch (its weights are kept).
     n_epochs_ : int
         Epochs run before early stopping.
     refit_epochs_ : int
@@ -224,13 +329,15 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
     def __init__(
         self,
         *,
-        max_epochs: int = 300,
-        batch_size: int = 32,
-        lr: float = 1e-3,
-        weight_decay: float = 0.0,
-        patience: int | None = 30,
-        val_fraction: float = 0.2,
-        lr_schedule: str = "plateau",
+        max_epochs: int = DEFAULT_EPOCHS,
+        batch_size: int | None = None,
+        lr: float = DEFAULT_LR,
+        weight_decay: float = DEFAULT_WEIGHT_DECAY,
+        dropout: float = 0.0,
+        whiten_inputs: bool = True,
+        patience: int | None = None,
+        val_fraction: float = 0.0,
+        lr_schedule: str = "cosine",
         refit: bool = True,
         random_state: int | np.random.RandomState | None = None,
     ) -> None:
@@ -238,6 +345,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         self.batch_size = batch_size
         self.lr = lr
         self.weight_decay = weight_decay
+        self.dropout = dropout
+        self.whiten_inputs = whiten_inputs
         self.patience = patience
         self.val_fraction = val_fraction
         self.lr_schedule = lr_schedule
@@ -348,13 +457,18 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             if not ok:
                 raise ConfigError(f"{type(self).__name__}: {name}={getattr(self, name)!r}; {rule}")
 
-        for name in ("max_epochs", "batch_size"):
-            v = getattr(self, name)
-            need(
-                isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1,
-                name,
-                "must be an integer >= 1",
-            )
+        v = self.max_epochs
+        need(
+            isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1,
+            "max_epochs",
+            "must be an integer >= 1",
+        )
+        v = self.batch_size
+        need(
+            v is None or (isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1),
+            "batch_size",
+            "must be None (full batch) or an integer >= 1",
+        )
         need(
             self.patience is None
             or (isinstance(self.patience, int | np.integer) and self.patience >= 1),
@@ -372,12 +486,22 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             "must be >= 0",
         )
         need(
+            isinstance(self.dropout, float | int) and 0 <= self.dropout < 1,
+            "dropout",
+            "must lie in [0, 1)",
+        )
+        need(
             isinstance(self.val_fraction, float | int) and 0 <= self.val_fraction < 1,
             "val_fraction",
             "must lie in [0, 1)",
         )
         need(self.lr_schedule in LR_SCHEDULES, "lr_schedule", f"valid: {', '.join(LR_SCHEDULES)}")
         need(isinstance(self.refit, bool | np.bool_), "refit", "must be True or False")
+        need(
+            isinstance(self.whiten_inputs, bool | np.bool_),
+            "whiten_inputs",
+            "must be True or False",
+        )
         self._validate_extra_params()
 
     def _measurements(
@@ -482,11 +606,19 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         }
         self.physics_ = self._fit_physics(X, a_train, y)
         self._prepare_physics_tensors()
+        self._whitening = None
+        if self.whiten_inputs:
+            z = self._transform(Xa)
+            self._whitening = (zca_whitening(np.hstack((z["nir"], z["pmf"]))), z["nir"].shape[1])
         train = self._tensors({**self._transform(Xt), "y": self._scale_y(yt)})
         val = None
         if Xv is not None and len(Xv):
             val = self._tensors({**self._transform(Xv), "y": self._scale_y(yv)})
 
+        # Subnormal floats (weights, gradients and Adam moments that strong weight decay
+        # drives towards 0) are 10-100x slower on x86 CPUs: flush them to 0 while
+        # training (RTE PINN at weight_decay=10: 2.8 -> 1.1 s per fit). Restored after.
+        flushing = torch.set_flush_denormal(True)
         try:
             with torch.random.fork_rng(devices=[]):
                 torch.manual_seed(init_seed)
@@ -504,10 +636,28 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                     plan = [r["lr"] for r in self.history_[: self.best_epoch_]]
                     self.refit_history_, _ = self._train(every, None, shuffle_seed, lr_plan=plan)
         finally:
+            if flushing:
+                torch.set_flush_denormal(False)  # torch's default
             self.__dict__.pop("_optimizer", None)
+            self.__dict__.pop("_whitening", None)
         self.refit_epochs_ = len(self.refit_history_)
         self._build_fast_path()
         return self
+
+    def _wrap_inputs(self, module: nn.Module, whitening: Any) -> nn.Module:
+        """``module`` behind the input whitening when ``whiten_inputs`` (else as is).
+
+        ``whitening`` is ``(matrix, n_nir)`` from :meth:`fit`, or a saved matrix tensor
+        (:meth:`load`; its NIR width is the module's first input width).
+        """
+        if not self.whiten_inputs:
+            return module
+        if isinstance(whitening, tuple):
+            matrix, n_nir = whitening
+        else:
+            matrix = np.zeros((0, 0)) if whitening is None else whitening.numpy()
+            n_nir = len(self.scaler_["nir_mean"])
+        return _WhitenedInputs(module, matrix, n_nir)
 
     def _scale_y(self, y: np.ndarray) -> np.ndarray:
         return (y - self.scaler_["y_mean"]) / self.scaler_["y_scale"]
@@ -528,9 +678,12 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
 
     @staticmethod
     def _batches(
-        tensors: dict[str, torch.Tensor], batch_size: int, order: torch.Tensor | None = None
+        tensors: dict[str, torch.Tensor], batch_size: int | None, order: torch.Tensor | None = None
     ) -> Iterator[tuple[int, dict[str, torch.Tensor]]]:
         n = len(tensors["y"])
+        if batch_size is None or batch_size >= n:
+            yield n, tensors  # full batch: the row order does not change the step
+            return
         for start in range(0, n, batch_size):
             if order is None:
                 yield (
@@ -545,7 +698,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         self.module_.eval()
         sums: dict[str, torch.Tensor] = {}
         n = 0
-        for size, batch in self._batches(tensors, max(_PREDICT_CHUNK // 8, self.batch_size)):
+        for size, batch in self._batches(tensors, _PREDICT_CHUNK // 8):
             for k, v in self.validation_step(batch).items():
                 sums[k] = sums.get(k, 0.0) + v * size
             n += size
@@ -562,12 +715,16 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         """Train a fresh module; return ``(history, best_epoch)``.
 
         Without ``lr_plan``: up to ``max_epochs`` with the schedule and early stopping,
-        keeping the best weights. With it: exactly ``len(lr_plan)`` epochs at those
-        learning rates, keeping the last weights (the refit).
+        keeping the best weights on ``val`` (the last weights without ``val``). With it:
+        exactly ``len(lr_plan)`` epochs at those learning rates, keeping the last
+        weights (the refit).
         """
-        self.module_ = self.build_module()
-        self._optimizer = torch.optim.Adam(
-            self.module_.parameters(), lr=self.lr, weight_decay=self.weight_decay
+        self.module_ = self._wrap_inputs(self.build_module(), self.__dict__.get("_whitening"))
+        self._optimizer = torch.optim.AdamW(
+            self.module_.parameters(),
+            lr=self.lr,
+            weight_decay=float(self.weight_decay),
+            foreach=True,  # one fused call per step instead of one per tensor
         )
         patience = self.patience if lr_plan is None else None
         max_epochs = int(self.max_epochs) if lr_plan is None else len(lr_plan)
@@ -588,6 +745,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             sched = None
         gen = torch.Generator().manual_seed(shuffle_seed)
         n_train = len(train["y"])
+        batch_size = None if self.batch_size is None else int(self.batch_size)
+        full_batch = batch_size is None or batch_size >= n_train
         y_scale = self.scaler_["y_scale"]
         history: list[dict] = []
         best, best_epoch, best_state, stale = math.inf, 0, None, 0
@@ -597,9 +756,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                 for group in self._optimizer.param_groups:
                     group["lr"] = lr_plan[epoch - 1]
             lr_now = self._optimizer.param_groups[0]["lr"]
-            order = torch.randperm(n_train, generator=gen)
+            order = None if full_batch else torch.randperm(n_train, generator=gen)
             sums: dict[str, torch.Tensor] = {}
-            for size, batch in self._batches(train, int(self.batch_size), order):
+            for size, batch in self._batches(train, batch_size, order):
                 for k, v in self.train_step(batch).items():
                     sums[k] = sums.get(k, 0.0) + v * size
             record: dict[str, Any] = {"epoch": epoch, "lr": lr_now}
@@ -624,13 +783,17 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                     f"{type(self).__name__}: training diverged at epoch {epoch} "
                     f"(loss {monitor}); lower lr (now {self.lr})"
                 )
-            if lr_plan is not None:
-                best_epoch = epoch
-            elif monitor < best - _MIN_IMPROVEMENT * abs(best) or best_state is None:
-                best, best_epoch, stale = monitor, epoch, 0
-                best_state = copy.deepcopy(self.module_.state_dict())
+            if monitor < best - _MIN_IMPROVEMENT * abs(best) or epoch == 1:
+                best, stale = monitor, 0
+                if val is not None and lr_plan is None:
+                    # The weights early stopping returns to; without a validation set
+                    # the last weights are kept (no copy per epoch).
+                    best_epoch = epoch
+                    best_state = copy.deepcopy(self.module_.state_dict())
             else:
                 stale += 1
+            if val is None or lr_plan is not None:
+                best_epoch = epoch
             if isinstance(sched, torch.optim.lr_scheduler.ReduceLROnPlateau):
                 sched.step(monitor)
             elif sched is not None:
@@ -892,8 +1055,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         est.n_features_in_ = len(est.schema_.raw_columns)
         if not est.schema_.is_plain:
             est.feature_names_in_ = np.asarray(est.schema_.raw_columns, dtype=object)
-        module = est.build_module()
         state = _read_weights(path, doc["weights_file"])
+        module = est._wrap_inputs(est.build_module(), state.get(WHITENING_KEY))
         expected = module.state_dict()
         missing_keys = sorted(set(expected) - set(state))
         extra_keys = sorted(set(state) - set(expected))

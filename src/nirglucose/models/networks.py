@@ -187,17 +187,23 @@ class OriginalPINNNet(nn.Module):
     These sizes give 20,225 trainable parameters; the study's table reports 163,000 for
     the same description, which its stated layer sizes cannot produce. We keep the
     described layers and report the counted number.
+
+    Parameters
+    ----------
+    dropout : float
+        Dropout probability after each hidden activation (0, the study's network, adds
+        no Dropout layer). [-]
     """
 
     NIR_SIZES = (4, 32, 64, 32)
     PMF_SIZES = (12, 16, 32, 16)
     HEAD_SIZES = (48, 128, 64, 1)
 
-    def __init__(self, n_nir: int = 4, n_pmf: int = 12) -> None:
+    def __init__(self, n_nir: int = 4, n_pmf: int = 12, dropout: float = 0.0) -> None:
         super().__init__()
-        self.nir = mlp((n_nir, *self.NIR_SIZES[1:]))
-        self.pmf = mlp((n_pmf, *self.PMF_SIZES[1:]))
-        self.head = mlp(self.HEAD_SIZES, final_activation=False)
+        self.nir = mlp((n_nir, *self.NIR_SIZES[1:]), dropout=dropout)
+        self.pmf = mlp((n_pmf, *self.PMF_SIZES[1:]), dropout=dropout)
+        self.head = mlp(self.HEAD_SIZES, final_activation=False, dropout=dropout)
 
     def forward(self, x_nir: torch.Tensor, x_pmf: torch.Tensor) -> torch.Tensor:
         z = torch.cat((self.nir(x_nir), self.pmf(x_pmf)), dim=-1)
@@ -325,6 +331,9 @@ class RTEPINNNet(nn.Module):
         Starting optical properties at the ``k`` wavelengths. [1/cm]
     mua_floor_per_cm, musp_floor_per_cm : float
         Lower bounds added to the softplus outputs. [1/cm]
+    dropout : float
+        Dropout probability after each hidden activation of the branches, the trunk
+        and the glucose head (0 adds no Dropout layer; the optics head has none). [-]
 
     Notes
     -----
@@ -342,6 +351,7 @@ class RTEPINNNet(nn.Module):
         musp_floor_per_cm: float = 0.5,
         n_nir: int = 4,
         n_pmf: int = 12,
+        dropout: float = 0.0,
     ) -> None:
         super().__init__()
         k = len(nominal_mua_per_cm)
@@ -350,11 +360,11 @@ class RTEPINNNet(nn.Module):
         self.n_wavelengths = k
         self.mua_floor = float(mua_floor_per_cm)
         self.musp_floor = float(musp_floor_per_cm)
-        self.nir = mlp((n_nir, 128, 128))
-        self.pmf = mlp((n_pmf, 64, 64))
-        self.trunk = mlp((192, 256, 256, 128))
+        self.nir = mlp((n_nir, 128, 128), dropout=dropout)
+        self.pmf = mlp((n_pmf, 64, 64), dropout=dropout)
+        self.trunk = mlp((192, 256, 256, 128), dropout=dropout)
         self.optics = mlp((128, 64, 2 * k), final_activation=False)
-        self.glucose = mlp((128 + 2 * k, 64, 1), final_activation=False)
+        self.glucose = mlp((128 + 2 * k, 64, 1), final_activation=False, dropout=dropout)
         with torch.no_grad():
             mua0 = torch.as_tensor(nominal_mua_per_cm, dtype=torch.float32) - self.mua_floor
             musp0 = torch.as_tensor(nominal_musp_per_cm, dtype=torch.float32) - self.musp_floor
@@ -408,17 +418,24 @@ class SDNNNet(nn.Module):
     small dense network; neither they nor the reference study give the layer sizes
     used here. This arrangement gives 3,713 trainable parameters, the count the study
     reports for its SDNN.
+
+    Parameters
+    ----------
+    dropout : float
+        Dropout probability after each hidden activation (0 adds no Dropout layer). [-]
     """
 
     FRONT_SIZES = (4, 16)
     STACK_SIZES = (28, 48, 32, 16, 8, 1)
 
-    def __init__(self, n_nir: int = 4, n_pmf: int = 12) -> None:
+    def __init__(self, n_nir: int = 4, n_pmf: int = 12, dropout: float = 0.0) -> None:
         super().__init__()
         self.n_nir = n_nir
         front = self.FRONT_SIZES[1]
-        self.front = mlp((n_nir, front))
-        self.stack = mlp((front + n_pmf, *self.STACK_SIZES[1:]), final_activation=False)
+        self.front = mlp((n_nir, front), dropout=dropout)
+        self.stack = mlp(
+            (front + n_pmf, *self.STACK_SIZES[1:]), final_activation=False, dropout=dropout
+        )
 
     def forward(self, x_nir: torch.Tensor, x_pmf: torch.Tensor) -> torch.Tensor:
         return self.stack(torch.cat((self.front(x_nir), x_pmf), dim=-1)).squeeze(-1)

@@ -67,8 +67,9 @@ def glucose_absorptivity_per_cm_per_mgdl(
         Natural-log absorption at the 2nd C-H overtone peak per mM
         (``glucose.absorptivity_per_cm_per_mm`` of the scenario). [1/(cm mM)]
     signal_gain : float
-        The scenario's ``glucose.signal_gain`` (13.5 in the ``paper`` preset), which
-        the simulator applies to glucose's optical effects. [-]
+        The scenario's ``glucose.signal_gain`` (the ``paper`` preset's value is
+        :data:`nirglucose.config.PAPER_SIGNAL_GAIN`), which the simulator applies to
+        glucose's optical effects. [-]
 
     Returns
     -------
@@ -91,7 +92,8 @@ def glucose_absorptivity_per_cm_per_mgdl(
 
     Examples
     --------
-    >>> eps = glucose_absorptivity_per_cm_per_mgdl([1150.0], 1e-4, 13.5)
+    >>> from nirglucose.config import PAPER_SIGNAL_GAIN
+    >>> eps = glucose_absorptivity_per_cm_per_mgdl([1150.0], 1e-4, PAPER_SIGNAL_GAIN)
     >>> float(eps[0]) > 0
     True
     """

@@ -47,7 +47,7 @@ from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..optics.diffusion import farrell_reflectance
-from ._torch_base import TorchRegressor
+from ._torch_base import DEFAULT_EPOCHS, DEFAULT_LR, DEFAULT_WEIGHT_DECAY, TorchRegressor
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
     beer_lambert_loss,
@@ -100,6 +100,18 @@ def _positive_or_none(est: Any, name: str) -> None:
     v = getattr(est, name)
     if v is not None and not (isinstance(v, float | int) and math.isfinite(v) and v > 0):
         raise ConfigError(f"{type(est).__name__}: {name}={v!r}; must be None or a number > 0")
+
+
+def _with_physics(est: Any, total: torch.Tensor, physics: torch.Tensor) -> torch.Tensor:
+    """``total + lambda_phys * physics``; with ``lambda_phys == 0`` exactly ``total``.
+
+    At 0 the physics term is left out of the graph altogether (not multiplied by 0), so
+    the loss, its gradients and hence the trained weights are bit-identical to the plain
+    network's: the clean ablation the benchmark pairs against the tuned weight.
+    """
+    if est.lambda_phys == 0:
+        return total
+    return total + est.lambda_phys * physics
 
 
 def _lambda_ok(est: Any) -> None:
@@ -187,7 +199,7 @@ class _BeerLambertPINN(TorchRegressor):
             glucose_ref_mgdl=ph["c_ref"],
         )
         terms["physics"] = physics
-        return total + self.lambda_phys * physics, terms
+        return _with_physics(self, total, physics), terms
 
 
 @register("original-pinn")
@@ -216,7 +228,9 @@ class OriginalPINN(_BeerLambertPINN):
     Parameters
     ----------
     lambda_phys : float
-        Weight of the physics term, ``<< 1`` in the study. [-]
+        Weight of the physics term, ``<< 1`` in the study; a tuned hyper-parameter
+        (grid includes 0). 0 trains exactly the plain network (same initialisation,
+        same data path, bit-identical weights): the physics ablation. [-]
     physics_form : {'absolute', 'relative'}
         'absolute' (default) is the study's residual. 'relative' subtracts the training
         means from both sides, :math:`(A - \bar A) - \varepsilon(\hat c - \bar c)l`
@@ -225,8 +239,8 @@ class OriginalPINN(_BeerLambertPINN):
         Glucose peak absorption [1/(cm mM)] and signal gain [-] for
         :math:`\varepsilon`; None takes them from the training Dataset's scenario (the
         ``paper`` preset when the data carries none).
-    max_epochs, batch_size, lr, weight_decay, patience, val_fraction, lr_schedule,
-    refit, random_state
+    max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
+    val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
 
     Notes
@@ -256,13 +270,15 @@ class OriginalPINN(_BeerLambertPINN):
         physics_form: str = "absolute",
         absorptivity_per_cm_per_mm: float | None = None,
         signal_gain: float | None = None,
-        max_epochs: int = 300,
-        batch_size: int = 32,
-        lr: float = 1e-3,
-        weight_decay: float = 0.0,
-        patience: int | None = 30,
-        val_fraction: float = 0.2,
-        lr_schedule: str = "plateau",
+        max_epochs: int = DEFAULT_EPOCHS,
+        batch_size: int | None = None,
+        lr: float = DEFAULT_LR,
+        weight_decay: float = DEFAULT_WEIGHT_DECAY,
+        dropout: float = 0.0,
+        whiten_inputs: bool = True,
+        patience: int | None = None,
+        val_fraction: float = 0.0,
+        lr_schedule: str = "cosine",
         refit: bool = True,
         random_state: int | np.random.RandomState | None = None,
     ) -> None:
@@ -271,6 +287,8 @@ class OriginalPINN(_BeerLambertPINN):
             batch_size=batch_size,
             lr=lr,
             weight_decay=weight_decay,
+            dropout=dropout,
+            whiten_inputs=whiten_inputs,
             patience=patience,
             val_fraction=val_fraction,
             lr_schedule=lr_schedule,
@@ -284,7 +302,7 @@ class OriginalPINN(_BeerLambertPINN):
 
     def build_module(self) -> OriginalPINNNet:
         """:class:`~nirglucose.models.networks.OriginalPINNNet`."""
-        return OriginalPINNNet(**self._input_widths())
+        return OriginalPINNNet(**self._input_widths(), dropout=float(self.dropout))
 
 
 @register("optimized-pinn")
@@ -303,13 +321,12 @@ class OptimizedPINN(_BeerLambertPINN):
     n_heads : int
         Attention heads (divides ``d_model``). [-]
     dropout : float
-        Dropout probability. [-]
+        Dropout probability (0.1 by default: with weight decay, part of the study's
+        "optimisation"). [-]
     lambda_phys, physics_form, absorptivity_per_cm_per_mm, signal_gain
         As in :class:`OriginalPINN`.
-    weight_decay : float
-        Adam L2 weight decay (1e-4 by default: part of the study's "optimisation"). [-]
-    max_epochs, batch_size, lr, patience, val_fraction, lr_schedule, refit,
-    random_state
+    max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
+    val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
     """
 
@@ -318,18 +335,19 @@ class OptimizedPINN(_BeerLambertPINN):
         *,
         d_model: int = 64,
         n_heads: int = 4,
-        dropout: float = 0.1,
         lambda_phys: float = 0.01,
         physics_form: str = "absolute",
         absorptivity_per_cm_per_mm: float | None = None,
         signal_gain: float | None = None,
-        max_epochs: int = 300,
-        batch_size: int = 32,
-        lr: float = 1e-3,
-        weight_decay: float = 1e-4,
-        patience: int | None = 30,
-        val_fraction: float = 0.2,
-        lr_schedule: str = "plateau",
+        max_epochs: int = DEFAULT_EPOCHS,
+        batch_size: int | None = None,
+        lr: float = DEFAULT_LR,
+        weight_decay: float = DEFAULT_WEIGHT_DECAY,
+        dropout: float = 0.1,
+        whiten_inputs: bool = True,
+        patience: int | None = None,
+        val_fraction: float = 0.0,
+        lr_schedule: str = "cosine",
         refit: bool = True,
         random_state: int | np.random.RandomState | None = None,
     ) -> None:
@@ -338,6 +356,8 @@ class OptimizedPINN(_BeerLambertPINN):
             batch_size=batch_size,
             lr=lr,
             weight_decay=weight_decay,
+            dropout=dropout,
+            whiten_inputs=whiten_inputs,
             patience=patience,
             val_fraction=val_fraction,
             lr_schedule=lr_schedule,
@@ -346,7 +366,6 @@ class OptimizedPINN(_BeerLambertPINN):
         )
         self.d_model = d_model
         self.n_heads = n_heads
-        self.dropout = dropout
         self.lambda_phys = lambda_phys
         self.physics_form = physics_form
         self.absorptivity_per_cm_per_mm = absorptivity_per_cm_per_mm
@@ -366,8 +385,6 @@ class OptimizedPINN(_BeerLambertPINN):
                 f"OptimizedPINN: d_model={self.d_model!r}, n_heads={self.n_heads!r}; both "
                 f"integers >= 1 with n_heads dividing d_model"
             )
-        if not (isinstance(self.dropout, float | int) and 0 <= self.dropout < 1):
-            raise ConfigError(f"OptimizedPINN: dropout={self.dropout!r}; must lie in [0, 1)")
 
     def build_module(self) -> OptimizedPINNNet:
         """:class:`~nirglucose.models.networks.OptimizedPINNNet`."""
@@ -427,13 +444,15 @@ class _RTEPINNBase(TorchRegressor):
         *,
         lambda_phys: float = 0.1,
         stability_weight: float = 0.1,
-        max_epochs: int = 300,
-        batch_size: int = 32,
-        lr: float = 1e-3,
-        weight_decay: float = 0.0,
-        patience: int | None = 30,
-        val_fraction: float = 0.2,
-        lr_schedule: str = "plateau",
+        max_epochs: int = DEFAULT_EPOCHS,
+        batch_size: int | None = None,
+        lr: float = DEFAULT_LR,
+        weight_decay: float = DEFAULT_WEIGHT_DECAY,
+        dropout: float = 0.0,
+        whiten_inputs: bool = True,
+        patience: int | None = None,
+        val_fraction: float = 0.0,
+        lr_schedule: str = "cosine",
         refit: bool = True,
         random_state: int | np.random.RandomState | None = None,
     ) -> None:
@@ -442,6 +461,8 @@ class _RTEPINNBase(TorchRegressor):
             batch_size=batch_size,
             lr=lr,
             weight_decay=weight_decay,
+            dropout=dropout,
+            whiten_inputs=whiten_inputs,
             patience=patience,
             val_fraction=val_fraction,
             lr_schedule=lr_schedule,
@@ -539,7 +560,12 @@ class _RTEPINNBase(TorchRegressor):
     def build_module(self) -> RTEPINNNet:
         """:class:`~nirglucose.models.networks.RTEPINNNet` started at nominal optics."""
         p = self._physics_or_default()
-        return RTEPINNNet(p["nominal_mua_per_cm"], p["nominal_musp_per_cm"], **self._input_widths())
+        return RTEPINNNet(
+            p["nominal_mua_per_cm"],
+            p["nominal_musp_per_cm"],
+            **self._input_widths(),
+            dropout=float(self.dropout),
+        )
 
     def get_loss(self, y_pred, y_true, batch):
         """MSE plus ``lambda_phys`` (reflectance residual + stability x scattering prior)."""
@@ -564,7 +590,7 @@ class _RTEPINNBase(TorchRegressor):
         prior = scattering_prior_loss(musp, ph["prior"])
         physics = reflectance + self.stability_weight * prior
         terms.update({"reflectance": reflectance, "scattering_prior": prior, "physics": physics})
-        return total + self.lambda_phys * physics, terms
+        return _with_physics(self, total, physics), terms
 
     def predict_optics(self, X: Any) -> tuple[np.ndarray, np.ndarray]:
         """The optical-property heads: ``(mua, musp)``, each (n, k). [1/cm]"""
@@ -580,11 +606,12 @@ _RTE_DOC_PARAMS = """
     Parameters
     ----------
     lambda_phys : float
-        Weight of the physics term. [-]
+        Weight of the physics term; a tuned hyper-parameter (grid includes 0). 0 trains
+        exactly the plain network (bit-identical weights): the physics ablation. [-]
     stability_weight : float
         Weight of the scattering prior inside the physics term. [-]
-    max_epochs, batch_size, lr, weight_decay, patience, val_fraction, lr_schedule,
-    refit, random_state
+    max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
+    val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
 """
 

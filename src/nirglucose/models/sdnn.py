@@ -35,8 +35,8 @@ class SDNN(TorchRegressor):
 
     Parameters
     ----------
-    max_epochs, batch_size, lr, weight_decay, patience, val_fraction, lr_schedule,
-    refit, random_state
+    max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
+    val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
 
     Notes
@@ -49,4 +49,4 @@ class SDNN(TorchRegressor):
 
     def build_module(self) -> SDNNNet:
         """:class:`~nirglucose.models.networks.SDNNNet`."""
-        return SDNNNet(**self._input_widths())
+        return SDNNNet(**self._input_widths(), dropout=float(self.dropout))

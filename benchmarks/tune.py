@@ -1,0 +1,209 @@
+"""Tune every model family on the same footing; write ``src/nirglucose/data/tuned_params.json``.
+
+For each preset (``wearable`` and ``paper``) and each family (EBL, PLS and the five
+networks), :data:`~nirglucose.models.tuning.N_CONFIGS` configurations are drawn from
+the family's grid (:func:`~nirglucose.models.tuning.search_space`; the networks share
+one training grid and the same draws, the PINNs add ``lambda_phys`` with every grid
+value, 0 included, drawn equally often) and scored by subject-grouped
+:data:`~nirglucose.models.tuning.N_FOLDS`-fold cross-validation on 80 subjects x 3 of
+each tuning seed (:data:`~nirglucose.models.tuning.TUNING_SEEDS`, disjoint from the
+reported seeds 0-4). The configuration with the lowest pooled RMSE is written. The same
+budget (configurations x folds x seeds) for every family; nothing here reads the
+reported seeds or the study's numbers.
+
+Presets: once the simulator has a ``wearable`` preset (issue 18), both presets are used
+as they are. Before that, ``wearable`` is today's ``paper`` and ``paper`` is today's
+``paper`` with :data:`~nirglucose.models.tuning.PAPER_STANDIN_OVERRIDES` (recorded in
+the JSON as ``standin``): re-run this script after the merge.
+
+Usage::
+
+    python benchmarks/tune.py [--presets wearable,paper] [--models ...] [--out PATH]
+
+Torch runs on one thread. The last line of the output is one JSON object (budget,
+time, the chosen parameters and their tuning-CV RMSE next to the no-skill RMSE).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from sklearn.model_selection import GroupKFold
+
+import nirglucose as ng
+from nirglucose.config import PRESETS
+from nirglucose.dataset import Dataset
+from nirglucose.models import make_model
+from nirglucose.models.tuning import (
+    LAMBDA_PHYS_GRID,
+    N_CONFIGS,
+    N_FOLDS,
+    PAPER_STANDIN_OVERRIDES,
+    TUNED_PRESETS,
+    TUNING_SEEDS,
+    search_space,
+)
+
+FAMILIES = (
+    "ebl",
+    "pls",
+    "sdnn",
+    "original-pinn",
+    "optimized-pinn",
+    "rte-pinn",
+    "selective-rte-pinn",
+)
+N_SUBJECTS, PER_SUBJECT = 80, 3
+OUT = Path(__file__).resolve().parents[1] / "src" / "nirglucose" / "data" / "tuned_params.json"
+SAMPLING_SEED = 0  # draws the configurations (the same draws for every network)
+
+
+def preset_source(preset: str) -> tuple[str, dict, bool]:
+    """``(preset to simulate, overrides, standin)`` for a tuned preset name."""
+    if "wearable" in PRESETS:  # the simulator's presets have landed
+        return preset, {}, False
+    if preset == "wearable":
+        return "paper", {}, True  # today's paper is the future wearable exactly
+    if preset == "paper":
+        return "paper", dict(PAPER_STANDIN_OVERRIDES), True
+    return preset, {}, False
+
+
+def configurations(name: str) -> list[dict]:
+    """:data:`N_CONFIGS` configurations of ``name``'s grid (deterministic)."""
+    space = search_space(name)
+    if name in ("ebl", "pls"):
+        ((key, values),) = space.items()
+        return [{key: v} for v in values[:N_CONFIGS]]
+    train_keys = [k for k in space if k != "lambda_phys"]
+    grid = list(itertools.product(*(space[k] for k in train_keys)))
+    rng = np.random.default_rng(SAMPLING_SEED)
+    picks = rng.choice(len(grid), size=N_CONFIGS, replace=False)
+    configs = [
+        dict(zip(train_keys, (v.item() if hasattr(v, "item") else v for v in grid[i]), strict=True))
+        for i in picks
+    ]
+    if "lambda_phys" in space:
+        lam = np.resize(np.asarray(LAMBDA_PHYS_GRID), N_CONFIGS)
+        np.random.default_rng(SAMPLING_SEED + 1).shuffle(lam)
+        for c, v in zip(configs, lam, strict=True):
+            c["lambda_phys"] = float(v)
+    return configs
+
+
+def _rows(ds: Dataset, idx: np.ndarray) -> Dataset:
+    return Dataset(ds.frame.iloc[idx].reset_index(drop=True), config=ds.config, seed=ds.seed)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--presets", default=",".join(TUNED_PRESETS))
+    ap.add_argument("--models", default=",".join(FAMILIES))
+    ap.add_argument("--out", type=Path, default=OUT)
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    presets = [p for p in args.presets.split(",") if p]
+    models = [m for m in args.models.split(",") if m]
+    t_start = time.perf_counter()
+    doc = json.loads(args.out.read_text()) if args.out.exists() else {}
+    params = doc.get("params", {})
+    scores = doc.get("scores", {})
+    sources = doc.get("presets", {})
+    fits = 0
+    for preset in presets:
+        base, overrides, standin = preset_source(preset)
+        sources[preset] = {"simulated_as": base, "overrides": overrides, "standin": standin}
+        data = []
+        for seed in TUNING_SEEDS:
+            ds = ng.simulate(base, N_SUBJECTS, PER_SUBJECT, seed=seed, overrides=overrides or None)
+            y = ds.frame["glucose_mgdl"].to_numpy()
+            groups = ds.frame["subject_id"].to_numpy()
+            folds = list(GroupKFold(N_FOLDS).split(y, groups=groups))
+            data.append((ds, y, folds))
+        no_skill = float(
+            np.sqrt(
+                np.mean(
+                    np.concatenate(
+                        [(y[te] - y[tr].mean()) ** 2 for _, y, folds in data for tr, te in folds]
+                    )
+                )
+            )
+        )
+        for name in models:
+            results = []
+            for k, cfg in enumerate(configurations(name)):
+                t0 = time.perf_counter()
+                sq = []
+                for ds, y, folds in data:
+                    for f, (tr, te) in enumerate(folds):
+                        extra = {} if name in ("ebl", "pls") else {"random_state": 100 * k + f}
+                        m = make_model(name, **cfg, **extra).fit(_rows(ds, tr))
+                        sq.append((m.predict(_rows(ds, te)) - y[te]) ** 2)
+                        fits += 1
+                rmse = float(np.sqrt(np.mean(np.concatenate(sq))))
+                results.append((rmse, k, cfg))
+                print(
+                    f"{preset} {name} {k:2d} {rmse:6.2f} ({time.perf_counter() - t0:.1f} s) {cfg}",
+                    flush=True,
+                )
+            rmse, k, cfg = min(results, key=lambda r: (r[0], r[1]))
+            out = {key: (list(v) if isinstance(v, tuple) else v) for key, v in cfg.items()}
+            params.setdefault(preset, {})[name] = out
+            scores.setdefault(preset, {})[name] = {
+                "tuning_cv_rmse_mgdl": round(rmse, 3),
+                "no_skill_rmse_mgdl": round(no_skill, 3),
+                "all_configs_rmse_mgdl": [round(r[0], 3) for r in results],
+            }
+    elapsed = time.perf_counter() - t_start
+    doc = {
+        "format": "nirglucose-tuned-params",
+        "format_version": 1,
+        "made_by": "benchmarks/tune.py",
+        "budget": {
+            "configurations_per_family": N_CONFIGS,
+            "folds": N_FOLDS,
+            "cv": "GroupKFold by subject_id",
+            "tuning_seeds": list(TUNING_SEEDS),
+            "reported_seeds_never_used": [0, 1, 2, 3, 4],
+            "n_subjects": N_SUBJECTS,
+            "per_subject": PER_SUBJECT,
+            "lambda_phys_grid": list(LAMBDA_PHYS_GRID),
+            "criterion": "pooled RMSE over the tuning seeds' held-out folds",
+        },
+        "presets": sources,
+        "params": params,
+        "scores": scores,
+        "last_run": {
+            "presets": presets,
+            "models": models,
+            "fits": fits,
+            "time_s": round(elapsed, 1),
+            "torch_threads": 1,
+        },
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n")
+    summary = {
+        "out": str(args.out),
+        "budget": doc["budget"],
+        "time_s": round(elapsed, 1),
+        "fits": fits,
+        "params": params,
+        "scores": {
+            p: {m: s["tuning_cv_rmse_mgdl"] for m, s in v.items()} for p, v in scores.items()
+        },
+        "no_skill_rmse_mgdl": {
+            p: next(iter(v.values()))["no_skill_rmse_mgdl"] for p, v in scores.items() if v
+        },
+    }
+    print(json.dumps(summary))
+
+
+if __name__ == "__main__":
+    main()

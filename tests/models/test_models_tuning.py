@@ -1,0 +1,121 @@
+"""Tuned hyper-parameters (the packaged file and its accessor) and the collapse guard."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+import nirglucose as ng
+from nirglucose.dataset import Dataset
+from nirglucose.exceptions import ConfigError
+from nirglucose.models import available_models, make_model, tuned_params
+from nirglucose.models.tuning import (
+    LAMBDA_PHYS_GRID,
+    N_CONFIGS,
+    PAPER_STANDIN_OVERRIDES,
+    TUNED_PRESETS,
+    TUNING_SEEDS,
+    search_space,
+    tuning_record,
+)
+
+NETWORKS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
+PINNS = NETWORKS[1:]
+REPORTED_SEEDS = range(5)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_thread():
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+# ----------------------------------------------------------------- accessor and file
+
+
+def test_unknown_model_or_preset_raises_config_error():
+    with pytest.raises(ConfigError, match="unknown model 'gpt'"):
+        tuned_params("gpt", "paper")
+    with pytest.raises(ConfigError, match="unknown preset 'nope'"):
+        tuned_params("sdnn", "nope")
+
+
+def test_untuned_models_get_their_defaults():
+    assert tuned_params("oracle", "paper") == {}
+    assert tuned_params("sdnn", "lab") == {}  # a preset that was not tuned
+
+
+@pytest.mark.parametrize("preset", TUNED_PRESETS)
+@pytest.mark.parametrize("name", ("ebl", "pls", *NETWORKS))
+def test_tuned_params_build_valid_models(name, preset):
+    params = tuned_params(name, preset)
+    assert params, f"{name} has no tuned parameters for {preset}"
+    make_model(name, **params)._validate_params() if name in NETWORKS else make_model(
+        name, **params
+    )
+    if name in PINNS:
+        assert params["lambda_phys"] in LAMBDA_PHYS_GRID
+    params["mutated"] = True  # a fresh copy each call
+    assert "mutated" not in tuned_params(name, preset)
+
+
+def test_tuning_never_used_the_reported_seeds_and_one_budget_for_all():
+    doc = tuning_record()
+    budget = doc["budget"]
+    assert set(budget["tuning_seeds"]) == set(TUNING_SEEDS)
+    assert set(budget["tuning_seeds"]).isdisjoint(REPORTED_SEEDS)
+    assert budget["configurations_per_family"] == N_CONFIGS
+    for preset in TUNED_PRESETS:
+        for name, score in doc["scores"][preset].items():
+            assert len(score["all_configs_rmse_mgdl"]) == N_CONFIGS, (preset, name)
+    if doc["presets"]["paper"]["standin"]:
+        assert doc["presets"]["paper"]["overrides"] == PAPER_STANDIN_OVERRIDES
+
+
+def test_search_spaces():
+    for name in PINNS:
+        assert 0.0 in search_space(name)["lambda_phys"]  # the ablation is on the grid
+    assert "lambda_phys" not in search_space("sdnn")
+    shared = {k: v for k, v in search_space("rte-pinn").items() if k != "lambda_phys"}
+    assert shared == search_space("sdnn")  # the networks' training grid is one grid
+    for name in ("ebl", "pls", *NETWORKS):
+        sizes = [len(v) for v in search_space(name).values()]
+        assert int(np.prod(sizes)) >= N_CONFIGS
+    with pytest.raises(ConfigError, match="no tuning search space"):
+        search_space("oracle")
+    assert set(available_models()) >= {"ebl", "pls", *NETWORKS}
+
+
+# ----------------------------------------------------------------- collapse guard
+
+
+@pytest.fixture(scope="module")
+def quiet_split():
+    """A quiet regime (the paper stand-in: glucose dominates what moves the signal),
+    60 training subjects and 20 held-out subjects; a seed disjoint from the study's."""
+    ds = ng.simulate("paper", 80, 3, seed=2024, overrides=PAPER_STANDIN_OVERRIDES)
+    f = ds.frame
+    held_out = f.subject_id.isin(np.unique(f.subject_id)[-20:]).to_numpy()
+
+    def rows(mask):
+        return Dataset(f[mask].reset_index(drop=True), config=ds.config, seed=ds.seed)
+
+    return rows(~held_out), rows(held_out)
+
+
+@pytest.mark.parametrize("name", NETWORKS)
+def test_network_does_not_collapse_to_the_mean(quiet_split, name):
+    # A network that predicts (nearly) the training mean on held-out subjects of a quiet
+    # regime is a defect (init, scaling, lr, too few steps), not a finding.
+    train, test = quiet_split
+    y_tr, y_te = train.frame.glucose_mgdl.to_numpy(), test.frame.glucose_mgdl.to_numpy()
+    model = make_model(name, **tuned_params(name, "paper"), random_state=0).fit(train)
+    pred = model.predict(test)
+    rmse = float(np.sqrt(np.mean((pred - y_te) ** 2)))
+    no_skill = float(np.sqrt(np.mean((y_tr.mean() - y_te) ** 2)))
+    spread = float(np.std(pred) / np.std(y_te))
+    assert spread > 0.5, f"{name}: prediction spread {spread:.2f} of the targets'"
+    assert rmse < 0.75 * no_skill, f"{name}: RMSE {rmse:.1f} vs no-skill {no_skill:.1f} mg/dL"
