@@ -30,7 +30,7 @@ def simulate_device(
     n_subjects: int = 8,
     per_subject: int = 3,
     seed: int = 0,
-    preset: str = "paper",
+    preset: str = "wearable",
 ):
     """A small simulated dataset of a device with ``n_leds`` LEDs at ``adc_bits`` bits."""
     return ng.simulate(

@@ -35,14 +35,14 @@ int main(int argc, char **argv)
 
 @pytest.fixture(scope="module")
 def fitted():
-    train = ng.simulate("paper", 40, 3, seed=0)
+    train = ng.simulate("wearable", 40, 3, seed=0)
     return {"ebl": EnhancedBeerLambert().fit(train), "pls": PLSBaseline().fit(train)}
 
 
 @pytest.fixture(scope="module")
 def samples():
     """10,000 simulated snapshots (measured columns), as float32 like a device has."""
-    ds = ng.simulate("paper", 3334, 3, seed=9)
+    ds = ng.simulate("wearable", 3334, 3, seed=9)
     return ds.frame[measured_columns()].to_numpy(np.float32)[:10_000]
 
 
@@ -120,7 +120,7 @@ def test_compiled_c_matches_python(fitted, samples, name, tmp_path):
 
 
 def test_only_fitted_linear_models_export(fitted, tmp_path):
-    ds = ng.simulate("paper", 6, 2, seed=0)
+    ds = ng.simulate("wearable", 6, 2, seed=0)
     with pytest.raises(ConfigError, match="only the linear models"):
         export_c(Oracle().fit(ds), tmp_path / "fw")
     with pytest.raises(DataError, match="not fitted"):
@@ -177,8 +177,8 @@ def test_any_device_compiles_and_matches_python(name, n_leds, bits, keep, tmp_pa
         from device_data import LED_SETS
 
         wl = LED_SETS[n_leds]
-    train = ng.simulate("paper", 30, 3, seed=1, overrides=device_overrides(wl, bits))
-    test = ng.simulate("paper", 200, 3, seed=2, overrides=device_overrides(wl, bits))
+    train = ng.simulate("wearable", 30, 3, seed=1, overrides=device_overrides(wl, bits))
+    test = ng.simulate("wearable", 200, 3, seed=2, overrides=device_overrides(wl, bits))
     f = train.frame
     if keep == "none":  # a bare one-LED device: no reference codes, no physiology
         cols = [c for c in f if c.startswith("adc_") and not c.startswith("adc_ref")]

@@ -51,8 +51,9 @@ def test_every_model_fits_predicts_and_round_trips(n_leds, bits, tmp_path):
 def test_networks_take_their_widths_from_the_device():
     ds = simulate_device(3, 12)
     m = make_model("sdnn", **FAST_NET).fit(ds)
-    assert m.module_.front[0].in_features == 3
-    assert m.module_.stack[0].in_features == 16 + 12
+    net = m.module_.inner  # inside the input whitening
+    assert net.front[0].in_features == 3
+    assert net.stack[0].in_features == 16 + 12
     rte = make_model("rte-pinn", **FAST_NET).fit(ds)
     assert rte.physics_["wavelengths_nm"] == [850.0, 940.0, 1150.0]
     sel = make_model("selective-rte-pinn", **FAST_NET).fit(ds)
@@ -111,7 +112,7 @@ def test_refuses_values_no_device_produces():
     f.loc[7, "glucose_mgdl"] = 700.0
     for name in ("ebl", "sdnn", "oracle"):
         data = ng.Dataset(f, config=ds.config) if name == "oracle" else f
-        with pytest.raises(DataError, match="20-600 mg/dL.*rows 7"):
+        with pytest.raises(DataError, match=r"20-600 \[mg/dL\].*rows 7"):
             _make(name).fit(data)
 
 

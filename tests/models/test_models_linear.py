@@ -47,7 +47,7 @@ def test_sklearn_checks(estimator, check, request):
 
 @pytest.fixture(scope="module")
 def paper():
-    return ng.simulate("paper", n_subjects=30, per_subject=3, seed=0)
+    return ng.simulate("wearable", n_subjects=30, per_subject=3, seed=0)
 
 
 @pytest.fixture(scope="module")
@@ -65,8 +65,8 @@ def clean():
     """No noise and identical subjects: glucose is all that varies the optics."""
     over = {"noise_scale": 0.0, "physiology.variation_scale": 0.0}
     return (
-        ng.simulate("paper", 40, 3, seed=5, overrides=over),
-        ng.simulate("paper", 20, 3, seed=6, overrides=over),
+        ng.simulate("wearable", 40, 3, seed=5, overrides=over),
+        ng.simulate("wearable", 20, 3, seed=6, overrides=over),
     )
 
 
@@ -167,8 +167,8 @@ def test_error_grows_with_noise():
     rmse = []
     for scale in (0.0, 1.0, 3.0):  # x4 draws cuff readings below 50 mmHg (refused)
         over = {"noise_scale": scale}
-        train = ng.simulate("paper", 60, 3, seed=11, overrides=over)
-        test = ng.simulate("paper", 30, 3, seed=12, overrides=over)
+        train = ng.simulate("wearable", 60, 3, seed=11, overrides=over)
+        test = ng.simulate("wearable", 30, 3, seed=12, overrides=over)
         rmse.append(
             _rmse(EnhancedBeerLambert().fit(train).predict(test), test.frame["glucose_mgdl"])
         )

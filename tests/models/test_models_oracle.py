@@ -28,14 +28,14 @@ def _rmse(a, b):
 def noise_free():
     over = {"noise_scale": 0.0}
     return (
-        ng.simulate("paper", 30, 3, seed=1, overrides=over),
-        ng.simulate("paper", 15, 3, seed=2, overrides=over),
+        ng.simulate("wearable", 30, 3, seed=1, overrides=over),
+        ng.simulate("wearable", 15, 3, seed=2, overrides=over),
     )
 
 
 @pytest.fixture(scope="module")
 def paper():
-    return ng.simulate("paper", 40, 3, seed=3), ng.simulate("paper", 20, 3, seed=4)
+    return ng.simulate("wearable", 40, 3, seed=3), ng.simulate("wearable", 20, 3, seed=4)
 
 
 @pytest.mark.parametrize(

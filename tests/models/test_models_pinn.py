@@ -45,7 +45,7 @@ def _one_thread():
 
 @pytest.fixture(scope="module")
 def small():
-    return ng.simulate("paper", n_subjects=12, per_subject=3, seed=1)
+    return ng.simulate("wearable", n_subjects=12, per_subject=3, seed=1)
 
 
 @pytest.fixture(scope="module")

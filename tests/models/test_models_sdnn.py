@@ -23,7 +23,7 @@ def _one_thread():
 
 @pytest.fixture(scope="module")
 def small():
-    return ng.simulate("paper", n_subjects=12, per_subject=3, seed=2)
+    return ng.simulate("wearable", n_subjects=12, per_subject=3, seed=2)
 
 
 def test_parameter_count_is_the_studys_3713():

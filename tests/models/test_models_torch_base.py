@@ -56,7 +56,7 @@ def _one_thread():
 
 @pytest.fixture(scope="module")
 def small():
-    return ng.simulate("paper", n_subjects=16, per_subject=3, seed=3)
+    return ng.simulate("wearable", n_subjects=16, per_subject=3, seed=3)
 
 
 @pytest.fixture(scope="module")
