@@ -116,7 +116,13 @@ def keys() -> None:
 @app.command()
 def benchmark(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
-    preset: Annotated[str, typer.Option(help="Scenario preset to simulate.")] = "paper",
+    preset: Annotated[
+        str,
+        typer.Option(
+            help="Scenario preset to simulate; several comma-separated (paper,wearable) "
+            "write OUT/<preset>/ each."
+        ),
+    ] = "paper",
     data: Annotated[
         Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
     ] = None,
@@ -131,12 +137,15 @@ def benchmark(
     seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
     jobs: Annotated[int, typer.Option(help="Worker processes (same result for any value).")] = 1,
     resamples: Annotated[int, typer.Option(help="Bootstrap resamples for the CIs.")] = 2000,
+    references: Annotated[
+        bool, typer.Option(help="Add the reference rows (mean, gp, gbr) to --models.")
+    ] = True,
+    ablation: Annotated[
+        bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
+    ] = True,
     set_: SetOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
-    import warnings
-
-    from .evaluation.benchmark import run_benchmark
     from .evaluation.splits import check_protocol
     from .models.registry import get_model_class
 
@@ -163,16 +172,43 @@ def benchmark(
         raise UserError(f"--out {str(out)!r} exists and is not a directory")
     if not out.exists() and not out.parent.exists():
         raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
+    if not presets:
+        raise UserError(f"--preset {preset!r} names no preset")
+    if len(presets) > 1 and data is not None:
+        raise UserError("--data benchmarks one dataset; give one --preset or none")
     if data is not None:
         from .dataset import load_dataset
 
         if set_:
             raise UserError("--set changes the simulation; it cannot apply to --data")
-        ds = load_dataset(data)
+        runs = [(None, out)]
     else:
-        from .api import simulate as _simulate
+        from .config import resolve_config
 
-        ds = _simulate(preset, subjects, per_subject, seed, overrides=_parse_sets(set_))
+        overrides = _parse_sets(set_)
+        for p in presets:
+            resolve_config(p, overrides)  # an unknown preset fails before anything runs
+        runs = [(p, out / p if len(presets) > 1 else out) for p in presets]
+        if len(presets) > 1:
+            out.mkdir(exist_ok=True)
+    for p, run_out in runs:
+        if p is None:
+            ds = load_dataset(data)
+        else:
+            from .api import simulate as _simulate
+
+            ds = _simulate(p, subjects, per_subject, seed, overrides=overrides)
+        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
+                       references, ablation)
+
+
+def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
+                   references, ablation) -> None:
+    import warnings
+
+    from .evaluation.benchmark import run_benchmark
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = run_benchmark(
@@ -186,6 +222,8 @@ def benchmark(
             jobs=jobs,
             progress=sys.stderr.isatty(),
             n_boot=resamples,
+            references=references,
+            ablation=ablation,
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
         console.print(f"warning: {msg}", highlight=False, soft_wrap=True)
