@@ -260,13 +260,22 @@ def sweep(
         typer.Option(help="KEY=V1,V2,... config values to sweep (dotted key); repeat for a grid."),
     ] = None,
     study: Annotated[
-        str | None, typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort.")
+        str | None,
+        typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort, data-size."),
     ] = None,
-    preset: Annotated[str, typer.Option(help="Scenario preset every task starts from.")] = "paper",
-    seeds: Annotated[int, typer.Option(help="Seeds per scenario (seed, seed+1, ...).")] = 5,
+    preset: Annotated[
+        str | None,
+        typer.Option(help="Scenario preset every task starts from (default paper); "
+                     "data-size: comma-separated presets (default paper,wearable)."),
+    ] = None,
+    seeds: Annotated[
+        int | None,
+        typer.Option(help="Seeds per scenario (seed, seed+1, ...); default 5, data-size 1."),
+    ] = None,
     seed: Annotated[int, typer.Option(help="First seed.")] = 0,
     models: Annotated[
-        str | None, typer.Option(help="Comma-separated model names (default: ebl,pls,oracle).")
+        str | None,
+        typer.Option(help="Comma-separated model names (default: ebl,pls,oracle; data-size: all)."),
     ] = None,
     protocol: Annotated[str, typer.Option(help="grouped-cv or paper-split.")] = "grouped-cv",
     subjects: Annotated[int, typer.Option(help="Subjects per simulated dataset.")] = 80,
@@ -289,6 +298,9 @@ def sweep(
     from .evaluation.sweep import DEFAULT_MODELS, parse_vary, run_sweep, threshold_crossing
     from .models.registry import available_models
 
+    if seeds is None:
+        seeds = 1 if study == "data-size" else 5
+
     for name, value in (("--subjects", subjects), ("--per-subject", per_subject),
                         ("--folds", folds), ("--repeats", repeats), ("--seeds", seeds),
                         ("--resamples", resamples)):
@@ -305,7 +317,9 @@ def sweep(
         if key in grid:
             raise UserError(f"--vary {key} is given twice; list all its values once")
         grid[key] = values
-    if models is None:
+    if models is None and study == "data-size":
+        names = available_models()
+    elif models is None:
         names = [m for m in DEFAULT_MODELS if m in available_models()]
     else:
         names = [m.strip() for m in models.split(",") if m.strip()]
@@ -357,6 +371,15 @@ def sweep(
                 f"{model}: costliest source {top['source']} (ΔRMSE {top['delta_off']:+.2f} "
                 f"mg/dL when switched off); alone: {alone['source']} "
                 f"({alone['delta_only']:+.2f} mg/dL)", highlight=False)
+    if res.effects is not None and "overtaker" in res.effects:
+        if not len(res.effects):
+            out_console.print("rankings: no two models swap places between the sizes run",
+                              highlight=False)
+        for _, r in res.effects.iterrows():
+            out_console.print(
+                f"{r['preset']}: {r['overtaker']} overtakes {r['overtaken']} between "
+                f"{r['n_before']} and {r['n_after']} training subjects (RMSE difference "
+                f"{r['diff_before']:+.1f} -> {r['diff_after']:+.1f} mg/dL)", highlight=False)
     if res.effects is not None and "shift" in res.effects:
         for _, r in res.effects.iterrows():
             out_console.print(
