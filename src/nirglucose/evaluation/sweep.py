@@ -643,8 +643,11 @@ def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> di
             f"the {spec['model']!r} shift task has an empty training or test "
             f"cohort ({len(train)} / {len(test)} rows); simulate more subjects"
         )
+    from .benchmark import _model_params
+
     cls = get_model_class(spec["model"])
-    params = dict(spec["model_params"])
+    # the preset's tuned parameters (the benchmark's one hook), then the sweep's own
+    params = {**_model_params(spec["model"], spec["preset"]), **spec["model_params"]}
     if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
         params["random_state"] = _derived_seed(spec["seed"], f"model|{spec['model']}")
     model = cls(**params).fit(train)
