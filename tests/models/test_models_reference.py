@@ -90,13 +90,20 @@ def test_gp_json_round_trip(lab, tmp_path):
     np.testing.assert_allclose(loaded.predict(test), gp.predict(test), rtol=1e-12)
 
 
-def test_gbr_fits_and_refuses_to_save(lab, tmp_path):
+def test_gbr_matches_scikit_learn_and_round_trips(lab, tmp_path):
+    from sklearn.ensemble import GradientBoostingRegressor
+
     train, test = lab
-    m = GBRReference(n_estimators=50, random_state=0).fit(train)
+    m = GBRReference(n_estimators=50, subsample=0.8, random_state=0).fit(train)
     assert _rmse(m, test) < 0.5 * _rmse(MeanReference().fit(train), test)
-    assert m.n_parameters > 50
-    with pytest.raises(ConfigError, match="cannot be saved"):
-        m.save(tmp_path / "gbr.json")
+    U, y, _ = _reference_inputs(m, train, fit=True)
+    V, _, _ = _reference_inputs(m, test, fit=False)
+    sk = GradientBoostingRegressor(n_estimators=50, subsample=0.8, random_state=0).fit(U, y)
+    np.testing.assert_allclose(m.predict(test), sk.predict(V), rtol=1e-10, atol=1e-8)
+    assert m.n_parameters == sum(t.tree_.node_count for t in sk.estimators_.ravel()) + 1
+    loaded = load_model(m.save(tmp_path / "gbr.json"))
+    np.testing.assert_array_equal(loaded.predict(test), m.predict(test))
+    np.testing.assert_array_equal(loaded.predict(test.frame.head(1)), m.predict(test)[:1])
 
 
 @pytest.mark.parametrize(

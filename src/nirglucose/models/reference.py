@@ -22,7 +22,6 @@ References
 
 from __future__ import annotations
 
-import os
 from numbers import Integral
 
 import numpy as np
@@ -275,13 +274,14 @@ class GPReference(JsonModelMixin, _ReferenceBase):
 
 
 @register("gbr")
-class GBRReference(_ReferenceBase):
+class GBRReference(JsonModelMixin, _ReferenceBase):
     """Gradient-boosted regression trees (scikit-learn ``GradientBoostingRegressor``).
 
     Squared-error boosting [2]_ with scikit-learn's default settings [3]_ (100 stages
     of depth-3 trees, shrinkage 0.1, every row); tuned values come through the
-    benchmark's per-preset parameters. Not saved as JSON: :meth:`save` raises (its state is
-    hundreds of trees; refit it from the data instead).
+    benchmark's per-preset parameters. The fitted trees are kept as padded node
+    arrays and evaluated by this class (all trees at once), so the model saves to
+    JSON and a loaded model predicts the same numbers as scikit-learn (tested).
 
     Parameters
     ----------
@@ -296,6 +296,21 @@ class GBRReference(_ReferenceBase):
     random_state : int, optional
         Seed of the subsampling.
 
+    Attributes
+    ----------
+    init_ : float
+        The boosting's starting value: the training mean. [mg/dL]
+    left_, right_, feature_ : numpy.ndarray
+        (trees, nodes) child indices (-1 at a leaf) and split input of every node.
+    threshold_ : numpy.ndarray
+        (trees, nodes) split thresholds (go left when ``input <= threshold``).
+    value_ : numpy.ndarray
+        (trees, nodes) leaf values, already multiplied by the learning rate. [mg/dL]
+    n_nodes_ : numpy.ndarray
+        (trees,) nodes of each tree (the rest of its row is padding). [-]
+    depth_ : int
+        Deepest leaf. [-]
+
     Examples
     --------
     >>> import nirglucose as ng
@@ -304,7 +319,17 @@ class GBRReference(_ReferenceBase):
     (30,)
     """
 
-    _FITTED = "model_"
+    _STATE = {
+        "init_": None,
+        "left_": (-1, -1),
+        "right_": (-1, -1),
+        "feature_": (-1, -1),
+        "threshold_": (-1, -1),
+        "value_": (-1, -1),
+        "n_nodes_": (-1,),
+        "depth_": None,
+    }
+    _FITTED = "value_"
 
     def __init__(
         self,
@@ -331,31 +356,58 @@ class GBRReference(_ReferenceBase):
             if isinstance(v, bool) or not isinstance(v, int | float) or not 0 < v <= 1:
                 raise ConfigError(f"{name} must be a number in (0, 1], got {v!r}")
         U, y, _ = _reference_inputs(self, X, y, fit=True)
-        self.model_ = GradientBoostingRegressor(
+        gbr = GradientBoostingRegressor(
             n_estimators=int(self.n_estimators),
             learning_rate=float(self.learning_rate),
             max_depth=int(self.max_depth),
             subsample=float(self.subsample),
             random_state=self.random_state,
         ).fit(U, y)
+        trees = [t.tree_ for t in gbr.estimators_.ravel()]
+        m = max(t.node_count for t in trees)
+
+        def padded(get, fill):
+            out = np.full((len(trees), m), fill, dtype=float)
+            for k, t in enumerate(trees):
+                out[k, : t.node_count] = get(t)
+            return out
+
+        self.init_ = float(np.ravel(gbr.init_.predict(U[:1]))[0])
+        self.left_ = padded(lambda t: t.children_left, -1.0)
+        self.right_ = padded(lambda t: t.children_right, -1.0)
+        self.feature_ = padded(lambda t: np.maximum(t.feature, 0), 0.0)
+        self.threshold_ = padded(lambda t: t.threshold, 0.0)
+        self.value_ = padded(lambda t: t.value.reshape(t.node_count) * gbr.learning_rate, 0.0)
+        self.n_nodes_ = np.array([t.node_count for t in trees], dtype=float)
+        self.depth_ = int(max(t.max_depth for t in trees))
+        self._restore()
         self._record_input(X)
         return self
+
+    def _restore(self) -> None:
+        self.n_features_in_ = N_MEASURED
+        self.depth_ = int(self.depth_)
+        self._left = self.left_.astype(np.intp)
+        self._right = self.right_.astype(np.intp)
+        self._feature = self.feature_.astype(np.intp)
 
     def predict(self, X) -> np.ndarray:
         """Glucose for each row. [mg/dL]"""
         self._require_fitted()
         U, _, _ = _reference_inputs(self, X, fit=False)
-        return self.model_.predict(U)
+        # scikit-learn's trees compare float32 inputs with float64 thresholds
+        Uf = U.astype(np.float32).astype(np.float64)
+        tix = np.arange(self.value_.shape[0])
+        node = np.zeros((len(U), len(tix)), dtype=np.intp)
+        for _ in range(self.depth_):
+            left = self._left[tix, node]
+            x = np.take_along_axis(Uf, self._feature[tix, node], axis=1)
+            nxt = np.where(x <= self.threshold_[tix, node], left, self._right[tix, node])
+            node = np.where(left < 0, node, nxt)
+        return self.init_ + self.value_[tix, node].sum(axis=1)
 
     @property
     def n_parameters(self) -> int:
         """Tree nodes (a threshold or a leaf value each) plus the initial constant."""
         self._require_fitted()
-        return int(sum(t.tree_.node_count for t in self.model_.estimators_.ravel())) + 1
-
-    def save(self, path: str | os.PathLike):
-        """Not supported: raises ConfigError (a boosted forest is not saved as JSON)."""
-        raise ConfigError(
-            "model 'gbr' cannot be saved (its trees are not stored as JSON); refit it, "
-            "or save 'gp', 'pls' or 'ebl' instead"
-        )
+        return int(self.n_nodes_.sum()) + 1
