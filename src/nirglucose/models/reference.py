@@ -225,11 +225,14 @@ class GPReference(JsonModelMixin, _ReferenceBase):
         scale = U.std(axis=0)
         scale[scale == 0] = 1.0  # a constant input carries nothing; keep it finite
         Z = (U - mean) / scale
-        # Starting point: unit signal, unit length scales on standardised inputs, and
-        # a noise variance of 0.1 of the normalised target; bounds wide enough that
-        # an input can be switched off (length scale 1e3) or the fit become pure noise.
-        kernel = C(1.0, (1e-3, 1e3)) * RBF(np.ones(_N_INPUTS), (1e-2, 1e3)) + WhiteKernel(
-            0.1, (1e-5, 1e1)
+        # Starting point: a smooth, nearly linear fit (length scales of 10 on inputs
+        # standardised to unit variance, i.e. several times their spread) with all the
+        # target's variance as noise; starting from unit length scales the search stops
+        # in an over-fitted optimum (measured: test RMSE at the no-skill level on the
+        # paper preset). Bounds wide enough that an input can be switched off (length
+        # scale 1e5) or the fit become pure noise.
+        kernel = C(1.0, (1e-3, 1e5)) * RBF(np.full(_N_INPUTS, 10.0), (1e-2, 1e5)) + WhiteKernel(
+            1.0, (1e-5, 1e1)
         )
         gp = GaussianProcessRegressor(
             kernel=kernel,
