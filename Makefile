@@ -3,7 +3,8 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-PRESET ?= paper
+# `make run` benchmarks both presets into OUT/<preset>/ and writes one report comparing them
+PRESET ?= paper,wearable
 SEED   ?= 0
 OUT    ?= results
 

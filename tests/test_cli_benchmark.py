@@ -68,6 +68,7 @@ BASE = [
     "1",
     "--resamples",
     "100",
+    "--no-references",
 ]
 
 
@@ -152,3 +153,29 @@ def test_missing_parent_and_data_with_set_exit_2(tmp_path, capsys):
     ]
     assert main(argv) == 2
     assert "--set" in capsys.readouterr().err
+
+
+def test_two_presets_write_one_directory_each_and_one_report(tmp_path, capsys):
+    out = tmp_path / "results"
+    argv = [*BASE, "--preset", "paper,lab", "--no-ablation", "--out", str(out)]
+    assert main(argv) == 0
+    for preset in ("paper", "lab"):
+        meta = json.loads((out / preset / "meta.json").read_text())
+        assert meta["preset"] == preset
+        assert (out / preset / "ablation.csv").is_file()
+    assert not (out / "metrics.csv").exists()
+    assert main(["report", str(out), "--out", str(tmp_path / "report.html")]) == 0
+    page = (tmp_path / "report.html").read_text()
+    assert 'id="presets-table"' in page
+    assert "Reproduced table on <code>lab</code>" in page
+    assert "settings differ between <code>paper</code> and <code>lab</code>" in page
+
+
+def test_two_presets_bad_arguments_exit_2(tmp_path, capsys):
+    out = tmp_path / "results"
+    assert main([*BASE, "--preset", "paper,nope", "--out", str(out)]) == 2
+    assert "nope" in capsys.readouterr().err
+    assert not out.exists()  # nothing ran
+    data = tmp_path / "d.csv"
+    ng.simulate("paper", n_subjects=4, per_subject=2, seed=0).save(data)
+    assert main([*BASE, "--preset", "paper,lab", "--data", str(data), "--out", str(out)]) == 2

@@ -53,3 +53,27 @@ def test_bad_input_exit_2_one_line(tmp_path, capsys, args, match):
     assert len(err.splitlines()) == 1 and err.startswith("error:")
     assert match in err
     assert not (tmp_path / "s" / "sweep.csv").exists()
+
+
+def test_sweep_data_size(tmp_path, capsys):
+    out = tmp_path / "size"
+    rc = main(["sweep", "--study", "data-size", "--preset", "paper,lab", "--vary",
+               "n_train_subjects=4,16", "--models", "mean,ebl", "--resamples", "20",
+               "--jobs", "1", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    frame = pd.read_csv(out / "sweep.csv")
+    assert len(frame) == 2 * 2 * 2  # presets x sizes x models, one seed by default
+    assert set(frame["preset"]) == {"paper", "lab"}
+    assert (out / "figures" / "sweep_data_size.png").exists()
+    text = " ".join(captured.out.split())
+    assert "overtakes" in text or "no two models swap places" in text
+    assert main(["sweep", "--study", "data-size", "--preset", "paper,nope", "--out",
+                 str(tmp_path / "bad")]) == 2
+
+
+def test_sweep_help_names_every_study():
+    from nirglucose.cli import _STUDY_NAMES
+    from nirglucose.evaluation.sweep import STUDIES
+
+    assert _STUDY_NAMES.split(", ") == list(STUDIES)

@@ -31,6 +31,8 @@ __all__ = ["app", "main"]
 
 #: Preset names for the --preset help texts.
 _PRESET_NAMES = ", ".join(PRESETS)
+#: Built-in sweep studies (kept in step with evaluation.sweep.STUDIES by a test).
+_STUDY_NAMES = "noise-scale, ablation, pmf-noise, cohort, device, data-size"
 
 app = typer.Typer(
     name="nirglucose",
@@ -232,7 +234,11 @@ def list_models() -> None:
 def benchmark(
     out: Annotated[Path, typer.Option(help="Output directory (created if its parent exists).")],
     preset: Annotated[
-        str, typer.Option(help=f"Scenario preset to simulate: {_PRESET_NAMES}.")
+        str,
+        typer.Option(
+            help=f"Scenario preset to simulate: {_PRESET_NAMES}; several comma-separated "
+            "(paper,wearable) write OUT/<preset>/ each."
+        ),
     ] = "paper",
     data: Annotated[
         Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
@@ -248,12 +254,15 @@ def benchmark(
     seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
     jobs: Annotated[int, typer.Option(help="Worker processes (same result for any value).")] = 1,
     resamples: Annotated[int, typer.Option(help="Bootstrap resamples for the CIs.")] = 2000,
+    references: Annotated[
+        bool, typer.Option(help="Add the reference rows (mean, gp, gbr) to --models.")
+    ] = True,
+    ablation: Annotated[
+        bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
+    ] = True,
     set_: SetOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
-    import warnings
-
-    from .evaluation.benchmark import run_benchmark
     from .evaluation.splits import check_protocol
     from .models.registry import get_model_class
 
@@ -283,16 +292,43 @@ def benchmark(
         raise UserError(f"--out {str(out)!r} exists and is not a directory")
     if not out.exists() and not out.parent.exists():
         raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
+    if not presets:
+        raise UserError(f"--preset {preset!r} names no preset")
+    if len(presets) > 1 and data is not None:
+        raise UserError("--data benchmarks one dataset; give one --preset or none")
     if data is not None:
         from .dataset import load_dataset
 
         if set_:
             raise UserError("--set changes the simulation; it cannot apply to --data")
-        ds = load_dataset(data)
+        runs = [(None, out)]
     else:
-        from .api import simulate as _simulate
+        from .config import resolve_config
 
-        ds = _simulate(preset, subjects, per_subject, seed, overrides=_parse_sets(set_))
+        overrides = _parse_sets(set_)
+        for p in presets:
+            resolve_config(p, overrides)  # an unknown preset fails before anything runs
+        runs = [(p, out / p if len(presets) > 1 else out) for p in presets]
+        if len(presets) > 1:
+            out.mkdir(exist_ok=True)
+    for p, run_out in runs:
+        if p is None:
+            ds = load_dataset(data)
+        else:
+            from .api import simulate as _simulate
+
+            ds = _simulate(p, subjects, per_subject, seed, overrides=overrides)
+        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
+                       references, ablation)
+
+
+def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
+                   references, ablation) -> None:
+    import warnings
+
+    from .evaluation.benchmark import run_benchmark
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = run_benchmark(
@@ -306,6 +342,8 @@ def benchmark(
             jobs=jobs,
             progress=True,
             n_boot=resamples,
+            references=references,
+            ablation=ablation,
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
         _say(f"warning: {msg}")
@@ -343,15 +381,22 @@ def sweep(
         typer.Option(help="KEY=V1,V2,... config values to sweep (dotted key); repeat for a grid."),
     ] = None,
     study: Annotated[
-        str | None, typer.Option(help="Built-in study: noise-scale, ablation, pmf-noise, cohort.")
+        str | None,
+        typer.Option(help=f"Built-in study: {_STUDY_NAMES}."),
     ] = None,
     preset: Annotated[
-        str, typer.Option(help=f"Preset every task starts from: {_PRESET_NAMES}.")
-    ] = "paper",
-    seeds: Annotated[int, typer.Option(help="Seeds per scenario (seed, seed+1, ...).")] = 5,
+        str | None,
+        typer.Option(help=f"Scenario preset every task starts from: {_PRESET_NAMES} (default "
+                     "paper); data-size: comma-separated presets (default paper,wearable)."),
+    ] = None,
+    seeds: Annotated[
+        int | None,
+        typer.Option(help="Seeds per scenario (seed, seed+1, ...); default 5, data-size 1."),
+    ] = None,
     seed: Annotated[int, typer.Option(help="First seed.")] = 0,
     models: Annotated[
-        str | None, typer.Option(help="Comma-separated model names (default: ebl,pls,oracle).")
+        str | None,
+        typer.Option(help="Comma-separated model names (default: ebl,pls,oracle; data-size: all)."),
     ] = None,
     protocol: Annotated[str, typer.Option(help="grouped-cv or paper-split.")] = "grouped-cv",
     subjects: Annotated[int, typer.Option(help="Subjects per simulated dataset.")] = 80,
@@ -374,6 +419,9 @@ def sweep(
     from .evaluation.sweep import DEFAULT_MODELS, parse_vary, run_sweep, threshold_crossing
     from .models.registry import available_models
 
+    if seeds is None:
+        seeds = 1 if study == "data-size" else 5
+
     for name, value in (("--subjects", subjects), ("--per-subject", per_subject),
                         ("--folds", folds), ("--repeats", repeats), ("--seeds", seeds),
                         ("--resamples", resamples)):
@@ -392,7 +440,9 @@ def sweep(
         if key in grid:
             raise UserError(f"--vary {key} is given twice; list all its values once")
         grid[key] = values
-    if models is None:
+    if models is None and study == "data-size":
+        names = available_models()
+    elif models is None:
         names = [m for m in DEFAULT_MODELS if m in available_models()]
     else:
         names = [m.strip() for m in models.split(",") if m.strip()]
@@ -444,6 +494,14 @@ def sweep(
                 f"{model}: costliest source {top['source']} (ΔRMSE {top['delta_off']:+.2f} "
                 f"mg/dL when switched off); alone: {alone['source']} "
                 f"({alone['delta_only']:+.2f} mg/dL)", err=False)
+    if res.effects is not None and "overtaker" in res.effects:
+        if not len(res.effects):
+            _say("rankings: no two models swap places between the sizes run", err=False)
+        for _, r in res.effects.iterrows():
+            _say(
+                f"{r['preset']}: {r['overtaker']} overtakes {r['overtaken']} between "
+                f"{r['n_before']} and {r['n_after']} training subjects (RMSE difference "
+                f"{r['diff_before']:+.1f} -> {r['diff_after']:+.1f} mg/dL)", err=False)
     if res.effects is not None and "shift" in res.effects:
         for _, r in res.effects.iterrows():
             _say(

@@ -26,6 +26,16 @@ Validation
     ``grouped-cv`` every estimator gets the training folds only and the networks take
     their own inner validation split by subject from them.
 
+Reference rows and the physics ablation
+    ``references=True`` adds :data:`REFERENCE_MODELS` (no skill, a Gaussian process
+    with one length scale per input, gradient boosting) to the models. Every model is
+    built with the tuned hyper-parameters of the data's preset (:func:`_model_params`),
+    overridden by ``model_params``. ``ablation=True`` also runs every PINN of
+    :data:`PINN_MODELS` with its physics term off (``lambda_phys=0``; everything else
+    identical: the same folds, the same seeds, the same other parameters) as the row
+    ``<name>/no-physics``; ``ablation.csv`` holds the paired RMSE difference (with
+    physics minus without) with its cluster-bootstrap CI and Holm-adjusted p-value.
+
 Scoring
     Predictions below 0 mg/dL are scored as 0 and non-finite ones as the median
     training target of their fold (the error grids need a non-negative number); both
@@ -70,12 +80,37 @@ __all__ = [
     "OUTPUT_FILES",
     "TASK_FORMAT",
     "ORACLE",
+    "REFERENCE_MODELS",
+    "PINN_MODELS",
+    "NO_PHYSICS",
+    "ABLATION_COLUMNS",
 ]
 
 #: Version of the task-file layout (part of every task hash).
 TASK_FORMAT = 1
 #: Registry name of the oracle bound.
 ORACLE = "oracle"
+#: Reference learners added by ``references=True`` (no skill and off-the-shelf).
+REFERENCE_MODELS = ("mean", "gp", "gbr")
+#: The physics-informed networks of the study (ablated by ``ablation=True``).
+PINN_MODELS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
+#: Suffix of a PINN's row with its physics term off.
+NO_PHYSICS = "/no-physics"
+#: Columns of ``ablation.csv``: one row per PINN, with physics minus without.
+ABLATION_COLUMNS = (
+    "model",
+    "ablated_model",
+    "rmse_mgdl",
+    "ablated_rmse_mgdl",
+    "rmse_diff_mgdl",
+    "ci_low",
+    "ci_high",
+    "p_value",
+    "p_holm",
+    "p_wilcoxon",
+    "significant",
+    "physics_helps",
+)
 
 #: Columns of ``BenchmarkResult.metrics`` / ``metrics.csv``, in order.
 METRIC_COLUMNS = (
@@ -143,6 +178,7 @@ OUTPUT_FILES = (
     "comparisons.csv",
     "histories.json",
     "importance.csv",
+    "ablation.csv",
     "dataset.parquet",
     "meta.json",
 )
@@ -171,7 +207,10 @@ class BenchmarkResult:
     importance : pandas.DataFrame
         Permutation importance per model and wavelength (:data:`IMPORTANCE_COLUMNS`).
     meta : dict
-        Protocol, seeds, dataset hash and config, versions, task counts, methods.
+        Protocol, seeds, dataset hash and config, versions, task counts, methods;
+        ``study_orderings`` says which of the study's pairwise orderings hold here.
+    ablation : pandas.DataFrame
+        Physics ablation (:data:`ABLATION_COLUMNS`); empty without ``ablation=True``.
     dataset : Dataset, optional
         The dataset benchmarked (written to ``dataset.parquet``).
     """
@@ -183,6 +222,7 @@ class BenchmarkResult:
     importance: pd.DataFrame
     meta: dict[str, Any]
     dataset: Dataset | None = field(default=None, repr=False)
+    ablation: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=ABLATION_COLUMNS))
 
     def table_markdown(self) -> str:
         """The study's Table 1 layout with our values (95 % CIs) beside the study's."""
@@ -194,7 +234,13 @@ class BenchmarkResult:
         _write_csv(out / "metrics.csv", self.metrics)
         _write_text(
             out / "metrics.json",
-            _dumps({"meta": self.meta, "metrics": self.metrics.to_dict(orient="records")}),
+            _dumps(
+                {
+                    "meta": self.meta,
+                    "metrics": self.metrics.to_dict(orient="records"),
+                    "ablation": self.ablation.to_dict(orient="records"),
+                }
+            ),
         )
         _write_text(out / "table.md", self.table_markdown())
         atomic_write(
@@ -203,6 +249,7 @@ class BenchmarkResult:
         _write_csv(out / "comparisons.csv", self.comparisons)
         _write_text(out / "histories.json", _dumps(self.histories))
         _write_csv(out / "importance.csv", self.importance)
+        _write_csv(out / "ablation.csv", self.ablation)
         if self.dataset is not None:
             self.dataset.save(out / "dataset.parquet")
         _write_text(out / "meta.json", _dumps(self.meta))
@@ -373,7 +420,9 @@ def _run_task(
         )
 
     params = dict(spec["params"])
-    task_seed = _task_seed(spec["seed"], spec["model"], spec["repeat"], spec["fold"])
+    # an ablated PINN draws the same seeds as its original: a paired comparison
+    seed_name = spec.get("seed_model", spec["model"])
+    task_seed = _task_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
     if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
         params["random_state"] = task_seed
     train, test = rows(split.train), rows(split.test)
@@ -445,6 +494,31 @@ def _resolve_models(models: Sequence[str] | str | None) -> list[str]:
     return names
 
 
+def _model_params(name: str, preset: str | None) -> dict[str, Any]:
+    """Tuned constructor arguments of model ``name`` on ``preset`` ({} when none).
+
+    The one place the benchmark asks for tuned hyper-parameters
+    (``nirglucose.models.tuned_params``, when that exists).
+    """
+    try:
+        from ..models import tuned_params
+    except ImportError:
+        return {}
+    if preset is None:
+        return {}
+    return dict(tuned_params(name, preset) or {})
+
+
+def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str, Any]]]:
+    """Row name -> (registered model, forced parameters); PINNs twice under ablation."""
+    out: dict[str, tuple[str, dict[str, Any]]] = {n: (n, {}) for n in names}
+    if ablation:
+        for n in names:
+            if n in PINN_MODELS:
+                out[n + NO_PHYSICS] = (n, {"lambda_phys": 0.0})
+    return out
+
+
 def _check_positive(name: str, value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
         raise ConfigError(f"{name} must be a positive integer, got {value!r}")
@@ -469,6 +543,8 @@ def run_benchmark(
     importance_repeats: int = _IMPORTANCE_REPEATS,
     oracle_reference: bool = True,
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
+    references: bool = False,
+    ablation: bool = False,
 ) -> BenchmarkResult:
     """Fit and score every model on subject-grouped splits.
 
@@ -491,7 +567,7 @@ def run_benchmark(
     progress : bool
         Show a rich progress bar on stderr.
     model_params : dict, optional
-        Model name -> constructor keyword arguments.
+        Model name -> constructor keyword arguments (over the preset's tuned ones).
     n_boot : int
         Bootstrap resamples for intervals and paired tests.
     alpha : float
@@ -505,6 +581,11 @@ def run_benchmark(
         data has ``true_*`` columns); False leaves the ratio NaN.
     on_task : callable, optional
         Called as ``on_task(spec, cached)`` for every task (progress hooks, tests).
+    references : bool
+        Add :data:`REFERENCE_MODELS` to ``models``.
+    ablation : bool
+        Also run every PINN among the models with ``lambda_phys=0`` (rows
+        ``<name>/no-physics``, paired differences in ``ablation``).
 
     Returns
     -------
@@ -528,10 +609,21 @@ def run_benchmark(
     jobs = _check_positive("jobs", jobs)
     n_boot = _check_positive("n_boot", n_boot)
     names = _resolve_models(models)
-    model_params = dict(model_params or {})
-    unknown = sorted(set(model_params) - set(names) - {ORACLE})
+    if references:
+        names += [m for m in REFERENCE_MODELS if m not in names]
+    explicit = dict(model_params or {})
+    unknown = sorted(set(explicit) - set(names) - {ORACLE})
     if unknown:
         raise ConfigError(f"model_params for models not benchmarked: {unknown}; models: {names}")
+    preset = getattr(dataset.config, "preset", None)
+    model_params = {
+        n: {**_model_params(n, preset), **explicit.get(n, {})} for n in [*names, ORACLE]
+    }
+    variants = _variants(names, ablation)
+    for row, (base, forced) in variants.items():
+        if row != base:
+            model_params[row] = {**model_params[base], **forced}
+    names = list(variants)
     n_splits_eff, repeats_eff = effective_layout(protocol, n_splits, repeats)
 
     has_truth = any(c.startswith("true_") for c in frame.columns)
@@ -565,7 +657,8 @@ def run_benchmark(
     splits = make_splits(groups, protocol, n_splits=n_splits, repeats=repeats, seed=seed)
     data_hash = dataset.content_hash()
     timing = dict(timing or {})
-    code = {name: _code_fingerprint(get_model_class(name)) for name in [*names, *aux]}
+    base_of = {**{n: variants[n][0] for n in names}, **{a: a for a in aux}}
+    code = {name: _code_fingerprint(get_model_class(base_of[name])) for name in [*names, *aux]}
     tasks = []
     for split in splits:
         for name in [*names, *aux]:
@@ -575,6 +668,7 @@ def run_benchmark(
                 "code": code[name],
                 "dataset": data_hash,
                 "model": name,
+                "seed_model": base_of[name],
                 "params": _jsonable_params(model_params.get(name, {})),
                 "protocol": protocol,
                 "n_splits": n_splits_eff,
@@ -585,7 +679,7 @@ def run_benchmark(
                 "timing": _jsonable_params(timing),
                 "importance_repeats": int(importance_repeats),
             }
-            tasks.append((spec, split, get_model_class(name)))
+            tasks.append((spec, split, get_model_class(base_of[name])))
 
     tasks_dir = None
     if out is not None:
@@ -654,7 +748,14 @@ def run_benchmark(
         "config": None if dataset.config is None else json.loads(dataset.config.to_json()),
         "models": names,
         "auxiliary_models": aux,
-        "model_params": _jsonable_params(model_params),
+        "model_params": _jsonable_params({k: v for k, v in model_params.items() if v}),
+        "references": [m for m in REFERENCE_MODELS if m in names],
+        "ablation": [n for n in names if n.endswith(NO_PHYSICS)],
+        "ablation_method": (
+            "each PINN refitted with lambda_phys=0, everything else identical (same "
+            "splits, seeds and other parameters); paired cluster bootstrap of the RMSE "
+            "difference (with physics minus without), Holm over the PINNs"
+        ),
         "n_boot": n_boot,
         "alpha": alpha,
         "ci_level": 0.95,
@@ -754,7 +855,7 @@ def _aggregate(
                 **point,
                 **{k: v for k, v in ci.items() if "_ci_" in k},
                 "model": name,
-                "label": MODEL_LABELS.get(name, name),
+                "label": _label(name),
                 "n_parameters": int(first["n_parameters"]),
                 "latency_single_ms": t.get("latency_single_ms", np.nan),
                 "latency_single_p90_ms": t.get("latency_single_p90_ms", np.nan),
@@ -788,6 +889,9 @@ def _aggregate(
         else (metrics["model"].iloc[0] if len(metrics) else None)
     )
 
+    ablation = _ablation(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
+    meta["study_orderings"] = _study_orderings(comparisons)
+
     histories = {}
     imp_rows = []
     for name in names:
@@ -813,7 +917,56 @@ def _aggregate(
         importance=importance,
         meta=meta,
         dataset=dataset,
+        ablation=ablation,
     )
+
+
+def _label(name: str) -> str:
+    if name.endswith(NO_PHYSICS):
+        base = name[: -len(NO_PHYSICS)]
+        return f"{MODEL_LABELS.get(base, base)} (no physics)"
+    return MODEL_LABELS.get(name, name)
+
+
+def _ablation(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
+    """Each PINN against itself without physics: paired RMSE difference (with − off)."""
+    pairs = [(n[: -len(NO_PHYSICS)], n) for n in names if n.endswith(NO_PHYSICS)]
+    if not pairs:
+        return pd.DataFrame(columns=list(ABLATION_COLUMNS))
+    c = compare_models(
+        preds, pairs=pairs, pred_col="scored_mgdl", n_boot=n_boot, seed=seed, alpha=alpha
+    )
+    c = c.rename(
+        columns={"reference_model": "ablated_model", "reference_rmse_mgdl": "ablated_rmse_mgdl"}
+    )
+    c["physics_helps"] = c["rmse_diff_mgdl"] < 0
+    return c[list(ABLATION_COLUMNS)].reset_index(drop=True)
+
+
+def _study_orderings(comparisons: pd.DataFrame) -> dict[str, Any]:
+    """Which of the study's pairwise RMSE orderings hold here, and which significantly."""
+    so = comparisons[comparisons["family"] == "study_order"]
+    pairs = [
+        {
+            "better": r["reference_model"],
+            "worse": r["model"],
+            "holds": bool(r["study_holds"]),
+            "significant": bool(r["significant"]),
+            "rmse_diff_mgdl": r["rmse_diff_mgdl"],
+            "ci_low": r["ci_low"],
+            "ci_high": r["ci_high"],
+            "p_holm": r["p_holm"],
+        }
+        for _, r in so.iterrows()
+    ]
+    return {
+        "study_order": [m for m in STUDY_ORDER],
+        "n_pairs": len(pairs),
+        "n_hold": sum(p["holds"] for p in pairs),
+        "n_hold_significant": sum(p["holds"] and p["significant"] for p in pairs),
+        "n_reversed_significant": sum((not p["holds"]) and p["significant"] for p in pairs),
+        "pairs": pairs,
+    }
 
 
 def _comparisons(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
@@ -898,7 +1051,38 @@ def _table_markdown(res: BenchmarkResult) -> str:
         )
     lines.append("")
     lines.extend(_significance_lines(res))
+    lines.extend(_ablation_lines(res))
     return "\n".join(lines) + "\n"
+
+
+def _ablation_lines(res: BenchmarkResult) -> list[str]:
+    a = res.ablation
+    if a is None or not len(a):
+        return []
+    label = {r["model"]: r["label"] for _, r in res.metrics.iterrows()}
+    out = [
+        "",
+        "## Physics ablation",
+        "",
+        "Each PINN refitted with its physics term off (`lambda_phys = 0`), everything else "
+        "identical (same splits, seeds and parameters). Δ RMSE = with physics − without "
+        "(negative: the physics term helps); paired cluster bootstrap over subjects, "
+        f"Holm over the {len(a)} PINNs, α = {res.meta['alpha']}.",
+        "",
+        "| PINN | RMSE with physics | RMSE without | Δ RMSE mg/dL [95 % CI] | p_holm | verdict |",
+        "|---|---|---|---|---|---|",
+    ]
+    for _, r in a.iterrows():
+        if r["significant"]:
+            verdict = "physics helps" if r["physics_helps"] else "physics hurts"
+        else:
+            verdict = "no significant difference"
+        out.append(
+            f"| {label.get(r['model'], r['model'])} | {_fmt(r['rmse_mgdl'])} "
+            f"| {_fmt(r['ablated_rmse_mgdl'])} | {r['rmse_diff_mgdl']:+.2f} "
+            f"[{r['ci_low']:+.2f}, {r['ci_high']:+.2f}] | {r['p_holm']:.3g} | {verdict} |"
+        )
+    return out
 
 
 def _significance_lines(res: BenchmarkResult) -> list[str]:

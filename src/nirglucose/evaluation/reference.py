@@ -96,6 +96,9 @@ MODEL_LABELS: dict[str, str] = {
     "rte-pinn": "RTE-inspired PINN",
     "selective-rte-pinn": "Selective RTE PINN",
     "sdnn": "SDNN",
+    "mean": "No skill (training mean)",
+    "gp": "Gaussian process (ARD)",
+    "gbr": "Gradient boosting",
 }
 
 #: The study's ranking by RMSE, best first.

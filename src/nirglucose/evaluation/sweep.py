@@ -30,6 +30,13 @@ Studies (:data:`STUDIES`)
         Each device capability (:data:`~nirglucose.config.DEVICE_CAPABILITIES`)
         switched off alone in ``paper`` and on alone in ``wearable``, besides both
         presets as they are; each scenario sets every key distinguishing the two.
+    ``data-size``
+        RMSE against the number of training subjects (:data:`DATA_SIZE_SUBJECTS`) on
+        each preset of :data:`DATA_SIZE_PRESETS`: every model is trained on a draw of
+        that many subjects and tested on an independent draw of
+        :data:`DATA_SIZE_TEST_SUBJECTS` subjects (another seed, derived from the
+        task's). :func:`ranking_crossings` says between which sizes two models swap
+        places.
     Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
     Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
 
@@ -106,10 +113,14 @@ __all__ = [
     "ablation_effects",
     "shift_effects",
     "threshold_crossing",
+    "ranking_crossings",
+    "DATA_SIZE_SUBJECTS",
+    "DATA_SIZE_TEST_SUBJECTS",
+    "DATA_SIZE_PRESETS",
 ]
 
 #: Built-in studies (``--study``).
-STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device")
+STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device", "data-size")
 #: The varied key and default values of the one-key studies.
 STUDY_GRIDS: dict[str, tuple[str, tuple[float, ...]]] = {
     "noise-scale": ("noise_scale", (0.25, 0.5, 1.0, 2.0, 4.0)),
@@ -130,6 +141,14 @@ COHORT_SHIFTS: dict[str, dict[str, Any]] = {
         "shifted": ("5-35 degC", (5.0, 35.0)),
     },
 }
+#: Training-set sizes of the ``data-size`` study (subjects; a bigger setting:
+#: ``vary={"n_train_subjects": [80, 160, 320, 640, 1280, 2560]}`` and several seeds).
+DATA_SIZE_SUBJECTS = (80, 320, 1280)
+#: Subjects of the independent test draw of the ``data-size`` study.
+DATA_SIZE_TEST_SUBJECTS = 200
+#: Presets of the ``data-size`` study when none are named.
+DATA_SIZE_PRESETS = ("paper", "wearable")
+
 #: Models of a sweep when none are named (the fast linear ones and the bound).
 DEFAULT_MODELS = ("ebl", "pls", "oracle")
 #: Metric columns of ``sweep.csv``, in order (timing columns are left out: they depend
@@ -185,6 +204,10 @@ class Scenario:
     train_filter, test_filter : dict or None
         ``{"column": name, "values": [...]}``: keep only rows whose measured column
         takes one of the values.
+    preset : str or None
+        Preset of this scenario (None: the sweep's).
+    n_subjects, n_test_subjects : int or None
+        Subjects of the training and of the test draw (None: the sweep's).
     """
 
     name: str
@@ -193,6 +216,9 @@ class Scenario:
     test_overrides: dict[str, Any] | None = None
     train_filter: dict[str, Any] | None = None
     test_filter: dict[str, Any] | None = None
+    preset: str | None = None
+    n_subjects: int | None = None
+    n_test_subjects: int | None = None
 
     @property
     def kind(self) -> str:
@@ -352,7 +378,9 @@ def grid_scenarios(
     return out
 
 
-def study_scenarios(study: str, values: Sequence[Any] | None = None) -> list[Scenario]:
+def study_scenarios(
+    study: str, values: Sequence[Any] | None = None, presets: Sequence[str] | None = None
+) -> list[Scenario]:
     """The scenarios of a built-in study (:data:`STUDIES`).
 
     Parameters
@@ -360,7 +388,10 @@ def study_scenarios(study: str, values: Sequence[Any] | None = None) -> list[Sce
     study : str
         One of :data:`STUDIES`.
     values : sequence, optional
-        Replace the default values of a one-key study (``noise-scale``, ``pmf-noise``).
+        Replace the default values of a one-key study (``noise-scale``, ``pmf-noise``)
+        or the training sizes of ``data-size``.
+    presets : sequence of str, optional
+        Presets of the ``data-size`` study (default :data:`DATA_SIZE_PRESETS`).
 
     Returns
     -------
@@ -378,6 +409,8 @@ def study_scenarios(study: str, values: Sequence[Any] | None = None) -> list[Sce
     if study in STUDY_GRIDS:
         key, default = STUDY_GRIDS[study]
         return grid_scenarios({key: list(values if values is not None else default)})
+    if study == "data-size":
+        return _data_size_scenarios(values, presets)
     if values is not None:
         raise ConfigError(f"the {study!r} study takes no values")
     if study == "ablation":
@@ -457,6 +490,38 @@ def _device_scenarios() -> list[Scenario]:
     return out
 
 
+def _data_size_scenarios(
+    sizes: Sequence[Any] | None, presets: Sequence[str] | None
+) -> list[Scenario]:
+    from ..config import PRESETS
+
+    sizes = list(DATA_SIZE_SUBJECTS if sizes is None else sizes)
+    presets = list(DATA_SIZE_PRESETS if presets is None else presets)
+    if not sizes or any(
+        isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 2 for n in sizes
+    ):
+        raise ConfigError(f"data-size training sizes must be integers >= 2, got {sizes!r}")
+    bad = [p for p in presets if p not in PRESETS]
+    if not presets or bad:
+        raise ConfigError(
+            f"unknown preset(s) {bad or presets!r} for the data-size study; valid: "
+            f"{', '.join(PRESETS)}"
+        )
+    return [
+        Scenario(
+            f"{p}:n={int(n)}",
+            {"preset": p, "n_train_subjects": int(n)},
+            {},
+            {},
+            preset=p,
+            n_subjects=int(n),
+            n_test_subjects=DATA_SIZE_TEST_SUBJECTS,
+        )
+        for p in dict.fromkeys(presets)
+        for n in dict.fromkeys(sizes)
+    ]
+
+
 # --------------------------------------------------------------------------- tasks
 def _sha(text: str) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
@@ -523,7 +588,11 @@ def plan_sweep(
     base = dict(base_overrides or {})
     params = dict(model_params or {})
     specs = []
+    sweep_preset, sweep_subjects = preset, n_subjects
     for sc in scenarios:
+        preset = sc.preset or sweep_preset
+        n_subjects = sc.n_subjects or sweep_subjects
+        sizes = {} if sc.n_test_subjects is None else {"test_n_subjects": sc.n_test_subjects}
         overrides = _canonical({**base, **sc.overrides})
         cfg_sha = _sha(resolve_config(preset, overrides).to_json())[:16]
         test_overrides = test_sha = None
@@ -557,6 +626,7 @@ def plan_sweep(
                         "model_params": _canonical(dict(params.get(model, {}))),
                         **proto,
                         "n_boot": int(n_boot),
+                        **sizes,
                     }
                 )
     return specs
@@ -605,8 +675,11 @@ def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> di
             f"the {spec['model']!r} shift task has an empty training or test "
             f"cohort ({len(train)} / {len(test)} rows); simulate more subjects"
         )
+    from .benchmark import _model_params
+
     cls = get_model_class(spec["model"])
-    params = dict(spec["model_params"])
+    # the preset's tuned parameters (the benchmark's one hook), then the sweep's own
+    params = {**_model_params(spec["model"], spec["preset"]), **spec["model_params"]}
     if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
         params["random_state"] = _derived_seed(spec["seed"], f"model|{spec['model']}")
     model = cls(**params).fit(train)
@@ -659,7 +732,7 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         else:
             test = simulate(
                 spec["preset"],
-                spec["n_subjects"],
+                spec.get("test_n_subjects", spec["n_subjects"]),
                 spec["per_subject"],
                 _derived_seed(spec["seed"], "test-cohort"),
                 overrides=spec["test_overrides"],
@@ -1053,6 +1126,67 @@ def threshold_crossing(
 
 # --------------------------------------------------------------------------- runner
 
+def ranking_crossings(
+    summary: pd.DataFrame, metric: str = "rmse_mgdl_mean", exclude: Sequence[str] = ("oracle",)
+) -> pd.DataFrame:
+    """Where two models swap places as the training set grows (``data-size`` study).
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        :func:`summarize_sweep` of a ``data-size`` sweep (columns ``preset``,
+        ``n_train_subjects``, ``model`` and ``metric``).
+    metric : str
+        Column ranked, lower is better (mean RMSE over seeds by default). [mg/dL]
+    exclude : sequence of str
+        Models left out (the oracle is a bound, not a competitor).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per crossing: ``preset``, ``n_before``, ``n_after`` (consecutive
+        training sizes between which the order changes), ``overtaker`` (worse before,
+        better after), ``overtaken``, ``diff_before``, ``diff_after`` (overtaker minus
+        overtaken, in the metric's unit).
+
+    Examples
+    --------
+    >>> s = pd.DataFrame({"preset": "p", "n_train_subjects": [80, 320, 80, 320],
+    ...                   "model": ["a", "a", "b", "b"], "rmse_mgdl_mean": [20., 10, 15, 12]})
+    >>> ranking_crossings(s)[["overtaker", "overtaken", "n_before", "n_after"]].values.tolist()
+    [['a', 'b', 80, 320]]
+    """
+    cols = ["preset", "n_before", "n_after", "overtaker", "overtaken", "diff_before", "diff_after"]
+    rows = []
+    s = summary[~summary["model"].isin(exclude)]
+    for preset, g in s.groupby("preset", sort=False):
+        table = g.pivot_table(index="n_train_subjects", columns="model", values=metric)
+        table = table.sort_index()
+        sizes = table.index.tolist()
+        models = list(dict.fromkeys(g["model"]))
+        for i, a in enumerate(models):
+            for b in models[i + 1 :]:
+                d = (table[a] - table[b]).to_numpy(dtype=float)
+                for k in range(len(sizes) - 1):
+                    d0, d1 = d[k], d[k + 1]
+                    if not (np.isfinite(d0) and np.isfinite(d1)) or d0 * d1 >= 0:
+                        continue
+                    over, under = (a, b) if d0 > 0 else (b, a)
+                    sign = 1.0 if over == a else -1.0
+                    rows.append(
+                        {
+                            "preset": preset,
+                            "n_before": int(sizes[k]),
+                            "n_after": int(sizes[k + 1]),
+                            "overtaker": over,
+                            "overtaken": under,
+                            "diff_before": sign * d0,
+                            "diff_after": sign * d1,
+                        }
+                    )
+    return pd.DataFrame(rows, columns=cols)
+
+
 def _resolve_seeds(seeds: int | Sequence[int]) -> list[int]:
     if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
         if seeds < 1:
@@ -1074,7 +1208,7 @@ def run_sweep(
     vary: Mapping[str, Sequence[Any]] | None = None,
     *,
     study: str | None = None,
-    preset: str = "paper",
+    preset: str | None = None,
     seeds: int | Sequence[int] = 5,
     models: Sequence[str] | str | None = None,
     overrides: Mapping[str, Any] | None = None,
@@ -1100,8 +1234,9 @@ def run_sweep(
     study : str, optional
         A built-in study (:data:`STUDIES`); with ``vary`` naming the study's own key,
         its values replace the default ones.
-    preset : str
-        Scenario preset every task starts from.
+    preset : str, optional
+        Scenario preset every task starts from (default ``paper``); for the
+        ``data-size`` study a comma-separated list (default :data:`DATA_SIZE_PRESETS`).
     seeds : int or sequence of int
         Number of seeds (0, 1, ...) or the seeds themselves.
     models : sequence of str or comma-separated str, optional
@@ -1146,7 +1281,20 @@ def run_sweep(
 
     t_start = time.perf_counter()
     base = dict(overrides or {})
-    if study is not None:
+    presets = None
+    if study == "data-size" and preset is not None:
+        presets = [p.strip() for p in str(preset).split(",") if p.strip()]
+    preset = "paper" if preset is None or study == "data-size" else preset
+    if study == "data-size":
+        if vary and set(vary) != {"n_train_subjects"}:
+            raise ConfigError(
+                "--vary cannot be combined with --study data-size (except to set its "
+                "sizes: --vary n_train_subjects=80,320,...)"
+            )
+        scenarios = study_scenarios(
+            study, list(vary["n_train_subjects"]) if vary else None, presets
+        )
+    elif study is not None:
         if study not in STUDIES:
             raise ConfigError(f"unknown study {study!r}; valid: {', '.join(STUDIES)}")
         values = None
@@ -1310,10 +1458,14 @@ def run_sweep(
         effects = ablation_effects(frame)
     elif study == "cohort":
         effects = shift_effects(frame)
+    elif study == "data-size":
+        effects = ranking_crossings(summary)
     task_warnings = list(dict.fromkeys(w for r in results.values() for w in r.get("warnings", [])))
     meta = {
         "study": study_name,
-        "preset": preset,
+        "preset": (
+            preset if study != "data-size" else list(dict.fromkeys(s.preset for s in scenarios))
+        ),
         "base_overrides": _canonical(base),
         "scenarios": [s.name for s in scenarios],
         "label_columns": label_columns,

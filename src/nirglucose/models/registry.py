@@ -29,6 +29,7 @@ MODEL_MODULES = (
     "nirglucose.models.oracle",
     "nirglucose.models.pinn",
     "nirglucose.models.sdnn",
+    "nirglucose.models.reference",
 )
 
 #: Registered name -> the module that defines it, so that looking up a linear model
@@ -42,6 +43,9 @@ _NAME_MODULES = {
     "rte-pinn": "nirglucose.models.pinn",
     "selective-rte-pinn": "nirglucose.models.pinn",
     "sdnn": "nirglucose.models.sdnn",
+    "mean": "nirglucose.models.reference",
+    "gp": "nirglucose.models.reference",
+    "gbr": "nirglucose.models.reference",
 }
 
 _REGISTRY: dict[str, type] = {}

@@ -21,6 +21,7 @@ __all__ = [
     "plot_ablation_bars",
     "plot_shift_bars",
     "figure_ablation",
+    "figure_data_size",
 ]
 
 #: Axis label (with unit) of each metric a sweep figure can show.
@@ -210,6 +211,38 @@ def figure_ablation(
         a, b = fig.subplots(1, 2, sharey=False)
     plot_ablation_bars(effects, which="off", models=models, unit=unit, ax=a)
     plot_ablation_bars(effects, which="only", models=models, unit=unit, ax=b)
+    return fig
+
+
+def figure_data_size(summary: pd.DataFrame, *, metric: str = "rmse_mgdl") -> Figure:
+    """RMSE against training subjects, one panel per preset (``data-size`` study).
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        Summary of a ``data-size`` sweep: ``preset``, ``n_train_subjects``, ``model``
+        and ``<metric>_mean`` / ``_ci_low`` / ``_ci_high``. [the metric's unit]
+    metric : str
+        Metric stem (see :data:`METRIC_LABELS`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One Axes per preset, each with one line per model on a base-2 log x axis.
+    """
+    presets = list(dict.fromkeys(summary["preset"]))
+    with plot_style():
+        fig = Figure(figsize=(5.2 * max(len(presets), 1), 4.0), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(1, max(len(presets), 1), sharey=False))
+    for ax, p in zip(axes, presets, strict=False):
+        plot_sweep_curve(
+            summary[summary["preset"] == p],
+            "n_train_subjects",
+            metric=metric,
+            xlabel="training subjects [-]",
+            title=f"preset {p}",
+            ax=ax,
+        )
     return fig
 
 

@@ -233,7 +233,10 @@ def _extra_table(results: Results) -> str:
 def _significance(results: Results) -> str:
     parts = []
     if results.table_md:
-        parts.append(markdown_to_html(results.table_md, skip_tables=True, skip_h1=True))
+        from .presets import strip_ablation
+
+        parts.append(markdown_to_html(strip_ablation(results.table_md), skip_tables=True,
+                                      skip_h1=True))
     c = results.comparisons
     if c is not None and len(c):
         if not results.table_md:
@@ -329,7 +332,8 @@ def _figure_html(f: RenderedFigure) -> str:
 
 
 def render_html(results: Results, figures: Sequence[RenderedFigure], *,
-                title: str = REPORT_TITLE, extra_sections: Sequence[str] = ()) -> str:
+                title: str = REPORT_TITLE, extra_sections: Sequence[str] = (),
+                middle_sections: Sequence[str] = ()) -> str:
     """The report page as a string (no I/O).
 
     Parameters
@@ -340,6 +344,8 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         Rendered figures (:func:`nirglucose.report.figures.render_figures`).
     title : str
         Page title.
+    extra_sections, middle_sections : sequence of str
+        HTML added after the figures / after the significance section.
 
     Returns
     -------
@@ -374,6 +380,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         _extra_table(results),
         '<h2 id="significance">Significance</h2>',
         _significance(results),
+        *middle_sections,
         '<h2 id="run">Configuration and provenance</h2>',
         _run_info(results),
         '<h2 id="figures">Figures</h2>',
@@ -400,7 +407,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     Parameters
     ----------
     results_dir : str or path
-        Directory written by ``nirglucose benchmark --out``.
+        Directory written by ``nirglucose benchmark --out``; one written with several
+        presets (``results_dir/<preset>/``) gives one report: the ``paper`` run in
+        full, then the presets compared (:mod:`~nirglucose.report.presets`).
     out_path : str or path
         The HTML file to write (atomically); its directory must exist.
     figures_dir : str or path, optional
@@ -431,11 +440,17 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     if not out_path.parent.exists():
         raise DataError(f"output directory {str(out_path.parent)!r} does not exist; "
                         "create it first")
-    results = load_results(results_dir)
+    from .presets import ablation_section, preset_dirs, presets_section
+
+    dirs = preset_dirs(results_dir)
+    primary = dirs[0] if dirs else Path(results_dir)
+    results = load_results(primary)
     figures = render_figures(results, figures_dir)
     from .sweep import sweep_section
 
-    page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs])
+    middle = [ablation_section(primary)] + ([presets_section(dirs)] if len(dirs) > 1 else [])
+    page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
+                       middle_sections=middle)
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
     path.chmod(0o644)  # the temporary file was private; a report is for reading
     return path

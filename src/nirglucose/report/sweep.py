@@ -98,7 +98,7 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
     -------
     list of SweepFigure
     """
-    from ..plots.sweep import figure_ablation, plot_shift_bars, plot_sweep_curve
+    from ..plots.sweep import figure_ablation, figure_data_size, plot_shift_bars, plot_sweep_curve
 
     res = sweep_dir if isinstance(sweep_dir, SweepResult) else load_sweep(sweep_dir)
     n_seeds = len(res.meta.get("seeds", []))
@@ -120,6 +120,11 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
             "sweep_ablation", "Noise-source ablation: ΔRMSE when a source is switched off "
             "with all others on (left) and when it is the only one on (right); error bars: "
             f"95 % paired t-interval over {n_seeds} seeds.", figure_ablation(res.effects)))
+    if res.meta.get("study") == "data-size" and "n_train_subjects" in res.summary:
+        out.append(SweepFigure(
+            "sweep_data_size", "RMSE on an independent test draw against the number of "
+            f"training subjects, one panel per preset: mean over {n_seeds} seeds.",
+            figure_data_size(res.summary)))
     if res.effects is not None and "shift" in res.effects:
         ax = plot_shift_bars(res.effects)
         out.append(SweepFigure(

@@ -1,0 +1,232 @@
+"""Report sections for the physics ablation and for runs on several presets.
+
+``nirglucose benchmark --preset paper,wearable --out results`` writes
+``results/<preset>/``; :func:`preset_dirs` finds those sub-directories, the full
+report is built from the first (``paper`` when present) and :func:`presets_section`
+adds the comparison table, every other preset's reproduced table, each preset's
+ablation table and a plain statement of what separates the presets (the simulation
+settings that differ, and how the results differ).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..exceptions import DataError
+
+__all__ = ["preset_dirs", "ablation_section", "presets_section"]
+
+#: The preset whose run carries the full report (the study's own setting).
+PRIMARY_PRESET = "paper"
+
+
+def _is_results(d: Path) -> bool:
+    return (d / "metrics.csv").is_file() or (d / "metrics.json").is_file()
+
+
+def preset_dirs(results_dir: str | Path) -> list[Path]:
+    """Sub-directories of ``results_dir`` that hold a benchmark run, primary first.
+
+    Empty when ``results_dir`` itself holds a run (a one-preset layout).
+    """
+    d = Path(results_dir)
+    if not d.is_dir() or _is_results(d):
+        return []
+    subs = sorted((s for s in d.iterdir() if s.is_dir() and _is_results(s)), key=lambda s: s.name)
+    return sorted(subs, key=lambda s: s.name != PRIMARY_PRESET)
+
+
+def _esc(x: Any) -> str:
+    import html
+
+    return html.escape(str(x), quote=True)
+
+
+def _num(v: Any, digits: int = 1, sign: bool = False) -> str:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return "–"
+    if not math.isfinite(f):
+        return "–"
+    return f"{f:+.{digits}f}" if sign else f"{f:.{digits}f}"
+
+
+def _read_ablation(d: Path) -> pd.DataFrame | None:
+    path = d / "ablation.csv"
+    if not path.is_file():
+        return None
+    try:
+        return pd.read_csv(path)
+    except (OSError, ValueError, pd.errors.EmptyDataError):
+        return None
+
+
+def ablation_section(results_dir: str | Path, heading: str = "Physics ablation") -> str:
+    """HTML of ``ablation.csv``: each PINN with physics against without (empty if none)."""
+    a = _read_ablation(Path(results_dir))
+    if a is None or a.empty:
+        return ""
+    from ..evaluation.reference import MODEL_LABELS
+
+    rows = []
+    for _, r in a.iterrows():
+        if bool(r["significant"]):
+            verdict = "physics helps" if bool(r["physics_helps"]) else "physics hurts"
+        else:
+            verdict = "no significant difference"
+        rows.append(
+            f"<tr><td>{_esc(MODEL_LABELS.get(r['model'], r['model']))}</td>"
+            f"<td>{_num(r['rmse_mgdl'])}</td><td>{_num(r['ablated_rmse_mgdl'])}</td>"
+            f"<td>{_num(r['rmse_diff_mgdl'], 2, True)} [{_num(r['ci_low'], 2, True)}, "
+            f"{_num(r['ci_high'], 2, True)}]</td><td>{_num(r['p_holm'], 3)}</td>"
+            f"<td>{_esc(verdict)}</td></tr>"
+        )
+    return (
+        f"<h3>{_esc(heading)}</h3><p>Each PINN refitted with its physics term off "
+        "(<code>lambda_phys = 0</code>), everything else identical (same splits, seeds and "
+        "parameters). Δ RMSE = with physics − without (negative: the physics term helps); "
+        "paired cluster bootstrap over subjects, Holm-adjusted over the PINNs.</p>"
+        '<div class="scroll"><table class="ablation"><thead><tr><th>PINN</th>'
+        "<th>RMSE with physics [mg/dL]</th><th>RMSE without [mg/dL]</th>"
+        "<th>Δ RMSE [95 % CI]</th><th>p (Holm)</th><th>verdict</th></tr></thead>"
+        f"<tbody>{''.join(rows)}</tbody></table></div>"
+    )
+
+
+def strip_ablation(table_md: str) -> str:
+    """``table.md`` without its ablation section (the report shows it as a table)."""
+    return table_md.split("\n## Physics ablation", 1)[0]
+
+
+def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
+    if isinstance(d, dict):
+        out: dict[str, Any] = {}
+        for k, v in d.items():
+            out.update(_flat(v, f"{prefix}{k}."))
+        return out
+    return {prefix[:-1]: d}
+
+
+def _config_differences(a: dict[str, Any], b: dict[str, Any]) -> list[tuple[str, Any, Any]]:
+    fa, fb = _flat(a or {}), _flat(b or {})
+    return [
+        (k, fa.get(k), fb.get(k))
+        for k in sorted(set(fa) | set(fb))
+        if k != "preset" and fa.get(k) != fb.get(k)
+    ]
+
+
+def _load(d: Path) -> tuple[dict[str, Any], pd.DataFrame]:
+    from .figures import load_results
+
+    res = load_results(d)
+    return res.meta, res.metrics.drop_duplicates("model").set_index("model")
+
+
+def presets_section(dirs: list[Path]) -> str:
+    """HTML comparing the runs in ``dirs`` (the first is the primary, shown in full).
+
+    Raises
+    ------
+    DataError
+        Fewer than two directories.
+    """
+    if len(dirs) < 2:
+        raise DataError("a preset comparison needs at least two results directories")
+    from ..evaluation.reference import MODEL_LABELS, STUDY_TABLE
+    from .figures import load_results
+    from .html import _reproduced_table, markdown_to_html
+
+    loaded = [_load(d) for d in dirs]
+    names = [m.get("preset") or d.name for d, (m, _) in zip(dirs, loaded, strict=True)]
+    study = {str(r["model"]): r for r in STUDY_TABLE}
+    models = list(dict.fromkeys(m for _, met in loaded for m in met.index))
+    head = "<th>Model</th>" + "".join(
+        f"<th>RMSE {_esc(n)} [mg/dL, 95 % CI]</th><th>MARD {_esc(n)} [%]</th>" for n in names
+    ) + "<th>study RMSE [mg/dL]</th>"
+    rows = []
+    label = {m: MODEL_LABELS.get(m, m) for m in models}
+    for _, met in loaded:
+        if "label" in met.columns:
+            label.update({m: str(v) for m, v in met["label"].items() if isinstance(v, str)})
+    for model in models:
+        cells = [f"<td>{_esc(label[model])}</td>"]
+        for _, met in loaded:
+            if model in met.index:
+                r = met.loc[model]
+                cells.append(
+                    f"<td>{_num(r.get('rmse_mgdl'))} [{_num(r.get('rmse_ci_low'))}, "
+                    f"{_num(r.get('rmse_ci_high'))}]</td><td>{_num(r.get('mard_pct'))}</td>"
+                )
+            else:
+                cells.append("<td>–</td><td>–</td>")
+        cells.append(f'<td class="study">{_num(study.get(model, {}).get("rmse_mgdl"))}</td>')
+        rows.append("<tr>" + "".join(cells) + "</tr>")
+    parts = [
+        '<h2 id="presets">Presets compared</h2>',
+        f"<p>The same benchmark on {len(names)} presets: "
+        + ", ".join(f"<code>{_esc(n)}</code>" for n in names)
+        + f". The sections above are the <code>{_esc(names[0])}</code> run.</p>",
+        '<div class="scroll"><table id="presets-table"><thead><tr>'
+        f"{head}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>",
+        "<h3>What separates the presets</h3>",
+        _separation(names, loaded, label),
+    ]
+    for d, n in zip(dirs[1:], names[1:], strict=True):
+        res = load_results(d)
+        parts += [
+            f"<h2 id=\"preset-{_esc(n)}\">Reproduced table on <code>{_esc(n)}</code></h2>",
+            _reproduced_table(res),
+        ]
+        if res.table_md:
+            text = strip_ablation(res.table_md)
+            parts.append(markdown_to_html(text, skip_tables=True, skip_h1=True))
+        parts.append(ablation_section(d, f"Physics ablation on {n}"))
+    return "\n".join(p for p in parts if p)
+
+
+def _separation(
+    names: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]], label: dict[str, str]
+) -> str:
+    base_meta, _ = loaded[0]
+    items = []
+    for n, (meta, _) in zip(names[1:], loaded[1:], strict=True):
+        diffs = _config_differences(base_meta.get("config") or {}, meta.get("config") or {})
+        if diffs:
+            shown = "; ".join(
+                f"<code>{_esc(k)}</code> {_esc(json.dumps(a))} → {_esc(json.dumps(b))}"
+                for k, a, b in diffs[:12]
+            )
+            more = f" (and {len(diffs) - 12} more)" if len(diffs) > 12 else ""
+            items.append(
+                f"<li>Simulation: {len(diffs)} settings differ between "
+                f"<code>{_esc(names[0])}</code> and <code>{_esc(n)}</code>: {shown}{more}.</li>"
+            )
+        else:
+            items.append(
+                f"<li>Simulation: no recorded setting differs between <code>{_esc(names[0])}"
+                f"</code> and <code>{_esc(n)}</code>.</li>"
+            )
+    for n, (meta, met) in zip(names, loaded, strict=True):
+        ranked = met.drop(index=[m for m in met.index if m == "oracle"], errors="ignore")
+        if ranked.empty:
+            continue
+        best = ranked["rmse_mgdl"].astype(float).idxmin()
+        mean = (
+            f"; no skill (training mean) {_num(met.loc['mean', 'rmse_mgdl'])} mg/dL"
+            if "mean" in met.index
+            else ""
+        )
+        oracle = meta.get("oracle_rmse_mgdl")
+        bound = f"; oracle bound {_num(oracle)} mg/dL" if oracle is not None else ""
+        items.append(
+            f"<li>Results on <code>{_esc(n)}</code>: best model {_esc(label.get(best, best))} at "
+            f"{_num(met.loc[best, 'rmse_mgdl'])} mg/dL{mean}{bound}.</li>"
+        )
+    return "<ul>" + "".join(items) + "</ul>"

@@ -1,0 +1,129 @@
+"""Reference learners: the no-skill mean, the ARD Gaussian process, gradient boosting."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import nirglucose as ng
+from nirglucose.exceptions import ConfigError, DataError
+from nirglucose.models import load_model, make_model
+from nirglucose.models.reference import (
+    REFERENCE_INPUT_NAMES,
+    GBRReference,
+    GPReference,
+    MeanReference,
+    _reference_inputs,
+)
+
+
+@pytest.fixture(scope="module")
+def lab():
+    train = ng.simulate("lab", n_subjects=30, per_subject=3, seed=0)
+    test = ng.simulate("lab", n_subjects=20, per_subject=3, seed=1)
+    return train, test
+
+
+def _rmse(model, ds):
+    y = ds.frame["glucose_mgdl"].to_numpy(float)
+    return float(np.sqrt(np.mean((model.predict(ds) - y) ** 2)))
+
+
+def test_registered_by_name():
+    assert isinstance(make_model("mean"), MeanReference)
+    assert isinstance(make_model("gp"), GPReference)
+    assert isinstance(make_model("gbr"), GBRReference)
+
+
+def test_inputs_are_absorbances_and_physiology(lab):
+    train, _ = lab
+    U, y, groups = _reference_inputs(None, train, fit=True)
+    f = train.frame
+    assert U.shape == (len(f), len(REFERENCE_INPUT_NAMES)) == (len(f), 16)
+    adc, ref = f["adc_850"].to_numpy(float), f["adc_ref_850"].to_numpy(float)
+    np.testing.assert_allclose(U[:, 0], np.log10(ref / adc), rtol=1e-12)
+    assert len(groups) == len(y) == len(f)
+
+
+def test_mean_model_is_the_training_mean(lab, tmp_path):
+    train, test = lab
+    m = MeanReference().fit(train)
+    assert m.mean_ == pytest.approx(train.frame["glucose_mgdl"].mean(), rel=1e-12)
+    assert np.all(m.predict(test) == m.mean_)
+    assert m.n_parameters == 1
+    loaded = load_model(m.save(tmp_path / "mean.json"))
+    np.testing.assert_array_equal(loaded.predict(test), m.predict(test))
+
+
+def test_gp_beats_mean_on_an_easy_preset(lab):
+    train, test = lab
+    gp = GPReference(random_state=0).fit(train)
+    mean = MeanReference().fit(train)
+    assert _rmse(gp, test) < 0.3 * _rmse(mean, test)
+    assert gp.length_scales_.shape == (16,)
+    assert gp.n_parameters > gp.alpha_.size
+
+
+def test_gp_posterior_mean_matches_scikit_learn(lab):
+    train, test = lab
+    gp = GPReference(random_state=0).fit(train)
+    from sklearn.gaussian_process import GaussianProcessRegressor
+    from sklearn.gaussian_process.kernels import RBF, WhiteKernel
+    from sklearn.gaussian_process.kernels import ConstantKernel as C
+
+    kernel = C(gp.signal_variance_, "fixed") * RBF(gp.length_scales_, "fixed") + WhiteKernel(
+        gp.noise_variance_, "fixed"
+    )
+    U, y, _ = _reference_inputs(gp, train, fit=True)
+    V, _, _ = _reference_inputs(gp, test, fit=False)
+    sk = GaussianProcessRegressor(kernel, normalize_y=True, optimizer=None)
+    sk.fit((U - gp.x_mean_) / gp.x_scale_, y)
+    np.testing.assert_allclose(gp.predict(test), sk.predict((V - gp.x_mean_) / gp.x_scale_),
+                               rtol=1e-8, atol=1e-6)
+
+
+def test_gp_json_round_trip(lab, tmp_path):
+    train, test = lab
+    gp = GPReference(max_fit_rows=40, random_state=1).fit(train)
+    assert gp.X_train_.shape == (40, 16)
+    loaded = load_model(gp.save(tmp_path / "gp.json"))
+    np.testing.assert_allclose(loaded.predict(test), gp.predict(test), rtol=1e-12)
+
+
+def test_gbr_matches_scikit_learn_and_round_trips(lab, tmp_path):
+    from sklearn.ensemble import GradientBoostingRegressor
+
+    train, test = lab
+    m = GBRReference(n_estimators=50, subsample=0.8, random_state=0).fit(train)
+    assert _rmse(m, test) < 0.5 * _rmse(MeanReference().fit(train), test)
+    U, y, _ = _reference_inputs(m, train, fit=True)
+    V, _, _ = _reference_inputs(m, test, fit=False)
+    sk = GradientBoostingRegressor(n_estimators=50, subsample=0.8, random_state=0).fit(U, y)
+    np.testing.assert_allclose(m.predict(test), sk.predict(V), rtol=1e-10, atol=1e-8)
+    assert m.n_parameters == sum(t.tree_.node_count for t in sk.estimators_.ravel()) + 1
+    loaded = load_model(m.save(tmp_path / "gbr.json"))
+    np.testing.assert_array_equal(loaded.predict(test), m.predict(test))
+    np.testing.assert_array_equal(loaded.predict(test.frame.head(1)), m.predict(test)[:1])
+
+
+@pytest.mark.parametrize(
+    ("model", "params"),
+    [("gp", {"max_fit_rows": 0}), ("gbr", {"learning_rate": 2.0}), ("gbr", {"max_depth": 0})],
+)
+def test_bad_parameters_raise(lab, model, params):
+    with pytest.raises(ConfigError):
+        make_model(model, **params).fit(lab[0])
+
+
+def test_non_positive_codes_raise(lab):
+    frame = lab[0].frame.copy()
+    frame.loc[3, "adc_850"] = 0.0
+    with pytest.raises(DataError):
+        MeanReference().fit(frame)
+
+
+def test_predict_before_fit_raises():
+    from sklearn.exceptions import NotFittedError
+
+    with pytest.raises(NotFittedError):
+        GPReference().predict(np.ones((2, 20)))
