@@ -8,13 +8,8 @@ import pytest
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models import load_model, make_model
-from nirglucose.models.reference import (
-    REFERENCE_INPUT_NAMES,
-    GBRReference,
-    GPReference,
-    MeanReference,
-    _reference_inputs,
-)
+from nirglucose.models.reference import GBRReference, GPReference, MeanReference
+from nirglucose.schema import MeasurementTransformer
 
 
 @pytest.fixture(scope="module")
@@ -35,14 +30,28 @@ def test_registered_by_name():
     assert isinstance(make_model("gbr"), GBRReference)
 
 
-def test_inputs_are_absorbances_and_physiology(lab):
-    train, _ = lab
-    U, y, groups = _reference_inputs(None, train, fit=True)
+def _inputs(train, test):
+    """The schema boundary's absorbances and physiology of both sets."""
+    t = MeasurementTransformer().fit(train)
+    return t.transform(train), t.transform(test)
+
+
+def test_inputs_are_the_schema_boundarys_absorbances_and_physiology(lab, tmp_path):
+    train, test = lab
+    U, _ = _inputs(train, test)
     f = train.frame
-    assert U.shape == (len(f), len(REFERENCE_INPUT_NAMES)) == (len(f), 16)
+    assert U.shape == (len(f), 16)
     adc, ref = f["adc_850"].to_numpy(float), f["adc_ref_850"].to_numpy(float)
     np.testing.assert_allclose(U[:, 0], np.log10(ref / adc), rtol=1e-12)
-    assert len(groups) == len(y) == len(f)
+    t = MeasurementTransformer().fit(train)
+    for name in ("mean", "gp", "gbr"):
+        m = make_model(name, **({"n_estimators": 5} if name == "gbr" else {})).fit(train)
+        assert m.schema_ == t.schema_ and m.schema_.is_study, name
+        assert m.input_names_ == tuple(t.get_feature_names_out()), name
+        assert m.n_features_in_ == 20 and list(m.feature_names_in_) == list(t.schema_.raw_columns)
+        back = load_model(m.save(tmp_path / f"{name}.json"))
+        assert back.schema_ == m.schema_ and back.n_features_in_ == 20, name
+        assert list(back.feature_names_in_) == list(m.feature_names_in_), name
 
 
 def test_mean_model_is_the_training_mean(lab, tmp_path):
@@ -74,12 +83,13 @@ def test_gp_posterior_mean_matches_scikit_learn(lab):
     kernel = C(gp.signal_variance_, "fixed") * RBF(gp.length_scales_, "fixed") + WhiteKernel(
         gp.noise_variance_, "fixed"
     )
-    U, y, _ = _reference_inputs(gp, train, fit=True)
-    V, _, _ = _reference_inputs(gp, test, fit=False)
+    U, V = _inputs(train, test)
+    y = train.frame["glucose_mgdl"].to_numpy(float)
     sk = GaussianProcessRegressor(kernel, normalize_y=True, optimizer=None)
     sk.fit((U - gp.x_mean_) / gp.x_scale_, y)
-    np.testing.assert_allclose(gp.predict(test), sk.predict((V - gp.x_mean_) / gp.x_scale_),
-                               rtol=1e-8, atol=1e-6)
+    np.testing.assert_allclose(
+        gp.predict(test), sk.predict((V - gp.x_mean_) / gp.x_scale_), rtol=1e-8, atol=1e-6
+    )
 
 
 def test_gp_json_round_trip(lab, tmp_path):
@@ -96,8 +106,8 @@ def test_gbr_matches_scikit_learn_and_round_trips(lab, tmp_path):
     train, test = lab
     m = GBRReference(n_estimators=50, subsample=0.8, random_state=0).fit(train)
     assert _rmse(m, test) < 0.5 * _rmse(MeanReference().fit(train), test)
-    U, y, _ = _reference_inputs(m, train, fit=True)
-    V, _, _ = _reference_inputs(m, test, fit=False)
+    U, V = _inputs(train, test)
+    y = train.frame["glucose_mgdl"].to_numpy(float)
     sk = GradientBoostingRegressor(n_estimators=50, subsample=0.8, random_state=0).fit(U, y)
     np.testing.assert_allclose(m.predict(test), sk.predict(V), rtol=1e-10, atol=1e-8)
     assert m.n_parameters == sum(t.tree_.node_count for t in sk.estimators_.ravel()) + 1
@@ -115,15 +125,32 @@ def test_bad_parameters_raise(lab, model, params):
         make_model(model, **params).fit(lab[0])
 
 
-def test_non_positive_codes_raise(lab):
+@pytest.mark.parametrize("name", ["mean", "gp", "gbr"])
+def test_bad_inputs_get_the_schema_boundarys_errors(lab, name):
     frame = lab[0].frame.copy()
     frame.loc[3, "adc_850"] = 0.0
-    with pytest.raises(DataError):
-        MeanReference().fit(frame)
+    with pytest.raises(DataError, match="adc_850.*outside 1-4095.*rows 3"):
+        make_model(name).fit(frame)
+    with pytest.raises(DataError, match="too few rows to fit: 4 sample"):
+        make_model(name).fit(lab[0].frame.head(4))
+    m = make_model(name, **({"n_estimators": 5} if name == "gbr" else {})).fit(lab[0])
+    with pytest.raises(DataError, match="missing columns \\['adc_ref_940'\\]"):
+        m.predict(lab[1].frame.drop(columns="adc_ref_940"))
+    with pytest.raises(DataError, match="X has 19 features, but .* expecting 20"):
+        m.predict(np.ones((2, 19)))
 
 
-def test_predict_before_fit_raises():
-    from sklearn.exceptions import NotFittedError
+def test_a_state_for_another_device_is_refused_on_load(lab, tmp_path):
+    import json
 
-    with pytest.raises(NotFittedError):
-        GPReference().predict(np.ones((2, 20)))
+    for name, tamper in [
+        ("gp", lambda st: st["schema_"].update(physiology=st["schema_"]["physiology"][:-1])),
+        ("gbr", lambda st: st["feature_"][0].__setitem__(0, 16)),  # input 16 of 0-15
+    ]:
+        m = make_model(name, **({"n_estimators": 5} if name == "gbr" else {})).fit(lab[0])
+        path = m.save(tmp_path / f"{name}.json")
+        doc = json.loads(path.read_text())
+        tamper(doc["state"])
+        path.write_text(json.dumps(doc))
+        with pytest.raises(DataError, match="refit the model"):
+            load_model(path)

@@ -28,10 +28,12 @@ from ..schema import (
     check_reference_glucose,
     fit_schema,
 )
+from ._json_io import JsonModelMixin
 
 __all__ = [
     "MEASURED_COLUMNS",
     "N_MEASURED",
+    "SchemaJsonMixin",
     "as_measurements",
     "fit_input",
     "predict_input",
@@ -105,6 +107,35 @@ def predict_input(est, X) -> np.ndarray:
     """The fitted device's raw columns of ``X``, validated, (n, width)."""
     schema = est.schema_
     return schema.raw(as_raw_input(est, X, schema))
+
+
+class SchemaJsonMixin(JsonModelMixin):
+    """JSON save/load for estimators that read their input through the schema boundary.
+
+    The one place a fitted ``schema_`` (:class:`~nirglucose.schema.DeviceSchema`) is
+    written to and read back from a model file, and the input record scikit-learn
+    expects rebuilt from it. Subclasses list ``"schema_": "json"`` in ``_STATE`` and
+    call :meth:`_restore_schema` first thing in their ``_restore`` (run after ``fit``
+    and after :meth:`~nirglucose.models._json_io.JsonModelMixin.load`).
+    """
+
+    def _state_dict(self):
+        schema = self.schema_
+        self.__dict__["schema_"] = schema.to_json()  # the JSON form, for saving only
+        try:
+            return super()._state_dict()
+        finally:
+            self.__dict__["schema_"] = schema
+
+    def _restore_schema(self) -> None:
+        """``schema_`` as a DeviceSchema (from its JSON form after load), and
+        ``n_features_in_`` / ``feature_names_in_`` (a device's raw columns) from it."""
+        if isinstance(self.schema_, dict):  # loaded from JSON
+            self.schema_ = DeviceSchema.from_json(self.schema_)
+        s = self.schema_
+        self.n_features_in_ = len(s.raw_columns)
+        if not s.is_plain:
+            self.feature_names_in_ = np.asarray(s.raw_columns, dtype=object)
 
 
 def as_measurements(X, y=None, *, require_target: bool = False):

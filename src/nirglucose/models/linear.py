@@ -61,10 +61,8 @@ from ..features import (
     log10_absorbance,
     perfusion_index,
 )
-from ..schema import DeviceSchema
-from ._base import fit_input, predict_input
+from ._base import SchemaJsonMixin, fit_input, predict_input
 from ._checks import EstimatorNotFittedError, require_fitted
-from ._json_io import JsonModelMixin
 from .registry import register
 
 __all__ = ["EnhancedBeerLambert", "PLSBaseline", "DEFAULT_ALPHAS", "PLS_INPUT_NAMES"]
@@ -123,28 +121,12 @@ def _check_cv(cv) -> int:
     return int(cv)
 
 
-class _LinearBase(JsonModelMixin, RegressorMixin, BaseEstimator):
+class _LinearBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
     """Shared plumbing: input handling, fitted checks, ``n_parameters``."""
 
     def _require_fitted(self) -> None:
         if "coef_" not in self.__dict__:  # cheap test first: this sits on the hot path
             require_fitted(self, "coef_")
-
-    def _state_dict(self):
-        schema = self.schema_
-        self.__dict__["schema_"] = schema.to_json()  # the JSON form, for saving only
-        try:
-            return super()._state_dict()
-        finally:
-            self.__dict__["schema_"] = schema
-
-    def _restore_schema(self) -> None:
-        if isinstance(self.schema_, dict):  # loaded from JSON
-            self.schema_ = DeviceSchema.from_json(self.schema_)
-        s = self.schema_
-        self.n_features_in_ = len(s.raw_columns)
-        if not s.is_plain:
-            self.feature_names_in_ = np.asarray(s.raw_columns, dtype=object)
 
     def _features(self, Xa: np.ndarray) -> np.ndarray:
         """Model inputs (n, p) from the fitted device's raw columns."""

@@ -4,10 +4,13 @@ What a user would pick instead of a physics-informed network, so that every benc
 table says how much of a model's skill is more than the training mean (``mean``) and
 more than an off-the-shelf learner on the same inputs (``gp``, ``gbr``).
 
-All three read the measured columns only and use ONE input builder,
-:func:`_reference_inputs`: the four absorbances ``log10(I0 / I)``
-(:func:`~nirglucose.features.log10_absorbance`) beside the twelve entries of the
-measured physiological vector, (n, 16).
+All three read their input through the package's one schema boundary
+(:func:`~nirglucose.models._base.fit_input`, :func:`~nirglucose.models._base.predict_input`,
+:class:`~nirglucose.schema.DeviceSchema`), as PLS does: the device's absorbances
+``log10(I0 / I)``, one per LED, then whichever physiological columns it records, so
+they fit, predict, save and load on any LED set, ADC resolution and physiology (the
+study's device: 4 + 12 = 16 inputs). The fitted device is saved with the model
+(``schema_``) and restored on load.
 
 References
 ----------
@@ -25,63 +28,64 @@ from __future__ import annotations
 from numbers import Integral
 
 import numpy as np
-import pandas as pd
 from sklearn.base import BaseEstimator, RegressorMixin
 
-from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
-from ..features import log10_absorbance
-from ._base import MEASURED_COLUMNS, N_MEASURED
-from ._checks import measured_input, require_fitted
-from ._json_io import JsonModelMixin
+from ._base import SchemaJsonMixin, fit_input, predict_input
+from ._checks import require_fitted
 from .registry import register
 
-__all__ = ["MeanReference", "GPReference", "GBRReference", "REFERENCE_INPUT_NAMES"]
-
-#: Number of LED channels (ADC codes first, then reference codes, then physiology).
-_N_CH = 4
-#: Names of the reference learners' inputs, in column order.
-REFERENCE_INPUT_NAMES: tuple[str, ...] = tuple(
-    [f"absorbance_{c.removeprefix('adc_')}" for c in MEASURED_COLUMNS[:_N_CH]]
-    + list(MEASURED_COLUMNS[2 * _N_CH :])
-)
-_N_INPUTS = len(REFERENCE_INPUT_NAMES)
+__all__ = ["MeanReference", "GPReference", "GBRReference"]
 
 
-def _reference_inputs(est, X, y=None, *, fit: bool):
-    """``(U (n, 16), y, groups)``: absorbances and the physiological vector.
+class _ReferenceBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
+    """Input reading, fitted checks and the saved device, shared by the reference learners.
 
-    The one place the reference learners read their inputs (to be switched to the
-    package's schema transformer when it exists).
+    Inputs: the fitted device's absorbances, then its physiological columns (n, p).
     """
-    Xa, y, groups = measured_input(est, X, y, fit=fit)
-    adc, ref = Xa[:, :_N_CH], Xa[:, _N_CH : 2 * _N_CH]
-    ok = (adc > 0) & (ref > 0)
-    if not ok.all():
-        rows = np.flatnonzero(~ok.all(axis=1))
-        raise DataError(
-            f"ADC and reference codes must be positive; {len(rows)} rows are not, "
-            f"first row {int(rows[0])}"
-        )
-    return np.hstack([log10_absorbance(adc, ref), Xa[:, 2 * _N_CH :]]), y, groups
-
-
-class _ReferenceBase(RegressorMixin, BaseEstimator):
-    """Fitted checks and the input record shared by the reference learners."""
 
     _FITTED = "n_features_in_"
 
     def _require_fitted(self) -> None:
         require_fitted(self, self._FITTED)
 
-    def _record_input(self, X) -> None:
-        self.n_features_in_ = N_MEASURED
-        if isinstance(X, pd.DataFrame | Dataset):
-            self.feature_names_in_ = np.asarray(MEASURED_COLUMNS, dtype=object)
+    def _fit_inputs(self, X, y, groups):
+        """``(U (n, p), y)`` for ``fit``; records the device as ``schema_``."""
+        self.schema_, Xa, y, _ = fit_input(self, X, y, groups)
+        return self._inputs(Xa), y
+
+    def _predict_inputs(self, X) -> np.ndarray:
+        """``U (n, p)``: ``X`` read as the fitted device."""
+        return self._inputs(predict_input(self, X))
+
+    def _inputs(self, Xa: np.ndarray) -> np.ndarray:
+        m = self.schema_.split(Xa)
+        return np.hstack([m.absorbance, m.physiology])
+
+    @property
+    def input_names_(self) -> tuple[str, ...]:
+        """Names of the inputs: ``A_<nm>`` per LED, then the physiological columns."""
+        s = self.schema_
+        return tuple(f"A_{w}" for w in s.labels) + s.physiology
+
+    def _check_width(self, name: str, width: int) -> None:
+        """Refuse a state whose input width is not the saved device's (DataError)."""
+        p = len(self.input_names_)
+        if width != p:
+            raise DataError(
+                f"model state {name!r} is for {width} inputs but its device has {p}; "
+                "refit the model"
+            )
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.single_output = True
+        tags.target_tags.multi_output = False
+        return tags
 
 
 @register("mean")
-class MeanReference(JsonModelMixin, _ReferenceBase):
+class MeanReference(_ReferenceBase):
     """No skill: predicts the training mean of glucose for every row.
 
     Any model whose RMSE is not below this one's has learned nothing from the
@@ -89,6 +93,8 @@ class MeanReference(JsonModelMixin, _ReferenceBase):
 
     Attributes
     ----------
+    schema_ : DeviceSchema
+        The fitted device (its inputs are validated, then ignored).
     mean_ : float
         Training mean of glucose. [mg/dL]
 
@@ -101,26 +107,24 @@ class MeanReference(JsonModelMixin, _ReferenceBase):
     (True, 1)
     """
 
-    _STATE = {"mean_": None}
+    _STATE = {"schema_": "json", "mean_": None}
     _FITTED = "mean_"
 
     def fit(self, X, y=None, groups=None):
         """Store the mean of the target (the inputs are validated, then ignored)."""
-        _, y, _ = _reference_inputs(self, X, y, fit=True)
-        if len(y) == 0:
-            raise DataError("cannot fit on zero rows")
+        _, y = self._fit_inputs(X, y, groups)
         self.mean_ = float(np.mean(y))
-        self._record_input(X)
+        self._restore()
         return self
 
     def _restore(self) -> None:
-        self.n_features_in_ = N_MEASURED
+        self._restore_schema()
+        self.mean_ = float(self.mean_)
 
     def predict(self, X) -> np.ndarray:
         """The training mean for each row. [mg/dL]"""
         self._require_fitted()
-        U, _, _ = _reference_inputs(self, X, fit=False)
-        return np.full(len(U), self.mean_)
+        return np.full(len(self._predict_inputs(X)), self.mean_)
 
     @property
     def n_parameters(self) -> int:
@@ -136,12 +140,15 @@ def _positive_int(name: str, value) -> int:
 
 
 @register("gp")
-class GPReference(JsonModelMixin, _ReferenceBase):
+class GPReference(_ReferenceBase):
     """Gaussian process, RBF kernel with one length scale per input (ARD) + white noise.
 
-    Inputs standardised, then scikit-learn's ``GaussianProcessRegressor`` [3]_ with
-    kernel ``C * RBF(l_1..l_16) + White`` and ``normalize_y=True``; the kernel's
-    hyper-parameters maximise the log marginal likelihood [1]_. Prediction is the
+    Inputs (the device's p absorbances and physiological columns) standardised, then
+    scikit-learn's ``GaussianProcessRegressor`` [3]_ with kernel
+    ``C * RBF(l_1..l_p) + White`` and ``normalize_y=True``; the kernel's
+    hyper-parameters maximise the log marginal likelihood [1]_ inside every ``fit``:
+    that is this model's tuning (it has no grid in
+    :func:`~nirglucose.models.tuning.search_space`). Prediction is the
     posterior mean, ``k(x*, X) @ alpha`` rescaled (Rasmussen & Williams Eq. 2.25),
     computed from the stored state, so a loaded model predicts the same numbers.
 
@@ -157,14 +164,16 @@ class GPReference(JsonModelMixin, _ReferenceBase):
 
     Attributes
     ----------
+    schema_ : DeviceSchema
+        The fitted device.
     x_mean_, x_scale_ : numpy.ndarray
-        (16,) input standardisation.
+        (p,) input standardisation.
     X_train_ : numpy.ndarray
-        (m, 16) standardised training inputs kept by the GP.
+        (m, p) standardised training inputs kept by the GP.
     alpha_ : numpy.ndarray
         (m,) weights of the posterior mean (normalised-target units).
     length_scales_ : numpy.ndarray
-        (16,) fitted ARD length scales (standardised-input units). [-]
+        (p,) fitted ARD length scales (standardised-input units). [-]
     signal_variance_, noise_variance_ : float
         Fitted constant and white-noise variances (normalised-target units). [-]
     y_mean_, y_std_ : float
@@ -184,11 +193,12 @@ class GPReference(JsonModelMixin, _ReferenceBase):
     """
 
     _STATE = {
-        "x_mean_": (_N_INPUTS,),
-        "x_scale_": (_N_INPUTS,),
-        "X_train_": (-1, _N_INPUTS),
+        "schema_": "json",
+        "x_mean_": (-1,),
+        "x_scale_": (-1,),
+        "X_train_": (-1, -1),
         "alpha_": (-1,),
-        "length_scales_": (_N_INPUTS,),
+        "length_scales_": (-1,),
         "signal_variance_": None,
         "noise_variance_": None,
         "y_mean_": None,
@@ -214,9 +224,7 @@ class GPReference(JsonModelMixin, _ReferenceBase):
         nr = self.n_restarts_optimizer
         if isinstance(nr, bool) or not isinstance(nr, Integral) or nr < 0:
             raise ConfigError(f"n_restarts_optimizer must be an integer >= 0, got {nr!r}")
-        U, y, _ = _reference_inputs(self, X, y, fit=True)
-        if len(U) < 2:
-            raise DataError(f"the GP needs at least 2 training rows, got {len(U)}")
+        U, y = self._fit_inputs(X, y, groups)
         rng = np.random.default_rng(self.random_state)
         if len(U) > max_rows:
             keep = np.sort(rng.choice(len(U), size=max_rows, replace=False))
@@ -231,7 +239,7 @@ class GPReference(JsonModelMixin, _ReferenceBase):
         # in an over-fitted optimum (measured: test RMSE at the no-skill level on the
         # paper preset). Bounds wide enough that an input can be switched off (length
         # scale 1e5) or the fit become pure noise.
-        kernel = C(1.0, (1e-3, 1e5)) * RBF(np.full(_N_INPUTS, 10.0), (1e-2, 1e5)) + WhiteKernel(
+        kernel = C(1.0, (1e-3, 1e5)) * RBF(np.full(U.shape[1], 10.0), (1e-2, 1e5)) + WhiteKernel(
             1.0, (1e-5, 1e1)
         )
         gp = GaussianProcessRegressor(
@@ -253,16 +261,24 @@ class GPReference(JsonModelMixin, _ReferenceBase):
         self.noise_variance_ = float(k.k2.noise_level)
         self.y_mean_ = float(np.ravel(gp._y_train_mean)[0])
         self.y_std_ = float(np.ravel(gp._y_train_std)[0])
-        self._record_input(X)
+        self._restore()
         return self
 
     def _restore(self) -> None:
-        self.n_features_in_ = N_MEASURED
+        self._restore_schema()
+        for name in ("x_mean_", "x_scale_", "length_scales_"):
+            self._check_width(name, len(getattr(self, name)))
+        self._check_width("X_train_", self.X_train_.shape[1])
+        if len(self.alpha_) != len(self.X_train_):
+            raise DataError(
+                f"model state 'alpha_' has {len(self.alpha_)} weights for "
+                f"{len(self.X_train_)} training rows; refit the model"
+            )
 
     def predict(self, X) -> np.ndarray:
         """Posterior mean of glucose for each row. [mg/dL]"""
         self._require_fitted()
-        U, _, _ = _reference_inputs(self, X, fit=False)
+        U = self._predict_inputs(X)
         Z = (U - self.x_mean_) / self.x_scale_ / self.length_scales_
         T = self.X_train_ / self.length_scales_
         d2 = (Z * Z).sum(1)[:, None] + (T * T).sum(1)[None, :] - 2.0 * Z @ T.T
@@ -273,16 +289,19 @@ class GPReference(JsonModelMixin, _ReferenceBase):
     def n_parameters(self) -> int:
         """Numbers the predictor uses: kept inputs, weights, kernel and scaling."""
         self._require_fitted()
-        return int(self.X_train_.size + self.alpha_.size + 2 * _N_INPUTS + _N_INPUTS + 4)
+        p = len(self.length_scales_)
+        return int(self.X_train_.size + self.alpha_.size + 2 * p + p + 4)
 
 
 @register("gbr")
-class GBRReference(JsonModelMixin, _ReferenceBase):
+class GBRReference(_ReferenceBase):
     """Gradient-boosted regression trees (scikit-learn ``GradientBoostingRegressor``).
 
-    Squared-error boosting [2]_ with scikit-learn's default settings [3]_ (100 stages
-    of depth-3 trees, shrinkage 0.1, every row); tuned values come through the
-    benchmark's per-preset parameters. The fitted trees are kept as padded node
+    Squared-error boosting [2]_ on the device's absorbances and physiological columns,
+    with scikit-learn's default settings [3]_ (100 stages of depth-3 trees, shrinkage
+    0.1, every row); tuned values (:func:`~nirglucose.models.tuning.search_space`:
+    stages, shrinkage, depth, row fraction) come through the benchmark's per-preset
+    parameters. The fitted trees are kept as padded node
     arrays and evaluated by this class (all trees at once), so the model saves to
     JSON and a loaded model predicts the same numbers as scikit-learn (tested).
 
@@ -301,6 +320,8 @@ class GBRReference(JsonModelMixin, _ReferenceBase):
 
     Attributes
     ----------
+    schema_ : DeviceSchema
+        The fitted device.
     init_ : float
         The boosting's starting value: the training mean. [mg/dL]
     left_, right_, feature_ : numpy.ndarray
@@ -323,6 +344,7 @@ class GBRReference(JsonModelMixin, _ReferenceBase):
     """
 
     _STATE = {
+        "schema_": "json",
         "init_": None,
         "left_": (-1, -1),
         "right_": (-1, -1),
@@ -358,7 +380,7 @@ class GBRReference(JsonModelMixin, _ReferenceBase):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | float) or not 0 < v <= 1:
                 raise ConfigError(f"{name} must be a number in (0, 1], got {v!r}")
-        U, y, _ = _reference_inputs(self, X, y, fit=True)
+        U, y = self._fit_inputs(X, y, groups)
         gbr = GradientBoostingRegressor(
             n_estimators=int(self.n_estimators),
             learning_rate=float(self.learning_rate),
@@ -384,20 +406,35 @@ class GBRReference(JsonModelMixin, _ReferenceBase):
         self.n_nodes_ = np.array([t.node_count for t in trees], dtype=float)
         self.depth_ = int(max(t.max_depth for t in trees))
         self._restore()
-        self._record_input(X)
         return self
 
     def _restore(self) -> None:
-        self.n_features_in_ = N_MEASURED
+        self._restore_schema()
         self.depth_ = int(self.depth_)
+        shape = self.value_.shape
+        arrays = (self.left_, self.right_, self.feature_, self.threshold_)
+        if any(a.shape != shape for a in arrays) or self.n_nodes_.shape != shape[:1]:
+            raise DataError("model's tree arrays do not have one shape; refit the model")
         self._left = self.left_.astype(np.intp)
         self._right = self.right_.astype(np.intp)
         self._feature = self.feature_.astype(np.intp)
+        n_nodes = shape[1]
+        p = len(self.input_names_)
+        if (
+            self._feature.min(initial=0) < 0
+            or self._feature.max(initial=0) >= p
+            or np.minimum(self._left, self._right).min(initial=0) < -1
+            or np.maximum(self._left, self._right).max(initial=0) >= n_nodes
+        ):
+            raise DataError(
+                f"model's trees name inputs or nodes outside its device's {p} inputs; "
+                "refit the model"
+            )
 
     def predict(self, X) -> np.ndarray:
         """Glucose for each row. [mg/dL]"""
         self._require_fitted()
-        U, _, _ = _reference_inputs(self, X, fit=False)
+        U = self._predict_inputs(X)
         # scikit-learn's trees compare float32 inputs with float64 thresholds
         Uf = U.astype(np.float32).astype(np.float64)
         tix = np.arange(self.value_.shape[0])
