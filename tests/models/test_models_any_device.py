@@ -13,15 +13,20 @@ from nirglucose.models import available_models, load_model, make_model
 from nirglucose.schema import DeviceSchema, MeasurementTransformer, meter_flags
 
 NETWORKS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn", "sdnn")
+REFERENCES = ("mean", "gp", "gbr")
 FAST_NET = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
+FAST = {name: FAST_NET for name in NETWORKS} | {
+    "gp": {"random_state": 0},
+    "gbr": {"n_estimators": 20, "random_state": 0},
+}
 
 
 def _make(name):
-    return make_model(name, **(FAST_NET if name in NETWORKS else {}))
+    return make_model(name, **FAST.get(name, {}))
 
 
 def test_every_registered_model_is_covered():
-    assert set(available_models()) == {"ebl", "pls", "oracle", *NETWORKS}
+    assert set(available_models()) == {"ebl", "pls", "oracle", *NETWORKS, *REFERENCES}
 
 
 @pytest.mark.parametrize("bits", [10, 12, 14, 16])
@@ -63,11 +68,27 @@ def test_networks_take_their_widths_from_the_device():
     assert len(bl.physics_["absorptivity_per_cm_per_mgdl"]) == 3
 
 
+@pytest.mark.parametrize("n_leds", [1, 6])
+def test_reference_learners_take_their_inputs_from_the_device(n_leds):
+    ds = simulate_device(n_leds, 14)
+    want = tuple(f"A_{w:g}" for w in LED_SETS[n_leds]) + DeviceSchema.infer(ds).physiology
+    assert len(want) == n_leds + 12
+    U = MeasurementTransformer().fit(ds).transform(ds)
+    for name in REFERENCES:
+        m = _make(name).fit(ds)
+        assert m.input_names_ == want and m.n_features_in_ == 2 * n_leds + 12, name
+    gp = _make("gp").fit(ds)
+    assert gp.length_scales_.shape == gp.x_mean_.shape == (n_leds + 12,)
+    np.testing.assert_allclose(gp.x_mean_, U.mean(axis=0), rtol=1e-12)
+    gbr = _make("gbr").fit(ds)
+    assert gbr.feature_.max() < n_leds + 12
+
+
 def test_device_without_reference_or_physiology(tmp_path):
     """A one-LED, 10-bit device that records neither reference codes nor physiology."""
     ds = simulate_device(1, 10)
     frame = ds.frame[["subject_id", "adc_940", "glucose_mgdl"]]
-    for name in ("ebl", "pls", "sdnn", "original-pinn", "rte-pinn"):
+    for name in ("ebl", "pls", "sdnn", "original-pinn", "rte-pinn", *REFERENCES):
         m = _make(name).fit(
             frame,
         )
@@ -110,13 +131,13 @@ def test_refuses_values_no_device_produces():
         make_model("pls").fit(f)
     f = ds.frame.copy()
     f.loc[7, "glucose_mgdl"] = 700.0
-    for name in ("ebl", "sdnn", "oracle"):
+    for name in ("ebl", "sdnn", "oracle", *REFERENCES):
         data = ng.Dataset(f, config=ds.config) if name == "oracle" else f
         with pytest.raises(DataError, match=r"20-600 \[mg/dL\].*rows 7"):
             _make(name).fit(data)
 
 
-@pytest.mark.parametrize("name", ["ebl", "pls", "sdnn", "oracle"])
+@pytest.mark.parametrize("name", ["ebl", "pls", "sdnn", "oracle", *REFERENCES])
 def test_one_fit_size_policy(name):
     ds = simulate_device(3, 12, n_subjects=1, per_subject=4)
     with pytest.raises(DataError, match="too few rows to fit: 4 sample"):
