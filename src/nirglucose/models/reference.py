@@ -132,6 +132,11 @@ class MeanReference(_ReferenceBase):
         self._require_fitted()
         return 1
 
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.regressor_tags.poor_score = True  # no skill by design: R^2 is 0 on its data
+        return tags
+
 
 def _positive_int(name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, Integral) or value < 1:
