@@ -1,9 +1,10 @@
 """Tune every model family on the same footing; write ``src/nirglucose/data/tuned_params.json``.
 
-For each preset (``wearable`` and ``paper``) and each family (EBL, PLS and the five
-networks), :data:`~nirglucose.models.tuning.N_CONFIGS` configurations are drawn from
-the family's grid (:func:`~nirglucose.models.tuning.search_space`; the networks share
-one training grid and the same draws, the PINNs add ``lambda_phys`` with every grid
+For each preset (``wearable`` and ``paper``) and each family (EBL, PLS, gradient
+boosting and the five networks; the GP tunes itself inside each fit),
+:data:`~nirglucose.models.tuning.N_CONFIGS` configurations are drawn from the family's
+grid (:func:`~nirglucose.models.tuning.search_space`; the networks share one training
+grid and the same draws, the PINNs add ``lambda_phys`` with every grid
 value, 0 included, drawn equally often) and scored by subject-grouped
 :data:`~nirglucose.models.tuning.N_FOLDS`-fold cross-validation on 80 subjects x 3 of
 each tuning seed (:data:`~nirglucose.models.tuning.TUNING_SEEDS`, disjoint from the
@@ -53,6 +54,7 @@ from nirglucose.models.tuning import (
 FAMILIES = (
     "ebl",
     "pls",
+    "gbr",
     "sdnn",
     "original-pinn",
     "optimized-pinn",

@@ -154,3 +154,51 @@ def test_a_state_for_another_device_is_refused_on_load(lab, tmp_path):
         path.write_text(json.dumps(doc))
         with pytest.raises(DataError, match="refit the model"):
             load_model(path)
+
+
+# ----------------------------------------------------------------- tuning footing
+
+
+def _tune_script():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "tune.py"
+    spec = importlib.util.spec_from_file_location("_tune_script", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_gbr_is_tuned_like_every_family(lab):
+    from nirglucose.models.tuning import N_CONFIGS, search_space
+
+    space = search_space("gbr")
+    assert set(space) == {"n_estimators", "learning_rate", "max_depth", "subsample"}
+    assert int(np.prod([len(v) for v in space.values()])) >= N_CONFIGS
+    defaults = GBRReference().get_params()
+    assert all(defaults[k] in v for k, v in space.items())  # scikit-learn's point is on it
+    tune = _tune_script()
+    assert "gbr" in tune.FAMILIES
+    configs = tune.configurations("gbr")
+    assert len(configs) == N_CONFIGS
+    assert len({tuple(sorted(c.items())) for c in configs}) == N_CONFIGS
+    small = lab[0].frame.head(30)
+    for c in configs:  # every drawn configuration builds and fits
+        assert np.isfinite(GBRReference(**c, random_state=0).fit(small).predict(small)).all()
+
+
+def test_gp_tunes_itself_and_untuned_families_get_defaults(lab, monkeypatch):
+    from nirglucose.models import tuning
+
+    with pytest.raises(ConfigError, match="no tuning search space for model 'gp'.*marginal"):
+        tuning.search_space("gp")
+    with pytest.raises(ConfigError, match="no tuning search space for model 'mean'"):
+        tuning.search_space("mean")
+    doc = {"params": {"paper": {"pls": {"n_components": 3}}}}  # a file tuned before gbr
+    monkeypatch.setattr(tuning, "_document", lambda: doc)
+    assert tuning.tuned_params("gbr", "paper") == {} == tuning.tuned_params("gp", "paper")
+    assert tuning.tuned_params("pls", "paper") == {"n_components": 3}
+    # the GP's hyper-parameters move away from their starting point in fit
+    gp = GPReference(random_state=0).fit(lab[0])
+    assert not np.allclose(gp.length_scales_, 10.0)

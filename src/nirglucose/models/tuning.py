@@ -7,6 +7,12 @@ subject-grouped cross-validation on simulation seeds disjoint from the reported 
 writes them to the packaged ``data/tuned_params.json``. :func:`tuned_params` reads
 that file; the benchmark constructs every model with what it returns.
 
+The reference learners: gradient boosting (``gbr``) is tuned like every other family
+(:func:`search_space`); the Gaussian process (``gp``) has no grid: it fits its kernel's
+hyper-parameters (signal and noise variances, one length scale per input) by maximising
+the log marginal likelihood inside every ``fit`` (Rasmussen & Williams 2006, ch. 5), on
+the training rows only, which is its tuning; the no-skill ``mean`` has nothing to tune.
+
 Examples
 --------
 >>> from nirglucose.models import tuned_params
@@ -74,6 +80,26 @@ _NETWORK_SPACE: dict[str, tuple] = {
 _NETWORKS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
 _PINNS = _NETWORKS[1:]
 
+#: Gradient boosting's grid (2 x 3 x 2 x 3 = 36 points, 12 drawn). Shrinkage at or below
+#: scikit-learn's 0.1, with more stages for the smaller steps (Friedman 2001, Ann.
+#: Statist. 29, 1189, doi:10.1214/aos/1013203451: shrinkage < 0.1 with more stages
+#: generalises better); trees of 4 or 8 leaves (depth 2, 3; Hastie, Tibshirani &
+#: Friedman, *The Elements of Statistical Learning*, 2nd ed., Springer 2009, sec. 10.11:
+#: 4 <= leaves <= 8 work well); row fractions 0.5-1 (Friedman 2002, Comput. Stat. Data
+#: Anal. 38, 367, doi:10.1016/S0167-9473(01)00065-2: 0.5-0.8 improves on all rows).
+_GBR_SPACE: dict[str, tuple] = {
+    "n_estimators": (100, 300),
+    "learning_rate": (0.02, 0.05, 0.1),
+    "max_depth": (2, 3),
+    "subsample": (0.5, 0.8, 1.0),
+}
+#: Families tuned elsewhere or not at all, with the reason search_space gives.
+_NO_GRID = {
+    "gp": "it fits its kernel's hyper-parameters by marginal likelihood inside each fit",
+    "mean": "the no-skill reference has nothing to tune",
+    "oracle": "the oracle knows the simulator's parameters",
+}
+
 
 def search_space(name: str) -> dict[str, tuple]:
     """The grid ``benchmarks/tune.py`` samples :data:`N_CONFIGS` points of, for ``name``.
@@ -81,12 +107,14 @@ def search_space(name: str) -> dict[str, tuple]:
     Networks share one training grid (learning rate, AdamW weight decay, epochs,
     dropout); the PINNs add :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty
     (one value per configuration, so its own inner CV is bypassed), PLS its number of
-    components.
+    components, gradient boosting (``gbr``) its stages, shrinkage, tree depth and row
+    fraction. The Gaussian process (``gp``) has none: its kernel's hyper-parameters
+    are fitted by marginal likelihood inside each ``fit``.
 
     Raises
     ------
     ConfigError
-        If ``name`` has no search space.
+        If ``name`` has no search space (``gp``, ``mean``, ``oracle``).
     """
     if name in _NETWORKS:
         space = dict(_NETWORK_SPACE)
@@ -100,9 +128,11 @@ def search_space(name: str) -> dict[str, tuple]:
         return {"alphas": tuple((a,) for a in DEFAULT_ALPHAS[::step][:N_CONFIGS])}
     if name == "pls":
         return {"n_components": tuple(range(1, N_CONFIGS + 1))}
-    raise ConfigError(
-        f"no tuning search space for model {name!r}; tuned: {', '.join(('ebl', 'pls', *_NETWORKS))}"
-    )
+    if name == "gbr":
+        return dict(_GBR_SPACE)
+    why = f" ({_NO_GRID[name]})" if name in _NO_GRID else ""
+    tuned = ", ".join(("ebl", "pls", "gbr", *_NETWORKS))
+    raise ConfigError(f"no tuning search space for model {name!r}{why}; tuned: {tuned}")
 
 
 @lru_cache(maxsize=1)
