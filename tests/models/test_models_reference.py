@@ -24,10 +24,14 @@ def _rmse(model, ds):
     return float(np.sqrt(np.mean((model.predict(ds) - y) ** 2)))
 
 
-def test_registered_by_name():
+def test_registered_by_name_and_exported():
+    import nirglucose.models as models
+
     assert isinstance(make_model("mean"), MeanReference)
     assert isinstance(make_model("gp"), GPReference)
     assert isinstance(make_model("gbr"), GBRReference)
+    for cls in (MeanReference, GPReference, GBRReference):
+        assert getattr(models, cls.__name__) is cls and cls.__name__ in models.__all__
 
 
 def _inputs(train, test):

@@ -1,4 +1,6 @@
-"""Estimators: EBL, PLS, the oracle bound, four PINNs and a shallow DNN, by name.
+"""Estimators by name: EBL, PLS, the oracle, four PINNs, a shallow DNN, three references.
+
+The reference learners are the no-skill mean, a Gaussian process and gradient boosting.
 
 Classes are imported lazily (torch loads only when a network is used).
 """
@@ -23,6 +25,9 @@ __all__ = [
     "RTEPINN",
     "SelectiveRTEPINN",
     "SDNN",
+    "MeanReference",
+    "GPReference",
+    "GBRReference",
 ]
 
 _LAZY = {
@@ -34,6 +39,9 @@ _LAZY = {
     "RTEPINN": "nirglucose.models.pinn",
     "SelectiveRTEPINN": "nirglucose.models.pinn",
     "SDNN": "nirglucose.models.sdnn",
+    "MeanReference": "nirglucose.models.reference",
+    "GPReference": "nirglucose.models.reference",
+    "GBRReference": "nirglucose.models.reference",
 }
 
 
