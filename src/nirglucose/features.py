@@ -764,7 +764,7 @@ def enhanced_beer_lambert(
     Examples
     --------
     >>> import nirglucose as ng
-    >>> ds = ng.simulate("paper", n_subjects=2, per_subject=2, seed=0)
+    >>> ds = ng.simulate("wearable", n_subjects=2, per_subject=2, seed=0)
     >>> enhanced_beer_lambert(ds).shape
     (4, 56)
     """
@@ -861,7 +861,7 @@ class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
     Examples
     --------
     >>> import nirglucose as ng
-    >>> ds = ng.simulate("paper", n_subjects=2, per_subject=2, seed=0)
+    >>> ds = ng.simulate("wearable", n_subjects=2, per_subject=2, seed=0)
     >>> t = EnhancedBeerLambertFeatures().fit(ds.frame)
     >>> t.transform(ds.frame).shape, t.get_feature_names_out()[4]
     ((4, 56), 'dA_1150_940')

@@ -443,7 +443,7 @@ class MeasurementTransformer(TransformerMixin, BaseEstimator):
     Examples
     --------
     >>> import nirglucose as ng
-    >>> ds = ng.simulate("paper", n_subjects=2, per_subject=2, seed=0)
+    >>> ds = ng.simulate("wearable", n_subjects=2, per_subject=2, seed=0)
     >>> t = MeasurementTransformer().fit(ds)
     >>> t.transform(ds).shape, t.get_feature_names_out()[0]
     ((4, 16), 'A_850')

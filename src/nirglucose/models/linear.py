@@ -190,7 +190,7 @@ class EnhancedBeerLambert(_LinearBase):
     Examples
     --------
     >>> import nirglucose as ng
-    >>> ds = ng.simulate("paper", n_subjects=20, per_subject=3, seed=0)
+    >>> ds = ng.simulate("wearable", n_subjects=20, per_subject=3, seed=0)
     >>> m = EnhancedBeerLambert().fit(ds)
     >>> m.predict(ds).shape, m.n_parameters
     ((60,), 57)
@@ -779,7 +779,7 @@ class PLSBaseline(_LinearBase):
     Examples
     --------
     >>> import nirglucose as ng
-    >>> ds = ng.simulate("paper", n_subjects=20, per_subject=3, seed=0)
+    >>> ds = ng.simulate("wearable", n_subjects=20, per_subject=3, seed=0)
     >>> m = PLSBaseline().fit(ds)
     >>> m.predict(ds).shape, m.n_parameters
     ((60,), 17)

@@ -4,7 +4,7 @@ Examples
 --------
 >>> import nirglucose as ng
 >>> from nirglucose.models import SDNN
->>> ds = ng.simulate("paper", n_subjects=10, per_subject=2, seed=0)
+>>> ds = ng.simulate("wearable", n_subjects=10, per_subject=2, seed=0)
 >>> SDNN(max_epochs=2, random_state=0).fit(ds).n_parameters
 3713
 
