@@ -44,6 +44,9 @@ from ..constants import (
 from ..exceptions import ConfigError
 
 __all__ = [
+    "board_temperature_c",
+    "led_temperatures_c",
+    "led_ages_h",
     "led_power_w",
     "led_peak_shift_nm",
     "dark_current_a",
@@ -52,6 +55,65 @@ __all__ = [
     "adc_inl_lsb",
     "adc_convert",
 ]
+
+
+def board_temperature_c(ambient_c, skin_c, skin_weight: float = 0.5) -> np.ndarray:
+    """Board temperature between air and skin, (1 - w) T_ambient + w T_skin. [degC]
+
+    The board sits between the air and the skin it is strapped to; halfway
+    (``hardware.board_skin_weight`` = 0.5) is an assumption of this package.
+
+    Examples
+    --------
+    >>> float(board_temperature_c(20.0, 34.0))
+    27.0
+    """
+    return (1.0 - skin_weight) * np.asarray(ambient_c) + skin_weight * np.asarray(skin_c)
+
+
+def led_temperatures_c(cfg, ambient_c, skin_c, first_rows, streams) -> dict:
+    """Junction and board temperatures of each reading and of the start-up reference.
+
+    A pulsed LED's junction sits ``hardware.led_self_heating_c`` above ambient, with an
+    SD of ``led_self_heating_sd_c`` between readings (scaled by the
+    ``led_thermal_drift`` noise source); the junction's forward-voltage heating is the
+    mechanism of the datasheets' thermal coefficients [3]_. The reference is read at
+    each subject's first reading's ambient.
+
+    Returns
+    -------
+    dict
+        ``led_c`` (n, n_led), ``board_c`` (n,), ``led_cal_c`` (n_sub, n_led),
+        ``board_cal_c`` (n_sub,). [degC]
+    """
+    hw = cfg.hardware
+    n, n_sub, n_led = len(ambient_c), len(first_rows), len(cfg.leds.emitters)
+    f_thermal = cfg.noise_factor("led_thermal_drift")
+    heat = hw.led_self_heating_c + f_thermal * hw.led_self_heating_sd_c * streams(
+        "led_thermal_drift"
+    ).normal(size=(n + n_sub, n_led))
+    board_c = board_temperature_c(ambient_c, skin_c, hw.board_skin_weight)
+    return {
+        "led_c": ambient_c[:, None] + heat[:n],
+        "board_c": board_c,
+        "led_cal_c": ambient_c[first_rows][:, None] + heat[n:],
+        "board_cal_c": board_c[first_rows],
+    }
+
+
+def led_ages_h(cfg, subject_index, n_sub: int, streams) -> dict:
+    """Device age at each subject's start-up reference and at each reading. [h]
+
+    The age at start-up is uniform over ``hardware.led_age_h``; each reading follows it
+    by a uniform ``hardware.hours_since_reference_h``.
+    """
+    hw = cfg.hardware
+    rng = streams("led_ageing")
+    age_cal_h = rng.uniform(*hw.led_age_h, size=n_sub)
+    age_h = age_cal_h[subject_index] + rng.uniform(
+        *hw.hours_since_reference_h, size=len(subject_index)
+    )
+    return {"age_h": age_h, "age_cal_h": age_cal_h}
 
 
 def led_power_w(
@@ -114,8 +176,10 @@ def led_peak_shift_nm(led_temperature_c, nm_per_c: float) -> np.ndarray:
     return nm_per_c * (np.asarray(led_temperature_c, dtype=float) - LED_REFERENCE_TEMPERATURE_C)
 
 
-def dark_current_a(i25_a, temperature_c) -> np.ndarray:
-    """Photodiode dark current I25 exp(0.1 (T - 25)) (Hamamatsu [1]_). [A]
+def dark_current_a(
+    i25_a, temperature_c, per_c: float = DARK_CURRENT_DOUBLING_COEFF_PER_C
+) -> np.ndarray:
+    """Photodiode dark current I25 exp(k (T - 25)), k = 0.1 /degC (Hamamatsu [1]_). [A]
 
     Examples
     --------
@@ -123,7 +187,7 @@ def dark_current_a(i25_a, temperature_c) -> np.ndarray:
     2.7183
     """
     t = np.asarray(temperature_c, dtype=float) - 25.0
-    return np.asarray(i25_a) * np.exp(DARK_CURRENT_DOUBLING_COEFF_PER_C * t)
+    return np.asarray(i25_a) * np.exp(per_c * t)
 
 
 def shot_noise_sd_a(current_a, bandwidth_hz: float) -> np.ndarray:
@@ -230,13 +294,13 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
     """
     hw = cfg.hardware
     n, n_led = detected_fraction_led.shape
-    p0 = np.asarray(hw.led_power_mw)[None, :] * 1e-3
-    resp = np.asarray(hw.responsivity_a_per_w)[None, :]
+    p0 = np.asarray(cfg.leds.power_mw)[None, :] * 1e-3
+    resp = np.asarray(cfg.leds.responsivity_a_per_w)[None, :]
     f_thermal = cfg.noise_factor("led_thermal_drift")
     f_age = cfg.noise_factor("led_ageing")
     f_flicker = cfg.noise_factor("led_flicker")
-    thermal = LED_THERMAL_COEFF_PER_C * f_thermal
-    ageing = LED_AGEING_PER_1000H * f_age
+    thermal = hw.led_thermal_coeff_per_c * f_thermal
+    ageing = hw.led_ageing_per_1000h * f_age
     n_sub = int(subject_index.max()) + 1 if n else 0
     flicker = hw.led_flicker_rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
     flicker_cal = (
@@ -256,8 +320,10 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
     i_sig = resp * detected_power_w
     f_dark = cfg.noise_factor("dark_current")
     i25 = hw.dark_current_25c_na * 1e-9
-    dark_now = dark_current_a(i25, temps["board_c"])[:, None]
-    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index])[:, None]
+    dark_now = dark_current_a(i25, temps["board_c"], hw.dark_current_per_c)[:, None]
+    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index], hw.dark_current_per_c)[
+        :, None
+    ]
     i_dark_residual = f_dark * (dark_now - dark_cal)
     f_amb = cfg.noise_factor("ambient_light")
     i_amb = f_amb * temps["ambient_a"][:, None]
@@ -295,7 +361,7 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         ageing_per_1000h=ageing,
     )
     i_ref = resp * p_cal * hw.reference_transmission
-    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"])[:, None]
+    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"], hw.dark_current_per_c)[:, None]
     shot_ref = cfg.noise_factor("shot") * shot_noise_sd_a(i_ref + dark_cal_sub, hw.bandwidth_hz)
     shot_ref = shot_ref * streams("shot.cal").normal(size=(n_sub, n_led))
     johnson_ref = (
