@@ -77,7 +77,7 @@ def ambient_photocurrent_a(
 
     Examples
     --------
-    >>> round(float(ambient_photocurrent_a(1000.0, 1 / 330, 0.3, 6.6e-6, 2.0)) * 1e12, 1)
+    >>> round(float(ambient_photocurrent_a(1000.0, 1 / 330, 0.3, 6.6e-6, 2.0)) * 1e9, 1)
     60.0
     """
     return (
