@@ -14,12 +14,9 @@ LED_SETS = {
 
 def device_overrides(wavelengths_nm, adc_bits: int) -> dict:
     """Simulator overrides for a device with these LEDs and ADC resolution."""
-    n = len(wavelengths_nm)
+    led = {"fwhm_nm": 40.0, "power_mw": 3.0, "responsivity_a_per_w": 0.5}
     return {
-        "leds.wavelengths_nm": tuple(wavelengths_nm),
-        "leds.fwhm_nm": (40.0,) * n,
-        "hardware.led_power_mw": (3.0,) * n,
-        "hardware.responsivity_a_per_w": (0.5,) * n,
+        "leds": [{"wavelength_nm": float(w), **led} for w in wavelengths_nm],
         "hardware.adc_bits": adc_bits,
     }
 

@@ -126,3 +126,116 @@ def test_device_keys_are_sweepable_and_documented():
     with pytest.raises(ConfigError):
         resolve_config("paper", {"device.physiology": "guessed"})
     assert key_info("device.nope").description == ""  # unknown: nothing to describe
+
+
+# --- issue 22: one record per LED; every scenario number in the config ---------------
+
+THREE = [
+    {"wavelength_nm": w, "fwhm_nm": 40.0, "power_mw": 3.0, "responsivity_a_per_w": 0.5}
+    for w in (850.0, 940.0, 1150.0)
+]
+
+
+def test_one_override_changes_the_led_set():
+    cfg = resolve_config("paper", {"leds": THREE})
+    assert cfg.leds.wavelengths_nm == (850.0, 940.0, 1150.0)
+    assert cfg.leds.power_mw == (3.0,) * 3 and cfg.leds.responsivity_a_per_w == (0.5,) * 3
+    assert resolve_config("paper", {"leds.emitters": THREE}) == cfg
+    # recorded: the records are in the config's JSON and come back from it
+    assert ScenarioConfig.model_validate_json(cfg.to_json()) == cfg
+    assert '"power_mw": 3.0' in cfg.to_json()
+
+
+def test_former_per_led_keys_map_onto_the_records():
+    old = {
+        "leds.wavelengths_nm": [850, 940, 1150],
+        "leds.fwhm_nm": [40, 40, 40],
+        "hardware.led_power_mw": [3, 3, 3],
+        "hardware.responsivity_a_per_w": [0.5, 0.5, 0.5],
+    }
+    assert resolve_config("paper", old) == resolve_config("paper", {"leds": THREE})
+    # same count: one former list changes that field only
+    cfg = resolve_config("paper", {"hardware.led_power_mw": [1, 2, 3, 4]})
+    assert cfg.leds.power_mw == (1, 2, 3, 4)
+    assert cfg.leds.fwhm_nm == resolve_config("paper").leds.fwhm_nm
+    # a new count needs every field: the error names the one key that does it
+    with pytest.raises(ConfigError, match=r"gives 3 LEDs but the scenario has 4; .*leds=\["):
+        resolve_config("paper", {"leds.wavelengths_nm": [850, 940, 1150]})
+
+
+def test_config_recorded_in_the_former_layout_still_loads():
+    data = resolve_config("wearable").model_dump(mode="json")
+    data["leds"] = {"band_points": 3, "wavelengths_nm": [850, 940, 1150], "fwhm_nm": [40] * 3}
+    data["hardware"]["led_power_mw"] = [3, 3, 3]
+    data["hardware"]["responsivity_a_per_w"] = [0.5] * 3
+    assert ScenarioConfig.model_validate(data) == resolve_config("wearable", {"leds": THREE})
+
+
+def test_one_led_value_is_a_key():
+    cfg = resolve_config("paper", {"leds.emitters.3.power_mw": 8.0})
+    assert cfg.leds.power_mw == (2.0, 2.0, 2.7, 8.0)
+    with pytest.raises(ConfigError, match="has 4 LEDs"):
+        resolve_config("paper", {"leds.emitters.4.power_mw": 8.0})
+    with pytest.raises(ConfigError, match="unknown config key"):
+        resolve_config("paper", {"leds.emitters.0.colour": "red"})
+    with pytest.raises(ConfigError, match=r"leds\.emitters\.0\.power_mw.*\[mW\]"):
+        resolve_config("paper", {"leds.emitters.0.power_mw": -1})
+    with pytest.raises(ConfigError, match="repeat"):
+        resolve_config("paper", {"leds": THREE + THREE[:1]})
+
+
+#: Numbers that were module constants or inline literals of simulate/ before issue 22,
+#: each with a value that must change the data when swept.
+MOVED = {
+    "physiology.heart_rate_bpm_mean": 90.0,
+    "physiology.systolic_bp_mmhg_per_yr": 1.0,
+    "physiology.skin_temp_c_neutral": 34.0,
+    "physiology.perfusion_per_c": 0.05,
+    "physiology.pulse_depth": 0.05,
+    "physiology.skin_thickness_loss_per_decade": 0.1,
+    "physiology.subcutis_fat_fraction_rise": 0.1,
+    "glucose.dawn_peak_hour": 4.0,
+    "glucose.meal_size_log_sd": 0.5,
+    "contact.pressure_beta": (3.0, 2.0),
+    "hardware.hours_since_reference_h": (0.0, 24.0),
+    "hardware.board_skin_weight": 0.3,
+    "hardware.led_thermal_coeff_per_c": 0.004,
+    "optics.reference_tissue.blood_fraction": 0.03,
+    "environment.perfusion_reference_mbar": 1000.0,
+}
+
+
+@pytest.mark.parametrize(("key", "value"), list(MOVED.items()))
+def test_moved_numbers_are_sweepable_recorded_and_described(key, value):
+    import nirglucose as ng
+
+    info = key_info(key)
+    assert info.unit and info.description, key
+    base = ng.simulate("wearable", 6, 2, 3)
+    moved = ng.simulate("wearable", 6, 2, 3, overrides={key: value})
+    node = moved.config
+    for part in key.split("."):
+        node = getattr(node, part)
+    assert node == value  # recorded in the dataset's config
+    measured = [c for c in base.frame.columns if c.startswith(("adc_", "true_"))]
+    assert not base.frame[measured].equals(moved.frame[measured]), key
+
+
+def test_simulate_modules_hold_no_scenario_constants():
+    from nirglucose import constants
+    from nirglucose.simulate import contact, glucose, hardware, physiology
+
+    # physical constants and datasheet defaults live in nirglucose.constants, with sources
+    for module in (physiology, contact, glucose, hardware):
+        numbers = [
+            n
+            for n, v in vars(module).items()
+            if n.isupper()
+            and not hasattr(constants, n)
+            and not isinstance(v, bool)
+            and (
+                isinstance(v, int | float)
+                or (isinstance(v, tuple) and any(isinstance(x, int | float) for x in v))
+            )
+        ]
+        assert numbers == [], (module.__name__, numbers)

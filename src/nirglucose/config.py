@@ -15,16 +15,29 @@ holds the hardware capabilities a wearable team chooses (:data:`DEVICE_CAPABILIT
 from __future__ import annotations
 
 import json
+import re
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .constants import DEFAULT_LED_WAVELENGTHS_NM
+from .constants import (
+    DARK_CURRENT_DOUBLING_COEFF_PER_C,
+    DEFAULT_LED_WAVELENGTHS_NM,
+    LED_AGEING_PER_1000H,
+    LED_THERMAL_COEFF_PER_C,
+    MGDL_PER_MMOLL_GLUCOSE,
+    WATER_FRACTION_DERMIS_NOMINAL,
+)
 from .exceptions import ConfigError
 
 __all__ = [
     "ScenarioConfig",
+    "LED",
     "LEDConfig",
+    "DEFAULT_LEDS",
+    "LEGACY_LED_KEYS",
+    "ContactConfig",
+    "ReferenceTissue",
     "PhysiologyConfig",
     "GlucoseConfig",
     "EnvironmentConfig",
@@ -47,6 +60,7 @@ __all__ = [
     "apply_overrides",
     "parse_override",
     "valid_keys",
+    "is_valid_key",
 ]
 
 #: Forward optical models selectable by name (``optics.model``).
@@ -100,16 +114,79 @@ def _check_range(value: tuple[float, float], name: str) -> tuple[float, float]:
     return value
 
 
-class LEDConfig(_Model):
-    """The LED set: centre wavelengths and emission bandwidths."""
+class LED(_Model):
+    """One LED of the set: where it emits, how wide, how strong, how well it is detected."""
 
-    wavelengths_nm: tuple[float, ...] = Field(
-        DEFAULT_LED_WAVELENGTHS_NM, description="LED centre wavelengths (the study's four). [nm]"
+    wavelength_nm: float = Field(
+        ..., description="Centre wavelength, within the optics tables' 700-1300 nm. [nm]"
     )
-    fwhm_nm: tuple[float, ...] = Field(
-        (40.0, 45.0, 50.0, 60.0),
+    fwhm_nm: float = Field(
+        ...,
+        gt=0,
         description="Emission full width at half maximum, typical of IR LEDs "
         "(e.g. Vishay VSLY5850 30 nm, TSAL6200 40 nm at 940 nm; longer wavelengths wider). [nm]",
+    )
+    power_mw: float = Field(
+        ...,
+        gt=0,
+        description="Optical power at 25 degC as driven (IR LEDs give 5-40 mW at 20-100 mA; "
+        "chosen per channel so tissue codes sit mid-scale). [mW]",
+    )
+    responsivity_a_per_w: float = Field(
+        ...,
+        gt=0,
+        description="Photodiode responsivity at this LED (the study's set: Hamamatsu S1336 "
+        "typical spectral response read at 850/940/1050/1150 nm). [A/W]",
+    )
+
+    @field_validator("wavelength_nm")
+    @classmethod
+    def _in_tables(cls, v: float) -> float:
+        if not 700.0 <= v <= 1300.0:
+            raise ValueError(
+                f"LED wavelength {v} nm is outside the optics tables' 700-1300 nm range"
+            )
+        return v
+
+
+#: The study's four LEDs: FWHM typical of IR LEDs, power per channel for mid-scale
+#: tissue codes, S1336 responsivity at each wavelength (:class:`LED` field sources).
+DEFAULT_LEDS: tuple[LED, ...] = tuple(
+    LED(wavelength_nm=wl, fwhm_nm=fwhm, power_mw=p, responsivity_a_per_w=r)
+    for wl, fwhm, p, r in zip(
+        DEFAULT_LED_WAVELENGTHS_NM,
+        (40.0, 45.0, 50.0, 60.0),
+        (2.0, 2.0, 2.7, 10.0),
+        (0.58, 0.62, 0.40, 0.15),
+        strict=True,
+    )
+)
+
+#: Per-LED keys of the former layout (before issue 22) -> the :class:`LED` field they set.
+LEGACY_LED_KEYS = {
+    "leds.wavelengths_nm": "wavelength_nm",
+    "leds.fwhm_nm": "fwhm_nm",
+    "hardware.led_power_mw": "power_mw",
+    "hardware.responsivity_a_per_w": "responsivity_a_per_w",
+}
+
+
+class LEDConfig(_Model):
+    """The LED set, one record per LED (``leds.emitters``), and its band integration.
+
+    One override replaces the set: ``leds=[{"wavelength_nm": 850, "fwhm_nm": 40,
+    "power_mw": 2.0, "responsivity_a_per_w": 0.58}, ...]`` (or ``leds.emitters=[...]``);
+    one LED's value is ``leds.emitters.<i>.<field>``. The per-LED tuples the layers use
+    are read-only properties (:attr:`wavelengths_nm`, :attr:`fwhm_nm`, :attr:`power_mw`,
+    :attr:`responsivity_a_per_w`).
+    """
+
+    emitters: tuple[LED, ...] = Field(
+        DEFAULT_LEDS,
+        min_length=1,
+        description="The LED set, one record per LED with wavelength_nm [nm], fwhm_nm [nm], "
+        "power_mw [mW] and responsivity_a_per_w [A/W] (the study's four by default). "
+        "[nm, nm, mW, A/W]",
     )
     band_points: int = Field(
         3,
@@ -120,23 +197,26 @@ class LEDConfig(_Model):
         "subjects <= 0.2 %) that the reference reading absorbs; raise it for accuracy. [-]",
     )
 
+    @model_validator(mode="before")
+    @classmethod
+    def _from_list(cls, data: Any) -> Any:
+        # ``leds=[...]``: the LED records alone; the former {wavelengths_nm, fwhm_nm} layout
+        if isinstance(data, list | tuple):
+            return {"emitters": data}
+        return data
+
     @model_validator(mode="after")
-    def _same_length(self) -> LEDConfig:
-        if len(self.wavelengths_nm) != len(self.fwhm_nm):
-            raise ValueError(
-                f"leds.wavelengths_nm has {len(self.wavelengths_nm)} entries but leds.fwhm_nm "
-                f"has {len(self.fwhm_nm)}; give one bandwidth per LED"
-            )
+    def _unique(self) -> LEDConfig:
         if len(set(self.wavelengths_nm)) != len(self.wavelengths_nm):
-            raise ValueError("leds.wavelengths_nm must not repeat a wavelength")
-        for wl in self.wavelengths_nm:
-            if not 700.0 <= wl <= 1300.0:
-                raise ValueError(
-                    f"LED wavelength {wl} nm is outside the optics tables' 700-1300 nm range"
-                )
-        if any(f <= 0 for f in self.fwhm_nm):
-            raise ValueError("leds.fwhm_nm must be positive")
+            raise ValueError("the LED set must not repeat a wavelength")
         return self
+
+    wavelengths_nm = property(lambda self: tuple(e.wavelength_nm for e in self.emitters))
+    fwhm_nm = property(lambda self: tuple(e.fwhm_nm for e in self.emitters))
+    power_mw = property(lambda self: tuple(e.power_mw for e in self.emitters))
+    responsivity_a_per_w = property(
+        lambda self: tuple(e.responsivity_a_per_w for e in self.emitters)
+    )
 
 
 class PhysiologyConfig(_Model):
@@ -186,6 +266,118 @@ class PhysiologyConfig(_Model):
     systolic_bp_mmhg: tuple[float, float] = Field((90.0, 180.0), description="Range. [mmHg]")
     heart_rate_bpm: tuple[float, float] = Field((50.0, 120.0), description="Range. [1/min]")
     resp_rate_bpm: tuple[float, float] = Field((12.0, 20.0), description="Range. [1/min]")
+    # --- vital signs: cohort (mean, between-subject SD) and within-subject SD ---------
+    heart_rate_bpm_mean: float = Field(
+        72.0, gt=0, description="Resting adult heart rate, 72 +/- 9 /min (normal 60-100; "
+        "Fleming et al., Lancet 377, 1011 (2011)). [1/min]"
+    )
+    heart_rate_bpm_sd: float = Field(9.0, ge=0, description="Between-subject SD. [1/min]")
+    heart_rate_bpm_sd_state: float = Field(
+        4.0, ge=0, description="Within-subject SD between snapshots (an assumption). [1/min]"
+    )
+    resp_rate_bpm_mean: float = Field(
+        16.0, gt=0, description="Adult respiratory rate, 16 +/- 1.5 /min (normal 12-20; "
+        "Fleming et al. 2011). [1/min]"
+    )
+    resp_rate_bpm_sd: float = Field(1.5, ge=0, description="Between-subject SD. [1/min]")
+    resp_rate_bpm_sd_state: float = Field(
+        1.0, ge=0, description="Within-subject SD between snapshots (an assumption). [1/min]"
+    )
+    systolic_bp_mmhg_at_18: float = Field(
+        110.0, gt=0, description="Mean systolic pressure at 18 yr (Framingham). [mmHg]"
+    )
+    systolic_bp_mmhg_per_yr: float = Field(
+        0.5, description="Rise of systolic pressure per year of age (Framingham). [mmHg/yr]"
+    )
+    systolic_bp_mmhg_sd: float = Field(12.0, ge=0, description="Between-subject SD. [mmHg]")
+    systolic_bp_mmhg_sd_state: float = Field(
+        5.0, ge=0, description="Within-subject SD between snapshots (an assumption). [mmHg]"
+    )
+    stress_systolic_mmhg: float = Field(
+        8.0, description="Systolic rise under acute mental stress (order of the laboratory "
+        "responses reviewed by Kario et al., Hypertens. Res. 26, 355 (2003)). [mmHg]"
+    )
+    stress_heart_rate_bpm: float = Field(
+        10.0, description="Heart-rate rise under acute mental stress (Kario et al. 2003). [1/min]"
+    )
+    # --- skin thickness and subcutaneous fat -------------------------------------------
+    skin_thickness_mm_per_bmi: float = Field(
+        0.03, description="Skin-thickness growth per kg/m^2 of BMI (an assumption of size). "
+        "[mm/(kg/m^2)]"
+    )
+    skin_thickness_bmi_ref_kgm2: float = Field(
+        25.0, gt=0, description="BMI at which skin_thickness_mm_mean applies. [kg/m^2]"
+    )
+    skin_thickness_loss_per_decade: float = Field(
+        0.06, ge=0, le=1, description="Relative thinning per decade of age (Shuster et al., "
+        "Br. J. Dermatol. 93, 639 (1975)). [1/decade]"
+    )
+    skin_thickness_loss_onset_yr: float = Field(
+        40.0, ge=0, description="Age at which thinning starts (Shuster et al. 1975). [yr]"
+    )
+    subcutis_fat_fraction_min: float = Field(
+        0.7, gt=0, lt=1, description="Subcutis fat volume fraction at the lowest BMI of "
+        "subcutis_fat_bmi_kgm2 (SOURCES.md layer table: 0.7-0.9). [-]"
+    )
+    subcutis_fat_fraction_rise: float = Field(
+        0.2, ge=0, lt=1, description="Rise of the fat fraction across subcutis_fat_bmi_kgm2, "
+        "linear in BMI (an assumption; SOURCES.md: 0.7-0.9). [-]"
+    )
+    subcutis_fat_bmi_kgm2: tuple[float, float] = Field(
+        (18.0, 40.0), description="BMI range over which the fat fraction rises. [kg/m^2]"
+    )
+    water_fraction_nominal: float = Field(
+        WATER_FRACTION_DERMIS_NOMINAL,
+        gt=0,
+        lt=1,
+        description="Nominal dermal water volume fraction, 0.6-0.7 (Meglinski & Matcher, "
+        "Physiol. Meas. 23, 741 (2002)). [-]",
+    )
+    nominal_fitzpatrick_type: int = Field(
+        3, ge=1, le=6, description="Fitzpatrick type of every subject at variation_scale 0. [-]"
+    )
+    # --- skin temperature and perfusion ------------------------------------------------
+    skin_temp_c_neutral: float = Field(
+        33.0, description="Skin temperature under the probe at skin_temp_ambient_ref_c "
+        "(thermoneutral skin about 33 degC). [degC]"
+    )
+    skin_temp_ambient_ref_c: float = Field(
+        25.0, description="Ambient temperature at which skin sits at skin_temp_c_neutral. [degC]"
+    )
+    skin_temp_per_ambient: float = Field(
+        0.3, ge=0, le=1, description="Skin-temperature change per degC of ambient (an "
+        "assumption of the wrist's coupling). [-]"
+    )
+    skin_temp_c_sd_state: float = Field(
+        0.7, ge=0, description="Within-subject SD of skin temperature (an assumption). [degC]"
+    )
+    perfusion_per_c: float = Field(
+        0.03, description="Relative perfusion change per degC of skin above skin_temp_c_neutral "
+        "(vasodilation; sign from Charkoudian, Mayo Clin. Proc. 78, 603 (2003), size an "
+        "assumption). [1/degC]"
+    )
+    perfusion_per_mmhg: float = Field(
+        0.002, description="Relative perfusion change per mmHg of systolic pressure above "
+        "perfusion_ref_systolic_mmhg (an assumption). [1/mmHg]"
+    )
+    perfusion_ref_systolic_mmhg: float = Field(
+        120.0, gt=0, description="Systolic pressure of nominal perfusion. [mmHg]"
+    )
+    pulse_depth: float = Field(
+        0.02, ge=0, lt=1, description="Cardiac blood-volume modulation depth: PPG perfusion "
+        "index about 1-2 % in the NIR (Lima & Bakker, Crit. Care Med. 30, 1210 (2002)). [-]"
+    )
+    resp_depth: float = Field(
+        0.005, ge=0, lt=1, description="Respiratory blood-volume modulation depth, smaller "
+        "than the cardiac one (an assumption). [-]"
+    )
+    saturation_limits: tuple[float, float] = Field(
+        (0.3, 0.98), description="Dermal SO2 is clipped to this range. [-]"
+    )
+    blood_fraction_limits: tuple[float, float] = Field(
+        (1e-4, 0.2), description="Dermal blood volume fraction is clipped to this range "
+        "(above Meglinski 2002's 0.002-0.05 either side). [-]"
+    )
     variation_scale: float = Field(
         1.0,
         ge=0,
@@ -200,6 +392,9 @@ class PhysiologyConfig(_Model):
         "systolic_bp_mmhg",
         "heart_rate_bpm",
         "resp_rate_bpm",
+        "subcutis_fat_bmi_kgm2",
+        "saturation_limits",
+        "blood_fraction_limits",
     )(lambda v, info: _check_range(v, info.field_name))
 
     @field_validator("fitzpatrick_probs")
@@ -251,6 +446,21 @@ class GlucoseConfig(_Model):
     range_mgdl: tuple[float, float] = Field(
         (60.0, 400.0), description="Snapshots are reflected into this range. [mg/dL]"
     )
+    hours_since_meal_h: tuple[float, float] = Field(
+        (0.0, 6.0), description="Range of the time since the last meal, drawn uniformly "
+        "(an excursion has decayed 6 h after a meal). [h]"
+    )
+    meal_size_log_sd: float = Field(
+        0.3, ge=0, description="SD of ln(meal size), a log-normal factor on the excursion "
+        "(an assumption). [-]"
+    )
+    dawn_peak_hour: float = Field(
+        6.0, ge=0, le=24, description="Hour of day of the dawn-phenomenon peak (Rizza et al., "
+        "N. Engl. J. Med. 310, 746 (1984): early morning). [h]"
+    )
+    dawn_width_h: float = Field(
+        2.0, gt=0, description="Width of the Gaussian dawn rise (an assumption). [h]"
+    )
     # --- optical magnitudes (SOURCES.md, Glucose section: weakly sourced) -------------
     water_displacement_per_mm: float = Field(
         1.1e-4,
@@ -301,6 +511,9 @@ class GlucoseConfig(_Model):
             raise ValueError(
                 f"glucose.range_mgdl must lie within 20-600 mg/dL, got {self.range_mgdl}"
             )
+        m_lo, m_hi = _check_range(self.hours_since_meal_h, "glucose.hours_since_meal_h")
+        if m_lo < 0:
+            raise ValueError(f"glucose.hours_since_meal_h must be >= 0, got {m_lo}")
         return self
 
 
@@ -334,7 +547,14 @@ class EnvironmentConfig(_Model):
     pressure_mbar: tuple[float, float] = Field((950.0, 1050.0), description="Range. [mbar]")
     perfusion_per_mbar: float = Field(
         1.0e-3,
-        description="Relative blood-volume change per mbar above 1013 (an assumption). [1/mbar]",
+        description="Relative blood-volume change per mbar above perfusion_reference_mbar "
+        "(an assumption). [1/mbar]",
+    )
+    perfusion_reference_mbar: float = Field(
+        1013.25,
+        ge=300,
+        le=1100,
+        description="Pressure of nominal perfusion: the standard atmosphere (ISO 2533). [mbar]",
     )
     ambient_lux: tuple[float, float] = Field(
         (10.0, 1000.0), description="Illuminance range, drawn log-uniformly. [lx]"
@@ -364,6 +584,33 @@ class EnvironmentConfig(_Model):
         return self
 
 
+class ReferenceTissue(_Model):
+    """The skin that fixes the Beer-Lambert geometry factor: the default cohort's centre."""
+
+    blood_fraction: float = Field(
+        0.02, gt=0, lt=0.2, description="As physiology.blood_fraction_median. [-]"
+    )
+    saturation: float = Field(0.7, gt=0, lt=1, description="As physiology.saturation_mean. [-]")
+    water_fraction: float = Field(
+        WATER_FRACTION_DERMIS_NOMINAL,
+        gt=0,
+        lt=1,
+        description="Nominal dermal water, 0.6-0.7 (Meglinski & Matcher 2002). [-]",
+    )
+    subcutis_fat_fraction: float = Field(
+        0.8, gt=0, lt=1, description="Subcutis fat at the cohort's mid BMI (0.7-0.9). [-]"
+    )
+    glucose_mgdl: float = Field(100.0, gt=0, description="A normal fasting glucose. [mg/dL]")
+    skin_thickness_mm: float = Field(
+        1.8, gt=0, description="As physiology.skin_thickness_mm_mean. [mm]"
+    )
+
+    @property
+    def glucose_mm(self) -> float:
+        """Glucose in mmol/L. [mM]"""
+        return self.glucose_mgdl / MGDL_PER_MMOLL_GLUCOSE
+
+
 class OpticsConfig(_Model):
     """Forward optical model and probe geometry."""
 
@@ -381,6 +628,7 @@ class OpticsConfig(_Model):
         0.08, gt=0, le=0.3, description="Living epidermis 50-100 um (SOURCES.md). [mm]"
     )
     tissue_refractive_index: float = Field(1.4, ge=1.3, le=1.6, description="Dermis n. [-]")
+    reference_tissue: ReferenceTissue = ReferenceTissue()
     lut_solver: Literal["monte-carlo", "diffusion"] = Field(
         "monte-carlo",
         description=(
@@ -393,11 +641,6 @@ class OpticsConfig(_Model):
 class HardwareConfig(_Model):
     """LEDs, photodiode, transimpedance amplifier and ADC."""
 
-    led_power_mw: tuple[float, ...] = Field(
-        (2.0, 2.0, 2.7, 10.0),
-        description="LED optical power at 25 degC as driven (IR LEDs give 5-40 mW at "
-        "20-100 mA; chosen per channel so tissue codes sit mid-scale). [mW]",
-    )
     led_self_heating_c: float = Field(
         8.0, ge=0, description="Junction temperature above ambient while pulsed. [degC]"
     )
@@ -406,6 +649,29 @@ class HardwareConfig(_Model):
         "drive (an assumption). [degC]"
     )
     led_age_h: tuple[float, float] = Field((0.0, 5000.0), description="Device age range. [h]")
+    hours_since_reference_h: tuple[float, float] = Field(
+        (0.0, 72.0),
+        description="Range of the time between a subject's start-up reference and each "
+        "measurement (snapshots over up to three days). [h]",
+    )
+    led_thermal_coeff_per_c: float = Field(
+        LED_THERMAL_COEFF_PER_C,
+        ge=0,
+        description="Relative LED power loss per degC above 25 (Vishay TSAL6200 datasheet, "
+        "about -0.2 %/K). [1/degC]",
+    )
+    led_ageing_per_1000h: float = Field(
+        LED_AGEING_PER_1000H,
+        ge=0,
+        description="Relative LED power loss per 1000 h of operation (DESIGN.md). [1/(1000 h)]",
+    )
+    board_skin_weight: float = Field(
+        0.5,
+        ge=0,
+        le=1,
+        description="Board temperature = (1 - w) ambient + w skin: the board sits between "
+        "air and skin (an assumption: halfway). [-]",
+    )
     led_flicker_rel: float = Field(
         0.001, ge=0, description="Relative flicker SD, N(0, 0.1 %) (DESIGN.md). [-]"
     )
@@ -415,13 +681,14 @@ class HardwareConfig(_Model):
         description="Peak shift with junction temperature, 0.2-0.3 nm/K "
         "(Vishay TSAL6200 / VSLY5850 datasheets). [nm/degC]",
     )
-    responsivity_a_per_w: tuple[float, ...] = Field(
-        (0.58, 0.62, 0.40, 0.15),
-        description="Si PIN photodiode responsivity at each LED (Hamamatsu S1336 typical "
-        "spectral response, read at 850/940/1050/1150 nm). [A/W]",
-    )
     dark_current_25c_na: float = Field(
         0.1, ge=0, description="Dark current at 25 degC (S1223: 0.1 nA typ at 10 V). [nA]"
+    )
+    dark_current_per_c: float = Field(
+        DARK_CURRENT_DOUBLING_COEFF_PER_C,
+        ge=0,
+        description="Dark current grows as exp(k (T - 25)), doubling about every 7 degC "
+        "(Hamamatsu 'Si photodiodes' technical note). [1/degC]",
     )
     bandwidth_hz: float = Field(
         10.0, gt=0, description="Equivalent noise bandwidth after in-device averaging. [Hz]"
@@ -523,6 +790,26 @@ class ContactConfig(_Model):
         le=0.5,
         description="Skin-thickness loss at full contact pressure (assumption). [-]",
     )
+    pressure_beta: tuple[float, float] = Field(
+        (2.0, 2.0),
+        description="Beta(a, b) shape of a hand-placed probe's contact pressure, a share of "
+        "full scale (an assumption: unimodal, mean 0.5). [-]",
+    )
+    constant_force_pressure: float = Field(
+        0.5,
+        ge=0,
+        le=1,
+        description="Contact pressure held by a constant-force probe (device.constant_force_probe"
+        "), a share of full scale: the mean of Beta(2, 2), so the cohort's mean blanching and "
+        "compression are unchanged. [-]",
+    )
+
+    @field_validator("pressure_beta")
+    @classmethod
+    def _positive(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if min(v) <= 0:
+            raise ValueError(f"contact.pressure_beta needs positive shapes, got {v}")
+        return v
 
 
 #: Pulse-oximeter accuracy: FDA premarket guidance ("Pulse Oximeters - Premarket
@@ -606,16 +893,29 @@ class ScenarioConfig(_Model):
     device: DeviceConfig = DeviceConfig()
     noise: NoiseConfig = NoiseConfig()
 
-    @model_validator(mode="after")
-    def _per_led(self) -> ScenarioConfig:
-        n = len(self.leds.wavelengths_nm)
-        for name in ("led_power_mw", "responsivity_a_per_w"):
-            if len(getattr(self.hardware, name)) != n:
-                raise ValueError(
-                    f"hardware.{name} needs one value per LED ({n}), "
-                    f"got {len(getattr(self.hardware, name))}"
-                )
-        return self
+    @model_validator(mode="before")
+    @classmethod
+    def _former_layout(cls, data: Any) -> Any:
+        # configs recorded before issue 22 kept per-LED values in four parallel lists
+        if not isinstance(data, dict):
+            return data
+        leds, hw = data.get("leds"), data.get("hardware")
+        old = {}
+        if isinstance(leds, dict):
+            old.update({f"leds.{k}": leds[k] for k in ("wavelengths_nm", "fwhm_nm") if k in leds})
+        if isinstance(hw, dict):
+            per_led = ("led_power_mw", "responsivity_a_per_w")
+            old.update({f"hardware.{k}": hw[k] for k in per_led if k in hw})
+        if not old:
+            return data
+        data = dict(data)
+        former = ("wavelengths_nm", "fwhm_nm", "led_power_mw", "responsivity_a_per_w")
+        leds = leds if isinstance(leds, dict) else {}
+        data["leds"] = {k: v for k, v in leds.items() if k not in former}
+        data["hardware"] = {k: v for k, v in (hw or {}).items() if k not in former}
+        base = [e.model_dump() for e in DEFAULT_LEDS]
+        data["leds"]["emitters"] = _merge_legacy_leds(base, old)
+        return data
 
     def noise_factor(self, source: str) -> float:
         """Effective multiplier of a noise source: enabled x scale x ``noise_scale``."""
@@ -786,12 +1086,94 @@ def parse_override(text: str) -> tuple[str, Any]:
     return key, value
 
 
+#: ``leds.emitters.<i>.<field>``: one value of one LED.
+_PER_LED_KEY = re.compile(r"leds\.emitters\.(\d+)\.(\w+)")
+
+
+def is_valid_key(dotted: str) -> bool:
+    """Whether :func:`apply_overrides` accepts a dotted key.
+
+    Besides :func:`valid_keys`: ``leds`` (the whole LED set, a list of records), one
+    LED's value ``leds.emitters.<i>.<field>`` and the former per-LED list keys
+    (:data:`LEGACY_LED_KEYS`).
+
+    Examples
+    --------
+    >>> is_valid_key("leds.emitters.3.power_mw"), is_valid_key("leds.emitters.0.colour")
+    (True, False)
+    """
+    if dotted in valid_keys() or dotted == "leds" or dotted in LEGACY_LED_KEYS:
+        return True
+    m = _PER_LED_KEY.fullmatch(dotted)
+    return bool(m) and m.group(2) in LED.model_fields
+
+
+def _merge_legacy_leds(emitters: list[dict], old: dict[str, Any]) -> list[dict]:
+    """LED records with the former per-LED lists (:data:`LEGACY_LED_KEYS`) merged in."""
+    for key, value in old.items():
+        if not isinstance(value, list | tuple):
+            raise ConfigError(f"{key} needs one value per LED (a list), got {value!r}")
+    counts = {key: len(value) for key, value in old.items()}
+    if len(set(counts.values())) > 1:
+        lengths = ", ".join(f"{k}: {n}" for k, n in counts.items())
+        raise ConfigError(f"the per-LED lists differ in length ({lengths}); give one per LED")
+    n = next(iter(counts.values()))
+    if n != len(emitters) and len(old) < len(LEGACY_LED_KEYS):
+        key = next(iter(old))
+        raise ConfigError(
+            f"{key} gives {n} LEDs but the scenario has {len(emitters)}; set a new LED set with "
+            'one key: leds=[{"wavelength_nm": ..., "fwhm_nm": ..., "power_mw": ..., '
+            '"responsivity_a_per_w": ...}, ...]'
+        )
+    out = [dict(e) for e in emitters] if n == len(emitters) else [{} for _ in range(n)]
+    for key, value in old.items():
+        for record, v in zip(out, value, strict=True):
+            record[LEGACY_LED_KEYS[key]] = v
+    return out
+
+
+def _plain(value: Any) -> Any:
+    """A value with models dumped and tuples as lists (LED records given as :class:`LED`)."""
+    if isinstance(value, BaseModel):
+        return value.model_dump(mode="json")
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _set_per_led(out: dict[str, Any], dotted: str, value: Any) -> None:
+    m = _PER_LED_KEY.fullmatch(dotted)
+    assert m is not None
+    emitters = out["leds"]["emitters"]
+    i = int(m.group(1))
+    if i >= len(emitters):
+        raise ConfigError(
+            f"{dotted}: the scenario has {len(emitters)} LEDs (indices 0-{len(emitters) - 1})"
+        )
+    emitters[i][m.group(2)] = value
+
+
 def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
-    """Return a copy of a config dict with dotted overrides set; unknown keys raise."""
+    """Return a copy of a config dict with dotted overrides set; unknown keys raise.
+
+    Whole values are set first (``leds`` is ``leds.emitters``), then the former per-LED
+    lists (:data:`LEGACY_LED_KEYS`) are merged into the LED records, then single LED
+    values (``leds.emitters.<i>.<field>``).
+    """
     out = json.loads(json.dumps(data))
     keys = set(valid_keys())
+    legacy: dict[str, Any] = {}
+    per_led: dict[str, Any] = {}
     for dotted, value in overrides.items():
+        if dotted == "leds" and isinstance(value, list | tuple):
+            dotted = "leds.emitters"
+        if dotted in LEGACY_LED_KEYS:
+            legacy[dotted] = value
+            continue
         if dotted not in keys:
+            if is_valid_key(dotted):
+                per_led[dotted] = value
+                continue
             from .config_keys import suggest_keys
 
             close = suggest_keys(dotted, keys)
@@ -803,7 +1185,11 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
         parts = dotted.split(".")
         for part in parts[:-1]:
             node = node.setdefault(part, {})
-        node[parts[-1]] = list(value) if isinstance(value, tuple) else value
+        node[parts[-1]] = _plain(value)
+    if legacy:
+        out["leds"]["emitters"] = _merge_legacy_leds(out["leds"]["emitters"], legacy)
+    for dotted, value in per_led.items():
+        _set_per_led(out, dotted, value)
     return out
 
 

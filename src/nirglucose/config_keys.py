@@ -17,6 +17,7 @@ from __future__ import annotations
 import difflib
 import re
 from collections.abc import Iterable
+from typing import get_args
 
 from pydantic import BaseModel
 
@@ -42,19 +43,28 @@ class KeyInfo(tuple):
     description = property(lambda self: self[2])
 
 
+def _model_of(ann) -> type[BaseModel] | None:
+    """The model a field holds: itself, or the item of a tuple of records (``leds.emitters``)."""
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return ann
+    args = [a for a in get_args(ann) if a is not Ellipsis]
+    if len(args) == 1 and isinstance(args[0], type) and issubclass(args[0], BaseModel):
+        return args[0]
+    return None
+
+
 def _field(dotted: str):
     from .config import ScenarioConfig
 
-    model: type[BaseModel] = ScenarioConfig
+    model: type[BaseModel] | None = ScenarioConfig
     field = None
     for part in dotted.split("."):
+        if part.isdigit() and field is not None and _model_of(field.annotation) is not None:
+            continue  # one record of a tuple of records: leds.emitters.<i>.<field>
         if model is None or part not in model.model_fields:
             return None
         field = model.model_fields[part]
-        ann = field.annotation
-        model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else None
-    if field is None and model is None:
-        return None
+        model = _model_of(field.annotation)
     return field
 
 
@@ -65,14 +75,16 @@ def key_info(dotted: str) -> KeyInfo:
     ----------
     dotted : str
         A key of :func:`nirglucose.config.valid_keys`, e.g. ``"hardware.adc_bits"``.
-        A noise source's ``enabled`` / ``scale`` are described from the source.
+        A noise source's ``enabled`` / ``scale`` are described from the source; one
+        LED's value (``leds.emitters.2.power_mw``) from the LED record's field, and
+        ``leds`` as ``leds.emitters``.
 
     Returns
     -------
     KeyInfo
         The key, its unit (``"-"`` for a dimensionless one) and its description.
     """
-    field = _field(dotted)
+    field = _field("leds.emitters" if dotted == "leds" else dotted)
     text = (field.description or "") if field is not None else ""
     if not text and dotted.startswith("noise.") and dotted.count(".") == 2:
         source, attr = dotted.split(".")[1:]

@@ -66,7 +66,7 @@ HUGE = ["hardware.adc_vref_v=1e300", "hardware.tia_gain_ohm=1e300", "glucose.sig
         "environment.pressure_mbar_sd=1e308", "hardware.bandwidth_hz=1e308",
         "hardware.led_age_h=[0,1e308]", "contact.coupling_sd=1e9",
         "physiology.variation_scale=1e308",
-        "hardware.led_power_mw=[1e308,1,1,1]", "measurement.age_yr=1e308"]
+        "leds.emitters.0.power_mw=1e308", "measurement.age_yr=1e308"]
 
 
 @pytest.mark.parametrize("setting", HUGE)

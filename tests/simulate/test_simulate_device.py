@@ -13,7 +13,6 @@ import pytest
 import nirglucose as ng
 from nirglucose.config import DEVICE_CAPABILITIES, resolve_config
 from nirglucose.simulate.measurement import PMF_COLUMNS, PPG_COLUMNS
-from nirglucose.simulate.simulator import CONSTANT_FORCE_CONTACT
 
 WL = ("850", "940", "1050", "1150")
 N_SUBJECTS, PER = 500, 4
@@ -83,9 +82,10 @@ def test_constant_force_probe_removes_contact_variation():
     cfg = {"device.constant_force_probe": True}
     f = ng.simulate("wearable", 200, 3, 4, overrides=cfg).frame
     free = ng.simulate("wearable", 200, 3, 4).frame
+    c = resolve_config("wearable").contact
+    CONSTANT_FORCE_CONTACT = c.constant_force_pressure  # noqa: N806
     assert (f["true_contact_pressure"] == CONSTANT_FORCE_CONTACT).all()
     assert free["true_contact_pressure"].std() > 0.1
-    c = resolve_config("wearable").contact
     blanch = f["true_blood_fraction_detected"] / f["true_blood_fraction"]
     np.testing.assert_allclose(blanch, np.exp(-c.blanching * CONSTANT_FORCE_CONTACT), rtol=1e-12)
     thick = f["true_skin_thickness_probe_mm"] / f["true_skin_thickness_mm"]

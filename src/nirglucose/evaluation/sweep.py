@@ -308,9 +308,9 @@ def _is_number(v: Any) -> bool:
 
 def _check_values(preset: str, key: str, values: Sequence[Any], base: Mapping[str, Any]) -> None:
     """Check every value of a varied key against the key's type and range."""
-    from ..config import resolve_config, valid_keys
+    from ..config import is_valid_key, resolve_config
 
-    if key not in valid_keys():
+    if not is_valid_key(key):
         resolve_config(preset, {**base, key: values[0]})  # raises with a hint
     default = _default_value(preset, key, base)
     for v in values:

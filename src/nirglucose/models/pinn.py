@@ -82,14 +82,12 @@ def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig |
     wl = tuple(float(w) for w in (wavelengths_nm or base.leds.wavelengths_nm))
     if wl == tuple(base.leds.wavelengths_nm):
         return base, "paper preset (the data carries no scenario)"
-    n = len(wl)
-    hw = base.hardware
-    overrides = {
-        "leds.wavelengths_nm": wl,
-        "leds.fwhm_nm": (float(np.mean(base.leds.fwhm_nm)),) * n,
-        "hardware.led_power_mw": (float(np.mean(hw.led_power_mw)),) * n,
-        "hardware.responsivity_a_per_w": (float(np.mean(hw.responsivity_a_per_w)),) * n,
+    led = {
+        "fwhm_nm": float(np.mean(base.leds.fwhm_nm)),
+        "power_mw": float(np.mean(base.leds.power_mw)),
+        "responsivity_a_per_w": float(np.mean(base.leds.responsivity_a_per_w)),
     }
+    overrides = {"leds": [{"wavelength_nm": w, **led} for w in wl]}
     try:
         return resolve_config("paper", overrides), "paper preset at the data's LEDs"
     except ConfigError as exc:

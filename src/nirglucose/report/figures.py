@@ -728,7 +728,7 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
         ],
         [
             box("Hardware", ("hardware",), [
-                f"LED power {', '.join(f'{p:g}' for p in hw.led_power_mw)} mW",
+                f"LED power {', '.join(f'{p:g}' for p in config.leds.power_mw)} mW",
                 f"TIA gain {hw.tia_gain_ohm:.0e} Ω",
                 f"ADC {hw.adc_bits} bit, {hw.adc_vref_v:g} V",
             ], "hardware"),

@@ -18,6 +18,7 @@ from ._random import RandomStreams, truncated_normal
 __all__ = [
     "LIGHT_SOURCES",
     "ambient_photocurrent_a",
+    "ambient_at_probe",
     "sample_environment",
     "apply_environment",
 ]
@@ -76,7 +77,7 @@ def ambient_photocurrent_a(
 
     Examples
     --------
-    >>> round(float(ambient_photocurrent_a(1000.0, 1 / 330, 0.3, 6.6e-6, 2.0)) * 1e12, 1)
+    >>> round(float(ambient_photocurrent_a(1000.0, 1 / 330, 0.3, 6.6e-6, 2.0)) * 1e9, 1)
     60.0
     """
     return (
@@ -86,6 +87,33 @@ def ambient_photocurrent_a(
         * np.asarray(responsivity_a_per_w)
         * 10.0 ** (-baffle_optical_density)
     )
+
+
+def ambient_at_probe(cfg: ScenarioConfig, env: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Ambient photocurrent of each reading and its source's residual flicker.
+
+    Looks up each reading's light source in :data:`LIGHT_SOURCES` and applies
+    :func:`ambient_photocurrent_a` through the baffle (``environment.baffle_optical_density``)
+    onto the photodiode (``optics.detector_area_mm2``).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Photocurrent (n,) [A] and relative flicker between LED-off and LED-on readings (n,) [-].
+    """
+    names = tuple(LIGHT_SOURCES)
+    table = np.array([LIGHT_SOURCES[k] for k in names])
+    light = env["true_light_source"]
+    idx = np.array([names.index(c) for c in light.categories], dtype=int)[light.codes]
+    w_per_lux, resp_amb, flicker = (table[idx, j] for j in range(3))
+    current_a = ambient_photocurrent_a(
+        env["true_ambient_lux"],
+        w_per_lux,
+        resp_amb,
+        cfg.optics.detector_area_mm2 * 1e-6,
+        cfg.environment.baffle_optical_density,
+    )
+    return current_a, flicker
 
 
 def sample_environment(

@@ -22,7 +22,13 @@ import pandas as pd
 from ..config import ScenarioConfig
 from ._random import RandomStreams
 
-__all__ = ["DIABETES_STATUSES", "meal_excursion", "reflect_into_range", "sample_glucose"]
+__all__ = [
+    "DIABETES_STATUSES",
+    "meal_excursion",
+    "dawn_profile",
+    "reflect_into_range",
+    "sample_glucose",
+]
 
 DIABETES_STATUSES = ("normal", "prediabetes", "type1", "type2")
 
@@ -37,6 +43,20 @@ def meal_excursion(hours_since_meal: np.ndarray, peak_h: float) -> np.ndarray:
     """
     x = np.asarray(hours_since_meal, dtype=float) / peak_h
     return x * np.exp(1.0 - x)
+
+
+def dawn_profile(hour_of_day: np.ndarray, peak_hour: float, width_h: float) -> np.ndarray:
+    """Normalised dawn-phenomenon rise exp(-((h - h_peak) / w)^2): 1 at the peak [2]_.
+
+    The early-morning peak is from Rizza et al. [2]_; the Gaussian shape and width are
+    assumptions (``glucose.dawn_peak_hour``, ``glucose.dawn_width_h``).
+
+    Examples
+    --------
+    >>> float(dawn_profile(6.0, 6.0, 2.0))
+    1.0
+    """
+    return np.exp(-(((np.asarray(hour_of_day, dtype=float) - peak_hour) / width_h) ** 2))
 
 
 def reflect_into_range(x: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -68,14 +88,14 @@ def sample_glucose(
 
     n = n_subjects * per_subject
     rep = np.repeat(np.arange(n_subjects), per_subject)
-    hours_since_meal = rng.uniform(0.0, 6.0, size=n)
-    meal_size = rng.lognormal(0.0, 0.3, size=n)
+    hours_since_meal = rng.uniform(*g.hours_since_meal_h, size=n)
+    meal_size = rng.lognormal(0.0, g.meal_size_log_sd, size=n)
     peak = np.array([g.meal_peak_mgdl[k] for k in names])[status_idx][rep]
     stressed = rng.random(size=n) < g.stress_prob
     stress_rise = np.where(stressed, rng.uniform(*g.stress_mgdl, size=n), 0.0)
-    hour = rng.uniform(0.0, 24.0, size=n)
+    hour = rng.uniform(0.0, 24.0, size=n)  # hour of day
     dawn = np.array([g.dawn_mgdl[k] for k in names])[status_idx][rep]
-    dawn_rise = dawn * np.exp(-(((hour - 6.0) / 2.0) ** 2))
+    dawn_rise = dawn * dawn_profile(hour, g.dawn_peak_hour, g.dawn_width_h)
     raw = (
         baseline[rep]
         + peak * meal_size * meal_excursion(hours_since_meal, g.meal_peak_h)

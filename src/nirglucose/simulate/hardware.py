@@ -44,6 +44,9 @@ from ..constants import (
 from ..exceptions import ConfigError
 
 __all__ = [
+    "board_temperature_c",
+    "led_temperatures_c",
+    "led_ages_h",
     "led_power_w",
     "led_peak_shift_nm",
     "dark_current_a",
@@ -52,6 +55,65 @@ __all__ = [
     "adc_inl_lsb",
     "adc_convert",
 ]
+
+
+def board_temperature_c(ambient_c, skin_c, skin_weight: float = 0.5) -> np.ndarray:
+    """Board temperature between air and skin, (1 - w) T_ambient + w T_skin. [degC]
+
+    The board sits between the air and the skin it is strapped to; halfway
+    (``hardware.board_skin_weight`` = 0.5) is an assumption of this package.
+
+    Examples
+    --------
+    >>> float(board_temperature_c(20.0, 34.0))
+    27.0
+    """
+    return (1.0 - skin_weight) * np.asarray(ambient_c) + skin_weight * np.asarray(skin_c)
+
+
+def led_temperatures_c(cfg, ambient_c, skin_c, first_rows, streams) -> dict:
+    """Junction and board temperatures of each reading and of the start-up reference.
+
+    A pulsed LED's junction sits ``hardware.led_self_heating_c`` above ambient, with an
+    SD of ``led_self_heating_sd_c`` between readings (scaled by the
+    ``led_thermal_drift`` noise source); the junction's forward-voltage heating is the
+    mechanism of the datasheets' thermal coefficients [3]_. The reference is read at
+    each subject's first reading's ambient.
+
+    Returns
+    -------
+    dict
+        ``led_c`` (n, n_led), ``board_c`` (n,), ``led_cal_c`` (n_sub, n_led),
+        ``board_cal_c`` (n_sub,). [degC]
+    """
+    hw = cfg.hardware
+    n, n_sub, n_led = len(ambient_c), len(first_rows), len(cfg.leds.emitters)
+    f_thermal = cfg.noise_factor("led_thermal_drift")
+    heat = hw.led_self_heating_c + f_thermal * hw.led_self_heating_sd_c * streams(
+        "led_thermal_drift"
+    ).normal(size=(n + n_sub, n_led))
+    board_c = board_temperature_c(ambient_c, skin_c, hw.board_skin_weight)
+    return {
+        "led_c": ambient_c[:, None] + heat[:n],
+        "board_c": board_c,
+        "led_cal_c": ambient_c[first_rows][:, None] + heat[n:],
+        "board_cal_c": board_c[first_rows],
+    }
+
+
+def led_ages_h(cfg, subject_index, n_sub: int, streams) -> dict:
+    """Device age at each subject's start-up reference and at each reading. [h]
+
+    The age at start-up is uniform over ``hardware.led_age_h``; each reading follows it
+    by a uniform ``hardware.hours_since_reference_h``.
+    """
+    hw = cfg.hardware
+    rng = streams("led_ageing")
+    age_cal_h = rng.uniform(*hw.led_age_h, size=n_sub)
+    age_h = age_cal_h[subject_index] + rng.uniform(
+        *hw.hours_since_reference_h, size=len(subject_index)
+    )
+    return {"age_h": age_h, "age_cal_h": age_cal_h}
 
 
 def led_power_w(
@@ -114,8 +176,10 @@ def led_peak_shift_nm(led_temperature_c, nm_per_c: float) -> np.ndarray:
     return nm_per_c * (np.asarray(led_temperature_c, dtype=float) - LED_REFERENCE_TEMPERATURE_C)
 
 
-def dark_current_a(i25_a, temperature_c) -> np.ndarray:
-    """Photodiode dark current I25 exp(0.1 (T - 25)) (Hamamatsu [1]_). [A]
+def dark_current_a(
+    i25_a, temperature_c, per_c: float = DARK_CURRENT_DOUBLING_COEFF_PER_C
+) -> np.ndarray:
+    """Photodiode dark current I25 exp(k (T - 25)), k = 0.1 /degC (Hamamatsu [1]_). [A]
 
     Examples
     --------
@@ -123,7 +187,7 @@ def dark_current_a(i25_a, temperature_c) -> np.ndarray:
     2.7183
     """
     t = np.asarray(temperature_c, dtype=float) - 25.0
-    return np.asarray(i25_a) * np.exp(DARK_CURRENT_DOUBLING_COEFF_PER_C * t)
+    return np.asarray(i25_a) * np.exp(per_c * t)
 
 
 def shot_noise_sd_a(current_a, bandwidth_hz: float) -> np.ndarray:
@@ -230,85 +294,44 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
     """
     hw = cfg.hardware
     n, n_led = detected_fraction_led.shape
-    p0 = np.asarray(hw.led_power_mw)[None, :] * 1e-3
-    resp = np.asarray(hw.responsivity_a_per_w)[None, :]
-    f_thermal = cfg.noise_factor("led_thermal_drift")
-    f_age = cfg.noise_factor("led_ageing")
-    f_flicker = cfg.noise_factor("led_flicker")
-    thermal = LED_THERMAL_COEFF_PER_C * f_thermal
-    ageing = LED_AGEING_PER_1000H * f_age
     n_sub = int(subject_index.max()) + 1 if n else 0
-    flicker = hw.led_flicker_rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
-    flicker_cal = (
-        hw.led_flicker_rel * f_flicker * streams("led_flicker.cal").normal(size=(n_sub, n_led))
-    )
+    p0 = np.asarray(cfg.leds.power_mw)[None, :] * 1e-3
+    resp = np.asarray(cfg.leds.responsivity_a_per_w)[None, :]
+    p_led, p_cal = _led_powers(cfg, p0, temps, n_sub, streams)
+    inl = cfg.noise_factor("adc_inl") * hw.adc_inl_lsb
 
     # Measurement: LED power, optics, photocurrent.
-    p_led = led_power_w(
-        p0,
-        temps["led_c"],
-        temps["age_h"][:, None],
-        flicker,
-        thermal_coeff_per_c=thermal,
-        ageing_per_1000h=ageing,
-    )
     detected_power_w = p_led * detected_fraction_led
     i_sig = resp * detected_power_w
-    f_dark = cfg.noise_factor("dark_current")
     i25 = hw.dark_current_25c_na * 1e-9
-    dark_now = dark_current_a(i25, temps["board_c"])[:, None]
-    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index])[:, None]
-    i_dark_residual = f_dark * (dark_now - dark_cal)
-    f_amb = cfg.noise_factor("ambient_light")
-    i_amb = f_amb * temps["ambient_a"][:, None]
+    dark_now = dark_current_a(i25, temps["board_c"], hw.dark_current_per_c)[:, None]
+    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index], hw.dark_current_per_c)[
+        :, None
+    ]
+    i_dark_residual = cfg.noise_factor("dark_current") * (dark_now - dark_cal)
+    i_amb = cfg.noise_factor("ambient_light") * temps["ambient_a"][:, None]
     amb_residual = (
         i_amb
         * (1.0 - hw.ambient_rejection)
         * temps["ambient_flicker"][:, None]
         * streams("ambient_light").normal(size=(n, n_led))
     )
-    i_total_shot = i_sig + dark_now + i_amb
-    shot = cfg.noise_factor("shot") * shot_noise_sd_a(i_total_shot, hw.bandwidth_hz)
-    shot = shot * streams("shot").normal(size=(n, n_led))
-    johnson = (
-        cfg.noise_factor("johnson")
-        * johnson_noise_sd_a(temps["board_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
-        * streams("johnson").normal(size=(n, n_led))
+    shot, johnson = _front_end_noise_a(
+        cfg, i_sig + dark_now + i_amb, temps["board_c"], ("shot", "johnson"), streams
     )
     voltage = (i_sig + i_dark_residual + amb_residual + shot + johnson) * hw.tia_gain_ohm
-    offset = (
-        cfg.noise_factor("adc_offset_drift")
-        * hw.adc_offset_drift_lsb_per_c
-        * (temps["board_c"][:, None] - 25.0)
-    )
-    inl = cfg.noise_factor("adc_inl") * hw.adc_inl_lsb
+    offset = _offset_lsb(cfg, temps["board_c"])
     adc = adc_convert(voltage, hw.adc_vref_v, hw.adc_bits, inl, offset)
 
     # Reference at start-up, once per subject: the same LED through a neutral
     # attenuator, no tissue; ``*_cal_*`` temperatures and ages are per subject.
-    p_cal = led_power_w(
-        p0,
-        temps["led_cal_c"],
-        temps["age_cal_h"][:, None],
-        flicker_cal,
-        thermal_coeff_per_c=thermal,
-        ageing_per_1000h=ageing,
-    )
     i_ref = resp * p_cal * hw.reference_transmission
-    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"])[:, None]
-    shot_ref = cfg.noise_factor("shot") * shot_noise_sd_a(i_ref + dark_cal_sub, hw.bandwidth_hz)
-    shot_ref = shot_ref * streams("shot.cal").normal(size=(n_sub, n_led))
-    johnson_ref = (
-        cfg.noise_factor("johnson")
-        * johnson_noise_sd_a(temps["board_cal_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
-        * streams("johnson.cal").normal(size=(n_sub, n_led))
+    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"], hw.dark_current_per_c)[:, None]
+    shot_ref, johnson_ref = _front_end_noise_a(
+        cfg, i_ref + dark_cal_sub, temps["board_cal_c"], ("shot.cal", "johnson.cal"), streams
     )
     v_ref = (i_ref + shot_ref + johnson_ref) * hw.tia_gain_ohm
-    offset_ref = (
-        cfg.noise_factor("adc_offset_drift")
-        * hw.adc_offset_drift_lsb_per_c
-        * (temps["board_cal_c"][:, None] - 25.0)
-    )
+    offset_ref = _offset_lsb(cfg, temps["board_cal_c"])
     adc_ref = adc_convert(v_ref, hw.adc_vref_v, hw.adc_bits, inl, offset_ref)[subject_index]
     if cfg.device.monitor_photodiode:
         # A monitor photodiode reads the same LED pulse through the reference path's
@@ -316,12 +339,8 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         # with the monitor's own dark-current residual, shot and Johnson noise and its
         # own conversion (quantisation, INL, offset at this board temperature).
         i_mon = resp * p_led * hw.reference_transmission
-        shot_mon = cfg.noise_factor("shot") * shot_noise_sd_a(i_mon + dark_now, hw.bandwidth_hz)
-        shot_mon = shot_mon * streams("monitor.shot").normal(size=(n, n_led))
-        johnson_mon = (
-            cfg.noise_factor("johnson")
-            * johnson_noise_sd_a(temps["board_c"][:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
-            * streams("monitor.johnson").normal(size=(n, n_led))
+        shot_mon, johnson_mon = _front_end_noise_a(
+            cfg, i_mon + dark_now, temps["board_c"], ("monitor.shot", "monitor.johnson"), streams
         )
         v_mon = (i_mon + i_dark_residual + shot_mon + johnson_mon) * hw.tia_gain_ohm
         adc_ref = adc_convert(v_mon, hw.adc_vref_v, hw.adc_bits, inl, offset)
@@ -333,3 +352,52 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         "voltage_v": voltage,
         "detected_power_w": detected_power_w,
     }
+
+
+def _led_powers(cfg, p0, temps: dict, n_sub: int, streams):
+    """LED power of each reading and of each subject's start-up reference. [W]"""
+    hw = cfg.hardware
+    n_led = p0.shape[1]
+    f_flicker = cfg.noise_factor("led_flicker")
+    thermal = hw.led_thermal_coeff_per_c * cfg.noise_factor("led_thermal_drift")
+    ageing = hw.led_ageing_per_1000h * cfg.noise_factor("led_ageing")
+    n = len(temps["age_h"])
+    flicker = hw.led_flicker_rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
+    flicker_cal = (
+        hw.led_flicker_rel * f_flicker * streams("led_flicker.cal").normal(size=(n_sub, n_led))
+    )
+    powers = (
+        led_power_w(
+            p0,
+            temps[f"led{cal}_c"],
+            temps[f"age{cal}_h"][:, None],
+            draws,
+            thermal_coeff_per_c=thermal,
+            ageing_per_1000h=ageing,
+        )
+        for cal, draws in (("", flicker), ("_cal", flicker_cal))
+    )
+    return tuple(powers)
+
+
+def _front_end_noise_a(cfg, shot_current_a, board_c, stream_names, streams):
+    """Shot noise of a photocurrent and the TIA resistor's Johnson noise, drawn. [A]"""
+    hw = cfg.hardware
+    size = np.shape(shot_current_a)
+    shot = cfg.noise_factor("shot") * shot_noise_sd_a(shot_current_a, hw.bandwidth_hz)
+    shot = shot * streams(stream_names[0]).normal(size=size)
+    johnson = (
+        cfg.noise_factor("johnson")
+        * johnson_noise_sd_a(board_c[:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
+        * streams(stream_names[1]).normal(size=size)
+    )
+    return shot, johnson
+
+
+def _offset_lsb(cfg, board_c) -> np.ndarray:
+    """ADC offset drift from its 25 degC calibration at a board temperature. [LSB]"""
+    return (
+        cfg.noise_factor("adc_offset_drift")
+        * cfg.hardware.adc_offset_drift_lsb_per_c
+        * (board_c[:, None] - LED_REFERENCE_TEMPERATURE_C)
+    )

@@ -18,48 +18,22 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import ScenarioConfig
-from ..constants import FITZPATRICK_MELANIN_FRACTION_RANGES, WATER_FRACTION_DERMIS_NOMINAL
+from ..constants import FITZPATRICK_MELANIN_FRACTION_RANGES
 from ._random import RandomStreams, truncated_normal
 
 __all__ = [
     "melanin_fraction_from_fitzpatrick",
     "subcutis_fat_fraction",
     "skin_temperature_c",
+    "skin_thickness_mean_mm",
     "sample_traits",
     "sample_state",
     "apply_physiology",
 ]
 
-#: Relative perfusion change per degC of skin temperature (vasodilation; assumption
-#: of size, sign from e.g. Charkoudian, Mayo Clin. Proc. 78, 603 (2003)). [1/degC]
-PERFUSION_PER_C = 0.03
-#: Cardiac and respiratory blood-volume modulation depths: a PPG perfusion index of
-#: about 1-2 % at the wrist/finger in the NIR (Lima & Bakker, Crit. Care Med. 30, 1210
-#: (2002)) and a smaller respiratory-induced variation. [-]
-PULSE_DEPTH = 0.02
-RESP_DEPTH = 0.005
-#: Skin temperature: about 33 degC at thermoneutral ambient, rising about 0.3 degC per
-#: degC of ambient (an assumption of the wrist's coupling). [degC], [-]
-SKIN_TEMP_NEUTRAL_C = 33.0
-#: Cohort vital signs, (mean, between-subject SD): resting heart rate of adults about
-#: 72 +/- 9 /min and respiratory rate 16 +/- 1.5 /min (normal ranges 60-100 and 12-20;
-#: e.g. Fleming et al., Lancet 377, 1011 (2011)). [1/min]
-HEART_RATE_BPM = (72.0, 9.0)
-RESP_RATE_BPM = (16.0, 1.5)
-#: Systolic pressure at 18 yr, its rise per year of age (Framingham, about 0.5 mmHg/yr)
-#: and between-subject SD. [mmHg], [mmHg/yr], [mmHg]
-SBP_AT_18_MMHG, SBP_PER_YR_MMHG, SBP_SD_MMHG = 110.0, 0.5, 12.0
-#: Within-subject SD between snapshots of systolic pressure, heart rate, respiratory rate
-#: and skin temperature (assumptions of plausible size). [mmHg], [1/min], [1/min], [degC]
-SBP_STATE_SD_MMHG, HR_STATE_SD_BPM, RR_STATE_SD_BPM, SKIN_TEMP_STATE_SD_C = 5.0, 4.0, 1.0, 0.7
-#: Acute mental stress raises systolic pressure about 8 mmHg and heart rate about
-#: 10 /min (order of the laboratory stress responses reviewed by Kario et al., Hypertens.
-#: Res. 26, 355 (2003)). [mmHg], [1/min]
-STRESS_SBP_MMHG, STRESS_HR_BPM = 8.0, 10.0
-#: Skin thickness grows about 0.03 mm per kg/m^2 of BMI (an assumption of size) and thins
-#: about 6 % per decade after 40 (Shuster et al. 1975). [mm/(kg/m^2)], [1/decade]
-THICKNESS_PER_BMI_MM, THICKNESS_LOSS_PER_DECADE = 0.03, 0.06
-SKIN_TEMP_PER_AMBIENT = 0.3
+# Every number of this layer is a field of :class:`~nirglucose.config.PhysiologyConfig`
+# (the source of each in its description), so a sweep can vary it and every output
+# records it.
 
 
 def melanin_fraction_from_fitzpatrick(fitzpatrick_type: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -89,25 +63,64 @@ def melanin_fraction_from_fitzpatrick(fitzpatrick_type: np.ndarray, u: np.ndarra
     return lo[idx] + np.asarray(u) * (hi[idx] - lo[idx])
 
 
-def subcutis_fat_fraction(bmi_kgm2: np.ndarray) -> np.ndarray:
-    """Fat volume fraction of the subcutis, 0.7 at BMI 18 to 0.9 at BMI 40.
+def subcutis_fat_fraction(
+    bmi_kgm2: np.ndarray,
+    fat_min: float = 0.7,
+    fat_rise: float = 0.2,
+    bmi_range_kgm2: tuple[float, float] = (18.0, 40.0),
+) -> np.ndarray:
+    """Fat volume fraction of the subcutis, rising linearly with BMI.
 
-    SOURCES.md layer table gives 0.7-0.9; the linear rise with BMI is an assumption.
+    f = fat_min + fat_rise clip((BMI - BMI_lo) / (BMI_hi - BMI_lo), 0, 1): 0.7 at BMI 18
+    to 0.9 at BMI 40 by default. SOURCES.md layer table gives 0.7-0.9; the linear rise
+    with BMI is an assumption (``physiology.subcutis_fat_*``).
 
     Examples
     --------
-    >>> float(subcutis_fat_fraction(29.0))
+    >>> round(float(subcutis_fat_fraction(29.0)), 12)
     0.8
     """
-    return 0.7 + 0.2 * np.clip((np.asarray(bmi_kgm2) - 18.0) / 22.0, 0.0, 1.0)
+    lo, hi = bmi_range_kgm2
+    return fat_min + fat_rise * np.clip((np.asarray(bmi_kgm2) - lo) / (hi - lo), 0.0, 1.0)
 
 
-def skin_temperature_c(ambient_c: np.ndarray) -> np.ndarray:
+def skin_temperature_c(
+    ambient_c: np.ndarray,
+    neutral_c: float = 33.0,
+    per_ambient: float = 0.3,
+    ambient_ref_c: float = 25.0,
+) -> np.ndarray:
     """Mean skin temperature under a probe at a given ambient temperature.
 
-    T_skin = 33 + 0.3 (T_ambient - 25) degC (assumption; see module constants).
+    T_skin = T_neutral + k (T_ambient - T_ref): 33 + 0.3 (T_ambient - 25) degC by
+    default (thermoneutral skin about 33 degC; the coupling k is an assumption,
+    ``physiology.skin_temp_*``). [degC]
+
+    Examples
+    --------
+    >>> float(skin_temperature_c(35.0))
+    36.0
     """
-    return SKIN_TEMP_NEUTRAL_C + SKIN_TEMP_PER_AMBIENT * (np.asarray(ambient_c) - 25.0)
+    return neutral_c + per_ambient * (np.asarray(ambient_c) - ambient_ref_c)
+
+
+def skin_thickness_mean_mm(cfg: ScenarioConfig, bmi_kgm2: np.ndarray, age_yr: np.ndarray):
+    """Subject's expected skin thickness from BMI and age, within the configured range.
+
+    T = T0 + a (BMI - BMI_ref) - l T0 max(age - onset, 0) / 10: thicker with BMI (an
+    assumption of size) and about 6 % thinner per decade after 40 (Shuster et al., Br.
+    J. Dermatol. 93, 639 (1975)). [mm]
+    """
+    p = cfg.physiology
+    mean = (
+        p.skin_thickness_mm_mean
+        + p.skin_thickness_mm_per_bmi * (bmi_kgm2 - p.skin_thickness_bmi_ref_kgm2)
+        - p.skin_thickness_loss_per_decade
+        * p.skin_thickness_mm_mean
+        * np.maximum(age_yr - p.skin_thickness_loss_onset_yr, 0.0)
+        / 10.0
+    )
+    return np.clip(mean, *p.skin_thickness_mm)
 
 
 def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
@@ -121,22 +134,22 @@ def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
     if v > 0:
         fitz = 1 + rng.choice(6, p=np.asarray(p.fitzpatrick_probs), size=n)
     else:
-        fitz = np.full(n, 3)
+        fitz = np.full(n, p.nominal_fitzpatrick_type)
         rng.random(size=n)  # keep the stream's consumption independent of the scale
     melanin = melanin_fraction_from_fitzpatrick(fitz, 0.5 + v * (rng.random(size=n) - 0.5))
-    thickness_mean = (
-        p.skin_thickness_mm_mean
-        + THICKNESS_PER_BMI_MM * (bmi - 25.0)
-        - THICKNESS_LOSS_PER_DECADE * p.skin_thickness_mm_mean * np.maximum(age - 40.0, 0.0) / 10.0
-    )
-    thickness_mean = np.clip(thickness_mean, *p.skin_thickness_mm)
+    thickness_mean = skin_thickness_mean_mm(cfg, bmi, age)
     thickness = truncated_normal(
         rng, thickness_mean, v * p.skin_thickness_mm_sd, *p.skin_thickness_mm, size=n
     )
-    sbp_mid = SBP_AT_18_MMHG + SBP_PER_YR_MMHG * (age - 18.0)
-    sbp = truncated_normal(rng, sbp_mid, v * SBP_SD_MMHG, *p.systolic_bp_mmhg, size=n)
-    hr = truncated_normal(rng, HEART_RATE_BPM[0], v * HEART_RATE_BPM[1], *p.heart_rate_bpm, size=n)
-    rr = truncated_normal(rng, RESP_RATE_BPM[0], v * RESP_RATE_BPM[1], *p.resp_rate_bpm, size=n)
+    # Framingham: systolic pressure about 0.5 mmHg/yr higher with age
+    sbp_mid = p.systolic_bp_mmhg_at_18 + p.systolic_bp_mmhg_per_yr * (age - 18.0)
+    sbp = truncated_normal(rng, sbp_mid, v * p.systolic_bp_mmhg_sd, *p.systolic_bp_mmhg, size=n)
+    hr = truncated_normal(
+        rng, p.heart_rate_bpm_mean, v * p.heart_rate_bpm_sd, *p.heart_rate_bpm, size=n
+    )
+    rr = truncated_normal(
+        rng, p.resp_rate_bpm_mean, v * p.resp_rate_bpm_sd, *p.resp_rate_bpm, size=n
+    )
     log_blood = np.log(p.blood_fraction_median) + v * p.blood_fraction_log_sd_subject * rng.normal(
         size=n
     )
@@ -147,7 +160,9 @@ def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
         "true_fitzpatrick_type": fitz.astype(np.int64),
         "true_melanin_fraction": melanin,
         "true_skin_thickness_mm": thickness,
-        "true_subcutis_fat_fraction": subcutis_fat_fraction(bmi),
+        "true_subcutis_fat_fraction": subcutis_fat_fraction(
+            bmi, p.subcutis_fat_fraction_min, p.subcutis_fat_fraction_rise, p.subcutis_fat_bmi_kgm2
+        ),
         "_sbp_base": sbp,
         "_hr_base": hr,
         "_rr_base": rr,
@@ -174,43 +189,52 @@ def sample_state(
     hydration = lim * np.tanh(hydration / lim)  # stays inside +/- limit, smoothly
     sbp = np.clip(
         traits["_sbp_base"]
-        + v * SBP_STATE_SD_MMHG * rng.normal(size=n_rows)
-        + STRESS_SBP_MMHG * stress,
+        + v * p.systolic_bp_mmhg_sd_state * rng.normal(size=n_rows)
+        + p.stress_systolic_mmhg * stress,
         *p.systolic_bp_mmhg,
     )
     hr = np.clip(
-        traits["_hr_base"] + v * HR_STATE_SD_BPM * rng.normal(size=n_rows) + STRESS_HR_BPM * stress,
+        traits["_hr_base"]
+        + v * p.heart_rate_bpm_sd_state * rng.normal(size=n_rows)
+        + p.stress_heart_rate_bpm * stress,
         *p.heart_rate_bpm,
     )
     rr = np.clip(
-        traits["_rr_base"] + v * RR_STATE_SD_BPM * rng.normal(size=n_rows), *p.resp_rate_bpm
+        traits["_rr_base"] + v * p.resp_rate_bpm_sd_state * rng.normal(size=n_rows),
+        *p.resp_rate_bpm,
     )
     skin_temp = skin_temperature_c(
-        env["true_ambient_temperature_c"]
-    ) + v * SKIN_TEMP_STATE_SD_C * rng.normal(size=n_rows)
+        env["true_ambient_temperature_c"],
+        p.skin_temp_c_neutral,
+        p.skin_temp_per_ambient,
+        p.skin_temp_ambient_ref_c,
+    ) + v * p.skin_temp_c_sd_state * rng.normal(size=n_rows)
     saturation = np.clip(
-        p.saturation_mean + v * p.saturation_sd * rng.normal(size=n_rows), 0.3, 0.98
+        p.saturation_mean + v * p.saturation_sd * rng.normal(size=n_rows), *p.saturation_limits
     )
     log_blood = (
         traits["_log_blood_base"]
         + v * p.blood_fraction_log_sd_state * rng.normal(size=n_rows)
-        + PERFUSION_PER_C * (skin_temp - SKIN_TEMP_NEUTRAL_C)
-        + 0.002 * (sbp - 120.0)
-        + cfg.environment.perfusion_per_mbar * (env["true_pressure_mbar"] - 1013.25)
+        + p.perfusion_per_c * (skin_temp - p.skin_temp_c_neutral)
+        + p.perfusion_per_mmhg * (sbp - p.perfusion_ref_systolic_mmhg)
+        + cfg.environment.perfusion_per_mbar
+        * (env["true_pressure_mbar"] - cfg.environment.perfusion_reference_mbar)
     )
     pulse = cfg.noise_factor("pulsation")
     phase = streams("pulsation").uniform(0.0, 2.0 * np.pi, size=(2, n_rows))
-    modulation = 1.0 + pulse * (PULSE_DEPTH * np.sin(phase[0]) + RESP_DEPTH * np.sin(phase[1]))
+    modulation = 1.0 + pulse * (
+        p.pulse_depth * np.sin(phase[0]) + p.resp_depth * np.sin(phase[1])
+    )
     blood = np.exp(log_blood) * modulation
     return {
         "true_hydration_pct": 100.0 + hydration,
-        "true_water_fraction": WATER_FRACTION_DERMIS_NOMINAL * (1.0 + hydration / 100.0),
+        "true_water_fraction": p.water_fraction_nominal * (1.0 + hydration / 100.0),
         "true_systolic_bp_mmhg": sbp,
         "true_heart_rate_bpm": hr,
         "true_resp_rate_bpm": rr,
         "true_skin_temp_c": skin_temp,
         "true_saturation": saturation,
-        "true_blood_fraction": np.clip(blood, 1e-4, 0.2),
+        "true_blood_fraction": np.clip(blood, *p.blood_fraction_limits),
     }
 
 

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..config import ScenarioConfig
+from ..config import ReferenceTissue, ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import forward, tissue
-from . import _random, environment, hardware, measurement, physiology
+from . import _random, contact, environment, hardware, measurement, physiology
 from ._random import RandomStreams
 from .glucose import sample_glucose
 
@@ -31,23 +31,12 @@ __all__ = [
     "scenario_band_spectra",
 ]
 
-#: Nominal skin (the centre of the default cohort): used to fix the Beer-Lambert
-#: geometry factor and as the operating point of the 'lab' preset. [SI-like units below]
+#: The default reference skin (``optics.reference_tissue``) as a dict, for callers
+#: without a scenario (the PINN regulariser). [fractions, mM, mm]
 NOMINAL = {
-    "blood_fraction": 0.02,
-    "saturation": 0.7,
-    "water_fraction": 0.65,
-    "subcutis_fat_fraction": 0.8,
-    "glucose_mm": 100.0 / MGDL_PER_MMOLL_GLUCOSE,
-    "skin_thickness_mm": 1.8,
+    **ReferenceTissue().model_dump(exclude={"glucose_mgdl"}),
+    "glucose_mm": ReferenceTissue().glucose_mm,
 }
-#: Contact pressure of a constant-force probe (``device.constant_force_probe``), as a
-#: share of full scale: the mean of the Beta(2, 2) draw of a hand-placed probe, so the
-#: cohort's mean blanching and compression are unchanged. [-]
-CONSTANT_FORCE_CONTACT = 0.5
-#: Hours between a subject's start-up reference and each measurement (snapshots taken
-#: over up to three days). [h]
-HOURS_SINCE_REFERENCE = (0.0, 72.0)
 
 
 @dataclass(frozen=True)
@@ -72,16 +61,15 @@ def scenario_band_spectra(cfg: ScenarioConfig) -> tissue.BandSpectra:
 
 def _tables(cfg: ScenarioConfig) -> _Tables:
     spectra = scenario_band_spectra(cfg)
+    ref = cfg.optics.reference_tissue
     optics = tissue.tissue_optics(
         spectra,
-        nominal_tissue(1),
+        nominal_tissue(1, ref),
         water_displacement_per_mm=0.0,
         scattering_rel_per_mm=0.0,
     )
     sep_cm = cfg.optics.source_detector_mm / 10.0
-    mua, musp, _ = forward.mixed_optics(
-        optics, np.array([NOMINAL["skin_thickness_mm"] / 10.0]), sep_cm
-    )
+    mua, musp, _ = forward.mixed_optics(optics, np.array([ref.skin_thickness_mm / 10.0]), sep_cm)
     geometry = forward.geometry_factor(
         mua[0],
         musp[0],
@@ -187,17 +175,18 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
     return out
 
 
-def nominal_tissue(n: int) -> tissue.TissueState:
-    """The nominal tissue composition repeated ``n`` times."""
+def nominal_tissue(n: int, reference: ReferenceTissue | None = None) -> tissue.TissueState:
+    """The reference tissue composition (``optics.reference_tissue``) repeated ``n`` times."""
+    ref = ReferenceTissue() if reference is None else reference
     return tissue.TissueState(
         *(
-            np.full(n, NOMINAL[k])
-            for k in (
-                "blood_fraction",
-                "saturation",
-                "water_fraction",
-                "subcutis_fat_fraction",
-                "glucose_mm",
+            np.full(n, v)
+            for v in (
+                ref.blood_fraction,
+                ref.saturation,
+                ref.water_fraction,
+                ref.subcutis_fat_fraction,
+                ref.glucose_mm,
             )
         )
     )
@@ -221,67 +210,35 @@ def simulate_block(
     per_subject: int,
     tables: _Tables | None = None,
 ) -> tuple[dict, int]:
-    """Simulate one block of subjects; returns ``(columns, n_random_variates)``."""
+    """Simulate one block of subjects; returns ``(columns, n_random_variates)``.
+
+    Orders the layers (each draws from its own named streams of the block):
+    glucose, environment, physiology, measurement, contact, LED temperatures and ages,
+    optics, ambient light, hardware, PPG.
+    """
     tables = _tables(cfg) if tables is None else tables
     streams = RandomStreams(seed, block)
     n = n_sub * per_subject
     rep = np.repeat(np.arange(n_sub), per_subject)
     first = np.arange(0, n, per_subject)
-    hw = cfg.hardware
 
     glucose = sample_glucose(cfg, n_sub, per_subject, streams)
     env = environment.apply_environment(cfg, n_sub, per_subject, streams)
     traits = physiology.sample_traits(cfg, n_sub, streams)
     traits_rows = {k: v[rep] for k, v in traits.items()}
     phys = physiology.apply_physiology(cfg, traits_rows, env, glucose, n, streams)
+    pmf = measurement.measure_physiology(cfg, {**phys, **env}, streams)
+    probe = contact.apply_contact(cfg, phys, env, pmf, streams)
 
-    # Contact pressure and humidity change the optical coupling and the path.
-    f_contact = cfg.noise_factor("contact_pressure")
-    rng_contact = streams("contact_pressure")
-    contact = rng_contact.beta(2.0, 2.0, size=n)
-    coupling_z = rng_contact.normal(size=n)
-    if cfg.device.constant_force_probe:  # held at the mean: no variation between readings
-        contact = np.full(n, CONSTANT_FORCE_CONTACT)
-        coupling_z = np.zeros(n)
-    lo, hi = cfg.environment.humidity_pct
-    wet = (env["true_humidity_pct"] - lo) / (hi - lo)
-    truth_out = {**phys, **env}
-    pmf = measurement.measure_physiology(cfg, truth_out, streams)
-    if cfg.device.humidity_compensation:
-        # firmware divides out the coupling-vs-RH curve at the RH sensor's reading: what
-        # remains is the curve at the sensor's error
-        wet = wet - (pmf["humidity_pct"] - lo) / (hi - lo)
-    coupling = np.exp(
-        f_contact * cfg.contact.coupling_sd * coupling_z
-        - cfg.noise_factor("humidity_coupling") * cfg.environment.humidity_coupling_loss * wet
+    temps = hardware.led_temperatures_c(
+        cfg, env["true_ambient_temperature_c"], phys["true_skin_temp_c"], first, streams
     )
-    blood = phys["true_blood_fraction"] * np.exp(-f_contact * cfg.contact.blanching * contact)
-    thickness_mm = phys["true_skin_thickness_mm"] * np.exp(
-        -f_contact * cfg.contact.compression * contact
-    )
-
-    # Temperatures: LED junctions, the board (between air and skin), the start-up reference.
-    n_led = len(cfg.leds.wavelengths_nm)
-    f_thermal = cfg.noise_factor("led_thermal_drift")
-    rng_t = streams("led_thermal_drift")
-    heat = hw.led_self_heating_c + f_thermal * hw.led_self_heating_sd_c * rng_t.normal(
-        size=(n + n_sub, n_led)
-    )
-    t_amb = env["true_ambient_temperature_c"]
-    led_c = t_amb[:, None] + heat[:n]
-    board_c = 0.5 * (t_amb + phys["true_skin_temp_c"])
-    led_cal_c = t_amb[first][:, None] + heat[n:]
-    board_cal_c = board_c[first]
-    rng_age = streams("led_ageing")
-    age_cal_h = rng_age.uniform(*hw.led_age_h, size=n_sub)
-    age_h = age_cal_h[rep] + rng_age.uniform(*HOURS_SINCE_REFERENCE, size=n)
+    temps.update(hardware.led_ages_h(cfg, rep, n_sub, streams))
     shift_nm = cfg.noise_factor("led_wavelength_shift") * hardware.led_peak_shift_nm(
-        led_c, hw.led_wavelength_shift_nm_per_c
+        temps["led_c"], cfg.hardware.led_wavelength_shift_nm_per_c
     )
-
-    # Optics: detected fraction per band node, weighted by the LED emission.
     state = tissue.TissueState(
-        blood,
+        probe["true_blood_fraction_detected"],
         phys["true_saturation"],
         phys["true_water_fraction"],
         phys["true_subcutis_fat_fraction"],
@@ -289,40 +246,50 @@ def simulate_block(
     )
     fraction = (
         _band_detected_fraction(
-            cfg, tables, state, phys["true_melanin_fraction"], thickness_mm, shift_nm
+            cfg,
+            tables,
+            state,
+            phys["true_melanin_fraction"],
+            probe["true_skin_thickness_probe_mm"],
+            shift_nm,
         )
-        * coupling[:, None]
+        * probe["true_coupling"][:, None]
     )
-
-    # Ambient light through the baffle.
-    light = env["true_light_source"]
-    idx = np.array([tables.light_names.index(c) for c in light.categories], dtype=int)[light.codes]
-    w_per_lux, resp_amb, flick = (t[idx] for t in tables.ambient)
-    ambient_a = environment.ambient_photocurrent_a(
-        env["true_ambient_lux"],
-        w_per_lux,
-        resp_amb,
-        cfg.optics.detector_area_mm2 * 1e-6,
-        cfg.environment.baffle_optical_density,
-    )
-    temps = {
-        "led_c": led_c,
-        "board_c": board_c,
-        "age_h": age_h,
-        "led_cal_c": led_cal_c,
-        "board_cal_c": board_cal_c,
-        "age_cal_h": age_cal_h,
-        "ambient_a": ambient_a,
-        "ambient_flicker": flick,
-    }
+    temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, env)
     hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
     if cfg.device.ppg_perfusion_spo2:
-        pmf.update(measurement.measure_ppg(cfg, blood, phys["true_saturation"], streams))
-
-    wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
-    cols: dict[str, np.ndarray] = {
+        pmf.update(
+            measurement.measure_ppg(
+                cfg, probe["true_blood_fraction_detected"], phys["true_saturation"], streams
+            )
+        )
+    ids = {
         "subject_id": (first_subject + rep).astype(np.int64),
         "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
+    }
+    truth = {**phys, **env, **probe, **_hidden(glucose, temps, fraction, shift_nm, hwout)}
+    return _columns(cfg, ids, glucose, hwout, pmf, env, truth), streams.n_variates
+
+
+def _hidden(glucose: dict, temps: dict, fraction, shift_nm, hwout: dict) -> dict:
+    """The ``true_*`` columns of the glucose and hardware layers (per LED by wavelength)."""
+    out = {
+        "true_led_temperature_c": temps["led_c"].mean(axis=1),
+        "true_board_temperature_c": temps["board_c"],
+        "true_hours_since_meal": glucose["true_hours_since_meal"],
+        "true_stress": glucose["true_stress"],
+        "true_hour_of_day": glucose["true_hour_of_day"],
+        "_fraction": fraction,
+        "_shift_nm": np.broadcast_to(shift_nm, fraction.shape),
+    }
+    return out
+
+
+def _columns(cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, truth: dict):
+    """The dataset's columns in their fixed order: ids, target, codes, PMF, truths (sorted)."""
+    wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
+    cols: dict[str, np.ndarray] = {
+        **ids,
         "glucose_mgdl": glucose["glucose_mgdl"],
         "diabetes_status": glucose["diabetes_status"],
     }
@@ -332,26 +299,14 @@ def simulate_block(
         cols[f"adc_ref_{w}"] = hwout["adc_ref"][:, i]
     cols.update(pmf)
     cols["ambient_lux"] = env["true_ambient_lux"]
-    truth_out.update(
-        {
-            "true_blood_fraction_detected": blood,
-            "true_skin_thickness_probe_mm": thickness_mm,
-            "true_contact_pressure": contact,
-            "true_coupling": coupling,
-            "true_led_temperature_c": led_c.mean(axis=1),
-            "true_board_temperature_c": board_c,
-            "true_hours_since_meal": glucose["true_hours_since_meal"],
-            "true_stress": glucose["true_stress"],
-            "true_hour_of_day": glucose["true_hour_of_day"],
-        }
-    )
+    fraction, shift = truth.pop("_fraction"), truth.pop("_shift_nm")
     for i, w in enumerate(wl):
-        truth_out[f"true_detected_fraction_{w}"] = fraction[:, i]
-        truth_out[f"true_led_shift_nm_{w}"] = np.broadcast_to(shift_nm, (n, n_led))[:, i]
-        truth_out[f"true_signal_v_{w}"] = hwout["signal_v"][:, i]
-        truth_out[f"true_voltage_v_{w}"] = hwout["voltage_v"][:, i]
-    cols.update(dict(sorted(truth_out.items())))
-    return cols, streams.n_variates
+        truth[f"true_detected_fraction_{w}"] = fraction[:, i]
+        truth[f"true_led_shift_nm_{w}"] = shift[:, i]
+        truth[f"true_signal_v_{w}"] = hwout["signal_v"][:, i]
+        truth[f"true_voltage_v_{w}"] = hwout["voltage_v"][:, i]
+    cols.update(dict(sorted(truth.items())))
+    return cols
 
 
 def iter_blocks(
