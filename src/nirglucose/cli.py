@@ -629,7 +629,10 @@ def _check_results_dir(results: Path) -> None:
             f"{str(results)!r} is a file, not a results directory; give the --out "
             "directory of `nirglucose benchmark`"
         )
-    if not any((results / f).is_file() for f in ("meta.json", "metrics.csv", "metrics.json")):
+    from .report.presets import preset_dirs
+
+    has_run = any((results / f).is_file() for f in ("meta.json", "metrics.csv", "metrics.json"))
+    if not has_run and not preset_dirs(results):  # a run, or one run per preset
         raise UserError(
             f"{str(results)!r} holds no meta.json or metrics; it is not the output of "
             "`nirglucose benchmark` (run it first)"
