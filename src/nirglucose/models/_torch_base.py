@@ -85,6 +85,8 @@ from ..exceptions import ConfigError, DataError, NotFittedError
 from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
 from ._validate import check_torch_doc, check_weights
+from ._whitening import scale_of as _scale_of
+from ._whitening import zca_whitening
 from .networks import count_parameters
 
 __all__ = [
@@ -171,42 +173,8 @@ def _smoothed_argmin(values: list[float], window: int) -> int:
     return int(np.argmin((c[hi] - c[lo]) / (hi - lo))) + 1
 
 
-def _scale_of(x: np.ndarray) -> np.ndarray:
-    s = np.std(x, axis=0)
-    return np.where(s > 1e-12 * np.maximum(np.abs(np.mean(x, axis=0)), 1.0), s, 1.0)
-
-
-#: Eigenvalue floor of the whitening, relative to the largest eigenvalue of the inputs'
-#: correlation matrix: a numerical guard (float32 has ~7 significant digits), so that
-#: an exactly constant or collinear column maps to 0 instead of dividing by 0.
-_WHITENING_FLOOR = 1e-6
 #: State-dict key of the whitening matrix (a buffer, not a trained parameter).
 WHITENING_KEY = "whitening"
-
-
-def zca_whitening(z: np.ndarray) -> np.ndarray:
-    """ZCA whitening matrix of standardised inputs, ``W = C^{-1/2}``.
-
-    ZCA after Kessy, Lewin and Strimmer (2018) (module reference [4]).
-
-    ``z @ W`` has (up to the eigenvalue floor) the identity as covariance and stays as
-    close as possible to ``z`` (no rotation): each column keeps its meaning.
-
-    Parameters
-    ----------
-    z : numpy.ndarray
-        (n, d) standardised training inputs. [-]
-
-    Returns
-    -------
-    numpy.ndarray
-        (d, d) symmetric matrix. [-]
-    """
-    cov = np.atleast_2d(np.cov(z, rowvar=False))
-    w, v = np.linalg.eigh(cov)
-    w_max = max(float(w.max()), 1e-300)
-    inv_sqrt = np.where(w > _WHITENING_FLOOR * w_max, 1.0 / np.sqrt(np.maximum(w, 1e-300)), 0.0)
-    return (v * inv_sqrt) @ v.T
 
 
 class _WhitenedInputs(nn.Module):
