@@ -55,9 +55,9 @@ def test_physics_depth_one_bubble_per_model():
     assert plot_physics_depth(t, depth_labels={0: "none", 1: "loss", 4: "features"},
                               ax=ax) is ax
     scat = [c for c in ax.collections if isinstance(c, PathCollection)]
-    assert len(scat) == len(MODELS)
+    assert len(scat) == len(MODELS) + 2  # a bubble per model, a ring per Pareto bubble
     sizes = [c.get_sizes()[0] for c in scat]
-    assert sizes[2] == max(sizes)  # the largest model has the largest bubble
+    assert sizes[0] == max(sizes)  # drawn biggest first: the largest model's bubble
     assert ax.get_ylabel() == "RMSE [mg/dL]"
 
 

@@ -37,15 +37,35 @@ def _preds(models=("ebl", "pls"), repeats=2):
     return pd.concat(rows, ignore_index=True)
 
 
-def test_error_grid_inputs_use_first_repeat_and_metrics():
+def test_error_grid_inputs_pool_repeats_and_agree_with_the_table():
     p = _preds()
     grids, clipped = error_grid_inputs(p, ["ebl", "pls"])
     assert clipped == 0 and list(grids) == ["ebl", "pls"]
     g = grids["ebl"]
-    assert g["reference"].size == 60
-    first = p[(p["model"] == "ebl") & (p["repeat"] == 0)]
-    assert g["zone_pct"] == zone_percentages(clarke_zones(first["reference_mgdl"],
-                                                          first["predicted_mgdl"]))
+    assert g["reference"].size == 120  # both repeats
+    # the table averages per-repeat shares; equal repeat sizes make that the pooled share
+    per_repeat = [zone_percentages(clarke_zones(q["reference_mgdl"], q["predicted_mgdl"]))["A"]
+                  for _, q in p[p["model"] == "ebl"].groupby("repeat")]
+    assert g["zone_pct"]["A"] == pytest.approx(np.mean(per_repeat))
+
+
+def test_error_grid_inputs_keep_only_the_given_snapshots():
+    p = _preds(("ebl",), 1).assign(measurement_id=np.arange(60))
+    grids, _ = error_grid_inputs(p, ["ebl"], kind="parkes", diabetes_type=2,
+                                 measurement_ids=range(10))
+    assert grids["ebl"]["reference"].size == 10
+
+
+def test_linearity_inputs_carry_prediction_intervals_when_present():
+    p = _preds(("ebl",), 1)
+    assert "lower" not in linearity_inputs(p, ["ebl"])["ebl"]
+    p = p.assign(lower90_mgdl=p["predicted_mgdl"] - 20, upper90_mgdl=p["predicted_mgdl"] + 20)
+    out = linearity_inputs(p, ["ebl"])["ebl"]
+    assert np.allclose(out["upper"] - out["lower"], 40.0)
+    from nirglucose.plots.agreement import figure_linearity
+
+    fig = figure_linearity({"ebl": out})
+    assert any("90 % interval" in t.get_text() for t in fig.axes[0].get_legend().get_texts())
 
 
 def test_error_grid_inputs_place_negative_predictions_at_zero():
@@ -103,10 +123,11 @@ def test_efficiency_and_depth_tables():
     m = pd.DataFrame({"model": ["ebl", "sdnn", "oracle"], "rmse_mgdl": [14.0, 35.0, 5.0],
                       "n_parameters": [56, 3713, 0], "latency_single_ms": [0.01, 0.8, 0.5]})
     t = efficiency_table(m, ["ebl", "sdnn", "oracle"])
-    assert t["front_parameters"].tolist() == [True, False, False]  # 0 is off a log axis
-    assert t["front_combined"].tolist() == [True, False, True]
+    assert list(t["model"]) == ["ebl", "sdnn"]  # the oracle is a reference line now
+    assert t["front_parameters"].tolist() == [True, False]
+    assert t["front_combined"].tolist() == [True, False]
     d, left_out = physics_depth_table(m, ["ebl", "sdnn", "oracle", "mine"])
-    assert list(d["model"]) == ["ebl", "sdnn", "oracle"] and left_out == ["mine"]
+    assert list(d["model"]) == ["ebl", "sdnn"] and left_out == ["mine"]  # oracle: a line
 
 
 def test_importance_matrix_and_order():

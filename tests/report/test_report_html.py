@@ -17,9 +17,10 @@ from nirglucose.report import build_report, load_results
 
 #: Every figure of the report: anchor key -> printed number.
 FIGURES = {
-    "data": "1a", "environment": "1b", "physiology": "1c", "pipeline": "2", "clarke": "3",
-    "parkes": "4", "bland_altman": "5", "linearity": "6", "training": "7", "radar": "8",
-    "physics_depth": "9", "efficiency": "10", "wavelengths": "11", "forest": "12",
+    "data": "1", "environment": "2", "physiology": "3", "pipeline": "4", "clarke": "5",
+    "parkes_type1": "6", "parkes_type2": "7", "bland_altman": "8", "linearity": "9",
+    "training": "10", "radar": "11", "physics_depth": "12", "efficiency": "13",
+    "wavelengths": "14", "forest": "15",
 }
 
 
@@ -132,7 +133,9 @@ def test_cli_report_with_missing_optional_inputs(minimal_results, tmp_path, caps
     out = tmp_path / "report.html"
     assert main(["report", str(minimal_results), "--out", str(out)]) == 0
     text, page = _parse(out)
-    assert set(page.figures) == {f"fig-{k}" for k in FIGURES}
+    # no dataset: no diabetes status, so one Parkes figure (type 1, said so)
+    assert set(page.figures) == ({f"fig-{k}" for k in FIGURES if not k.startswith("parkes")}
+                                 | {"fig-parkes"})
     for name in ("histories.json", "importance.csv", "dataset.parquet", "comparisons.csv"):
         assert f"No {name}" in text
     assert page.figures["fig-training"]["imgs"] == []
@@ -148,7 +151,8 @@ def test_figures_written_as_png_and_svg(minimal_results, tmp_path):
                           include=["forest", "training"])
     assert [f.key for f in figs] == ["training", "forest"]
     assert figs[0].files == []  # not drawn: no histories.json
-    assert [p.name for p in figs[1].files] == ["fig12_forest.png", "fig12_forest.svg"]
+    stem = f"fig{figs[1].number}_forest"
+    assert [p.name for p in figs[1].files] == [f"{stem}.png", f"{stem}.svg"]
     assert all(p.stat().st_size > 0 for p in figs[1].files)
 
 

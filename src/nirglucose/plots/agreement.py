@@ -45,6 +45,7 @@ def plot_bland_altman(
     loa_low_ci: Interval | None = None,
     loa_high_ci: Interval | None = None,
     color: str | None = None,
+    ylim_mgdl: float | None = None,
     title: str | None = None,
     ax: Axes | None = None,
 ) -> Axes:
@@ -62,8 +63,12 @@ def plot_bland_altman(
         95 % confidence intervals of the three lines, drawn as shaded bands. [mg/dL]
     color : str, optional
         Point colour.
+    ylim_mgdl : float, optional
+        Half-height of the y range (the same for every panel of a figure); by default
+        1.2 times the largest of the limits and the differences. [mg/dL]
     title : str, optional
-        Axes title.
+        Axes title; the bias and limits with their intervals are set under it, not
+        over the lines.
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure's by default.
 
@@ -89,24 +94,23 @@ def plot_bland_altman(
         ("+1.96 SD", loa_high, loa_high_ci, "--"),
         ("−1.96 SD", loa_low, loa_low_ci, "--"),
     )
+    parts = []
     for name, value, ci, ls in lines:
         ax.axhline(value, color="black", lw=1.0, ls=ls)
+        txt = f"{value:+.1f}"
         if ci is not None and np.all(np.isfinite(ci)):
             ax.axhspan(ci[0], ci[1], color=color, alpha=0.15, lw=0)
-        txt = f"{name} {value:+.1f}"
-        if ci is not None and np.all(np.isfinite(ci)):
-            txt += f" [{ci[0]:+.1f}, {ci[1]:+.1f}]"
-        ax.annotate(txt, xy=(1.0, value), xycoords=("axes fraction", "data"),
-                    xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom",
-                    fontsize=7, color="black",
-                    bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none",
-                          "alpha": 0.75})
+            txt += f" [{ci[0]:+.0f}, {ci[1]:+.0f}]"
+        parts.append((name, txt))
     span = max(abs(loa_low), abs(loa_high), float(np.nanmax(np.abs(d))) if d.size else 1.0)
-    if np.isfinite(span) and span > 0:
-        ax.set_ylim(-1.2 * span, 1.2 * span)
+    half = ylim_mgdl if ylim_mgdl is not None else 1.2 * span
+    if np.isfinite(half) and half > 0:
+        ax.set_ylim(-half, half)
+    stats = (f"bias {parts[0][1]}\nLoA {parts[2][1]} / {parts[1][1]}")
     ax.set_xlabel("mean of reference and prediction [mg/dL]")
     ax.set_ylabel("prediction − reference [mg/dL]")
-    ax.set_title(title if title is not None else "Bland–Altman")
+    ax.set_title(f"{title if title is not None else 'Bland–Altman'}\n{stats}",
+                 fontsize=8.5)
     return ax
 
 
@@ -119,6 +123,9 @@ def plot_linearity(
     intercept: float,
     r_squared: float | None = None,
     slope_ci: Interval | None = None,
+    lower: ArrayLike | None = None,
+    upper: ArrayLike | None = None,
+    interval_level: str = "90 %",
     color: str | None = None,
     title: str | None = None,
     ax: Axes | None = None,
@@ -137,6 +144,11 @@ def plot_linearity(
         Coefficient of determination of that fit. [-]
     slope_ci : (float, float), optional
         95 % confidence interval of the slope. [-]
+    lower, upper : array_like, optional
+        Prediction interval of each point (e.g. ``lower90_mgdl``/``upper90_mgdl``),
+        drawn as thin vertical bars. [mg/dL]
+    interval_level : str
+        Nominal level of those intervals, for the legend.
     color : str, optional
         Point and line colour.
     title : str, optional
@@ -154,6 +166,13 @@ def plot_linearity(
     ref, pred = _xy(reference, predicted, "reference and predicted")
     color = color or OKABE_ITO["blue"]
     ax.scatter(ref, pred, s=8, color=color, alpha=0.55, linewidths=0, zorder=3)
+    if lower is not None and upper is not None:
+        lo_i, hi_i = _xy(lower, upper, "lower and upper")
+        if lo_i.size != ref.size:
+            raise ValueError(f"lower/upper have {lo_i.size} values, reference {ref.size}")
+        covered = (ref >= lo_i) & (ref <= hi_i)
+        ax.vlines(ref, lo_i, hi_i, color=color, alpha=0.18, lw=0.8, zorder=2,
+                  label=f"{interval_level} interval ({100 * covered.mean():.0f} % cover)")
     both = np.concatenate([ref, pred])
     both = both[np.isfinite(both)]
     lo = float(np.floor(min(both.min(), 0.9 * ref.min()) / 25) * 25) if both.size else 0.0
@@ -211,7 +230,7 @@ def _per_model_figure(
 
 
 def figure_bland_altman(panels: Mapping[str, Mapping[str, object]], *, ncols: int = 4) -> Figure:
-    """One Bland–Altman panel per model.
+    """One Bland–Altman panel per model, all on the same y range.
 
     Parameters
     ----------
@@ -227,11 +246,16 @@ def figure_bland_altman(panels: Mapping[str, Mapping[str, object]], *, ncols: in
     matplotlib.figure.Figure
     """
 
+    spans = [max(abs(float(p["loa_low"])), abs(float(p["loa_high"])),
+                 float(np.nanmax(np.abs(np.asarray(p["difference_mgdl"], float)))))
+             for p in panels.values() if len(np.asarray(p["difference_mgdl"]))]
+    half = 1.1 * max(spans) if spans else None
+
     def draw(ax: Axes, p: dict, color: str, title: str) -> Axes:
         return plot_bland_altman(p.pop("mean_mgdl"), p.pop("difference_mgdl"), color=color,
-                                 title=title, ax=ax, **p)
+                                 title=title, ylim_mgdl=half, ax=ax, **p)
 
-    return _per_model_figure(panels, draw, (3.7, 3.0), ncols)
+    return _per_model_figure(panels, draw, (3.7, 3.3), ncols)
 
 
 def figure_linearity(panels: Mapping[str, Mapping[str, object]], *, ncols: int = 4) -> Figure:

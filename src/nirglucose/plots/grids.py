@@ -111,7 +111,7 @@ def _zone_legend(ax: Axes, scatter_label: str, zone_pct: Mapping[str, float] | N
     # below the grid, so that no zone (and no point) is hidden behind it
     ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, -0.17),
               ncol=3, handlelength=0.8, handletextpad=0.4, columnspacing=1.0,
-              borderaxespad=0.0, fontsize=7.5, frameon=False)
+              borderaxespad=0.0, fontsize=8.5, frameon=False)
 
 
 def _scatter(ax: Axes, ref: np.ndarray, pred: np.ndarray, lim: float, color: str,

@@ -70,6 +70,11 @@ MODEL_COLORS: dict[str, str] = {
     "rte-pinn": OKABE_ITO["bluish_green"],
     "selective-rte-pinn": OKABE_ITO["reddish_purple"],
     "sdnn": "#8C8C8C",
+    # reference rows: two of Paul Tol's "muted" colours (also colour-blind safe; Tol P,
+    # Colour Schemes, SRON/EPS/TN/09-002, 2021) and a light grey for no skill
+    "gp": "#882255",
+    "gbr": "#999933",
+    "mean": "#BBBBBB",
 }
 
 #: Marker of each registered model (a second cue besides colour).
@@ -82,6 +87,9 @@ MODEL_MARKERS: dict[str, str] = {
     "rte-pinn": "D",
     "selective-rte-pinn": "P",
     "sdnn": "X",
+    "gp": "h",
+    "gbr": "p",
+    "mean": "_",
 }
 
 #: Colour of each diabetes status of the simulated cohort.

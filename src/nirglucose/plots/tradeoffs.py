@@ -20,6 +20,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from numpy.typing import ArrayLike
 
+from .labels import label_points, place_labels
 from .style import (
     GREY,
     model_colors,
@@ -43,6 +44,25 @@ __all__ = [
 MAX_BUBBLE_PT2 = 2200.0
 #: Smallest bubble area drawn (smaller ones are enlarged to stay visible). [pt^2]
 MIN_BUBBLE_PT2 = 14.0
+
+
+#: Line style of each reference row drawn as a horizontal line.
+_REF_STYLE = {"oracle": ":", "mean": "--"}
+
+
+def _reference_lines(ax: Axes, references: Mapping[str, float] | None
+                     ) -> list[tuple[str, float]]:
+    """Horizontal lines for reference rows (a bound or no skill), labelled at the right."""
+    out = []
+    for name, v in (references or {}).items():
+        if v is None or not np.isfinite(v):
+            continue
+        ax.axhline(v, color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0, zorder=1)
+        ax.annotate(f"{model_label(name)}: {v:.1f}", (1.0, v), xycoords=("axes fraction", "data"),
+                    xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
+                    fontsize=7, color=GREY)
+        out.append((name, float(v)))
+    return out
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -121,6 +141,7 @@ def plot_physics_depth(
     table: pd.DataFrame,
     *,
     depth_labels: Mapping[int, str] | None = None,
+    references: Mapping[str, float] | None = None,
     title: str | None = None,
     ax: Axes | None = None,
 ) -> Axes:
@@ -135,6 +156,9 @@ def plot_physics_depth(
         horizontal nudge separating models of the same depth). [-, -, mg/dL, -]
     depth_labels : mapping of int to str, optional
         Tick label of each depth level.
+    references : mapping of str to float, optional
+        Reference rows (the oracle's bound, the no-skill mean) drawn as horizontal
+        lines, not as competitors. [mg/dL]
     title : str, optional
         Axes title.
     ax : matplotlib.axes.Axes, optional
@@ -143,8 +167,11 @@ def plot_physics_depth(
     Returns
     -------
     matplotlib.axes.Axes
-        The Axes, with one PathCollection (a bubble) per model.
+        The Axes, with one PathCollection (a bubble) per model. Labels are placed by
+        :func:`~nirglucose.plots.labels.place_labels` (by the caller when it passed
+        ``ax``).
     """
+    own = ax is None
     ax = new_axes(ax, figsize=(7.0, 4.4))
     t = table.reset_index(drop=True)
     colors = model_colors(t["model"])
@@ -153,40 +180,49 @@ def plot_physics_depth(
     offset = t["x_offset"].to_numpy(float) if "x_offset" in t else np.zeros(len(t))
     front = t["on_front"].to_numpy(bool) if "on_front" in t else np.zeros(len(t), bool)
     x = t["physics_depth"].to_numpy(float) + offset
-    for k, row in t.iterrows():
+    # biggest first, so small bubbles stay on top and visible
+    for k in np.argsort(-areas, kind="stable"):
+        row = t.iloc[k]
         ax.scatter([x[k]], [row["rmse_mgdl"]], s=areas[k], color=colors[row["model"]],
-                   alpha=0.45, edgecolors="black" if front[k] else colors[row["model"]],
-                   linewidths=1.6 if front[k] else 0.8, zorder=3)
-        ax.annotate(f"{model_label(row['model'])}\n{int(row['n_parameters']):,} params",
-                    (x[k], row["rmse_mgdl"]), xytext=(0, -np.sqrt(areas[k]) / 2 - 3),
-                    textcoords="offset points", ha="center", va="top", fontsize=7, zorder=4,
-                    bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none",
-                          "alpha": 0.75})
+                   alpha=0.55, edgecolors=colors[row["model"]], linewidths=0.8, zorder=3)
+        if front[k]:  # a black ring around the bubble, clear of its translucent fill
+            ax.scatter([x[k]], [row["rmse_mgdl"]], s=max(1.6 * areas[k], 110.0),
+                       facecolors="none", edgecolors="black", linewidths=1.5, zorder=4)
+    label_points(ax, x, t["rmse_mgdl"].to_numpy(float),
+                 [f"{model_label(m)}\n{int(p):,} params"
+                  for m, p in zip(t["model"], t["n_parameters"], strict=True)],
+                 marker_radius_pt=np.sqrt(np.where(front, np.maximum(1.6 * areas, 110.0),
+                                                   areas)) / 2.0)
     levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
     ax.set_xticks(levels)
     ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
     if levels:
         ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
     y = t["rmse_mgdl"].to_numpy(float)
-    if y.size:
-        span = max(float(np.nanmax(y) - np.nanmin(y)), 1.0)
-        ax.set_ylim(max(0.0, np.nanmin(y) - 0.45 * span), np.nanmax(y) + 0.3 * span)
+    lines = _reference_lines(ax, references)
+    top = max([float(np.nanmax(y))] if y.size else [1.0] + [v for _, v in lines])
+    ax.set_ylim(0.0, 1.25 * top)  # from zero: differences keep their true proportion
     refs = [v for v in (1e2, 1e4, 1e6) if v <= 1.5 * pmax] or [pmax]
     handles = [Line2D([], [], ls="none", marker="o", ms=np.sqrt(bubble_area([v], pmax)[0]),
                       mfc="none", mec=GREY) for v in refs]
     labels = [f"{v:,.0f} parameters" for v in refs]
     if front.any():
-        handles.append(Line2D([], [], ls="none", marker="o", ms=8, mfc="none", mec="black",
-                              mew=1.6))
-        labels.append("Pareto-optimal (parameters vs RMSE)")
+        handles.append(Line2D([], [], ls="none", marker="o", ms=10, mfc="none", mec="black",
+                              mew=1.5))
+        labels.append("Pareto-optimal\n(parameters vs RMSE)")
+    for name, _ in lines:
+        handles.append(Line2D([], [], color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0))
+        labels.append(f"{model_label(name)}\n(reference, not a competitor)")
     biggest = float(np.sqrt(bubble_area([max(refs)], pmax)[0]))
-    ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7,
+    ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
               labelspacing=max(1.0, biggest / 14.0), borderpad=0.9,
               handlelength=max(2.0, biggest / 7.0), handletextpad=0.8,
-              title="bubble area ∝ parameters", title_fontsize=7, frameon=False)
+              title="bubble area ∝ parameters", title_fontsize=8, frameon=False)
     ax.set_xlabel("physics depth (how much of the forward model a method uses)")
     ax.set_ylabel("RMSE [mg/dL]")
     ax.set_title(title if title is not None else "Accuracy vs physics depth")
+    if own:
+        place_labels(ax.figure)
     return ax
 
 
@@ -199,6 +235,7 @@ def plot_efficiency(
     on_front: ArrayLike | None = None,
     xlabel: str,
     log_x: bool = False,
+    references: Mapping[str, float] | None = None,
     title: str | None = None,
     ax: Axes | None = None,
 ) -> Axes:
@@ -219,6 +256,8 @@ def plot_efficiency(
         Axis label with unit.
     log_x : bool
         Logarithmic cost axis. [-]
+    references : mapping of str to float, optional
+        Reference rows drawn as horizontal lines, not as points. [mg/dL]
     title : str, optional
         Axes title.
     ax : matplotlib.axes.Axes, optional
@@ -228,8 +267,11 @@ def plot_efficiency(
     -------
     matplotlib.axes.Axes
         The Axes, with one PathCollection per model and, when a front is given, one
-        line through it.
+        line through it. The y axis starts at 0. Labels are placed by
+        :func:`~nirglucose.plots.labels.place_labels` (by the caller when it passed
+        ``ax``).
     """
+    own = ax is None
     ax = new_axes(ax, figsize=(4.4, 3.6))
     xv = np.asarray(x, dtype=float)
     yv = np.asarray(rmse_mgdl, dtype=float)
@@ -239,42 +281,34 @@ def plot_efficiency(
                          f"{len(names)}")
     colors = model_colors(names)
     front = np.zeros(len(names), bool) if on_front is None else np.asarray(on_front, bool)
-    tx = np.log10(np.maximum(xv, 1e-12)) if log_x else xv
-    fx_, fy_ = _unit(tx), _unit(yv)
-    placed: list[tuple[float, float, bool]] = []
     for k, m in enumerate(names):
-        ax.scatter([xv[k]], [yv[k]], s=55, color=colors[m], marker=model_marker(m),
-                   edgecolors="black" if front[k] else "white", linewidths=1.0, zorder=3,
-                   label=model_label(m))
-        # label on the side away from the nearer edge, so it stays inside the panel, and
-        # below the point when a label already sits above a nearby one
-        right_half = fx_[k] > 0.6
-        crowded = any(abs(fx_[k] - x) < 0.25 and abs(fy_[k] - y) < 0.08 and up
-                      for x, y, up in placed)
-        placed.append((fx_[k], fy_[k], not crowded))
-        ax.annotate(model_label(m), (xv[k], yv[k]),
-                    xytext=(-6 if right_half else 6, -6 if crowded else 5),
-                    textcoords="offset points", ha="right" if right_half else "left",
-                    va="top" if crowded else "baseline", fontsize=6.5, color="#333333")
+        ax.scatter([xv[k]], [yv[k]], s=55 if front[k] else 40, color=colors[m],
+                   marker=model_marker(m), edgecolors="black" if front[k] else "none",
+                   linewidths=1.2, zorder=3, label=model_label(m))
     if front.any():
         order = np.argsort(xv[front])
         fx, fy = xv[front][order], yv[front][order]
         ax.step(fx, fy, where="post", color="black", lw=0.9, ls="--", zorder=2,
                 label="Pareto front")
+    label_points(ax, xv, yv, [model_label(m) for m in names], marker_radius_pt=4.5,
+                 fontsize=7.0)
     if log_x:
         ax.set_xscale("log")
         plain_log_ticks(ax.xaxis, xv)
-    ax.margins(x=0.12)
-    if xv.size:
-        pad = 0.12 * max(float(np.nanmax(yv) - np.nanmin(yv)), 1.0)
-        ax.set_ylim(max(0.0, float(np.nanmin(yv)) - pad), float(np.nanmax(yv)) + 2 * pad)
+    ax.margins(x=0.15)
+    lines = _reference_lines(ax, references)
+    top = max([float(np.nanmax(yv))] if yv.size else [1.0] + [v for _, v in lines])
+    ax.set_ylim(0.0, 1.2 * top)  # from zero: a 5 mg/dL gap keeps its true proportion
     ax.set_xlabel(xlabel)
     ax.set_ylabel("RMSE [mg/dL]")
     ax.set_title(title if title is not None else "Efficiency")
+    if own:
+        place_labels(ax.figure)
     return ax
 
 
-def figure_efficiency_landscape(table: pd.DataFrame) -> Figure:
+def figure_efficiency_landscape(table: pd.DataFrame,
+                                references: Mapping[str, float] | None = None) -> Figure:
     """Parameters, latency and a combined cost index against RMSE, fronts marked.
 
     Parameters
@@ -284,6 +318,8 @@ def figure_efficiency_landscape(table: pd.DataFrame) -> Figure:
         ``latency_single_ms``, ``combined_index`` (0 = smallest and fastest, 1 =
         largest and slowest) and the boolean fronts ``front_parameters``,
         ``front_latency``, ``front_combined``, all computed by the caller.
+    references : mapping of str to float, optional
+        Reference rows (oracle bound, no-skill mean) drawn as horizontal lines. [mg/dL]
 
     Returns
     -------
@@ -298,7 +334,7 @@ def figure_efficiency_landscape(table: pd.DataFrame) -> Figure:
          False, "Combined efficiency"),
     )
     with plot_style():
-        fig = Figure(figsize=(13.0, 3.9), layout="constrained")
+        fig = Figure(figsize=(14.0, 4.6), layout="constrained")
         axes = fig.subplots(1, 3)
         models = list(table["model"])
         for ax, (col, front, xlabel, log_x, title) in zip(axes, panels, strict=True):
@@ -307,7 +343,8 @@ def figure_efficiency_landscape(table: pd.DataFrame) -> Figure:
             plot_efficiency(x[ok], table["rmse_mgdl"].to_numpy(float)[ok],
                             [m for m, o in zip(models, ok, strict=True) if o],
                             on_front=table[front].to_numpy(bool)[ok] if front in table else None,
-                            xlabel=xlabel, log_x=log_x, title=title, ax=ax)
+                            xlabel=xlabel, log_x=log_x, references=references,
+                            title=title, ax=ax)
             if not ok.all():
                 ax.text(0.98, 0.02, f"{int((~ok).sum())} model(s) without {xlabel.split(' [')[0]}",
                         transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color=GREY)
@@ -319,5 +356,6 @@ def figure_efficiency_landscape(table: pd.DataFrame) -> Figure:
         labels += ["Pareto front"] if "Pareto front" in seen else []
         handles = [seen[lab] for lab in labels]
         if handles:
-            fig.legend(handles, labels, loc="outside right center", fontsize=7.5)
+            fig.legend(handles, labels, loc="outside right center", fontsize=8)
+        place_labels(fig)
     return fig

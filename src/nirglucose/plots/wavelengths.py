@@ -21,6 +21,7 @@ def plot_wavelength_heatmap(
     *,
     cmap: str = "cividis",
     annotate: bool = True,
+    relative: bool = True,
     title: str | None = None,
     ax: Axes | None = None,
 ) -> Axes:
@@ -35,7 +36,10 @@ def plot_wavelength_heatmap(
     cmap : str
         Colour map (a perceptually uniform, colour-blind-safe one by default).
     annotate : bool
-        Write each cell's value in it. [-]
+        Write each cell's value (ΔRMSE in mg/dL) in it. [-]
+    relative : bool
+        Colour each row on its own scale (its largest rise = 1, negatives as 0), so a
+        model with rises of a few mg/dL is as readable as one with hundreds. [-]
     title : str, optional
         Axes title.
     ax : matplotlib.axes.Axes, optional
@@ -49,12 +53,21 @@ def plot_wavelength_heatmap(
     nrow, ncol = matrix.shape
     ax = new_axes(ax, figsize=(1.3 * max(ncol, 1) + 3.6, 0.42 * max(nrow, 1) + 1.6))
     values = matrix.to_numpy(float)
-    finite = values[np.isfinite(values)]
-    vmin = min(0.0, float(finite.min())) if finite.size else 0.0
-    vmax = float(finite.max()) if finite.size else 1.0
-    if vmax <= vmin:
-        vmax = vmin + 1.0
-    im = ax.imshow(np.ma.masked_invalid(values), cmap=cmap, vmin=vmin, vmax=vmax,
+    if relative:
+        # each row on its own scale: its largest rise = 1 (rows without a positive rise
+        # stay at 0), negative rises clipped to 0 in colour but printed as they are
+        peak = np.nanmax(np.where(np.isfinite(values), values, -np.inf), axis=1, initial=0.0)
+        scale = np.where(peak > 0, peak, 1.0)[:, None]
+        shown = np.clip(values / scale, 0.0, 1.0)
+        vmin, vmax = 0.0, 1.0
+    else:
+        shown = values
+        finite = values[np.isfinite(values)]
+        vmin = min(0.0, float(finite.min())) if finite.size else 0.0
+        vmax = float(finite.max()) if finite.size else 1.0
+        if vmax <= vmin:
+            vmax = vmin + 1.0
+    im = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, vmin=vmin, vmax=vmax,
                    aspect="auto", interpolation="nearest")
     ax.set_xticks(range(ncol))
     ax.set_xticklabels([f"{float(c):g}" for c in matrix.columns])
@@ -70,10 +83,11 @@ def plot_wavelength_heatmap(
             for j in range(ncol):
                 v = values[i, j]
                 if np.isfinite(v):
-                    ax.text(j, i, f"{v:.1f}", ha="center", va="center", fontsize=7.5,
-                            color="black" if v > mid else "white")
+                    txt = f"{v:.0f}" if abs(v) >= 100 else f"{v:.1f}"
+                    ax.text(j, i, txt, ha="center", va="center", fontsize=7.5,
+                            color="black" if shown[i, j] > mid else "white")
     cbar = ax.figure.colorbar(im, ax=ax, fraction=0.06, pad=0.02)
-    cbar.set_label("ΔRMSE [mg/dL]")
+    cbar.set_label("ΔRMSE / row maximum [-]" if relative else "ΔRMSE [mg/dL]")
     ax.set_title(title if title is not None else
-                 "Wavelength utilisation: RMSE increase when a channel is permuted")
+                 "Wavelength utilisation: RMSE increase [mg/dL] when a channel is permuted")
     return ax

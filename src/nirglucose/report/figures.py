@@ -31,6 +31,11 @@ __all__ = [
     "REQUIRED_METRIC_COLUMNS",
     "REQUIRED_PREDICTION_COLUMNS",
     "PHYSICS_DEPTH",
+    "REFERENCE_ROWS",
+    "competitors",
+    "is_ablation_row",
+    "reference_values",
+    "pooled",
     "PHYSICS_DEPTH_LABELS",
     "NOISE_LAYER",
     "RADAR_AXES",
@@ -70,6 +75,8 @@ REQUIRED_PREDICTION_COLUMNS: Final = ("model", "reference_mgdl", "predicted_mgdl
 PHYSICS_DEPTH: Final[dict[str, int]] = {
     "sdnn": 0,
     "pls": 0,
+    "gp": 0,
+    "gbr": 0,
     "original-pinn": 1,
     "optimized-pinn": 1,
     "selective-rte-pinn": 2,
@@ -77,6 +84,11 @@ PHYSICS_DEPTH: Final[dict[str, int]] = {
     "ebl": 4,
     "oracle": 5,
 }
+#: Rows that are references, not competitors: drawn as horizontal lines in figures 9-10
+#: and left out of the radar and the Pareto fronts (the oracle is a bound, the training
+#: mean is no skill).
+REFERENCE_ROWS: Final = ("oracle", "mean")
+
 #: Tick labels of the physics-depth levels.
 PHYSICS_DEPTH_LABELS: Final[dict[int, str]] = {
     0: "none\n(data-driven)",
@@ -84,7 +96,6 @@ PHYSICS_DEPTH_LABELS: Final[dict[int, str]] = {
     2: "RTE loss\n(2 λ)",
     3: "RTE loss\n(all λ)",
     4: "Beer–Lambert\nfeatures",
-    5: "forward model\n(oracle)",
 }
 
 #: Simulator layer in which each noise source acts (for the pipeline diagram).
@@ -381,6 +392,15 @@ def first_repeat(predictions: pd.DataFrame, model: str) -> pd.DataFrame:
     return p
 
 
+def pooled(predictions: pd.DataFrame, model: str) -> pd.DataFrame:
+    """One model's out-of-fold predictions of every repeat, pooled.
+
+    Each repeat predicts every snapshot once, so the zone shares of the pooled points
+    equal the table's (per-repeat shares averaged over repeats, all repeats the same size).
+    """
+    return predictions[predictions["model"] == model]
+
+
 def _finite_pairs(p: pd.DataFrame, col: str) -> tuple[np.ndarray, np.ndarray, int]:
     ref = p["reference_mgdl"].to_numpy(float)
     pred = p[col].to_numpy(float)
@@ -410,12 +430,16 @@ def channel_correlations(glucose_mgdl: np.ndarray, adc: Mapping[float, np.ndarra
 
 
 def error_grid_inputs(predictions: pd.DataFrame, models: Sequence[str], *, kind: str = "clarke",
-                      diabetes_type: int = 1) -> tuple[dict[str, dict[str, Any]], int]:
+                      diabetes_type: int = 1, measurement_ids: Iterable[Any] | None = None
+                      ) -> tuple[dict[str, dict[str, Any]], int]:
     """Points and zone percentages of the Clarke or Parkes grid of each model.
 
-    Uses the first repeat (each snapshot once) and the scored predictions (negative
+    Uses every repeat's predictions pooled (:func:`pooled`) and the scored predictions (negative
     ones are placed at 0 mg/dL by the benchmark, as the grids require; if only raw
     predictions exist, negatives are placed at 0 here and counted).
+
+    ``measurement_ids`` keeps only those snapshots (e.g. the type-2 ones for the
+    type-2 Parkes grid).
 
     Returns
     -------
@@ -429,8 +453,12 @@ def error_grid_inputs(predictions: pd.DataFrame, models: Sequence[str], *, kind:
     col = scored_column(predictions)
     grids: dict[str, dict[str, Any]] = {}
     clipped = 0
+    keep = None if measurement_ids is None else set(measurement_ids)
     for m in models:
-        ref, pred, _ = _finite_pairs(first_repeat(predictions, m), col)
+        p = pooled(predictions, m)
+        if keep is not None:
+            p = p[p["measurement_id"].isin(keep)]
+        ref, pred, _ = _finite_pairs(p, col)
         if ref.size == 0:
             continue
         neg = pred < 0
@@ -468,7 +496,7 @@ def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
     col = scored_column(predictions)
     out: dict[str, dict[str, Any]] = {}
     for m in models:
-        ref, pred, _ = _finite_pairs(first_repeat(predictions, m), col)
+        ref, pred, _ = _finite_pairs(pooled(predictions, m), col)
         n = ref.size
         if n < 3:
             continue
@@ -489,11 +517,15 @@ def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
 
 def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
                      level: float = 0.95) -> dict[str, dict[str, Any]]:
-    """Least-squares line of predicted on reference glucose, its slope CI and R²."""
+    """Least-squares line of predicted on reference glucose, its slope CI and R².
+
+    When the predictions carry ``lower90_mgdl``/``upper90_mgdl`` (the benchmark's
+    prediction intervals), each panel also gets ``lower`` and ``upper``.
+    """
     col = scored_column(predictions)
     out: dict[str, dict[str, Any]] = {}
     for m in models:
-        ref, pred, _ = _finite_pairs(first_repeat(predictions, m), col)
+        ref, pred, _ = _finite_pairs(pooled(predictions, m), col)
         n = ref.size
         if n < 3 or np.ptp(ref) == 0:
             continue
@@ -507,6 +539,15 @@ def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
         out[m] = {"reference": ref, "predicted": pred, "slope": float(slope),
                   "intercept": float(intercept), "r_squared": r2,
                   "slope_ci": (float(slope - tq * se), float(slope + tq * se))}
+        p = pooled(predictions, m)
+        if {"lower90_mgdl", "upper90_mgdl"} <= set(p.columns):
+            r_all = p["reference_mgdl"].to_numpy(float)
+            lo = p["lower90_mgdl"].to_numpy(float)
+            hi = p["upper90_mgdl"].to_numpy(float)
+            ok = (np.isfinite(r_all) & np.isfinite(p[col].to_numpy(float)) & (r_all > 0)
+                  & np.isfinite(lo) & np.isfinite(hi))
+            if ok.sum() == n:  # the same rows as the points
+                out[m].update(lower=lo[ok], upper=hi[ok])
     return out
 
 
@@ -598,7 +639,11 @@ def combined_cost_index(n_parameters: Sequence[float], latency_ms: Sequence[floa
 
 
 def efficiency_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
-    """Inputs of figure 10: costs, the combined index and the three Pareto fronts."""
+    """Inputs of figure 10: costs, the combined index and the three Pareto fronts.
+
+    Only competitors (:func:`competitors`); the references are drawn as lines.
+    """
+    models = competitors(models)
     t = pd.DataFrame({
         "model": list(models),
         "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
@@ -616,9 +661,31 @@ def efficiency_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFra
     return t
 
 
+def is_ablation_row(model: str) -> bool:
+    """Whether ``model`` is an ablation row (``<pinn>/no-physics``), shown in its own table."""
+    return "/" in str(model)
+
+
+def competitors(models: Iterable[str]) -> list[str]:
+    """Models that compete: neither a reference row (:data:`REFERENCE_ROWS`) nor an ablation."""
+    return [m for m in models if m not in REFERENCE_ROWS and not is_ablation_row(m)]
+
+
+def reference_values(metrics: pd.DataFrame, models: Sequence[str]) -> dict[str, float]:
+    """RMSE of the reference rows present (oracle bound, no-skill mean). [mg/dL]"""
+    refs = [m for m in REFERENCE_ROWS if m in models]
+    return {m: float(v) for m, v in zip(refs, _metric(metrics, refs, "rmse_mgdl"), strict=True)
+            if np.isfinite(v)}
+
+
 def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str]) -> tuple[pd.DataFrame,
                                                                                 list[str]]:
-    """Inputs of figure 9 and the models left out (no known physics depth)."""
+    """Inputs of figure 9 and the models left out (no known physics depth).
+
+    Reference rows (:data:`REFERENCE_ROWS`) and ablation rows are not competitors and
+    are neither drawn as bubbles nor listed as left out.
+    """
+    models = competitors(models)
     known = [m for m in models if m in PHYSICS_DEPTH]
     t = pd.DataFrame({
         "model": known,
@@ -639,10 +706,14 @@ def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str]) -> tuple[p
 
 
 def importance_matrix(importance: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
-    """Models × wavelengths matrix of the mean RMSE increase (rows in display order)."""
+    """Models × wavelengths matrix of the mean RMSE increase (rows in display order).
+
+    Ablation rows (``<pinn>/no-physics``) are left out; they have their own table.
+    """
     mat = importance.pivot_table(index="model", columns="wavelength_nm",
                                  values="rmse_increase_mgdl", aggfunc="mean")
-    rows = [m for m in models if m in mat.index] + [m for m in mat.index if m not in models]
+    rows = [m for m in models if m in mat.index] + [m for m in mat.index if m not in models
+                                                     and not is_ablation_row(m)]
     return mat.reindex(rows).sort_index(axis=1)
 
 
@@ -841,12 +912,17 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
 
     wanted = None if include is None else set(include)
     models = results.models
-    pred_models = [m for m in models if m in set(results.predictions["model"])]
+    pred_models = [m for m in models if m in set(results.predictions["model"])
+                   and not is_ablation_row(m)]
+    user_data = results.config is None
+    counter = [0]
     preds = results.predictions
     rendered: list[RenderedFigure] = []
 
     def add(key: str, number: str, title: str, caption: str,
             build: Callable[[], Any] | None, note: str | None = None) -> None:
+        counter[0] += 1
+        number = str(counter[0])  # numbered in page order: contents and captions agree
         if wanted is not None and key not in wanted:
             return
         fig_out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
@@ -866,10 +942,11 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         rendered.append(fig_out)
 
     ds = results.dataset
-    n_first = len(first_repeat(preds, pred_models[0])) if pred_models else 0
-    rep_note = ("the first repeat of the cross-validation, each snapshot once"
-                if "repeat" in preds.columns and preds["repeat"].nunique() > 1 else
-                "every out-of-fold prediction")
+    n_first = len(pooled(preds, pred_models[0])) if pred_models else 0
+    n_rep = int(preds["repeat"].nunique()) if "repeat" in preds.columns else 1
+    rep_note = (f"every out-of-fold prediction of all {n_rep} repeats pooled, so the zone "
+                f"shares equal the table's" if n_rep > 1 else "every out-of-fold prediction")
+    what = "measured" if user_data else "simulated"
 
     # 1: data
     if ds is not None:
@@ -880,21 +957,26 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         corr = channel_correlations(g, adc)
         corr_txt = ", ".join(f"{w:g} nm r = {r:+.2f}" for w, r in corr.items())
         add("data", "1a", "Glucose and NIR signal",
-            f"Reference glucose of the {len(frame)} simulated snapshots by diabetes status "
+            f"Reference glucose of the {len(frame)} {what} snapshots by diabetes status "
             f"(left) and the log ADC code of each LED channel against glucose, with the "
             f"Pearson correlation ({corr_txt}).",
             lambda: data.figure_data_characteristics(
                 g, frame["diabetes_status"].astype(str).to_numpy()
                 if "diabetes_status" in frame else np.full(len(frame), "unknown"),
                 {w: np.log(v) for w, v in adc.items()}, corr))
-        add("environment", "1b", "Environment",
-            "Distributions of the ambient conditions the snapshots were simulated under "
-            "(true temperature, humidity, pressure, illuminance and light source).",
-            lambda: data.figure_distributions(environment_panels(frame), ncols=5))
-        add("physiology", "1c", "Physiology",
-            "Distributions of the measured physiological vector the models see (its "
-            "humidity and pressure entries are shown with the environment in figure 1b).",
-            lambda: data.figure_distributions(physiology_panels(frame), ncols=5))
+        env = environment_panels(frame)
+        if env:  # a user's data may record no ambient conditions: promise no panels
+            add("environment", "1b", "Environment",
+                f"Distributions of the ambient conditions of the {what} snapshots "
+                "(temperature, humidity, pressure, illuminance and light source, where "
+                "recorded).",
+                lambda: data.figure_distributions(env, ncols=5))
+        phys = physiology_panels(frame)
+        if phys:
+            add("physiology", "1c", "Physiology",
+                "Distributions of the measured physiological vector the models see (its "
+                "humidity and pressure entries are shown with the environment).",
+                lambda: data.figure_distributions(phys, ncols=5))
     else:
         for key, number, title in (("data", "1a", "Glucose and NIR signal"),
                                    ("environment", "1b", "Environment"),
@@ -924,25 +1006,50 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         f"with the share of points in each zone in the legend.",
         lambda: grids.figure_error_grids(cg, kind="clarke") if cg else None,
         note=None if cg else "No predictions: figure not drawn.")
-    pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=1)
-    add("parkes", "4", "Parkes error grids",
-        f"Parkes (consensus) error grid for type 1 diabetes of each model ({rep_note}), "
-        f"with the share of points in each zone in the legend.",
-        lambda: grids.figure_error_grids(pg, kind="parkes") if pg else None,
-        note=None if pg else "No predictions: figure not drawn.")
+    status = None
+    if ds is not None and "diabetes_status" in ds.frame and "measurement_id" in preds.columns \
+            and "measurement_id" in ds.frame:
+        status = ds.frame.set_index("measurement_id")["diabetes_status"].astype(str)
+    if status is not None:
+        t2 = status.index[status == "type2"]
+        other = status.index[status != "type2"]
+        for dtype, ids, who in ((1, other, "type-1, prediabetes and normal"),
+                                (2, t2, "type-2")):
+            pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=dtype,
+                                      measurement_ids=ids)
+            add(f"parkes_type{dtype}", "4", f"Parkes error grids, type {dtype}",
+                f"Parkes (consensus) error grid for type {dtype} diabetes, applied to the "
+                f"{len(ids)} {who} snapshots only ({rep_note.split(',')[0]}), with the share "
+                f"of points in each zone in the legend. The table's Parkes A column uses "
+                f"the type-1 grid for every snapshot.",
+                (lambda pg=pg, dtype=dtype: grids.figure_error_grids(
+                    pg, kind="parkes", diabetes_type=dtype)) if pg else None,
+                note=None if pg else f"No {who} snapshots: figure not drawn.")
+    else:
+        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=1)
+        add("parkes", "4", "Parkes error grids",
+            f"Parkes (consensus) error grid for type 1 diabetes of each model ({rep_note}); "
+            f"the diabetes status of each snapshot is not recorded here, so the type-1 grid "
+            f"is applied to all.",
+            lambda: grids.figure_error_grids(pg, kind="parkes") if pg else None,
+            note=None if pg else "No predictions: figure not drawn.")
 
     # 5, 6: agreement
     ba = bland_altman_inputs(preds, pred_models)
     add("bland_altman", "5", "Bland–Altman",
-        f"Prediction minus reference against their mean for each model ({rep_note}), with "
-        f"the bias and 95 % limits of agreement and their 95 % confidence intervals "
-        f"(shaded; Bland & Altman 1986).",
+        f"Prediction minus reference against their mean for each model ({rep_note}), on "
+        f"one y range for all panels, with the bias (solid) and 95 % limits of agreement "
+        f"(dashed), their values and 95 % confidence intervals (shaded) under each title "
+        f"(Bland & Altman 1986).",
         lambda: agreement.figure_bland_altman(ba) if ba else None,
         note=None if ba else "Too few predictions: figure not drawn.")
     lin = linearity_inputs(preds, pred_models)
     add("linearity", "6", "Linearity",
         f"Predicted against reference glucose for each model ({rep_note}), with the unity "
-        f"line and the least-squares line (slope with its 95 % CI, intercept, R²).",
+        f"line and the least-squares line (slope with its 95 % CI, intercept, R²)"
+        + ("; vertical bars: each prediction's 90 % interval, with the share that covers "
+           "the reference." if {"lower90_mgdl", "upper90_mgdl"} <= set(preds.columns)
+           else "."),
         lambda: agreement.figure_linearity(lin) if lin else None,
         note=None if lin else "Too few predictions: figure not drawn.")
 
@@ -960,40 +1067,53 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
             note=None if hist else "No networks in this run.")
 
     # 8-10: trade-offs
-    radar_models = [m for m in models if m != "oracle"]
+    radar_models = competitors(models)
     scores = radar_scores(results.metrics, radar_models)
     add("radar", "8", "Normalised scores",
         "Each model's RMSE, MARD, Clarke zone A and share within ±15 % as a ratio to the "
         "best model shown (1 = best), and its parameter count and latency scored 1 for the "
-        "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound rather "
-        "than a competitor, is left out).",
+        "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound, and the "
+        "training mean, no skill, are references rather than competitors and are left "
+        "out; so are the ablation rows).",
         lambda: _figure_one(lambda ax: tradeoffs.plot_radar(scores, ax=ax), (7.6, 5.0),
                             plot_style, polar=True) if len(scores) else None,
         note=None if len(scores) else "No model besides the oracle.")
     depth, left_out = physics_depth_table(results.metrics, models)
+    refs = reference_values(results.metrics, models)
+    ref_txt = (" The " + " and ".join(
+        f"{'oracle (a bound, not a competitor)' if r == 'oracle' else 'training mean (no skill)'}"
+        for r in refs) + " are drawn as horizontal reference lines." if refs else "")
     lo_txt = f" ({', '.join(left_out)} left out: no physics depth or metrics)" if left_out else ""
     add("physics_depth", "9", "Accuracy vs physics depth",
-        f"RMSE against how much of the forward model each method uses, bubble area "
-        f"proportional to the trainable parameter count; outlined bubbles are on the "
-        f"parameters–RMSE Pareto front{lo_txt}.",
+        f"RMSE against how much of the forward model each method uses (the RMSE axis starts "
+        f"at 0), bubble area proportional to the trainable parameter count; a black ring "
+        f"marks the bubbles on the parameters–RMSE Pareto front.{ref_txt}{lo_txt}",
         lambda: _figure_one(lambda ax: tradeoffs.plot_physics_depth(
-            depth, depth_labels=PHYSICS_DEPTH_LABELS, ax=ax), (10.0, 4.8), plot_style)
+            depth, depth_labels=PHYSICS_DEPTH_LABELS, references=refs, ax=ax), (11.0, 5.2),
+            plot_style)
         if len(depth) else None,
         note=None if len(depth) else "No model with a known physics depth.")
     eff = efficiency_table(results.metrics, models)
     add("efficiency", "10", "Efficiency landscape",
-        "RMSE against trainable parameters, single-sample latency and a combined cost index "
-        "(mean of the normalised log parameters and log latency); Pareto-optimal models "
-        "(no other model both cheaper and more accurate) are outlined and joined by a "
-        "dashed line.",
-        lambda: tradeoffs.figure_efficiency_landscape(eff))
+        "RMSE (axis from 0) against trainable parameters, single-sample latency and a "
+        "combined cost index (mean of the normalised log parameters and log latency); "
+        "Pareto-optimal models (no other model both cheaper and more accurate) have a black "
+        f"edge and are joined by a dashed line.{ref_txt}",
+        lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
 
     # 11: wavelength importance
     if results.importance is not None and len(results.importance):
-        mat = importance_matrix(results.importance, models)
+        mat = importance_matrix(results.importance, [m for m in models
+                                                     if not is_ablation_row(m)])
         add("wavelengths", "11", "Wavelength utilisation",
             "Permutation importance of each LED channel for each model: the rise in "
-            "held-out RMSE when that channel's values are shuffled.",
+            "held-out RMSE when that channel's values are shuffled, in mg/dL (the number in "
+            "each cell). Colour is relative within each row (the row's largest rise = 1), "
+            "so that models whose absolute rises differ by orders of magnitude can be read "
+            "alike. A negative value means shuffling that channel made the model slightly "
+            "better: the channel carries no usable information for it and the value is "
+            "noise of the permutation; a very large one (polynomial features) means the "
+            "model extrapolates when a channel leaves its training range.",
             lambda: _figure_one(lambda ax: wl_plots.plot_wavelength_heatmap(mat, ax=ax),
                                 (1.2 * mat.shape[1] + 4.2, 0.45 * mat.shape[0] + 1.6),
                                 plot_style))
@@ -1014,10 +1134,13 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
 def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style, polar: bool = False):
     from matplotlib.figure import Figure
 
+    from ..plots.labels import place_labels
+
     with plot_style():
         fig = Figure(figsize=figsize, layout="constrained")
         ax = fig.add_subplot(projection="polar" if polar else None)
         draw(ax)
+        place_labels(fig)
     return fig
 
 

@@ -41,7 +41,9 @@ h2 { font-size: 1.25rem; margin: 2.2rem 0 .6rem; border-bottom: 1px solid var(--
 h3 { font-size: 1.05rem; margin: 1.4rem 0 .4rem; }
 p.sub { color: var(--muted); margin: 0 0 1rem; }
 nav ol { margin: .3rem 0; }
-nav ol.figs { columns: 3; padding-left: 1.4rem; }
+nav ul.figs { columns: 3; padding-left: 1.4rem; list-style: none; }
+.side { display: grid; grid-template-columns: repeat(auto-fit, minmax(0, 1fr)); gap: 1rem; }
+.side > div { min-width: 0; }
 table { border-collapse: collapse; margin: .6rem 0 1rem; font-size: 13px; }
 th, td { border: 1px solid var(--line); padding: .25rem .45rem; text-align: right;
          vertical-align: top; }
@@ -188,28 +190,51 @@ def _model_label(model: str, metrics_row: pd.Series | None = None) -> str:
     return model_label(model)
 
 
+#: Prediction-interval columns shown beside RMSE when the benchmark wrote them
+#: (metrics column, ci stem, header, digits).
+_INTERVAL_COLUMNS: tuple[tuple[str, str | None, str, int], ...] = (
+    ("coverage90_pct", "coverage90", "90 % interval coverage [%]", 1),
+    ("width90_mgdl", None, "90 % interval width [mg/dL]", 1),
+    ("coverage80_pct", None, "80 % interval coverage [%]", 1),
+    ("width80_mgdl", None, "80 % interval width [mg/dL]", 1),
+)
+
+
+def is_user_data(results: Results) -> bool:
+    """Whether the run is on a user's data (no simulation configuration recorded)."""
+    return results.config is None and not results.meta.get("preset")
+
+
 def _reproduced_table(results: Results) -> str:
     from ..evaluation.reference import STUDY_TABLE
 
-    study = {str(r["model"]): r for r in STUDY_TABLE}
+    with_study = not is_user_data(results)
+    study = {str(r["model"]): r for r in STUDY_TABLE} if with_study else {}
     m = results.metrics.drop_duplicates("model").set_index("model")
+    base = list(_TABLE_COLUMNS)
+    intervals = [c for c in _INTERVAL_COLUMNS if c[0] in m.columns]
+    columns = base[:1] + [(c, stem, None, h, d) for c, stem, h, d in intervals] + base[1:]
+    span = 2 if with_study else 1
     head1 = "<th rowspan=2>Model</th>" + "".join(
-        f"<th colspan=2>{_esc(h)}</th>" for _, _, _, h, _ in _TABLE_COLUMNS)
-    head2 = "".join(f"<th>{'ours [95 % CI]' if stem else 'ours'}</th><th>study</th>"
-                    for _, stem, _, _, _ in _TABLE_COLUMNS)
+        f"<th colspan={span if scol else 1}>{_esc(h)}</th>" for _, _, scol, h, _ in columns)
+    head2 = "".join(f"<th>{'ours [95 % CI]' if stem else 'ours'}</th>"
+                    + ("<th>study</th>" if with_study and scol else "")
+                    for _, stem, scol, _, _ in columns)
     rows = []
     for model in results.models:
         r = m.loc[model]
         s = study.get(model, {})
         cells = [f"<td>{_esc(_model_label(model, r))}</td>"]
-        for col, stem, scol, _, digits in _TABLE_COLUMNS:
+        for col, stem, scol, _, digits in columns:
             ours = _num(r.get(col), digits)
             if stem and f"{stem}_ci_low" in r.index and f"{stem}_ci_high" in r.index:
                 lo, hi = r.get(f"{stem}_ci_low"), r.get(f"{stem}_ci_high")
                 if _num(lo) != "–":
                     ours += f" [{_num(lo, digits)}, {_num(hi, digits)}]"
             cells.append(f"<td>{ours}</td>")
-            cells.append(f'<td class="study">{_num(s.get(scol), digits) if s else "–"}</td>')
+            if with_study and scol:
+                cells.append(f'<td class="study">{_num(s.get(scol), digits) if s else "–"}'
+                             "</td>")
         rows.append("<tr>" + "".join(cells) + "</tr>")
     return (f'<div class="scroll"><table id="reproduced-table"><thead><tr>{head1}</tr>'
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
@@ -253,12 +278,19 @@ def _significance(results: Results) -> str:
             parts.append(f"<ul>{''.join(lines)}</ul>")
         cols = [k for k in ("family", "model", "reference_model", "rmse_diff_mgdl", "ci_low",
                             "ci_high", "p_value", "p_holm", "significant") if k in c.columns]
-        head = "".join(f"<th>{_esc(k)}</th>" for k in cols)
+        names = {"family": "family", "model": "model", "reference_model": "against",
+                 "rmse_diff_mgdl": "Δ RMSE [mg/dL]", "ci_low": "95 % CI low",
+                 "ci_high": "95 % CI high", "p_value": "p", "p_holm": "p (Holm)",
+                 "significant": "significant"}
+        head = "".join(f"<th>{_esc(names.get(k, k))}</th>" for k in cols)
+
         def cell(k: str, v: Any) -> str:
             if k.startswith("p_"):
                 return _pval(v)
             if k in ("rmse_diff_mgdl", "ci_low", "ci_high"):
                 return _num(v)
+            if k in ("model", "reference_model"):
+                return _esc(_model_label(str(v)))
             return _esc(v)
 
         body = "".join("<tr>" + "".join(f"<td>{cell(k, r[k])}</td>" for k in cols) + "</tr>"
@@ -354,7 +386,8 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
     """
     meta = results.meta
     sub = ", ".join(p for p in (
-        f"preset {meta['preset']}" if meta.get("preset") else "",
+        f"preset {meta['preset']}" if meta.get("preset") not in (None, "", "None")
+        else "your data",
         f"seed {meta['seed']}" if meta.get("seed") is not None else "",
         f"protocol {meta['protocol']}" if meta.get("protocol") else "",
         f"{len(results.models)} models",
@@ -370,11 +403,14 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         '<nav><b>Contents</b><ol><li><a href="#table">Reproduced table</a></li>'
         '<li><a href="#significance">Significance</a></li>'
         '<li><a href="#run">Configuration and provenance</a></li>'
-        f'<li><a href="#figures">Figures</a></li></ol><ol class="figs">{toc_figs}</ol></nav>',
+        f'<li><a href="#figures">Figures</a></li></ol><ul class="figs">{toc_figs}</ul></nav>',
         '<h2 id="table">Reproduced table</h2>',
-        "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
-        "(single 60/20/20 split by subject, test n = 48; no intervals reported). "
-        "Latency: median single-sample prediction time on this machine.</p>",
+        ("<p>This run's metrics with 95 % confidence intervals on your data. The study's "
+         "Table 1 is left out: it was measured on other data. Latency: median "
+         "single-sample prediction time on this machine.</p>" if is_user_data(results) else
+         "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
+         "(single 60/20/20 split by subject, test n = 48; no intervals reported). "
+         "Latency: median single-sample prediction time on this machine.</p>"),
         _reproduced_table(results),
         "<h3>Further metrics</h3>",
         _extra_table(results),

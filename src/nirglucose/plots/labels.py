@@ -1,0 +1,167 @@
+"""Point labels that do not overprint one another.
+
+:func:`label_points` records labels for the points of an Axes; :func:`place_labels`
+settles the figure's layout, then places each label greedily at the nearest free spot
+around its point: candidate offsets on rings of growing radius, the first whose
+window extent (matplotlib's ``Text.get_window_extent``) clears the labels already
+placed, every marker of the Axes and the Axes' edges. A label set away from its point
+gets a thin leader line. The layout is frozen afterwards so the places stay valid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.text import Text
+from matplotlib.transforms import Bbox
+
+from .style import GREY
+
+__all__ = ["label_points", "place_labels", "overlapping_texts"]
+
+#: Ring radii of the candidate label positions, nearest first. [pt]
+RING_RADII_PT: tuple[float, ...] = (4.0, 9.0, 15.0, 22.0, 30.0, 40.0, 52.0, 66.0, 82.0)
+#: Directions tried on each ring (0 = right, counter-clockwise). [deg]
+RING_ANGLES_DEG: tuple[float, ...] = (0, 180, 90, 270, 30, 150, 330, 210, 60, 120, 300, 240)
+#: Radius beyond which a leader line joins the label to its point. [pt]
+LEADER_FROM_PT = 14.0
+#: Clearance kept around every placed label. [px]
+PAD_PX = 1.5
+
+_PENDING = "_nirglucose_pending_labels"
+
+
+def label_points(ax: Axes, x: Sequence[float], y: Sequence[float], texts: Sequence[str], *,
+                 marker_radius_pt: Sequence[float] | float = 4.0, fontsize: float = 7.0,
+                 color: str = "#333333") -> None:
+    """Record labels for points of ``ax``; :func:`place_labels` draws them.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes holding the points.
+    x, y : sequence of float
+        Point positions. [data units]
+    texts : sequence of str
+        One label per point.
+    marker_radius_pt : float or sequence of float
+        Radius of each point's marker, kept clear of every label. [pt]
+    fontsize : float
+        Label font size. [pt]
+    color : str
+        Label colour.
+    """
+    r = np.broadcast_to(np.asarray(marker_radius_pt, dtype=float), (len(texts),))
+    pending = getattr(ax, _PENDING, [])
+    pending.extend({"x": float(a), "y": float(b), "text": str(t), "r": float(rr),
+                    "fontsize": fontsize, "color": color}
+                   for a, b, t, rr in zip(x, y, texts, r, strict=True))
+    setattr(ax, _PENDING, pending)
+
+
+def _renderer(fig: Figure):
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)  # a Figure made without pyplot has no renderer yet
+    return fig.canvas.get_renderer()
+
+
+def _overlap(a: Bbox, b: Bbox) -> float:
+    w = min(a.x1, b.x1) - max(a.x0, b.x0)
+    h = min(a.y1, b.y1) - max(a.y0, b.y0)
+    return w * h if w > 0 and h > 0 else 0.0
+
+
+def _outside(a: Bbox, frame: Bbox) -> float:
+    inner = _overlap(a, frame)
+    return a.width * a.height - inner
+
+
+def place_labels(fig: Figure) -> None:
+    """Place every recorded label of ``fig`` (see the module docstring); freeze the layout."""
+    axes = [ax for ax in fig.axes if getattr(ax, _PENDING, None)]
+    if not axes:
+        return
+    renderer = _renderer(fig)
+    fig.draw_without_rendering()  # settle the constrained layout first
+    px_per_pt = fig.dpi / 72.0
+    for ax in axes:
+        pending = getattr(ax, _PENDING)
+        setattr(ax, _PENDING, [])
+        frame = ax.get_window_extent(renderer)
+        pts = ax.transData.transform(np.array([[p["x"], p["y"]] for p in pending]))
+        markers = [Bbox.from_extents(px - p["r"] * px_per_pt, py - p["r"] * px_per_pt,
+                                     px + p["r"] * px_per_pt, py + p["r"] * px_per_pt)
+                   for (px, py), p in zip(pts, pending, strict=True)]
+        placed: list[Bbox] = []
+        # most crowded points first: they have the fewest free spots
+        dist = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+        order = np.argsort(np.sort(dist, axis=1)[:, 1] if len(pts) > 1 else np.zeros(1))
+        for k in order:
+            p = pending[k]
+            ann = ax.annotate(p["text"], (p["x"], p["y"]), xytext=(0, 0),
+                              textcoords="offset points", fontsize=p["fontsize"],
+                              color=p["color"], zorder=5, annotation_clip=False)
+            best, best_cost = None, np.inf
+            for ring in RING_RADII_PT:
+                radius = p["r"] + ring
+                for ang in RING_ANGLES_DEG:
+                    dx, dy = np.cos(np.radians(ang)), np.sin(np.radians(ang))
+                    ha = "left" if dx > 0.3 else "right" if dx < -0.3 else "center"
+                    va = "bottom" if dy > 0.3 else "top" if dy < -0.3 else "center"
+                    ann.set_position((radius * dx, radius * dy))
+                    ann.set_ha(ha)
+                    ann.set_va(va)
+                    bb = ann.get_window_extent(renderer).expanded(1.0, 1.0).padded(PAD_PX)
+                    cost = (sum(_overlap(bb, o) for o in placed)
+                            + sum(_overlap(bb, m) for m in markers)
+                            + 4.0 * _outside(bb, frame))
+                    if cost < best_cost - 1e-9:
+                        best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
+                    if cost == 0.0:
+                        break
+                if best_cost == 0.0:
+                    break
+            assert best is not None
+            ann.set_position(best[:2])
+            ann.set_ha(best[2])
+            ann.set_va(best[3])
+            if best[4] > LEADER_FROM_PT:
+                ann_arrow = {"arrowstyle": "-", "color": GREY, "lw": 0.5,
+                             "shrinkA": 1.0, "shrinkB": p["r"] + 1.0}
+                ann.remove()
+                ann = ax.annotate(p["text"], (p["x"], p["y"]), xytext=best[:2],
+                                  textcoords="offset points", fontsize=p["fontsize"],
+                                  color=p["color"], zorder=5, ha=best[2], va=best[3],
+                                  annotation_clip=False, arrowprops=ann_arrow)
+            ann.update_positions(renderer)  # a fresh Annotation's text is placed on draw
+            placed.append(Text.get_window_extent(ann, renderer).padded(PAD_PX))
+    fig.set_layout_engine("none")  # the places were computed for this layout
+
+
+def overlapping_texts(fig: Figure) -> list[tuple[str, str]]:
+    """Pairs of non-empty texts inside each Axes of ``fig`` whose window extents overlap.
+
+    Examples
+    --------
+    >>> from matplotlib.figure import Figure
+    >>> fig = Figure(); ax = fig.add_subplot()
+    >>> _ = ax.text(0.5, 0.5, "one"); _ = ax.text(0.5, 0.5, "two")
+    >>> overlapping_texts(fig)
+    [('one', 'two')]
+    """
+    renderer = _renderer(fig)
+    fig.draw_without_rendering()
+    out = []
+    for ax in fig.axes:
+        texts = [t for t in ax.texts if t.get_visible() and t.get_text().strip()]
+        # the text itself: an Annotation's own extent also spans its leader line
+        boxes = [Text.get_window_extent(t, renderer) for t in texts]
+        for i in range(len(texts)):
+            for j in range(i + 1, len(texts)):
+                if _overlap(boxes[i], boxes[j]) > 0:
+                    out.append((texts[i].get_text(), texts[j].get_text()))
+    return out
