@@ -153,6 +153,26 @@ SetOption = Annotated[
     list[str] | None,
     typer.Option("--set", help="Config override KEY=VALUE (dotted key), repeatable."),
 ]
+#: --jobs of every command: the same default (the available cores) and meaning.
+JobsOption = Annotated[
+    int | None,
+    typer.Option(help="Worker processes (default: the available cores); any value gives "
+                 "the same result."),
+]
+#: --resamples of every command that reports bootstrap CIs.
+ResamplesOption = Annotated[int, typer.Option(help="Bootstrap resamples for each 95 % CI.")]
+DEFAULT_RESAMPLES = 2000
+
+
+def _jobs(jobs: int | None) -> int:
+    """``--jobs`` checked (positive; a warning beyond the cores), None as the cores."""
+    from .evaluation.executors import available_cores
+
+    if jobs is None:
+        return available_cores()
+    _positive("--jobs", jobs)
+    _check_jobs(jobs)
+    return jobs
 
 
 @app.command()
@@ -164,7 +184,7 @@ def simulate(
     subjects: Annotated[int, typer.Option(help="Number of subjects.")] = 80,
     per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
-    jobs: Annotated[int, typer.Option(help="Worker processes (same result for any value).")] = 1,
+    jobs: JobsOption = None,
     set_: SetOption = None,
 ) -> None:
     """Generate a dataset and print a summary of it."""
@@ -173,10 +193,9 @@ def simulate(
 
     _positive("--subjects", subjects)
     _positive("--per-subject", per_subject)
-    _positive("--jobs", jobs)
+    jobs = _jobs(jobs)
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
-    _check_jobs(jobs)
     cfg = resolve_config(preset, _parse_sets(set_))
     if out.suffix and out.suffix not in (".parquet", ".csv"):
         raise UserError(f"--out {str(out)!r}: use a .parquet or .csv file, or a directory")
@@ -252,8 +271,8 @@ def benchmark(
     folds: Annotated[int, typer.Option(help="Folds of grouped-cv.")] = 5,
     repeats: Annotated[int, typer.Option(help="Repeats of grouped-cv.")] = 3,
     seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
-    jobs: Annotated[int, typer.Option(help="Worker processes (same result for any value).")] = 1,
-    resamples: Annotated[int, typer.Option(help="Bootstrap resamples for the CIs.")] = 2000,
+    jobs: JobsOption = None,
+    resamples: ResamplesOption = DEFAULT_RESAMPLES,
     references: Annotated[
         bool, typer.Option(help="Add the reference rows (mean, gp, gbr) to --models.")
     ] = True,
@@ -271,14 +290,13 @@ def benchmark(
         ("--per-subject", per_subject),
         ("--folds", folds),
         ("--repeats", repeats),
-        ("--jobs", jobs),
         ("--resamples", resamples),
     ):
         _positive(name, value)
+    jobs = _jobs(jobs)
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
     check_protocol(protocol)
-    _check_jobs(jobs)
     if data is None:
         _check_size(subjects, per_subject)
     names = None
@@ -403,10 +421,8 @@ def sweep(
     per_subject: Annotated[int, typer.Option(help="Measurements per subject.")] = 3,
     folds: Annotated[int, typer.Option(help="Folds of grouped-cv.")] = 5,
     repeats: Annotated[int, typer.Option(help="Repeats of grouped-cv.")] = 3,
-    resamples: Annotated[int, typer.Option(help="Bootstrap resamples per task.")] = 1000,
-    jobs: Annotated[
-        int | None, typer.Option(help="Local worker processes (default: available cores).")
-    ] = None,
+    resamples: ResamplesOption = DEFAULT_RESAMPLES,
+    jobs: JobsOption = None,
     scheduler: Annotated[
         str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
     ] = None,
@@ -426,9 +442,7 @@ def sweep(
                         ("--folds", folds), ("--repeats", repeats), ("--seeds", seeds),
                         ("--resamples", resamples)):
         _positive(name, value)
-    if jobs is not None:
-        _positive("--jobs", jobs)
-        _check_jobs(jobs)
+    jobs = _jobs(jobs)
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
     _check_size(subjects, per_subject)

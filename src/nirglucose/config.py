@@ -28,7 +28,7 @@ from .constants import (
     MGDL_PER_MMOLL_GLUCOSE,
     WATER_FRACTION_DERMIS_NOMINAL,
 )
-from .exceptions import ConfigError
+from .exceptions import ConfigError, unknown_name
 
 __all__ = [
     "ScenarioConfig",
@@ -1220,7 +1220,7 @@ def resolve_config(
         all_overrides = dict(overrides or {})
     else:
         if preset not in PRESETS:
-            raise ConfigError(f"unknown preset {preset!r}; valid: {', '.join(PRESETS)}")
+            raise ConfigError(unknown_name("preset", preset, PRESETS))
         base = ScenarioConfig(preset=preset).model_dump(mode="json")
         all_overrides = {**PRESETS[preset], **(overrides or {})}
     data = apply_overrides(base, all_overrides)

@@ -7,7 +7,10 @@ working (the xarray / scikit-learn habit).
 
 from __future__ import annotations
 
-__all__ = ["NirGlucoseError", "ConfigError", "DataError", "NotFittedError"]
+import difflib
+from collections.abc import Iterable
+
+__all__ = ["NirGlucoseError", "ConfigError", "DataError", "NotFittedError", "unknown_name"]
 
 
 class NirGlucoseError(Exception):
@@ -24,3 +27,17 @@ class DataError(NirGlucoseError, ValueError):
 
 class NotFittedError(NirGlucoseError, AttributeError):
     """An estimator was used before ``fit``."""
+
+
+def unknown_name(kind: str, name: object, valid: Iterable[str]) -> str:
+    """The one message for an unknown name: echo it, suggest the closest, list the valid.
+
+    Examples
+    --------
+    >>> unknown_name("preset", "papr", ["paper", "wearable"])
+    "unknown preset 'papr'; did you mean 'paper'? valid: paper, wearable"
+    """
+    valid = list(valid)
+    close = difflib.get_close_matches(str(name), valid, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ";"
+    return f"unknown {kind} {name!r}{hint} valid: {', '.join(valid)}"

@@ -91,3 +91,29 @@ def test_interrupt_status_is_not_zero(cli, monkeypatch, workdir):
     monkeypatch.setattr(cli_mod, "_print_summary", boom)
     code, _, err = cli("simulate", "--out", "a.csv", "--subjects", 2)
     assert code == 130 and "interrupted" in err
+
+
+@pytest.mark.parametrize(
+    ("args", "hint"),
+    [
+        (["simulate", "--preset", "papr", "--out", "a.csv"], "did you mean 'paper'?"),
+        (["benchmark", "--models", "ebll", "--out", "res"], "did you mean 'ebl'?"),
+        (["sweep", "--study", "devise", "--out", "sw"], "did you mean 'device'?"),
+    ],
+)
+def test_did_you_mean_for_presets_models_and_studies(cli, workdir, args, hint):
+    code, _, err = cli(*args)
+    assert_one_line_error(code, err, contains=[hint])
+
+
+def test_jobs_and_resamples_mean_the_same_in_every_command():
+    """One --jobs (default: the available cores) and one --resamples default everywhere."""
+    import inspect
+
+    from nirglucose import cli as cli_module
+
+    for command in (cli_module.simulate, cli_module.benchmark, cli_module.sweep):
+        params = inspect.signature(command).parameters
+        assert params["jobs"].default is None, command.__name__
+        if "resamples" in params:
+            assert params["resamples"].default == cli_module.DEFAULT_RESAMPLES

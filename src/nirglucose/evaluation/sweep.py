@@ -86,7 +86,7 @@ import numpy as np
 import pandas as pd
 
 from ..dataset import Dataset, atomic_write
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError, DataError, unknown_name
 from .benchmark import METRIC_COLUMNS
 from .progress import TaskProgress
 
@@ -405,7 +405,7 @@ def study_scenarios(
     from ..config import NOISE_SOURCES
 
     if study not in STUDIES:
-        raise ConfigError(f"unknown study {study!r}; valid: {', '.join(STUDIES)}")
+        raise ConfigError(unknown_name("study", study, STUDIES))
     if study in STUDY_GRIDS:
         key, default = STUDY_GRIDS[study]
         return grid_scenarios({key: list(values if values is not None else default)})
@@ -1296,7 +1296,7 @@ def run_sweep(
         )
     elif study is not None:
         if study not in STUDIES:
-            raise ConfigError(f"unknown study {study!r}; valid: {', '.join(STUDIES)}")
+            raise ConfigError(unknown_name("study", study, STUDIES))
         values = None
         if vary:
             key = STUDY_GRIDS.get(study, (None,))[0]

@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError, DataError, unknown_name
 
 __all__ = [
     "register",
@@ -89,7 +89,7 @@ def get_model_class(name: str) -> type:
     if name not in _REGISTRY:
         _load_all()
     if name not in _REGISTRY:
-        raise ConfigError(f"unknown model {name!r}; valid: {', '.join(sorted(_REGISTRY))}")
+        raise ConfigError(unknown_name("model", name, sorted(_REGISTRY)))
     return _REGISTRY[name]
 
 
