@@ -11,8 +11,8 @@ Batch
 
 Input form
     Every estimator is timed on the cheapest input its public ``predict`` accepts: a
-    float array of the measured columns (:data:`nirglucose.models._base.MEASURED_COLUMNS`
-    order); an estimator that cannot predict from it (the oracle, which reads ``true_*``
+    float array of the device's measured columns in the order the model was fitted on;
+    an estimator that cannot predict from it (the oracle, which reads ``true_*``
     columns) is timed on a one-row :class:`~nirglucose.dataset.Dataset`. The form used is
     reported as ``latency_input``.
 """
@@ -57,13 +57,16 @@ def _row(data: Any, k: int) -> Any:
 def timing_inputs(model: Any, rows: Dataset) -> tuple[str, Any]:
     """The input form to time ``model`` on: ``("array", X)`` or ``("dataset", rows)``.
 
-    ``X`` is the measured columns of ``rows`` as a float array; it is used when the
-    fitted ``model`` predicts from it.
+    ``X`` is the columns the fitted ``model`` was fitted on (its ``feature_names_in_``:
+    the device's raw columns; the study's 20 when it records none) of ``rows`` as a float
+    array; it is used when the model predicts from it.
     """
     from ..models._base import MEASURED_COLUMNS
 
-    if set(MEASURED_COLUMNS) <= set(rows.frame.columns):
-        X = rows.frame[list(MEASURED_COLUMNS)].to_numpy(dtype=float)
+    names = getattr(model, "feature_names_in_", None)
+    cols = [str(c) for c in names] if names is not None else list(MEASURED_COLUMNS)
+    if set(cols) <= set(rows.frame.columns):
+        X = rows.frame[cols].to_numpy(dtype=float)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
