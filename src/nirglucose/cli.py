@@ -260,6 +260,14 @@ def benchmark(
     ablation: Annotated[
         bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
     ] = True,
+    calibration: Annotated[
+        int,
+        typer.Option(
+            help="Personal calibration: each test subject's first K readings (1 or 2) "
+            "calibrate them and only later readings are scored (calibration.csv); 0: none. "
+            "Needs --per-subject > K."
+        ),
+    ] = 0,
     set_: SetOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
@@ -279,6 +287,7 @@ def benchmark(
         raise UserError(f"--seed must be non-negative, got {seed}")
     check_protocol(protocol)
     _check_jobs(jobs)
+    _check_calibration(calibration, None if data is not None else per_subject)
     if data is None:
         _check_size(subjects, per_subject)
     names = None
@@ -320,11 +329,21 @@ def benchmark(
 
             ds = _simulate(p, subjects, per_subject, seed, overrides=overrides)
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation)
+                       references, ablation, calibration)
+
+
+def _check_calibration(k: int, per_subject: int | None) -> None:
+    if k not in (0, 1, 2):
+        raise UserError(f"--calibration must be 0, 1 or 2 readings per person, got {k}")
+    if k and per_subject is not None and per_subject <= k:
+        raise UserError(
+            f"--calibration {k} leaves no reading to score at --per-subject {per_subject}; "
+            f"use --per-subject {k + 2} or more"
+        )
 
 
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
-                   references, ablation) -> None:
+                   references, ablation, calibration=0) -> None:
     import warnings
 
     from .evaluation.benchmark import run_benchmark
@@ -344,6 +363,7 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             n_boot=resamples,
             references=references,
             ablation=ablation,
+            calibration=calibration,
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
         _say(f"warning: {msg}")
@@ -351,7 +371,8 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
 
     table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
                   box=box.SIMPLE_HEAD)
-    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "params", "ms"):
+    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "90% PI cover/width",
+                "params", "ms"):
         table.add_column(col, justify="left" if col == "model" else "right", no_wrap=True)
     for _, r in res.metrics.iterrows():
         table.add_row(
@@ -359,11 +380,20 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
             f"{r['mard_pct']:.1f}",
             f"{r['clarke_a_pct']:.1f}",
+            f"{r['coverage90_pct']:.0f}% / {r['width90_mgdl']:.0f}",
             f"{int(r['n_parameters']):,}",
             f"{r['latency_single_ms']:.3f}",
         )
     # not a terminal (a log file, make): wide enough that no column is truncated
     (out_console if out_console.is_terminal else Console(width=110)).print(table)
+    cal = res.calibration
+    for _, r in cal[cal["method"] != "none"].iterrows():
+        _say(
+            f"calibration ({r['k']} reading{'s' if r['k'] > 1 else ''}): {r['model']} "
+            f"{r['method']}: RMSE {r['rmse_mgdl']:.1f} mg/dL"
+            + (f", gain {r['gain_mgdl']:+.1f} vs {r['baseline']}" if r["baseline"] else ""),
+            err=False,
+        )
     m = res.meta
     _say(
         f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "
@@ -411,6 +441,15 @@ def sweep(
         str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
     ] = None,
     figures: Annotated[bool, typer.Option(help="Write figures to OUT/figures.")] = True,
+    calibration: Annotated[
+        int,
+        typer.Option(
+            help="Personal calibration: each test subject's first K readings (1 or 2) "
+            "calibrate them and only later readings are scored (sweep.csv: "
+            "later_rmse_mgdl, offset_rmse_mgdl, ...); 0: none. "
+            "Needs --per-subject > K."
+        ),
+    ] = 0,
     set_: SetOption = None,
 ) -> None:
     """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks)."""
@@ -432,6 +471,7 @@ def sweep(
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
     _check_size(subjects, per_subject)
+    _check_calibration(calibration, per_subject)
     if study is None and not vary:
         raise UserError("give --vary KEY=V1,V2,... or --study NAME")
     grid: dict = {}
@@ -459,7 +499,7 @@ def sweep(
                         overrides=_parse_sets(set_), protocol=protocol, n_splits=folds,
                         repeats=repeats, n_subjects=subjects, per_subject=per_subject,
                         n_boot=resamples, out=out, jobs=jobs, scheduler=scheduler,
-                        progress=True)
+                        progress=True, calibration=calibration)
         if figures:
             from .report.sweep import save_sweep_figures
 
