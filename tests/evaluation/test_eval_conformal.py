@@ -148,3 +148,14 @@ def test_personal_calibration_refuses_bad_k(bench):
         personal_calibration(bench.dataset, bench.predictions, [], 3)
     with pytest.raises(ConfigError):
         run_benchmark(bench.dataset, ["mean"], calibration=-1)
+
+
+def test_network_carries_its_calibration(tmp_path):
+    from nirglucose.models import make_model
+
+    data = ng.simulate("wearable", 60, 3, seed=0)
+    net = split_conformal(make_model("sdnn", max_epochs=5, random_state=0), data)
+    path = net.save(tmp_path / "net.json")
+    again = load_model(path)
+    assert again.conformal_ == net.conformal_
+    np.testing.assert_allclose(again.predict(data), net.predict(data), rtol=1e-6)
