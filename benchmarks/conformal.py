@@ -50,8 +50,15 @@ def _bench(preset, seed, models, subjects, per_subject, folds, repeats, k):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return run_benchmark(
-            ds, models, n_splits=folds, repeats=repeats, seed=seed, n_boot=500,
-            timing=dict(_TIMING), importance_repeats=1, oracle_reference=False,
+            ds,
+            models,
+            n_splits=folds,
+            repeats=repeats,
+            seed=seed,
+            n_boot=500,
+            timing=dict(_TIMING),
+            importance_repeats=1,
+            oracle_reference=False,
             calibration=k,
         )
 
@@ -77,12 +84,18 @@ def main() -> None:
     cal: dict = {}
     for preset in presets:
         for seed in _ints(a.seeds):
-            res = _bench(preset, seed, models, a.subjects, a.per_subject, a.folds,
-                         a.repeats, 1)
+            res = _bench(preset, seed, models, a.subjects, a.per_subject, a.folds, a.repeats, 1)
             for _, r in res.metrics.iterrows():
-                d = cov.setdefault(preset, {}).setdefault(r["model"], {
-                    "coverage90_pct": [], "coverage80_pct": [], "width90_mgdl": [],
-                    "width80_mgdl": [], "rmse_mgdl": []})
+                d = cov.setdefault(preset, {}).setdefault(
+                    r["model"],
+                    {
+                        "coverage90_pct": [],
+                        "coverage80_pct": [],
+                        "width90_mgdl": [],
+                        "width80_mgdl": [],
+                        "rmse_mgdl": [],
+                    },
+                )
                 for key in d:
                     d[key].append(float(r[key]))
             for _, r in res.calibration.iterrows():
@@ -96,8 +109,10 @@ def main() -> None:
         for model, d in per_model.items():
             row = {k: round(float(np.mean(v)), 2) for k, v in d.items()}
             row["coverage90_per_seed"] = [round(v, 1) for v in d["coverage90_pct"]]
-            row["ok"] = bool(abs(row["coverage90_pct"] - 90) <= TOLERANCE_PCT
-                             and abs(row["coverage80_pct"] - 80) <= TOLERANCE_PCT)
+            row["ok"] = bool(
+                abs(row["coverage90_pct"] - 90) <= TOLERANCE_PCT
+                and abs(row["coverage80_pct"] - 80) <= TOLERANCE_PCT
+            )
             if not row["ok"]:
                 failures.append(f"{preset}/{model}")
             coverage[preset][model] = row
@@ -114,34 +129,39 @@ def main() -> None:
                     continue
                 vals: dict = {}
                 for seed in _ints(a.sweep_seeds):
-                    res = _bench(preset, seed, a.sweep_models.split(","), a.subjects, n,
-                                 a.folds, 1, k)
+                    res = _bench(
+                        preset, seed, a.sweep_models.split(","), a.subjects, n, a.folds, 1, k
+                    )
                     for _, r in res.calibration.iterrows():
                         vals.setdefault(f"{r['model']}/{r['method']}", []).append(
-                            float(r["rmse_mgdl"]))
+                            float(r["rmse_mgdl"])
+                        )
                 sweep[f"{preset}/per_subject={n}/k={k}"] = {
                     m: round(float(np.mean(v)), 2) for m, v in vals.items()
                 }
-                print(f"sweep {preset} n={n} k={k}: {time.perf_counter() - t0:.0f} s",
-                      flush=True)
+                print(f"sweep {preset} n={n} k={k}: {time.perf_counter() - t0:.0f} s", flush=True)
 
-    print(json.dumps({
-        "benchmark": "conformal",
-        "presets": presets,
-        "seeds": _ints(a.seeds),
-        "models": models,
-        "subjects": a.subjects,
-        "per_subject": a.per_subject,
-        "folds": a.folds,
-        "repeats": a.repeats,
-        "tolerance_pct": TOLERANCE_PCT,
-        "coverage": coverage,
-        "acceptance_pass": not failures,
-        "failures": failures,
-        "calibration_k1_rmse_mgdl": calibration,
-        "per_subject_sweep_rmse_mgdl": sweep,
-        "wall_s": round(time.perf_counter() - t0, 1),
-    }))
+    print(
+        json.dumps(
+            {
+                "benchmark": "conformal",
+                "presets": presets,
+                "seeds": _ints(a.seeds),
+                "models": models,
+                "subjects": a.subjects,
+                "per_subject": a.per_subject,
+                "folds": a.folds,
+                "repeats": a.repeats,
+                "tolerance_pct": TOLERANCE_PCT,
+                "coverage": coverage,
+                "acceptance_pass": not failures,
+                "failures": failures,
+                "calibration_k1_rmse_mgdl": calibration,
+                "per_subject_sweep_rmse_mgdl": sweep,
+                "wall_s": round(time.perf_counter() - t0, 1),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

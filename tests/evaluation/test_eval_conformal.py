@@ -137,8 +137,11 @@ def test_calibration_mask_and_offset():
     f = pd.DataFrame({"subject_id": [1, 1, 1, 2, 2], "measurement_id": [7, 3, 5, 9, 8]})
     assert calibration_mask(f, 1).tolist() == [False, True, False, False, True]
     out, has = apply_offset(
-        np.array([100.0, 100.0, 50.0]), np.array([1, 3, 2]),
-        np.array([90.0, 60.0]), np.array([100.0, 50.0]), np.array([1, 2]),
+        np.array([100.0, 100.0, 50.0]),
+        np.array([1, 3, 2]),
+        np.array([90.0, 60.0]),
+        np.array([100.0, 50.0]),
+        np.array([1, 2]),
     )
     assert out.tolist() == [110.0, 100.0, 40.0] and has.tolist() == [True, False, True]
 

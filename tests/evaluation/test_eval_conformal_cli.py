@@ -35,15 +35,17 @@ def files(tmp_path_factory):
 def test_fit_saves_intervals_and_predict_writes_them(files, capsys, tmp_path):
     d, first, rest = files
     model = tmp_path / "m.json"
-    code, out, err = _run(["fit", "--model", "pls", "--data", d / "train.parquet",
-                           "--out", model], capsys)
+    code, out, err = _run(
+        ["fit", "--model", "pls", "--data", d / "train.parquet", "--out", model], capsys
+    )
     assert code == 0, err
     assert "90 % interval" in out and "12 held-out subjects" in out
     m = load_model(model)
     half = m.conformal_["half_width_mgdl"]["90"]
     pred = tmp_path / "p.csv"
-    code, out, err = _run(["predict", "--model", model, "--data", d / "new.csv",
-                           "--out", pred], capsys)
+    code, out, err = _run(
+        ["predict", "--model", model, "--data", d / "new.csv", "--out", pred], capsys
+    )
     assert code == 0, err
     t = pd.read_csv(pred)
     np.testing.assert_allclose(t["glucose_upper_mgdl"] - t["predicted_glucose_mgdl"], half)
@@ -51,8 +53,20 @@ def test_fit_saves_intervals_and_predict_writes_them(files, capsys, tmp_path):
 
     # one fingerstick per person shifts that person's later predictions by its error
     cal = tmp_path / "pc.csv"
-    code, out, err = _run(["predict", "--model", model, "--data", d / "new.csv", "--out", cal,
-                           "--calibration", d / "fingersticks.csv"], capsys)
+    code, out, err = _run(
+        [
+            "predict",
+            "--model",
+            model,
+            "--data",
+            d / "new.csv",
+            "--out",
+            cal,
+            "--calibration",
+            d / "fingersticks.csv",
+        ],
+        capsys,
+    )
     assert code == 0, err
     c = pd.read_csv(cal)
     assert c["calibrated"].all() and "calibrated by their person" in out
@@ -63,32 +77,86 @@ def test_fit_saves_intervals_and_predict_writes_them(files, capsys, tmp_path):
 
 def test_fit_without_enough_subjects_has_no_interval(tmp_path, capsys):
     ng.simulate("wearable", 20, 3, seed=0).save(tmp_path / "small.parquet")
-    code, out, err = _run(["fit", "--model", "pls", "--data", tmp_path / "small.parquet",
-                           "--out", tmp_path / "m.json"], capsys)
+    code, out, err = _run(
+        [
+            "fit",
+            "--model",
+            "pls",
+            "--data",
+            tmp_path / "small.parquet",
+            "--out",
+            tmp_path / "m.json",
+        ],
+        capsys,
+    )
     assert code == 0 and "no intervals" in out
-    code, _, err = _run(["fit", "--model", "pls", "--data", tmp_path / "small.parquet",
-                         "--out", tmp_path / "m2.json", "--intervals", "split"], capsys)
+    code, _, err = _run(
+        [
+            "fit",
+            "--model",
+            "pls",
+            "--data",
+            tmp_path / "small.parquet",
+            "--out",
+            tmp_path / "m2.json",
+            "--intervals",
+            "split",
+        ],
+        capsys,
+    )
     assert code == 2 and "too few" in err and err.count("\n") == 1
 
 
 def test_benchmark_calibration_option(tmp_path, capsys):
-    code, out, err = _run(["benchmark", "--preset", "wearable", "--models", "pls",
-                           "--no-references", "--subjects", "30", "--per-subject", "3",
-                           "--folds", "3", "--repeats", "1", "--resamples", "100",
-                           "--calibration", "1", "--out", tmp_path / "b"], capsys)
+    code, out, err = _run(
+        [
+            "benchmark",
+            "--preset",
+            "wearable",
+            "--models",
+            "pls",
+            "--no-references",
+            "--subjects",
+            "30",
+            "--per-subject",
+            "3",
+            "--folds",
+            "3",
+            "--repeats",
+            "1",
+            "--resamples",
+            "100",
+            "--calibration",
+            "1",
+            "--out",
+            tmp_path / "b",
+        ],
+        capsys,
+    )
     assert code == 0, err
     c = pd.read_csv(tmp_path / "b" / "calibration.csv")
     assert {"none", "offset", "difference-ridge"} <= set(c["method"])
     assert "pls offset" in out
-    code, _, err = _run(["benchmark", "--per-subject", "2", "--calibration", "2",
-                         "--out", tmp_path / "c"], capsys)
+    code, _, err = _run(
+        ["benchmark", "--per-subject", "2", "--calibration", "2", "--out", tmp_path / "c"], capsys
+    )
     assert code == 2 and "--per-subject" in err
 
 
 def test_sweep_calibration_columns():
-    res = run_sweep({"noise_scale": [1.0]}, preset="wearable", seeds=1, models="pls",
-                    n_splits=3, repeats=1, n_subjects=30, per_subject=3, n_boot=50,
-                    jobs=1, calibration=1)
+    res = run_sweep(
+        {"noise_scale": [1.0]},
+        preset="wearable",
+        seeds=1,
+        models="pls",
+        n_splits=3,
+        repeats=1,
+        n_subjects=30,
+        per_subject=3,
+        n_boot=50,
+        jobs=1,
+        calibration=1,
+    )
     row = res.frame.iloc[0]
     assert row["offset_rmse_mgdl"] > 0 and np.isfinite(row["difference_ridge_rmse_mgdl"])
     assert row["offset_gain_mgdl"] == pytest.approx(

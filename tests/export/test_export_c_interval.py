@@ -69,8 +69,21 @@ def test_compiled_interval_matches_python(calibrated, name, tmp_path):
     (tmp_path / "driver.c").write_text(DRIVER)
     exe = tmp_path / "driver"
     subprocess.run(
-        [GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-I", str(out),
-         str(tmp_path / "driver.c"), str(out / "nirglucose_model.c"), "-o", str(exe), "-lm"],
+        [
+            GCC,
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-O2",
+            "-I",
+            str(out),
+            str(tmp_path / "driver.c"),
+            str(out / "nirglucose_model.c"),
+            "-o",
+            str(exe),
+            "-lm",
+        ],
         check=True,
         capture_output=True,
     )

@@ -65,12 +65,13 @@ _BOOT_STREAM = 0xCA1B
 
 def check_k(k) -> int:
     """``k`` if it is 1 or 2 (0: no calibration), else ConfigError."""
-    if isinstance(k, bool) or not isinstance(k, int | np.integer) or not (
-        0 <= k <= MAX_CALIBRATION_READINGS
+    if (
+        isinstance(k, bool)
+        or not isinstance(k, int | np.integer)
+        or not (0 <= k <= MAX_CALIBRATION_READINGS)
     ):
         raise ConfigError(
-            f"calibration readings per person must be 0, 1 or {MAX_CALIBRATION_READINGS}, "
-            f"got {k!r}"
+            f"calibration readings per person must be 0, 1 or {MAX_CALIBRATION_READINGS}, got {k!r}"
         )
     return int(k)
 
