@@ -50,6 +50,8 @@ def test_fit_predict_export_happy_path(files, capsys, tmp_path):
         "measurement_id",
         "subject_id",
         "predicted_glucose_mgdl",
+        "glucose_lower_mgdl",
+        "glucose_upper_mgdl",
         "flag",
     ]
     np.testing.assert_allclose(

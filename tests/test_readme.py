@@ -73,7 +73,7 @@ def test_user_data_doc_runs_end_to_end(tmp_path, monkeypatch, capsys):
     assert claimed and claimed.group(1) + ";" in header
     pred = pd.read_csv(tmp_path / "three_led_pred.csv")
     assert list(pred.columns) == ["measurement_id", "subject_id", "predicted_glucose_mgdl",
-                                  "flag"]  # fmt: skip
+                                  "glucose_lower_mgdl", "glucose_upper_mgdl", "flag"]  # fmt: skip
     assert (tmp_path / "three_led_fw" / "nirglucose_model.c").exists()
     # the documented refusal without the declared resolution
     code = main(["fit", "--model", "pls", "--data", "three_led.csv", "--out", "x.json"])

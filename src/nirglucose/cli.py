@@ -279,6 +279,14 @@ def benchmark(
     ablation: Annotated[
         bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
     ] = True,
+    calibration: Annotated[
+        int,
+        typer.Option(
+            help="Personal calibration: each test subject's first K readings (1 or 2) "
+            "calibrate them and only later readings are scored (calibration.csv); 0: none. "
+            "Needs --per-subject > K."
+        ),
+    ] = 0,
     set_: SetOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
@@ -297,6 +305,7 @@ def benchmark(
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
     check_protocol(protocol)
+    _check_calibration(calibration, None if data is not None else per_subject)
     if data is None:
         _check_size(subjects, per_subject)
     names = None
@@ -338,11 +347,21 @@ def benchmark(
 
             ds = _simulate(p, subjects, per_subject, seed, overrides=overrides)
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation)
+                       references, ablation, calibration)
+
+
+def _check_calibration(k: int, per_subject: int | None) -> None:
+    if k not in (0, 1, 2):
+        raise UserError(f"--calibration must be 0, 1 or 2 readings per person, got {k}")
+    if k and per_subject is not None and per_subject <= k:
+        raise UserError(
+            f"--calibration {k} leaves no reading to score at --per-subject {per_subject}; "
+            f"use --per-subject {k + 2} or more"
+        )
 
 
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
-                   references, ablation) -> None:
+                   references, ablation, calibration=0) -> None:
     import warnings
 
     from .evaluation.benchmark import run_benchmark
@@ -362,6 +381,7 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             n_boot=resamples,
             references=references,
             ablation=ablation,
+            calibration=calibration,
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
         _say(f"warning: {msg}")
@@ -369,7 +389,8 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
 
     table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
                   box=box.SIMPLE_HEAD)
-    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "params", "ms"):
+    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "90% PI cover/width",
+                "params", "ms"):
         table.add_column(col, justify="left" if col == "model" else "right", no_wrap=True)
     for _, r in res.metrics.iterrows():
         table.add_row(
@@ -377,11 +398,20 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
             f"{r['mard_pct']:.1f}",
             f"{r['clarke_a_pct']:.1f}",
+            f"{r['coverage90_pct']:.0f}% / {r['width90_mgdl']:.0f}",
             f"{int(r['n_parameters']):,}",
             f"{r['latency_single_ms']:.3f}",
         )
     # not a terminal (a log file, make): wide enough that no column is truncated
     (out_console if out_console.is_terminal else Console(width=110)).print(table)
+    cal = res.calibration
+    for _, r in cal[cal["method"] != "none"].iterrows():
+        _say(
+            f"calibration ({r['k']} reading{'s' if r['k'] > 1 else ''}): {r['model']} "
+            f"{r['method']}: RMSE {r['rmse_mgdl']:.1f} mg/dL"
+            + (f", gain {r['gain_mgdl']:+.1f} vs {r['baseline']}" if r["baseline"] else ""),
+            err=False,
+        )
     m = res.meta
     _say(
         f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "
@@ -427,6 +457,15 @@ def sweep(
         str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
     ] = None,
     figures: Annotated[bool, typer.Option(help="Write figures to OUT/figures.")] = True,
+    calibration: Annotated[
+        int,
+        typer.Option(
+            help="Personal calibration: each test subject's first K readings (1 or 2) "
+            "calibrate them and only later readings are scored (sweep.csv: "
+            "later_rmse_mgdl, offset_rmse_mgdl, ...); 0: none. "
+            "Needs --per-subject > K."
+        ),
+    ] = 0,
     set_: SetOption = None,
 ) -> None:
     """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks)."""
@@ -446,6 +485,7 @@ def sweep(
     if seed < 0:
         raise UserError(f"--seed must be non-negative, got {seed}")
     _check_size(subjects, per_subject)
+    _check_calibration(calibration, per_subject)
     if study is None and not vary:
         raise UserError("give --vary KEY=V1,V2,... or --study NAME")
     grid: dict = {}
@@ -473,7 +513,7 @@ def sweep(
                         overrides=_parse_sets(set_), protocol=protocol, n_splits=folds,
                         repeats=repeats, n_subjects=subjects, per_subject=per_subject,
                         n_boot=resamples, out=out, jobs=jobs, scheduler=scheduler,
-                        progress=True)
+                        progress=True, calibration=calibration)
         if figures:
             from .report.sweep import save_sweep_figures
 
@@ -534,13 +574,34 @@ def fit_model(
         int | None,
         typer.Option(help="The device's ADC resolution [bit] (default: the file's, else 12)."),
     ] = None,
+    intervals: Annotated[
+        str,
+        typer.Option(
+            help="Prediction intervals: split (hold out --calibration-share of the subjects "
+            "to calibrate them; the model fits on the rest), none, or auto (split when "
+            "the held-out subjects are enough for a 90 % interval, else none)."
+        ),
+    ] = "auto",
+    calibration_share: Annotated[
+        float, typer.Option(help="Share of subjects held out to calibrate the intervals.")
+    ] = 0.2,
+    seed: Annotated[int, typer.Option(help="Seed of the draw of calibration subjects.")] = 0,
 ) -> None:
-    """Fit a model on your own measurements (any LEDs, any ADC) and save it."""
+    """Fit a model on your own measurements (any LEDs, any ADC) and save it.
+
+    With intervals, a share of the subjects (never used for fitting) calibrates
+    subject-grouped split-conformal 90 % and 80 % intervals, saved with the model.
+    """
     from .dataset import load_dataset
+    from .evaluation.conformal import calibration_subjects, split_conformal
     from .models import make_model
 
     if out.suffix != ".json":
         raise UserError(f"--out {str(out)!r}: the model file must end in .json")
+    if intervals not in ("auto", "split", "none"):
+        raise UserError(f"--intervals must be auto, split or none, got {intervals!r}")
+    if not 0.0 < calibration_share < 1.0:
+        raise UserError(f"--calibration-share must lie in (0, 1), got {calibration_share}")
     _check_out_file(out)
     estimator = make_model(model)  # unknown names raise with the valid ones
     ds = load_dataset(data)
@@ -550,10 +611,30 @@ def fit_model(
         from .schema import DeviceSchema
 
         DeviceSchema.infer(ds, adc_bits)  # a device file: adc_<nm> columns (DataError)
-    estimator.fit(ds)
+    note = ""
+    if intervals == "auto":
+        n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else 0
+        n_cal = round(calibration_share * n_sub)
+        intervals = "split" if 9 <= n_cal < n_sub else "none"  # 9: ceil(0.9 (n+1)) <= n
+        if intervals == "none":
+            note = f"; no intervals ({n_sub} subjects: too few to hold out 9 to calibrate)"
+    if intervals == "split":
+        if "subject_id" not in ds.frame:
+            raise UserError("--intervals split needs a subject_id column to hold out subjects")
+        split_conformal(estimator, ds, share=calibration_share, seed=seed)
+        cal = estimator.conformal_
+        n_fit = int((~calibration_subjects(ds.frame["subject_id"].to_numpy(),
+                                           calibration_share, seed)).sum())
+        note = (
+            f"; 90 % interval ±{cal['half_width_mgdl']['90']:.1f} mg/dL from "
+            f"{cal['n_calibration_subjects']} held-out subjects"
+        )
+    else:
+        estimator.fit(ds)
+        n_fit = len(ds)
     estimator.save(out)
     device = estimator.schema_.describe() if hasattr(estimator, "schema_") else "simulated"
-    _say(f"fitted {model!r} on {len(ds)} measurements ({device}); wrote {out}", err=False)
+    _say(f"fitted {model!r} on {n_fit} measurements ({device}){note}; wrote {out}", err=False)
 
 
 @app.command("predict")
@@ -561,15 +642,29 @@ def predict_glucose(
     model: Annotated[Path, typer.Option(help="Model file written by `nirglucose fit`.")],
     data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv).")],
     out: Annotated[Path, typer.Option(help="Predictions to write (.csv).")],
+    calibration: Annotated[
+        Path | None,
+        typer.Option(
+            help="A person's calibration readings (.csv/.parquet: subject_id, the device's "
+            "columns and the fingerstick glucose_mgdl): each subject's mean error on them "
+            "is added to their new predictions."
+        ),
+    ] = None,
 ) -> None:
     """Predict glucose for your own measurements; writes predicted_glucose_mgdl and flag.
 
-    ``flag`` is ``LO`` / ``HI`` where the estimate lies below 20 / above 600 mg/dL, as a
-    meter shows it (the number itself is kept).
+    ``glucose_lower_mgdl`` / ``glucose_upper_mgdl`` bound the 90 % prediction interval
+    when the model carries a calibration (empty otherwise). ``flag`` is ``LO`` / ``HI``
+    where the estimate lies below 20 / above 600 mg/dL, as a meter shows it (the number
+    itself is kept). With ``--calibration``, ``calibrated`` says which rows a person's
+    calibration readings corrected.
     """
+    import numpy as np
     import pandas as pd
 
     from .dataset import atomic_write, load_dataset
+    from .evaluation.calibration import apply_offset
+    from .evaluation.conformal import calibration_of, interval
     from .models import load_model
     from .models._validate import check_predictions
     from .schema import meter_flags
@@ -579,15 +674,51 @@ def predict_glucose(
     _check_out_file(out)
     estimator = load_model(model)
     ds = load_dataset(data)
-    pred = check_predictions(estimator.predict(ds), model)
+    pred = np.asarray(check_predictions(estimator.predict(ds), model), dtype=float)
+    calibrated = None
+    if calibration is not None:
+        cal = load_dataset(calibration)
+        for name, frame in (("--calibration", cal.frame), ("--data", ds.frame)):
+            if "subject_id" not in frame.columns:
+                raise UserError(f"{name} needs a subject_id column to match people")
+        if "glucose_mgdl" not in cal.frame.columns:
+            raise UserError("--calibration needs the reference glucose_mgdl of each reading")
+        cal_pred = check_predictions(estimator.predict(cal), calibration)
+        pred, calibrated = apply_offset(
+            pred,
+            ds.frame["subject_id"].to_numpy(),
+            cal_pred,
+            cal.frame["glucose_mgdl"].to_numpy(float),
+            cal.frame["subject_id"].to_numpy(),
+        )
     ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
     table = ds.frame[ids].reset_index(drop=True).copy()
     table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
+    lower = np.full(len(pred), np.nan)
+    upper = np.full(len(pred), np.nan)
+    cal_doc = calibration_of(estimator)
+    if cal_doc is not None:
+        lower, upper = interval(estimator, pred, 0.9)
+        if calibrated is not None and (cal_doc.get("half_width_offset1_mgdl") or {}).get("90"):
+            lo_c, up_c = interval(estimator, pred, 0.9, offset_calibrated=True)
+            lower, upper = np.where(calibrated, lo_c, lower), np.where(calibrated, up_c, upper)
+        lower = np.maximum(lower, 0.0)
+    table["glucose_lower_mgdl"] = lower
+    table["glucose_upper_mgdl"] = upper
     table["flag"] = meter_flags(pred)
+    if calibrated is not None:
+        table["calibrated"] = calibrated
     atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
     n_flag = int((table["flag"] != "").sum())
     flagged = f" ({n_flag} outside 20-600 mg/dL, flagged LO/HI)" if n_flag else ""
-    _say(f"predicted {len(table)} measurements{flagged}; wrote {out}", err=False)
+    cal_note = (
+        f"; {int(calibrated.sum())} calibrated by their person's readings"
+        if calibrated is not None
+        else ""
+    )
+    no_int = "" if cal_doc is not None else "; the model carries no interval calibration"
+    _say(f"predicted {len(table)} measurements{flagged}{cal_note}{no_int}; wrote {out}",
+         err=False)
 
 
 @app.command("export-c")

@@ -65,6 +65,8 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
+from .calibration import CALIBRATION_COLUMNS, check_k, personal_calibration
+from .conformal import LEVELS, coverage_summary, out_of_fold_intervals
 from .progress import TaskProgress
 from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_PROTOCOL, STUDY_TABLE
 from .splits import Split, check_protocol, effective_layout, make_splits
@@ -87,7 +89,7 @@ __all__ = [
 ]
 
 #: Version of the task-file layout (part of every task hash).
-TASK_FORMAT = 1
+TASK_FORMAT = 2
 #: Registry name of the oracle bound.
 ORACLE = "oracle"
 #: Reference learners added by ``references=True`` (no skill and off-the-shelf).
@@ -147,6 +149,12 @@ METRIC_COLUMNS = (
     "fit_time_s",
     "n_predictions",
     "n_invalid_predictions",
+    "coverage90_pct",
+    "coverage90_ci_low",
+    "coverage90_ci_high",
+    "width90_mgdl",
+    "coverage80_pct",
+    "width80_mgdl",
 )
 #: Columns of ``predictions.parquet``.
 PREDICTION_COLUMNS = (
@@ -158,6 +166,8 @@ PREDICTION_COLUMNS = (
     "reference_mgdl",
     "predicted_mgdl",
     "scored_mgdl",
+    "lower90_mgdl",
+    "upper90_mgdl",
 )
 #: Columns of ``comparisons.csv``.
 COMPARISON_COLUMNS = ("family", *PAIRED_COLUMNS, "study_holds")
@@ -179,6 +189,7 @@ OUTPUT_FILES = (
     "histories.json",
     "importance.csv",
     "ablation.csv",
+    "calibration.csv",
     "dataset.parquet",
     "meta.json",
 )
@@ -213,6 +224,9 @@ class BenchmarkResult:
         Physics ablation (:data:`ABLATION_COLUMNS`); empty without ``ablation=True``.
     dataset : Dataset, optional
         The dataset benchmarked (written to ``dataset.parquet``).
+    calibration : pandas.DataFrame
+        Personal calibration (:data:`~nirglucose.evaluation.calibration.CALIBRATION_COLUMNS`);
+        empty without ``calibration=k``.
     """
 
     metrics: pd.DataFrame
@@ -223,6 +237,9 @@ class BenchmarkResult:
     meta: dict[str, Any]
     dataset: Dataset | None = field(default=None, repr=False)
     ablation: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=ABLATION_COLUMNS))
+    calibration: pd.DataFrame = field(
+        default_factory=lambda: pd.DataFrame(columns=CALIBRATION_COLUMNS)
+    )
 
     def table_markdown(self) -> str:
         """The study's Table 1 layout with our values (95 % CIs) beside the study's."""
@@ -239,6 +256,7 @@ class BenchmarkResult:
                     "meta": self.meta,
                     "metrics": self.metrics.to_dict(orient="records"),
                     "ablation": self.ablation.to_dict(orient="records"),
+                    "calibration": self.calibration.to_dict(orient="records"),
                 }
             ),
         )
@@ -250,6 +268,7 @@ class BenchmarkResult:
         _write_text(out / "histories.json", _dumps(self.histories))
         _write_csv(out / "importance.csv", self.importance)
         _write_csv(out / "ablation.csv", self.ablation)
+        _write_csv(out / "calibration.csv", self.calibration)
         if self.dataset is not None:
             self.dataset.save(out / "dataset.parquet")
         _write_text(out / "meta.json", _dumps(self.meta))
@@ -442,6 +461,9 @@ def _run_task(
                 f"model {spec['model']!r} returned {pred.shape} predictions for "
                 f"{len(split.test)} rows"
             )
+        val_pred = None
+        if split.val is not None:  # calibrates the conformal intervals of paper-split
+            val_pred = np.asarray(model.predict(rows(split.val)), dtype=float).ravel()
         latency: dict[str, Any] = {}
         if spec["timed"]:
             form, data = timing_inputs(model, test)
@@ -451,6 +473,7 @@ def _run_task(
         )
     result = {
         "predicted_mgdl": [float(v) for v in pred],
+        "val_predicted_mgdl": None if val_pred is None else [float(v) for v in val_pred],
         "fallback_mgdl": float(np.median(train.frame["glucose_mgdl"].to_numpy(float))),
         "n_parameters": int(getattr(model, "n_parameters", -1)),
         "fit_time_s": fit_time,
@@ -545,6 +568,7 @@ def run_benchmark(
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
     references: bool = False,
     ablation: bool = False,
+    calibration: int = 0,
 ) -> BenchmarkResult:
     """Fit and score every model on subject-grouped splits.
 
@@ -586,6 +610,11 @@ def run_benchmark(
     ablation : bool
         Also run every PINN among the models with ``lambda_phys=0`` (rows
         ``<name>/no-physics``, paired differences in ``ablation``).
+    calibration : int
+        Personal calibration protocol: each test subject's first ``calibration``
+        readings (1 or 2) calibrate that person and only their later readings are
+        scored (:mod:`~nirglucose.evaluation.calibration`; ``calibration.csv``);
+        0 (default) runs none. The main metrics always score every held-out reading.
 
     Returns
     -------
@@ -608,6 +637,7 @@ def run_benchmark(
     repeats = _check_positive("repeats", repeats)
     jobs = _check_positive("jobs", jobs)
     n_boot = _check_positive("n_boot", n_boot)
+    calibration = check_k(calibration)
     names = _resolve_models(models)
     if references:
         names += [m for m in REFERENCE_MODELS if m not in names]
@@ -783,9 +813,26 @@ def run_benchmark(
         "tasks_corrupt": n_corrupt,
         "tasks_cpu_s": float(sum(r.get("task_cpu_s", np.nan) for r in results.values())),
     }
+    meta["interval_method"] = (
+        "subject-grouped conformal, no extra fit: each test fold's half-width is the "
+        "conformal quantile (subjects weighted equally) of the absolute held-out residuals "
+        + (
+            "of the validation subjects"
+            if protocol == "paper-split"
+            else "of the other folds of the same repeat"
+        )
+        + "; coverage per repeat averaged over repeats, 95 % CI by cluster bootstrap over "
+        "subjects; width = mean interval width"
+    )
+    meta["interval_levels_pct"] = [round(100 * a) for a in LEVELS]
+    meta["calibration_readings"] = calibration
     result = _aggregate(
         dataset, tasks, results, names, aux, meta, n_boot=n_boot, alpha=alpha, seed=seed
     )
+    if calibration:
+        result.calibration = personal_calibration(
+            dataset, result.predictions, splits, calibration, n_boot=n_boot, seed=seed
+        )
     result.meta["wall_time_s"] = time.perf_counter() - t_start
     if out is not None:
         result.save(out)
@@ -802,6 +849,7 @@ def _aggregate(
     mid = frame["measurement_id"].to_numpy() if "measurement_id" in frame else np.arange(len(frame))
     yref = frame["glucose_mgdl"].to_numpy(float)
     parts = []
+    val_parts = []
     by_model: dict[str, list[tuple[dict, dict]]] = {}
     for i, (spec, split, _cls) in enumerate(tasks):
         res = results[i]
@@ -822,7 +870,28 @@ def _aggregate(
             )
         )
         by_model.setdefault(spec["model"], []).append((spec, res))
+        val_raw = res.get("val_predicted_mgdl")
+        if split.val is not None and val_raw is not None:
+            vraw = np.asarray(val_raw, dtype=float)
+            val_parts.append(
+                pd.DataFrame(
+                    {
+                        "model": spec["model"],
+                        "subject_id": sid[split.val],
+                        "repeat": split.repeat,
+                        "fold": split.fold,
+                        "reference_mgdl": yref[split.val],
+                        "scored_mgdl": np.where(
+                            np.isfinite(vraw), np.maximum(vraw, 0.0), res["fallback_mgdl"]
+                        ),
+                    }
+                )
+            )
     preds_all = pd.concat(parts, ignore_index=True)
+    val_cal = pd.concat(val_parts, ignore_index=True) if val_parts else None
+    preds_all = out_of_fold_intervals(preds_all, val_cal)
+    preds_all["lower90_mgdl"] = np.maximum(preds_all["scored_mgdl"] - preds_all["half90_mgdl"], 0)
+    preds_all["upper90_mgdl"] = preds_all["scored_mgdl"] + preds_all["half90_mgdl"]
     order = {m: k for k, m in enumerate([*names, *aux])}
     preds_all = (
         preds_all.assign(_o=preds_all["model"].map(order))
@@ -847,6 +916,7 @@ def _aggregate(
             n_boot=n_boot,
             seed=seed,
         )
+        cov = {a: coverage_summary(p, a, n_boot=n_boot, seed=seed) for a in LEVELS}
         first = next(res for spec, res in by_model[name] if spec["timed"])
         t = first["timing"]
         raw = p["predicted_mgdl"].to_numpy()
@@ -864,6 +934,12 @@ def _aggregate(
                 "fit_time_s": float(np.mean([res["fit_time_s"] for _, res in by_model[name]])),
                 "n_predictions": int(len(p)),
                 "n_invalid_predictions": int(np.count_nonzero(~np.isfinite(raw) | (raw < 0))),
+                "coverage90_pct": cov[0.9]["coverage"],
+                "coverage90_ci_low": cov[0.9]["ci_low"],
+                "coverage90_ci_high": cov[0.9]["ci_high"],
+                "width90_mgdl": cov[0.9]["width"],
+                "coverage80_pct": cov[0.8]["coverage"],
+                "width80_mgdl": cov[0.8]["width"],
             }
         )
     allm = pd.DataFrame(rows)
@@ -882,6 +958,7 @@ def _aggregate(
     metrics = metrics[list(METRIC_COLUMNS)]
 
     preds = preds_all[preds_all["model"].isin(names)].reset_index(drop=True)
+    preds = preds[list(PREDICTION_COLUMNS)]
     comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
     meta["best_model"] = (
         comparisons.loc[comparisons["family"] == "vs_best", "reference_model"].iloc[0]

@@ -96,6 +96,7 @@ __all__ = [
     "COHORT_SHIFTS",
     "DEFAULT_MODELS",
     "SWEEP_METRICS",
+    "CALIBRATION_METRICS",
     "SUMMARY_METRICS",
     "SWEEP_FILES",
     "TASK_FORMAT",
@@ -153,6 +154,15 @@ DATA_SIZE_PRESETS = ("paper", "wearable")
 DEFAULT_MODELS = ("ebl", "pls", "oracle")
 #: Metric columns of ``sweep.csv``, in order (timing columns are left out: they depend
 #: on the machine, the metrics do not).
+#: Personal-calibration metrics of a cv task run with ``calibration=k`` (the later
+#: readings only: uncalibrated, one offset per person, and the difference ridge);
+#: sweep.csv has them only then.
+CALIBRATION_METRICS = (
+    "later_rmse_mgdl",
+    "offset_rmse_mgdl",
+    "offset_gain_mgdl",
+    "difference_ridge_rmse_mgdl",
+)
 SWEEP_METRICS = tuple(
     c for c in METRIC_COLUMNS
     if c not in ("model", "label", "latency_single_ms", "latency_single_p90_ms",
@@ -660,9 +670,21 @@ def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
         timing=dict(_FAST_TIMING),
         importance_repeats=1,
         oracle_reference=False,
+        calibration=int(spec.get("calibration", 0)),
     )
     row = res.metrics.iloc[0]
-    return {k: row[k] for k in SWEEP_METRICS if k in row.index}
+    out = {k: row[k] for k in SWEEP_METRICS if k in row.index}
+    c = res.calibration
+    if len(c):
+        def rmse(model, method):
+            hit = c[(c["model"] == model) & (c["method"] == method)]["rmse_mgdl"]
+            return float(hit.iloc[0]) if len(hit) else np.nan
+
+        out["later_rmse_mgdl"] = rmse(spec["model"], "none")
+        out["offset_rmse_mgdl"] = rmse(spec["model"], "offset")
+        out["offset_gain_mgdl"] = out["later_rmse_mgdl"] - out["offset_rmse_mgdl"]
+        out["difference_ridge_rmse_mgdl"] = rmse("difference-ridge", "difference-ridge")
+    return out
 
 
 def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> dict[str, Any]:
@@ -1224,6 +1246,7 @@ def run_sweep(
     scheduler: Any = None,
     progress: bool = False,
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
+    calibration: int = 0,
 ) -> SweepResult:
     """Run a grid of scenarios × seeds × models (local processes or a Dask cluster).
 
@@ -1262,6 +1285,10 @@ def run_sweep(
         Show a rich progress bar (done / total, time left) on stderr.
     on_task : callable, optional
         Called as ``on_task(spec, cached)`` for every task as it is loaded or finished.
+    calibration : int
+        Personal calibration readings per test subject (0, 1 or 2) of every
+        cross-validated task (:mod:`~nirglucose.evaluation.calibration`): adds
+        :data:`CALIBRATION_METRICS` (shift tasks leave them empty).
 
     Returns
     -------
@@ -1351,6 +1378,13 @@ def run_sweep(
         n_boot=n_boot,
         model_params=model_params,
     )
+    from .calibration import check_k
+
+    calibration = check_k(calibration)
+    if calibration:  # only then: task hashes without it stay as they were
+        for s in specs:
+            if s["kind"] == "cv":
+                s["calibration"] = calibration
     keys = [_task_key(s) for s in specs]
     unique = list(dict.fromkeys(keys))
     spec_of = dict(zip(keys, specs, strict=True))
@@ -1437,13 +1471,13 @@ def run_sweep(
                         "model": model,
                         **{
                             m: res["metrics"].get(m)
-                            for m in (*SWEEP_METRICS, "n_train")
+                            for m in (*SWEEP_METRICS, *CALIBRATION_METRICS, "n_train")
                             if m in res["metrics"]
                         },
                     }
                 )
     frame = pd.DataFrame(rows)
-    for m in SWEEP_METRICS:
+    for m in (*SWEEP_METRICS, *CALIBRATION_METRICS):
         if m in frame:
             frame[m] = pd.to_numeric(frame[m], errors="coerce")
     if "oracle" in models:

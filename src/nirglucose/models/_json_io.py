@@ -3,7 +3,11 @@
 A model file is one JSON document::
 
     {"format": "nirglucose-model", "format_version": 1, "model": "ebl",
-     "nirglucose_version": "0.1.0", "params": {...}, "state": {...}}
+     "nirglucose_version": "0.1.0", "params": {...}, "state": {...},
+     "conformal": {...}}
+
+``conformal`` (optional) is the model's prediction-interval calibration
+(:func:`nirglucose.evaluation.conformal.split_conformal`), validated on load.
 
 ``params`` are the constructor's keyword arguments (``get_params()``); ``state`` holds
 the learned attributes as numbers and lists. Loading validates the schema, the model
@@ -93,6 +97,8 @@ class JsonModelMixin:
             "params": _to_json(self.get_params(deep=False)),
             "state": self._state_dict(),
         }
+        if getattr(self, "conformal_", None) is not None:  # its interval calibration
+            doc["conformal"] = _to_json(self.conformal_)
         text = json.dumps(doc, indent=1, allow_nan=False)
 
         def write(tmp: str) -> None:
@@ -175,6 +181,10 @@ class JsonModelMixin:
                 )
             setattr(model, key, value)
         model._restore()
+        if "conformal" in doc:
+            from ..evaluation.conformal import check_calibration_doc
+
+            model.conformal_ = check_calibration_doc(doc["conformal"], repr(str(path)))
         return model
 
     def _restore(self) -> None:

@@ -962,6 +962,8 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             "n_parameters": self.n_parameters,
             "weights_file": weights.name,
         }
+        if getattr(self, "conformal_", None) is not None:  # its interval calibration
+            doc["conformal"] = self.conformal_
         text = json.dumps(doc, indent=1, allow_nan=False)
         atomic_write(path, lambda tmp: Path(tmp).write_text(text))
         return path
@@ -1020,6 +1022,10 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         est.n_epochs_ = doc.get("n_epochs", len(est.history_))
         est.refit_history_ = doc.get("refit_history", [])
         est.refit_epochs_ = len(est.refit_history_)
+        if "conformal" in doc:  # the interval calibration saved with the model
+            from ..evaluation.conformal import check_calibration_doc
+
+            est.conformal_ = check_calibration_doc(doc["conformal"], repr(str(path)))
         est.n_features_in_ = len(est.schema_.raw_columns)
         if not est.schema_.is_plain:
             est.feature_names_in_ = np.asarray(est.schema_.raw_columns, dtype=object)
