@@ -176,7 +176,7 @@ def _simulator() -> dict:
 
 
 def _monte_carlo() -> list[dict]:
-    from nirglucose.optics.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
 
     start = time.process_time()
     run = mc_detected_paths([0.2, 0.1, 0.03], [200.0, 200.0, 140.0], 0.9, [0.008, 0.15],

@@ -22,8 +22,8 @@ import time
 
 import numpy as np
 
-from nirglucose.optics.adding_doubling import slab_rt
-from nirglucose.optics.monte_carlo import mc_slab
+from nirglucose.optics.reference.adding_doubling import slab_rt
+from nirglucose.optics.reference.monte_carlo import mc_slab
 
 MCML_RD = 0.09734
 MCML_TT = 0.66096
