@@ -48,6 +48,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import simulate as sim_bench  # noqa: E402  (benchmarks/simulate.py)
 from nirglucose.optics import layers, tissue  # noqa: E402
 from nirglucose.optics import lut as L  # noqa: E402
+from nirglucose.optics.lut import interpolate as LI  # noqa: E402
+from nirglucose.optics.reference import lut_checks as LV  # noqa: E402
 
 RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 
@@ -101,7 +103,7 @@ def _cohort_points(cohort, n_points: int, seed: int = 0) -> dict:
 
 
 def _errors(lut, points, **kw) -> dict:
-    err = L.lut_errors(lut, points, **kw)
+    err = LV.lut_errors(lut, points, **kw)
     r = np.abs(err["reflectance"])
     p = np.abs(err["pathlength"])
     return {
@@ -131,7 +133,7 @@ def _vs_diffusion(lut, points) -> dict:
 def _throughput(lut, cohort) -> dict:
     from nirglucose.simulate.simulator import _OPTICS_SLICE_ROWS
 
-    pts = L.random_lut_points(lut, 200_000, rng=3)
+    pts = LV.random_lut_points(lut, 200_000, rng=3)
     start = time.process_time()
     L.interpolate_lut(lut, **pts)
     generic = 200_000 / (time.process_time() - start)
@@ -156,7 +158,7 @@ def _throughput(lut, cohort) -> dict:
     return {
         "generic_points_per_s": round(generic),
         "node_points_per_s": round(node_rate(L.interpolate_node_lut, 5)),
-        "node_numpy_points_per_s": round(node_rate(L._interpolate_node_lut_numpy, 2)),
+        "node_numpy_points_per_s": round(node_rate(LI._interpolate_node_lut_numpy, 2)),
         "node_kernel_first_call_s": round(first_call, 3),
     }
 
@@ -228,15 +230,15 @@ def main() -> dict:
             result["build"] = {"from_cache": True, **{k: result["build"][k] for k in (
                 "n_solves", "table_nodes", "cache_file_mb")}}
         result["accuracy_uniform"] = _errors(
-            lut, L.random_lut_points(lut, 120, rng=7, groups=12))
+            lut, LV.random_lut_points(lut, 120, rng=7, groups=12))
         if os.environ.get("NIRGLUCOSE_BENCH_REFERENCE") == "1":  # about 17 CPU-minutes
             # independent reference: 10x the photons, other random numbers
             result["accuracy_independent"] = _errors(
-                lut, L.random_lut_points(lut, 36, rng=21, groups=3),
+                lut, LV.random_lut_points(lut, 36, rng=21, groups=3),
                 n_photons=4_000_000, seed=12345)
         cohort = _cohort()
         result["monte_carlo_vs_diffusion"] = {
-            "uniform_box": _vs_diffusion(lut, L.random_lut_points(lut, 2000, rng=5)),
+            "uniform_box": _vs_diffusion(lut, LV.random_lut_points(lut, 2000, rng=5)),
             "paper_cohort": _vs_diffusion(lut, _cohort_points(cohort, 2000)),
         }
         result["throughput"] = _throughput(lut, cohort)

@@ -91,12 +91,20 @@ def _sim_hashes(default_diffusion: bool) -> dict:
 
     out = {}
     grids = ["tiny", "default"] if default_diffusion else ["tiny"]
-    for grid in grids:
-        os.environ["NIRGLUCOSE_LUT_GRID"] = grid
-        ds = ng.simulate("paper", n_subjects=4, per_subject=3, seed=7,
-                         overrides={"optics.model": "rte-lut", "optics.lut_solver": "diffusion"})
-        out[f"simulate_rte_lut_{grid}_diffusion"] = _h(
-            pd.util.hash_pandas_object(ds.frame, index=True).to_numpy())
+    before = os.environ.get("NIRGLUCOSE_LUT_GRID")
+    try:
+        for grid in grids:
+            os.environ["NIRGLUCOSE_LUT_GRID"] = grid
+            ds = ng.simulate("paper", n_subjects=4, per_subject=3, seed=7,
+                             overrides={"optics.model": "rte-lut",
+                                        "optics.lut_solver": "diffusion"})
+            out[f"simulate_rte_lut_{grid}_diffusion"] = _h(
+                pd.util.hash_pandas_object(ds.frame, index=True).to_numpy())
+    finally:  # leave the caller's environment as it was
+        if before is None:
+            os.environ.pop("NIRGLUCOSE_LUT_GRID", None)
+        else:
+            os.environ["NIRGLUCOSE_LUT_GRID"] = before
     return out
 
 

@@ -6,7 +6,7 @@ only the numba kernel it calls, compiled for one signature and cached on disk
 ever takes a few seconds), and imported lazily so that ``import nirglucose`` does not
 import numba.
 
-The kernel does what the numpy reference (``nirglucose.optics.lut.
+The kernel does what the numpy reference (``nirglucose.optics.lut.interpolate.
 _interpolate_node_lut_numpy``) does in a few dozen array passes over the whole slice,
 chunk by chunk of about 400 points, so that its scratch stays in the CPU's L1/L2 cache:
 

@@ -265,8 +265,8 @@ def band_detected_fraction_lut(
     ConfigError
         If a snapshot's optics fall outside the table (the message names the axis).
     """
-    from . import lut as lut_mod
     from ._lut_kernel import node_reflectance
+    from .lut import interpolate as lut_mod
 
     n_led, n_pts = spectra.nodes_nm.shape
     if tuple(node_lut.node_shape) != (n_led, n_pts):

@@ -346,9 +346,11 @@ class WhiteRun:
 def _n_threads(n_threads: int | None) -> int:
     if n_threads is not None:
         return max(1, int(n_threads))
-    env = os.environ.get("NIRGLUCOSE_MC_THREADS")
-    if env:
-        return max(1, int(env))
+    from .lut.cache import mc_threads_from_env  # the optics' one reader of the environment
+
+    env = mc_threads_from_env()
+    if env is not None:
+        return env
     return max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                       else (os.cpu_count() or 1), 8))
 
