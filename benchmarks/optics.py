@@ -5,7 +5,8 @@
   reused from NIRGLUCOSE_BENCH_LUT_CACHE;
 * accuracy: table / direct solve - 1 at 120 random off-grid points uniform in each axis'
   coordinate over the table's box, in 12 groups sharing (musp_ratio, thickness) (one
-  Monte Carlo run each); "direct solve" is nirglucose.optics.lut.direct_solve, a run at
+  Monte Carlo run each); "direct solve" is
+  nirglucose.optics.reference.lut_checks.direct_solve, a run at
   the point with the table's settings and common random numbers (at the default
   table's 3.2 million photons per run about 90 CPU-minutes: 45 measured at 1.6 million);
   with the direct solve's own standard error;
@@ -22,7 +23,7 @@
   numbers) at 36 points in 3 groups (one solve per point: too noisy to judge 1 % at a
   point; benchmarks/optics_reference.py averages seeds for that);
 * Monte Carlo (only with NIRGLUCOSE_BENCH_MC=1, about 2 min of CPU): the three-layer
-  model against nirglucose.optics.mc_paths at a few skin states.
+  model against nirglucose.optics.reference.mc_paths at a few skin states.
 
 Prints one JSON object on its last line.
 """

@@ -9,7 +9,7 @@ This script chooses them from the table's own runs, without the hold-out referen
 
 * node values from two disjoint halves of the default build's photons: photons
   0 .. N/2 - 1 and N/2 .. N - 1 of every run (N the default photons per run;
-  ``first_photon`` of ``nirglucose.optics.mc_white.white_mc_run``), which together are
+  ``first_photon`` of ``nirglucose.optics.kernels.mc_white.white_mc_run``), which together are
   exactly the default table's runs; each half takes about an hour of CPU and is saved
   in ``--work`` (default ``optics-fit-degrees/`` in the nirglucose cache directory) as
   it finishes, so a rerun resumes (the cross-validation is then of a table of half the
@@ -63,7 +63,7 @@ def _setup():
 def _half_path(work: Path, grid: dict, geo: dict, first: int, photons: int) -> Path:
     """Work file of one half, named by everything its node values depend on."""
     from nirglucose.optics import lut as L
-    from nirglucose.optics import mc_white
+    from nirglucose.optics.kernels import mc_white
     from nirglucose.optics.lut import grid as LG
 
     settings = {k: v for k, v in L.LUT_MC_SETTINGS.items() if k != "residual_fit_degrees"}

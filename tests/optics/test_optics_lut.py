@@ -1,9 +1,9 @@
 """Tests of nirglucose.optics.lut (the rte-lut look-up table) and its simulator wiring.
 
 Every test uses a temporary cache directory (NIRGLUCOSE_CACHE) and never a pre-existing
-cache. "Direct solve" below is nirglucose.optics.lut.direct_solve: a white Monte Carlo run
-at the point with the table's settings and common random numbers (the model the table is
-built from).
+cache. "Direct solve" below is nirglucose.optics.reference.lut_checks.direct_solve: a
+white Monte Carlo run at the point with the table's settings and common random numbers
+(the model the table is built from).
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ import pytest
 
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError
-from nirglucose.optics import forward, layers, mc_white, tissue
+from nirglucose.optics import forward, layers, tissue
 from nirglucose.optics import lut as L
+from nirglucose.optics.kernels import mc_white
 from nirglucose.optics.lut import build as LB
 from nirglucose.optics.lut import cache as LC
 from nirglucose.optics.lut import grid as LG

@@ -173,7 +173,7 @@ def test_kernel_is_deterministic_and_chunk_free(table):
 
 def test_kernel_log_and_exp_match_the_c_library():
     # the kernel's arithmetic-only ln and exp (vectorisable), against numpy's
-    from nirglucose.optics._lut_kernel import _exp, _log
+    from nirglucose.optics.kernels.lut_kernel import _exp, _log
 
     rng = np.random.default_rng(8)
     x = np.concatenate([np.exp(rng.uniform(-40.0, 40.0, 2000)), rng.uniform(0.5, 2.0, 500),
@@ -191,7 +191,7 @@ def test_simulator_fused_band_path_equals_tissue_optics_then_table(table):
     """band_kernel.band_detected_fraction_lut (layer optics compiled, then the kernel)
     equals tissue_optics -> detected_fraction('rte-lut') -> band weights."""
     from nirglucose.optics import forward, tissue
-    from nirglucose.optics.band_kernel import band_detected_fraction_lut
+    from nirglucose.optics.kernels.band_kernel import band_detected_fraction_lut
 
     spectra = tissue.band_spectra([850, 940, 1050, 1150], [30, 40, 50, 60], 3)
     ratio = spectra.spectra["musp_fat"] / spectra.spectra["musp_skin"]

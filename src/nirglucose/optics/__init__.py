@@ -4,7 +4,8 @@ absorption (chromophore tables), scattering (power laws, glucose), beer_lambert
 (modified Beer-Lambert law), diffusion (dipole diffusion theory), skin (layers),
 tissue (band-integrated tissue properties), forward (forward models by name),
 layers (the three-layer skin model), lut (the ``rte-lut`` look-up table: grid, build,
-cache, interpolate), mc_white (the compiled white Monte Carlo behind the table),
+cache, interpolate), kernels (compiled: mc_white, the white Monte Carlo behind the table;
+lut_kernel and band_kernel, the simulator's fast path),
 reference (validation only: the NumPy photon engine with its front ends ``mc_slab``,
 ``mc_layers``, ``mc_detected_paths``, adding-doubling ``slab_rt``, table checks).
 The solvers load lazily: the simulator's fast path never imports iadpython.

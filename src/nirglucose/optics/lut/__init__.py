@@ -29,7 +29,7 @@ covers LEDs anywhere in 700-1300 nm, Fitzpatrick I-VI, every preset's physiology
 skin 0.4-4 mm.
 
 Where the table comes from: a white Monte Carlo solution of the radiative transport
-equation (:mod:`nirglucose.optics.mc_white`, MCML physics with Henyey-Greenstein g = 0.9
+equation (:mod:`nirglucose.optics.kernels.mc_white`, MCML physics with Henyey-Greenstein g = 0.9
 and Fresnel escape, compiled with numba): one run per (``musp_ratio``,
 ``skin_transport_thickness``) solve node, in transport units, gives R and the per-layer
 mean paths at every ``musp_dermis_per_cm`` node by scaling and at every absorption node

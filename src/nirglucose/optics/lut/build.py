@@ -1,7 +1,7 @@
 """Building the table: solve the model at the nodes, refine, smooth, centre.
 
 :func:`build_lut` solves the layered-skin model at the grid's solve nodes (the white
-Monte Carlo of :mod:`nirglucose.optics.mc_white` plus a least-squares fit of its
+Monte Carlo of :mod:`nirglucose.optics.kernels.mc_white` plus a least-squares fit of its
 difference to the three-layer diffusion model, or the diffusion model alone), refines
 each axis and centres the node values for multilinear interpolation. No caching here
 (:mod:`nirglucose.optics.lut.cache`); the package docstring gives the method and its
@@ -17,7 +17,8 @@ import time
 import numpy as np
 
 from ...exceptions import ConfigError
-from .. import layers, mc_white
+from .. import layers
+from ..kernels import mc_white
 from .grid import (
     _MIN_SKIN_OVER_EPIDERMIS,
     _PATH_FLOOR_CM,
@@ -54,7 +55,7 @@ def _mua_ref(grid: dict) -> float:
 
 
 def _mc_run_kwargs(grid: dict, geo: dict, n_photons: int) -> dict:
-    """Keyword arguments of :func:`~nirglucose.optics.mc_white.white_mc_run` for a table."""
+    """Keyword arguments of :func:`~nirglucose.optics.kernels.mc_white.white_mc_run` for a table."""
     return {
         "n_photons": n_photons,
         "seed": int(LUT_MC_SETTINGS["seed"]),
@@ -161,9 +162,9 @@ def build_lut(
 
     Notes
     -----
-    One run of :func:`~nirglucose.optics.mc_white.white_mc_run` per
+    One run of :func:`~nirglucose.optics.kernels.mc_white.white_mc_run` per
     (``musp_ratio``, ``skin_transport_thickness``) solve node, in transport units;
-    :func:`~nirglucose.optics.mc_white.white_mc_tally` turns it into R and the mean
+    :func:`~nirglucose.optics.kernels.mc_white.white_mc_tally` turns it into R and the mean
     paths at every ``musp_dermis_per_cm`` node (scaling) and every absorption node
     (re-weighting), exactly for the RTE up to Monte Carlo noise. Every run uses the
     same random numbers (:data:`LUT_MC_SETTINGS` ``seed``). The table holds the
@@ -194,27 +195,7 @@ def build_lut(
     names = list(LUT_AXES)
     coords, splits = _solve_axes(grid, geo)
     ax = {k: _inverse(LUT_AXES[k][0], coords[i]) for i, k in enumerate(names)}
-    degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
-    if solver == "monte-carlo" and degrees is None:  # raw Monte Carlo nodes, splined
-        values = _monte_carlo_nodes(ax, grid, geo, photons)
-        solved = {}
-    else:
-        # the diffusion model is solved at every refined node of the scattering axes
-        # that it resolves better than a spline (_SOLVED_AXES); the Monte Carlo
-        # correction is a smooth fit over the scattering axes, evaluated there directly
-        solved = {i: _refined_coords(coords[i], grid[k][3], splits[i])
-                  for i, k in enumerate(names) if k in _SOLVED_AXES}
-        values = _diffusion_nodes(
-            {k: _inverse(LUT_AXES[k][0], solved[i]) if i in solved else ax[k]
-             for i, k in enumerate(names)}, geo)
-        if solver == "monte-carlo":
-            at_solve = values
-            for i in solved:  # solve node j is refined node j * upsample
-                at_solve = at_solve.take(np.arange(coords[i].size) * grid[names[i]][3],
-                                         axis=i)
-            at = tuple(solved.get(i, coords[i]) for i in _SCATTERING)
-            values += _residual_fit(_monte_carlo_nodes(ax, grid, geo, photons), at_solve,
-                                    coords, splits[-1], degrees, at=at)
+    values, solved = _node_values(solver, grid, geo, coords, splits, ax, photons)
     # model solves: the Monte Carlo runs' nodes, or every diffusion node of the table
     solved_nodes = solved if solver == "diffusion" else {}
     n_solves = int(np.prod([solved_nodes.get(i, c).size for i, c in enumerate(coords)]))
@@ -236,6 +217,40 @@ def build_lut(
         np.ascontiguousarray(values, dtype=np.float32), tuple(nodes), values.shape[:-1],
         grid, geo, key, time.perf_counter() - start, n_solves, solver,
     )
+
+
+def _node_values(solver: str, grid: dict, geo: dict, coords: list, splits: list, ax: dict,
+                 photons: int) -> tuple[np.ndarray, dict]:
+    """The model's values at the solve nodes, and the refined coordinates of the axes
+    solved at every refined node (:data:`_SOLVED_AXES`; none for raw Monte Carlo nodes).
+
+    The diffusion model (:func:`_diffusion_nodes`), plus for the Monte Carlo solver the
+    smooth fit of Monte Carlo minus diffusion (:func:`_residual_fit`; Kienle & Patterson
+    1996 for the scaled white runs behind :func:`_monte_carlo_nodes`).
+    """
+    names = list(LUT_AXES)
+    degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
+    if solver == "monte-carlo" and degrees is None:  # raw Monte Carlo nodes, splined
+        values = _monte_carlo_nodes(ax, grid, geo, photons)
+        solved = {}
+    else:
+        # the diffusion model is solved at every refined node of the scattering axes
+        # that it resolves better than a spline (_SOLVED_AXES); the Monte Carlo
+        # correction is a smooth fit over the scattering axes, evaluated there directly
+        solved = {i: _refined_coords(coords[i], grid[k][3], splits[i])
+                  for i, k in enumerate(names) if k in _SOLVED_AXES}
+        values = _diffusion_nodes(
+            {k: _inverse(LUT_AXES[k][0], solved[i]) if i in solved else ax[k]
+             for i, k in enumerate(names)}, geo)
+        if solver == "monte-carlo":
+            at_solve = values
+            for i in solved:  # solve node j is refined node j * upsample
+                at_solve = at_solve.take(np.arange(coords[i].size) * grid[names[i]][3],
+                                         axis=i)
+            at = tuple(solved.get(i, coords[i]) for i in _SCATTERING)
+            values += _residual_fit(_monte_carlo_nodes(ax, grid, geo, photons), at_solve,
+                                    coords, splits[-1], degrees, at=at)
+    return values, solved
 
 
 def _centre_nodes(values: np.ndarray, splits: list[int | None]) -> np.ndarray:
@@ -378,7 +393,7 @@ def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int,
     """ln R and ln paths at the solve nodes from white Monte Carlo runs (see build_lut).
 
     ``first_photon``: trace photons ``first_photon .. first_photon + photons - 1`` of each
-    run (:func:`~nirglucose.optics.mc_white.white_mc_run`); disjoint ranges give
+    run (:func:`~nirglucose.optics.kernels.mc_white.white_mc_run`); disjoint ranges give
     independent node values (``benchmarks/optics_fit_degrees.py``).
     """
     musp = ax["musp_dermis_per_cm"]

@@ -165,7 +165,7 @@ def mc_threads_from_env() -> int | None:
     """Threads of the white Monte Carlo from ``$NIRGLUCOSE_MC_THREADS`` (None: unset).
 
     Read here so that the optics read environment variables in one module; used by
-    :func:`nirglucose.optics.mc_white.white_mc_run` when it is given no ``n_threads``.
+    :func:`nirglucose.optics.kernels.mc_white.white_mc_run` when it is given no ``n_threads``.
     """
     env = os.environ.get("NIRGLUCOSE_MC_THREADS")
     return max(1, int(env)) if env else None

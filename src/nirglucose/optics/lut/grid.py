@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...exceptions import ConfigError
-from .. import mc_white
+from ..kernels import mc_white
 
 __all__ = [
     "LUT_AXES",
@@ -88,7 +88,7 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
 LUT_MC_PHOTONS: dict[str, int] = {"default": 3_200_000, "tiny": 8_000}
 
 
-#: Settings of the white Monte Carlo behind the table (:mod:`nirglucose.optics.mc_white`;
+#: Settings of the white Monte Carlo behind the table (:mod:`nirglucose.optics.kernels.mc_white`;
 #: all in the cache key). ``seed``: the common random numbers of every run;
 #: ``half_width_cm``: the detector kernel's half-width about rho (fourth-order kernel,
 #: bias O(h^4): below 0.2 % at 0.75 mm for the most absorbing skin of the box);
@@ -114,7 +114,7 @@ LUT_MC_SETTINGS: dict = {
 #: Monte Carlo of the RTE above, about 2 CPU-hours for the default grid, with 0.3-0.7 %
 #: noise per node. ``"diffusion"``: the three-layer diffusion model
 #: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 40 s, smooth, within
-#: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.mc_paths``) and 0.90-1.05 x
+#: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.reference.mc_paths``) and 0.90-1.05 x
 #: the Monte Carlo table over the paper cohort: for quick sweeps of the probe geometry.
 LUT_SOLVERS = ("monte-carlo", "diffusion")
 

@@ -3,7 +3,7 @@
 :func:`interpolate_lut` (the full table, reflectance and per-layer paths, NumPy),
 :func:`node_lut` + :func:`interpolate_node_lut` (the simulator's fast path: the table
 specialised to fixed wavelength nodes, interpolated by the compiled kernel of
-:mod:`nirglucose.optics._lut_kernel`; ``_interpolate_node_lut_numpy`` is its NumPy
+:mod:`nirglucose.optics.kernels.lut_kernel`; ``_interpolate_node_lut_numpy`` is its NumPy
 reference) and :func:`reflectance_from_tissue_optics` (the simulator's entry). The node
 values are centred at build time (Blu, Thevenaz & Unser 2004), so multilinear
 interpolation errs by zero on average over every cell.
@@ -283,14 +283,15 @@ def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, g
 
 
 def _node_kernel_args(nlut: NodeLUT) -> tuple:
-    """The table arguments of :func:`._lut_kernel.node_reflectance`, cached on the table.
+    """Arguments of :func:`~nirglucose.optics.kernels.lut_kernel.node_reflectance`.
 
-    ``(table words, cells per node, node ratios, axis_f, axis_i)``; see the kernel.
+    Cached on the table: ``(table words, cells per node, node ratios, axis_f,
+    axis_i)``; see the kernel.
     """
     cached = nlut.__dict__.get("_kernel_args")
     if cached is not None:
         return cached
-    from .._lut_kernel import KERNEL_AXES
+    from ..kernels.lut_kernel import KERNEL_AXES
 
     lut = nlut.lut
     kinds = tuple(LUT_AXES[list(LUT_AXES)[i]][0] for i in _NOT_Q)
@@ -323,7 +324,7 @@ def interpolate_node_lut(
 ) -> NDArray[np.float64]:
     """Reflectance R(rho) from a :class:`NodeLUT`, as :func:`interpolate_lut` gives it.
 
-    One call of a compiled kernel (:mod:`nirglucose.optics._lut_kernel`): coordinates,
+    One call of a compiled kernel (:mod:`nirglucose.optics.kernels.lut_kernel`): coordinates,
     cells, the 32-corner multilinear interpolation and the ``musp_ratio`` slope in one
     pass over the points; equal to the numpy reference (``_interpolate_node_lut_numpy``)
     to float32 rounding of ln R.
@@ -349,7 +350,7 @@ def interpolate_node_lut(
     ConfigError
         If a point lies outside the table's box (the message names the axis and range).
     """
-    from .._lut_kernel import node_reflectance
+    from ..kernels.lut_kernel import node_reflectance
 
     mua_d = np.asarray(mua_dermis_per_cm, dtype=float)
     full = mua_d.shape

@@ -17,7 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...exceptions import ConfigError
-from .. import layers, mc_white
+from .. import layers
+from ..kernels import mc_white
 from ..lut.build import _mc_run_kwargs
 from ..lut.grid import (
     LUT_AXES,

@@ -355,7 +355,7 @@ def mc_slab(
 ) -> MCResult:
     r"""Monte Carlo reflectance and transmittance of one homogeneous slab.
 
-    Same conventions as :func:`~nirglucose.optics.adding_doubling.slab_rt`: a normally
+    Same conventions as :func:`~nirglucose.optics.reference.adding_doubling.slab_rt`: a normally
     incident pencil beam, the same ambient medium on both sides. ``thickness_cm =
     inf`` gives a semi-infinite medium (then ``mua_per_cm > 0``).
 

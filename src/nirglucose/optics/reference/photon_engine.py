@@ -27,7 +27,7 @@ identical. The random numbers are drawn in a fixed order per step (free paths, p
 azimuthal angles of the scattered packets, internal-interface decisions, roulette), so a
 seed gives the same bytes.
 
-Relation to :mod:`nirglucose.optics.mc_white`: that is the production engine behind the
+Relation to :mod:`nirglucose.optics.kernels.mc_white`: that is the production engine behind the
 ``rte-lut`` table and stays a separate, compiled (numba) per-photon kernel, because its
 design is what this engine cannot give: counter-based random numbers per photon and per
 flight (common random numbers across table nodes), an optical depth carried across the

@@ -222,7 +222,9 @@ def node_reflectance(table, n_cells, ratio, axis_f, axis_i, mua_d, mua_s, mua_e,
     """R(rho) at every point of the simulator's layout, written to ``out``.
 
     Points are the flattened (n_rows, n_nodes) grid, row-major: point g belongs to node
-    g % n_nodes.
+    g % n_nodes. One long function on purpose: it is the compiled chunk loop, whose
+    scratch arrays must stay in local variables of one numba function to stay in the
+    CPU cache (module docstring).
 
     Parameters
     ----------
