@@ -254,4 +254,8 @@ def main() -> dict:
 
 
 if __name__ == "__main__":
+    import argparse
+
+    # no options: the environment variables of the module docstring steer it
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     print(json.dumps(main()))
