@@ -53,6 +53,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from ...exceptions import ConfigError
+
 __all__ = ["ABSORPTION_MODELS", "Packets", "Stack", "Tally", "run_photons"]
 
 #: Absorption models of :func:`run_photons` (module docstring).
@@ -281,6 +283,11 @@ def run_photons(
     max_steps : int
         Steps after which a run that has not finished raises RuntimeError. [-]
 
+    Raises
+    ------
+    ConfigError
+        If ``absorption`` is not one of :data:`ABSORPTION_MODELS`.
+
     Notes
     -----
     Per step: free path :math:`s = -\\ln\\xi/\\mu` (:math:`\\mu = \\mu_t` or
@@ -295,7 +302,7 @@ def run_photons(
        doi:10.1088/0031-9155/49/14/N07
     """
     if absorption not in ABSORPTION_MODELS:
-        raise ValueError(f"absorption = {absorption!r}; expected one of {ABSORPTION_MODELS}")
+        raise ConfigError(f"absorption = {absorption!r} is unknown; valid: {ABSORPTION_MODELS}")
     continuous = absorption == "continuous"
     mua, mus = stack.mua_per_cm, stack.mus_per_cm
     mut = mua + mus
