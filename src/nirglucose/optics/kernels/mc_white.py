@@ -43,6 +43,14 @@ Design choices, each for low or smooth noise:
   which cancels the u^2 term (bias O(h^4 R'''')) and vanishes at its edges (a photon's
   weight is continuous in its exit radius, for smooth common-random-number noise).
 
+Relation to the NumPy photon engine (:mod:`nirglucose.optics.reference.photon_engine`,
+the one reference engine, with pluggable tallies): same MCML physics, but this kernel
+stays separate and compiled because its random numbers are counter-based per photon and
+flight (common random numbers across the table's nodes), its optical depth is carried
+across the interface and its absorption is analog -- none of which a vectorised
+all-packets-per-step loop can give -- and because it must be about 100x faster. The
+reference engine validates it (``tests/optics/test_optics_mc_white.py``).
+
 Speed: about 0.3 us per scattering event on one core (numba), a few tens of
 microseconds per photon; :func:`white_mc_run` splits the photons into batches run on
 threads (the kernel releases the GIL) and joins them in batch order, so the result is

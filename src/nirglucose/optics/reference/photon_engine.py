@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 
 from ...exceptions import ConfigError
 
-__all__ = ["ABSORPTION_MODELS", "Packets", "Stack", "Tally", "run_photons"]
+__all__ = ["ABSORPTION_MODELS", "Packets", "Stack", "Tally", "fresnel", "hg_cos", "run_photons"]
 
 #: Absorption models of :func:`run_photons` (module docstring).
 ABSORPTION_MODELS = ("discrete", "continuous")
