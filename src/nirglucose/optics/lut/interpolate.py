@@ -173,6 +173,7 @@ def interpolate_lut(
 
     Examples
     --------
+    >>> from nirglucose.optics.lut import build_lut
     >>> lut = build_lut(0.3, 0.008, grid="tiny")
     >>> r, _ = interpolate_lut(lut, mua_epidermis_per_cm=2.0, mua_dermis_per_cm=0.3,
     ...     musp_dermis_per_cm=20.0, mua_subcutis_per_cm=0.1, musp_subcutis_per_cm=12.0,
