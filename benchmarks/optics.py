@@ -5,7 +5,8 @@
   reused from NIRGLUCOSE_BENCH_LUT_CACHE;
 * accuracy: table / direct solve - 1 at 120 random off-grid points uniform in each axis'
   coordinate over the table's box, in 12 groups sharing (musp_ratio, thickness) (one
-  Monte Carlo run each); "direct solve" is nirglucose.optics.lut.direct_solve, a run at
+  Monte Carlo run each); "direct solve" is
+  nirglucose.optics.reference.lut_checks.direct_solve, a run at
   the point with the table's settings and common random numbers (at the default
   table's 3.2 million photons per run about 90 CPU-minutes: 45 measured at 1.6 million);
   with the direct solve's own standard error;
@@ -22,7 +23,7 @@
   numbers) at 36 points in 3 groups (one solve per point: too noisy to judge 1 % at a
   point; benchmarks/optics_reference.py averages seeds for that);
 * Monte Carlo (only with NIRGLUCOSE_BENCH_MC=1, about 2 min of CPU): the three-layer
-  model against nirglucose.optics.mc_paths at a few skin states.
+  model against nirglucose.optics.reference.mc_paths at a few skin states.
 
 Prints one JSON object on its last line.
 """
@@ -48,6 +49,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import simulate as sim_bench  # noqa: E402  (benchmarks/simulate.py)
 from nirglucose.optics import layers, tissue  # noqa: E402
 from nirglucose.optics import lut as L  # noqa: E402
+from nirglucose.optics.lut import interpolate as LI  # noqa: E402
+from nirglucose.optics.reference import lut_checks as LV  # noqa: E402
 
 RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 
@@ -101,7 +104,7 @@ def _cohort_points(cohort, n_points: int, seed: int = 0) -> dict:
 
 
 def _errors(lut, points, **kw) -> dict:
-    err = L.lut_errors(lut, points, **kw)
+    err = LV.lut_errors(lut, points, **kw)
     r = np.abs(err["reflectance"])
     p = np.abs(err["pathlength"])
     return {
@@ -131,7 +134,7 @@ def _vs_diffusion(lut, points) -> dict:
 def _throughput(lut, cohort) -> dict:
     from nirglucose.simulate.simulator import _OPTICS_SLICE_ROWS
 
-    pts = L.random_lut_points(lut, 200_000, rng=3)
+    pts = LV.random_lut_points(lut, 200_000, rng=3)
     start = time.process_time()
     L.interpolate_lut(lut, **pts)
     generic = 200_000 / (time.process_time() - start)
@@ -156,7 +159,7 @@ def _throughput(lut, cohort) -> dict:
     return {
         "generic_points_per_s": round(generic),
         "node_points_per_s": round(node_rate(L.interpolate_node_lut, 5)),
-        "node_numpy_points_per_s": round(node_rate(L._interpolate_node_lut_numpy, 2)),
+        "node_numpy_points_per_s": round(node_rate(LI._interpolate_node_lut_numpy, 2)),
         "node_kernel_first_call_s": round(first_call, 3),
     }
 
@@ -176,7 +179,7 @@ def _simulator() -> dict:
 
 
 def _monte_carlo() -> list[dict]:
-    from nirglucose.optics.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
 
     start = time.process_time()
     run = mc_detected_paths([0.2, 0.1, 0.03], [200.0, 200.0, 140.0], 0.9, [0.008, 0.15],
@@ -228,15 +231,15 @@ def main() -> dict:
             result["build"] = {"from_cache": True, **{k: result["build"][k] for k in (
                 "n_solves", "table_nodes", "cache_file_mb")}}
         result["accuracy_uniform"] = _errors(
-            lut, L.random_lut_points(lut, 120, rng=7, groups=12))
+            lut, LV.random_lut_points(lut, 120, rng=7, groups=12))
         if os.environ.get("NIRGLUCOSE_BENCH_REFERENCE") == "1":  # about 17 CPU-minutes
             # independent reference: 10x the photons, other random numbers
             result["accuracy_independent"] = _errors(
-                lut, L.random_lut_points(lut, 36, rng=21, groups=3),
+                lut, LV.random_lut_points(lut, 36, rng=21, groups=3),
                 n_photons=4_000_000, seed=12345)
         cohort = _cohort()
         result["monte_carlo_vs_diffusion"] = {
-            "uniform_box": _vs_diffusion(lut, L.random_lut_points(lut, 2000, rng=5)),
+            "uniform_box": _vs_diffusion(lut, LV.random_lut_points(lut, 2000, rng=5)),
             "paper_cohort": _vs_diffusion(lut, _cohort_points(cohort, 2000)),
         }
         result["throughput"] = _throughput(lut, cohort)
@@ -251,4 +254,8 @@ def main() -> dict:
 
 
 if __name__ == "__main__":
+    import argparse
+
+    # no options: the environment variables of the module docstring steer it
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     print(json.dumps(main()))

@@ -9,7 +9,7 @@ This script chooses them from the table's own runs, without the hold-out referen
 
 * node values from two disjoint halves of the default build's photons: photons
   0 .. N/2 - 1 and N/2 .. N - 1 of every run (N the default photons per run;
-  ``first_photon`` of ``nirglucose.optics.mc_white.white_mc_run``), which together are
+  ``first_photon`` of ``nirglucose.optics.kernels.mc_white.white_mc_run``), which together are
   exactly the default table's runs; each half takes about an hour of CPU and is saved
   in ``--work`` (default ``optics-fit-degrees/`` in the nirglucose cache directory) as
   it finishes, so a rerun resumes (the cross-validation is then of a table of half the
@@ -50,35 +50,40 @@ CANDIDATES = list(itertools.product((2, 3, 4, 5, 6), (1, 2), (3, 4, 5, 6, 7)))
 
 def _setup():
     from nirglucose.optics import lut as L
+    from nirglucose.optics.lut import build as LB
+    from nirglucose.optics.lut import grid as LG
 
-    grid = L._resolve_grid("default")
-    geo = L._geometry(RHO_CM, T_EPI_CM, N_TISSUE, 1.0)
-    coords, splits = L._solve_axes(grid, geo)
-    ax = {k: L._inverse(L.LUT_AXES[k][0], coords[i]) for i, k in enumerate(L.LUT_AXES)}
+    grid = LG._resolve_grid("default")
+    geo = LG._geometry(RHO_CM, T_EPI_CM, N_TISSUE, 1.0)
+    coords, splits = LB._solve_axes(grid, geo)
+    ax = {k: LG._inverse(L.LUT_AXES[k][0], coords[i]) for i, k in enumerate(L.LUT_AXES)}
     return L, grid, geo, coords, splits[-1], ax
 
 
 def _half_path(work: Path, grid: dict, geo: dict, first: int, photons: int) -> Path:
     """Work file of one half, named by everything its node values depend on."""
     from nirglucose.optics import lut as L
-    from nirglucose.optics import mc_white
+    from nirglucose.optics.kernels import mc_white
+    from nirglucose.optics.lut import grid as LG
 
     settings = {k: v for k, v in L.LUT_MC_SETTINGS.items() if k != "residual_fit_degrees"}
     payload = {"geometry": geo, "grid": grid, "mc": settings, "photons": photons,
                "first": first, "batch": mc_white._BATCH_PHOTONS,
-               "split_survival": mc_white._SPLIT_SURVIVAL, "version": L._FORMAT_VERSION}
+               "split_survival": mc_white._SPLIT_SURVIVAL, "version": LG._FORMAT_VERSION}
     key = hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
     return work / f"nodes-{key}-first{first}-n{photons}.npz"
 
 
 def _halves(work: Path, L, grid: dict, geo: dict, ax: dict) -> tuple[np.ndarray, np.ndarray]:
     """ln R at the solve nodes from each half of the default table's photons."""
+    from nirglucose.optics.lut import build as LB
+
     photons = L.LUT_MC_PHOTONS["default"] // 2
     out = []
     for first in (0, photons):
         path = _half_path(work, grid, geo, first, photons)
         if not path.exists():
-            values = L._monte_carlo_nodes(ax, grid, geo, photons, first_photon=first)
+            values = LB._monte_carlo_nodes(ax, grid, geo, photons, first_photon=first)
             tmp = Path(str(path) + ".tmp.npz")
             np.savez(tmp, values=values)
             os.replace(tmp, path)  # atomic: a half is there whole or not at all
@@ -88,6 +93,8 @@ def _halves(work: Path, L, grid: dict, geo: dict, ax: dict) -> tuple[np.ndarray,
 
 
 def main(argv: list[str] | None = None) -> dict:
+    from nirglucose.optics.lut import build as LB
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=None,
                     help="directory of the halves' node values (resumable)")
@@ -95,12 +102,12 @@ def main(argv: list[str] | None = None) -> dict:
     L, grid, geo, coords, split, ax = _setup()
     work = work_dir(ap, args.work, L.cache_dir() / "optics-fit-degrees")
     va, vb = _halves(work, L, grid, geo, ax)
-    diff = L._diffusion_nodes(ax, geo)[..., :1]
+    diff = LB._diffusion_nodes(ax, geo)[..., :1]
     n_tau = coords[-1].size
 
     def node_cv(deg) -> float:
-        fa = L._residual_fit(va, diff, coords, split, deg)
-        fb = L._residual_fit(vb, diff, coords, split, deg)
+        fa = LB._residual_fit(va, diff, coords, split, deg)
+        fb = LB._residual_fit(vb, diff, coords, split, deg)
         return float(np.sqrt((np.mean((diff + fa - vb) ** 2)
                               + np.mean((diff + fb - va) ** 2)) / 2))
 
@@ -114,7 +121,7 @@ def main(argv: list[str] | None = None) -> dict:
             c = [*coords[:-1], coords[-1][keep]]
             at = (coords[0], coords[1], coords[-1][[j]])
             for fit, test in ((va, vb), (vb, va)):
-                f = L._residual_fit(fit[..., keep, :], diff[..., keep, :], c,
+                f = LB._residual_fit(fit[..., keep, :], diff[..., keep, :], c,
                                     split - (j < split), deg, at=at)
                 err.append(np.mean((diff[..., [j], :] + f - test[..., [j], :]) ** 2))
         return float(np.sqrt(np.mean(err)))

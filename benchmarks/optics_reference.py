@@ -68,14 +68,14 @@ def _use_bench_cache() -> None:
 def _points(lut, groups: int, per_group: int, rng: int, thin_groups: int,
             ) -> tuple[dict, np.ndarray]:
     """The random points, and the group of each (thin-corner groups last)."""
-    from nirglucose.optics import lut as L
+    from nirglucose.optics.reference import lut_checks as LV
 
-    pts = L.random_lut_points(lut, groups * per_group, rng=rng, groups=groups)
+    pts = LV.random_lut_points(lut, groups * per_group, rng=rng, groups=groups)
     parts = [pts]
     lo = lut.box["skin_transport_thickness"][0]
     for j in range(thin_groups):  # the thin-skin corner, tau < THIN_TAU, drawn apart
         seed = rng + 1 + j
-        extra = L.random_lut_points(lut, per_group, rng=seed, groups=1)
+        extra = LV.random_lut_points(lut, per_group, rng=seed, groups=1)
         tau = float(np.exp(np.random.default_rng(seed).uniform(np.log(lo), np.log(THIN_TAU))))
         extra["skin_thickness_cm"] = tau / extra["musp_dermis_per_cm"]
         parts.append(extra)
@@ -88,9 +88,10 @@ def _solve(task: tuple) -> tuple[int, int]:
     lut_dir, group_pts, photons, seed, path = task
     os.environ["NIRGLUCOSE_CACHE"] = lut_dir
     from nirglucose.optics import lut as L
+    from nirglucose.optics.reference import lut_checks as LV
 
     lut = L.get_lut(RHO_CM, T_EPI_CM, N_TISSUE)  # memoised: read once per worker
-    r, se, paths = L.direct_solve(lut, group_pts, n_photons=photons, seed=seed)
+    r, se, paths = LV.direct_solve(lut, group_pts, n_photons=photons, seed=seed)
     tmp = Path(str(path) + ".tmp.npz")
     np.savez(tmp, r=r, se=se, paths=paths)
     os.replace(tmp, path)

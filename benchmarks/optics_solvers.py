@@ -16,14 +16,15 @@ Run: ``python benchmarks/optics_solvers.py [n_photons]`` (default 1 000 000).
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import time
 
 import numpy as np
 
-from nirglucose.optics.adding_doubling import slab_rt
-from nirglucose.optics.monte_carlo import mc_slab
+from nirglucose.optics.reference.adding_doubling import slab_rt
+from nirglucose.optics.reference.monte_carlo import mc_slab
 
 MCML_RD = 0.09734
 MCML_TT = 0.66096
@@ -74,5 +75,16 @@ def main(n_photons: int = 1_000_000) -> dict[str, float]:
     return out
 
 
+def _cli(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("n_photons", nargs="?", type=int, default=1_000_000,
+                    help="Monte Carlo photon packets (default 1 000 000)")
+    args = ap.parse_args(argv)
+    if args.n_photons < 1:
+        ap.error(f"n_photons = {args.n_photons} is invalid; expected an integer >= 1")
+    main(args.n_photons)
+    return 0
+
+
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000)
+    sys.exit(_cli())

@@ -87,7 +87,7 @@ def test_fused_beer_lambert_equals_the_composed_model():
 
 @pytest.mark.parametrize("shift_kind", ["per_sample", "per_led"])
 def test_compiled_band_kernel_equals_the_numpy_model(shift_kind):
-    from nirglucose.optics.band_kernel import band_detected_fraction
+    from nirglucose.optics.kernels.band_kernel import band_detected_fraction
 
     n = 700
     rng = np.random.default_rng(4)

@@ -1,9 +1,9 @@
 """Tests of nirglucose.optics.lut (the rte-lut look-up table) and its simulator wiring.
 
 Every test uses a temporary cache directory (NIRGLUCOSE_CACHE) and never a pre-existing
-cache. "Direct solve" below is nirglucose.optics.lut.direct_solve: a white Monte Carlo run
-at the point with the table's settings and common random numbers (the model the table is
-built from).
+cache. "Direct solve" below is nirglucose.optics.reference.lut_checks.direct_solve: a
+white Monte Carlo run at the point with the table's settings and common random numbers
+(the model the table is built from).
 """
 
 from __future__ import annotations
@@ -17,6 +17,11 @@ import nirglucose as ng
 from nirglucose.exceptions import ConfigError
 from nirglucose.optics import forward, layers, tissue
 from nirglucose.optics import lut as L
+from nirglucose.optics.kernels import mc_white
+from nirglucose.optics.lut import build as LB
+from nirglucose.optics.lut import cache as LC
+from nirglucose.optics.lut import grid as LG
+from nirglucose.optics.reference import lut_checks as LV
 
 RHO, T_EPI = 0.3, 0.008
 
@@ -57,9 +62,9 @@ def _sub_grid(n: int = 5, first: int = 1) -> dict:
             out[name] = (float(np.exp(h * (first - 1))), float(np.exp(h * (first + n - 2))),
                          n, m)
             continue
-        u = np.linspace(L._forward(kind, np.float64(lo)), L._forward(kind, np.float64(hi)), ns)
+        u = np.linspace(LG._forward(kind, np.float64(lo)), LG._forward(kind, np.float64(hi)), ns)
         i = start[name]
-        out[name] = (float(L._inverse(kind, u[i])), float(L._inverse(kind, u[i + n - 1])), n, m)
+        out[name] = (float(LG._inverse(kind, u[i])), float(LG._inverse(kind, u[i + n - 1])), n, m)
     return out
 
 
@@ -89,7 +94,7 @@ def test_tiny_table_is_exact_at_its_nodes(tiny):
         skin_thickness_cm=p["skin_transport_thickness"] / p["musp_dermis_per_cm"],
     )
     r, paths = L.interpolate_lut(tiny, pathlengths=True, **args)
-    r0, se0, p0 = L.direct_solve(tiny, args)  # the same photons as the nodes' runs
+    r0, se0, p0 = LV.direct_solve(tiny, args)  # the same photons as the nodes' runs
     np.testing.assert_allclose(r, r0, rtol=1e-5)  # float32 storage of ln R
     np.testing.assert_allclose(paths, np.maximum(p0, 1e-6), rtol=1e-5)
     assert np.median(se0 / r0) < 0.1  # the tiny grid's few photons
@@ -113,8 +118,8 @@ def test_interpolation_against_direct_solves_in_a_block_of_the_default_grid():
     lo, hi, _, m = grid["skin_transport_thickness"]
     grid["skin_transport_thickness"] = (lo, float(np.sqrt(lo * hi)), 2, m)
     lut = L.build_lut(RHO, T_EPI, grid=grid, n_photons=15_000)
-    pts = L.random_lut_points(lut, 40, rng=2, groups=2)
-    err = L.lut_errors(lut, pts, n_photons=15_000)
+    pts = LV.random_lut_points(lut, 40, rng=2, groups=2)
+    err = LV.lut_errors(lut, pts, n_photons=15_000)
     r, se = np.abs(err["reflectance"]), err["reflectance_se"]
     assert np.all(r <= np.maximum(0.01, 4 * se))
     assert np.median(r) <= 1.5 * np.median(se)
@@ -281,7 +286,7 @@ def test_solver_choice_keys_builds_and_validates():
     np.testing.assert_allclose(r_lut, r_dir, rtol=1e-5)
     np.testing.assert_allclose(p_lut, paths, rtol=1e-5)
     # its direct solves are the diffusion model (no Monte Carlo noise)
-    err = L.lut_errors(lut, n_points=20, rng=3)
+    err = LV.lut_errors(lut, n_points=20, rng=3)
     assert np.all(err["reflectance_se"] == 0.0)
 
 
@@ -300,9 +305,9 @@ def test_simulator_lut_solver_from_the_config(monkeypatch):
 
 def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     # the default grid's scattering axes, two absorption nodes, one channel
-    grid = L._resolve_grid("default")
-    geo = L._geometry(RHO, T_EPI, 1.4, 1.0)
-    coords, splits = L._solve_axes(grid, geo)
+    grid = LG._resolve_grid("default")
+    geo = LG._geometry(RHO, T_EPI, 1.4, 1.0)
+    coords, splits = LB._solve_axes(grid, geo)
     x, q, y = coords[0], coords[1], coords[-1]
     deg = L.LUT_MC_SETTINGS["residual_fit_degrees"]
 
@@ -314,31 +319,31 @@ def test_residual_fit_keeps_smooth_differences_and_removes_node_noise():
     shape = (x.size, q.size, 1, 1, 2, y.size, 1)
     base = np.random.default_rng(0).normal(-3.0, 0.5, shape)
     mc = base + smooth(y)
-    got = L._residual_fit(mc, base, coords, splits[-1], deg)
+    got = LB._residual_fit(mc, base, coords, splits[-1], deg)
     np.testing.assert_allclose(got, np.broadcast_to(smooth(y), got.shape), atol=1e-10)
     # evaluated between the ratio and thickness nodes (the table's refined axes)
-    fine, fine_q = L._refined_coords(y, 2, splits[-1]), L._refined_coords(q, 3, None)
-    got = L._residual_fit(mc, base, coords, splits[-1], deg, at=(x, fine_q, fine))
+    fine, fine_q = LB._refined_coords(y, 2, splits[-1]), LB._refined_coords(q, 3, None)
+    got = LB._residual_fit(mc, base, coords, splits[-1], deg, at=(x, fine_q, fine))
     assert got.shape == (x.size, fine_q.size) + shape[2:-2] + (fine.size, 1)
     np.testing.assert_allclose(got, np.broadcast_to(smooth(fine, fine_q), got.shape),
                                atol=1e-10)
     # 1 % node noise is reduced (252 nodes, 150 terms: by about sqrt(150 / 252))
     noise = 0.01 * np.random.default_rng(1).standard_normal(shape)
-    got = L._residual_fit(mc + noise, base, coords, splits[-1], deg)
+    got = LB._residual_fit(mc + noise, base, coords, splits[-1], deg)
     left = np.sqrt(np.mean((got - smooth(y)) ** 2))
     assert left < 0.85 * 0.01
     # full rank (a unique fit between the nodes): 5 x 3 x (5 left of tau = 1 + 5 right)
-    basis = L._residual_basis(coords, splits[-1], deg)
+    basis = LB._residual_basis(coords, splits[-1], deg)
     assert basis.shape == (x.size * q.size * y.size, 150)
     assert np.linalg.matrix_rank(basis) == 150
 
 
 def test_refined_thickness_nodes_are_those_of_the_spline_refinement():
-    grid = L._resolve_grid("default")
-    coords, splits = L._solve_axes(grid, L._geometry(RHO, T_EPI, 1.4, 1.0))
+    grid = LG._resolve_grid("default")
+    coords, splits = LB._solve_axes(grid, LG._geometry(RHO, T_EPI, 1.4, 1.0))
     y = coords[-1]
-    fine = L._refined_coords(y, 3, splits[-1])
-    _, spline_nodes = L._upsample(np.zeros((y.size, 1)), 0, y, 3, splits[-1])
+    fine = LB._refined_coords(y, 3, splits[-1])
+    _, spline_nodes = LB._upsample(np.zeros((y.size, 1)), 0, y, 3, splits[-1])
     np.testing.assert_array_equal(fine, spline_nodes)
     np.testing.assert_allclose(fine[::3], y, rtol=1e-15, atol=1e-15)  # solve node j: 3 j
     assert np.any(fine == 0.0)  # tau = 1 stays a node
@@ -348,7 +353,7 @@ def test_refined_thickness_nodes_are_those_of_the_spline_refinement():
 def test_diffusion_table_solves_every_refined_scattering_node_directly(axis, monkeypatch):
     # refined thickness and ratio nodes are diffusion solves, not spline values: exact
     # there before the table's node values are centred (checked on its own below)
-    monkeypatch.setattr(L, "_centre_nodes", lambda values, splits: values)
+    monkeypatch.setattr(LB, "_centre_nodes", lambda values, splits: values)
     grid = dict(L.LUT_GRIDS["tiny"])
     grid[axis] = grid[axis][:2] + (3, 3)
     lut = L.build_lut(RHO, T_EPI, grid=grid, solver="diffusion")
@@ -369,10 +374,10 @@ def test_diffusion_table_solves_every_refined_scattering_node_directly(axis, mon
 
 
 def test_direct_solve_with_other_random_numbers_is_an_independent_reference(tiny):
-    pts = L.random_lut_points(tiny, 6, rng=4, groups=1)
-    same, se, _ = L.direct_solve(tiny, pts)
-    other, se_o, _ = L.direct_solve(tiny, pts, seed=777)
-    again, _, _ = L.direct_solve(tiny, pts, seed=777)
+    pts = LV.random_lut_points(tiny, 6, rng=4, groups=1)
+    same, se, _ = LV.direct_solve(tiny, pts)
+    other, se_o, _ = LV.direct_solve(tiny, pts, seed=777)
+    again, _, _ = LV.direct_solve(tiny, pts, seed=777)
     np.testing.assert_array_equal(other, again)  # seeded
     assert not np.allclose(other, same, rtol=1e-9)  # other photons
     assert np.all(np.abs(other / same - 1.0) < 5.0 * np.hypot(se / same, se_o / other))
@@ -382,24 +387,24 @@ def test_direct_solve_runs_once_per_group_despite_round_off(tiny, monkeypatch):
     # a group of random_lut_points shares (ratio, thickness); recovered from the solver
     # arguments (tau = skin x mus') they differ in the last bits, which must not split
     # the group into several runs (each a full Monte Carlo run)
-    pts = L.random_lut_points(tiny, 60, rng=3, groups=2)
+    pts = LV.random_lut_points(tiny, 60, rng=3, groups=2)
     musp = pts["musp_dermis_per_cm"]
     tau = pts["skin_thickness_cm"] * musp
     assert np.unique(np.stack([pts["musp_subcutis_per_cm"] / musp, tau], 1), axis=0).shape[0] > 2
     calls = []
-    real = L.mc_white.white_mc_points
+    real = mc_white.white_mc_points
 
     def counted(*args, **kwargs):
         calls.append(kwargs["skin_transport_thickness"])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(L.mc_white, "white_mc_points", counted)
-    r, se, _ = L.direct_solve(tiny, pts, n_photons=9000)
+    monkeypatch.setattr(mc_white, "white_mc_points", counted)
+    r, se, _ = LV.direct_solve(tiny, pts, n_photons=9000)
     assert len(calls) == 2
     assert np.all(r > 0) and np.all(np.isfinite(se))
     # a group solved alone gives the same values as within the whole set
     first = {k: v[:30] for k, v in pts.items()}
-    np.testing.assert_array_equal(L.direct_solve(tiny, first, n_photons=9000)[0], r[:30])
+    np.testing.assert_array_equal(LV.direct_solve(tiny, first, n_photons=9000)[0], r[:30])
 
 
 def test_default_diffusion_table_is_unbiased_and_within_half_a_percent_off_grid():
@@ -409,7 +414,7 @@ def test_default_diffusion_table_is_unbiased_and_within_half_a_percent_off_grid(
     # (measured: max 0.37 %, RMS 0.080 %, mean -0.003 %; with the solver's own node
     # values instead of centred ones: max 0.59 %, RMS 0.167 %, mean -0.095 %)
     lut = L.build_lut(RHO, T_EPI, solver="diffusion")
-    err = L.lut_errors(lut, n_points=300, rng=11, groups=None)
+    err = LV.lut_errors(lut, n_points=300, rng=11, groups=None)
     assert np.all(err["reflectance_se"] == 0.0)
     assert np.max(np.abs(err["reflectance"])) <= 0.005
     assert np.sqrt(np.mean(err["reflectance"] ** 2)) <= 0.0011
@@ -433,7 +438,7 @@ def test_centred_nodes_make_multilinear_interpolation_unbiased_over_each_cell():
         return a * xx**2 + b * yy**2
 
     nodes = f(x[:, None], y[None, :])[..., None] * np.ones(2)  # two channels
-    centred = L._centre_nodes(nodes, [None, None])
+    centred = LB._centre_nodes(nodes, [None, None])
     interp = RegularGridInterpolator((x, y), centred[..., 1])
     t = (np.arange(40) + 0.5) / 40  # a fine midpoint grid over each cell
     for i in range(x.size - 1):  # every cell, the edge cells included
@@ -449,16 +454,16 @@ def test_centred_nodes_make_multilinear_interpolation_unbiased_over_each_cell():
     # a kink where an axis is split (tau = 1) leaks no shift: |x - x_3| is linear on
     # either side; a two-node piece, with no curvature to see, is left as it is
     kink = np.abs(x - x[3])[:, None] * np.ones((1, 2))
-    np.testing.assert_allclose(L._centre_nodes(kink, [3]), kink, atol=1e-15)
-    assert not np.allclose(L._centre_nodes(kink, [None]), kink)
+    np.testing.assert_allclose(LB._centre_nodes(kink, [3]), kink, atol=1e-15)
+    assert not np.allclose(LB._centre_nodes(kink, [None]), kink)
     two = np.array([[0.0, 1.0], [4.0, 1.0], [1.0, 1.0]])
-    np.testing.assert_array_equal(L._centre_nodes(two, [1]), two)
+    np.testing.assert_array_equal(LB._centre_nodes(two, [1]), two)
 
 
 def test_a_default_monte_carlo_build_is_announced_as_a_warning(tiny, monkeypatch, tmp_path,
                                                                caplog):
     # the hours-long first build must show without logging configured (a warning)
-    monkeypatch.setattr(L, "build_lut", lambda *a, **k: tiny)
+    monkeypatch.setattr(LC, "build_lut", lambda *a, **k: tiny)
     with caplog.at_level("INFO", logger="nirglucose.optics.lut"):
         L.load_or_build_lut(RHO, T_EPI, directory=tmp_path)
         L.load_or_build_lut(RHO, T_EPI, directory=tmp_path, solver="diffusion")

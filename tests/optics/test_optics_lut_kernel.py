@@ -13,6 +13,7 @@ import pytest
 
 from nirglucose.exceptions import ConfigError
 from nirglucose.optics import lut as L
+from nirglucose.optics.lut import interpolate as LI
 
 #: Per axis (table order): node coordinates (in the axis' own coordinate).
 _NODES = (
@@ -74,7 +75,7 @@ def test_kernel_equals_the_numpy_reference(table):
     nlut = L.node_lut(table, ratio)
     pts = _points(3000, ratio=ratio)
     fast = L.interpolate_node_lut(nlut, **pts)
-    ref = L._interpolate_node_lut_numpy(nlut, **pts)
+    ref = LI._interpolate_node_lut_numpy(nlut, **pts)
     assert fast.shape == ref.shape == (3000, 4, 3)
     rel = np.abs(fast / ref - 1.0)
     assert rel.max() <= 1e-6  # float32 rounding of ln R, at worst
@@ -96,14 +97,14 @@ def test_kernel_layouts(table):
     ratio = _ratio((1,))
     nlut = L.node_lut(table, ratio)
     pts = _points(60, node_shape=(1,), ratio=ratio, seed=2)
-    ref = L._interpolate_node_lut_numpy(nlut, **pts)
+    ref = LI._interpolate_node_lut_numpy(nlut, **pts)
     lead = {k: v.reshape(3, 20, *v.shape[1:]) for k, v in pts.items()}
     np.testing.assert_allclose(L.interpolate_node_lut(nlut, **lead), ref.reshape(3, 20, 1),
                                rtol=1e-6)
     ratio = _ratio((4, 3))
     nlut = L.node_lut(table, ratio)
     pts = _points(40, ratio=ratio, seed=3)
-    ref = L._interpolate_node_lut_numpy(nlut, **pts)
+    ref = LI._interpolate_node_lut_numpy(nlut, **pts)
     per_node = dict(pts, skin_thickness_cm=np.broadcast_to(
         pts["skin_thickness_cm"][:, None, None], (40, 4, 3)))
     strided = {k: np.asfortranarray(v) for k, v in per_node.items()}
@@ -126,7 +127,7 @@ def test_kernel_at_the_corners_of_the_box(table):
     pts = {k: np.array([[r[k]] * 2 for r in rows]) for k in rows[0]}
     pts["skin_thickness_cm"] = pts["skin_thickness_cm"][:, 0]
     fast = L.interpolate_node_lut(nlut, **pts)
-    np.testing.assert_allclose(fast, L._interpolate_node_lut_numpy(nlut, **pts), rtol=1e-6)
+    np.testing.assert_allclose(fast, LI._interpolate_node_lut_numpy(nlut, **pts), rtol=1e-6)
     # the box's corners are table nodes: ln R is the stored value at the node's ratio
     v = table.values[..., 0].astype(np.float64)
     share = (0.6 - _NODES[1][0]) / (_NODES[1][1] - _NODES[1][0])
@@ -155,7 +156,7 @@ def test_kernel_raises_as_the_reference_for_points_outside(table, key, value, ax
     with pytest.raises(ConfigError, match=axis) as fast:
         L.interpolate_node_lut(nlut, **pts)
     with pytest.raises(ConfigError) as ref:
-        L._interpolate_node_lut_numpy(nlut, **pts)
+        LI._interpolate_node_lut_numpy(nlut, **pts)
     assert str(fast.value) == str(ref.value)
 
 
@@ -172,7 +173,7 @@ def test_kernel_is_deterministic_and_chunk_free(table):
 
 def test_kernel_log_and_exp_match_the_c_library():
     # the kernel's arithmetic-only ln and exp (vectorisable), against numpy's
-    from nirglucose.optics._lut_kernel import _exp, _log
+    from nirglucose.optics.kernels.lut_kernel import _exp, _log
 
     rng = np.random.default_rng(8)
     x = np.concatenate([np.exp(rng.uniform(-40.0, 40.0, 2000)), rng.uniform(0.5, 2.0, 500),
@@ -190,7 +191,7 @@ def test_simulator_fused_band_path_equals_tissue_optics_then_table(table):
     """band_kernel.band_detected_fraction_lut (layer optics compiled, then the kernel)
     equals tissue_optics -> detected_fraction('rte-lut') -> band weights."""
     from nirglucose.optics import forward, tissue
-    from nirglucose.optics.band_kernel import band_detected_fraction_lut
+    from nirglucose.optics.kernels.band_kernel import band_detected_fraction_lut
 
     spectra = tissue.band_spectra([850, 940, 1050, 1150], [30, 40, 50, 60], 3)
     ratio = spectra.spectra["musp_fat"] / spectra.spectra["musp_skin"]

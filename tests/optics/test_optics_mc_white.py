@@ -1,4 +1,4 @@
-"""Tests of nirglucose.optics.mc_white (compiled white Monte Carlo behind the rte-lut table)."""
+"""Tests of nirglucose.optics.kernels.mc_white (the compiled white Monte Carlo of the table)."""
 
 from __future__ import annotations
 
@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from nirglucose.exceptions import ConfigError
-from nirglucose.optics.mc_paths import mc_detected_paths, reweight_detected
-from nirglucose.optics.mc_white import (
+from nirglucose.optics.kernels.mc_white import (
     kernel_weight,
     white_mc_points,
     white_mc_run,
     white_mc_tally,
 )
+from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
 
 
 def test_mcml_benchmark_slab():

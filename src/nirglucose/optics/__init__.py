@@ -3,8 +3,11 @@
 absorption (chromophore tables), scattering (power laws, glucose), beer_lambert
 (modified Beer-Lambert law), diffusion (dipole diffusion theory), skin (layers),
 tissue (band-integrated tissue properties), forward (forward models by name),
-adding_doubling (``slab_rt``), monte_carlo (``mc_slab``, ``mc_layers``), layers (the
-three-layer skin model), lut (the ``rte-lut`` look-up table), mc_paths (per-layer paths).
+layers (the three-layer skin model), lut (the ``rte-lut`` look-up table: grid, build,
+cache, interpolate), kernels (compiled: mc_white, the white Monte Carlo behind the table;
+lut_kernel and band_kernel, the simulator's fast path),
+reference (validation only: the NumPy photon engine with its front ends ``mc_slab``,
+``mc_layers``, ``mc_detected_paths``, adding-doubling ``slab_rt``, table checks).
 The solvers load lazily: the simulator's fast path never imports iadpython.
 """
 
@@ -18,9 +21,11 @@ from .diffusion import (
 from .forward import FORWARD_MODELS, detected_fraction
 
 _LAZY = {
-    "slab_rt": "adding_doubling",
-    "mc_slab": "monte_carlo",
-    "mc_layers": "monte_carlo",
+    "slab_rt": "reference.adding_doubling",
+    "mc_slab": "reference.monte_carlo",
+    "mc_layers": "reference.monte_carlo",
+    "mc_detected_paths": "reference.mc_paths",
+    "reweight_detected": "reference.mc_paths",
     "three_layer_reflectance": "layers",
 }
 

@@ -106,7 +106,7 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
     n_led = len(cfg.leds.wavelengths_nm)
     shift = np.broadcast_to(np.asarray(shift_nm, dtype=float), (n, n_led))
     if cfg.optics.model == "beer-lambert":  # the default: one compiled pass
-        from ..optics.band_kernel import band_detected_fraction
+        from ..optics.kernels.band_kernel import band_detected_fraction
 
         return band_detected_fraction(
             tables.spectra,
@@ -121,7 +121,7 @@ def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm)
             scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
         )
     if cfg.optics.model == "rte-lut":  # layer optics compiled, then the table kernel
-        from ..optics.band_kernel import band_detected_fraction_lut
+        from ..optics.kernels.band_kernel import band_detected_fraction_lut
 
         return band_detected_fraction_lut(
             tables.spectra,

@@ -64,6 +64,35 @@ def _single_threaded_blas() -> contextlib.AbstractContextManager[object]:
     return threadpool_limits(limits=1, user_api="blas")
 
 
+def _validated(mua_per_cm, mus_per_cm, g, thickness_cm, n_slab, n_ambient, quad_pts):
+    """:func:`slab_rt`'s inputs broadcast, with n_slab / n_ambient, or ConfigError."""
+    if (
+        isinstance(quad_pts, bool)
+        or not isinstance(quad_pts, int | np.integer)
+        or quad_pts % 2
+        or not QUAD_PTS_RANGE[0] <= quad_pts <= QUAD_PTS_RANGE[1]
+    ):
+        raise ConfigError(
+            f"quad_pts = {quad_pts!r} is invalid; expected an even integer in "
+            f"[{QUAD_PTS_RANGE[0]}, {QUAD_PTS_RANGE[1]}] [-]"
+        )
+    mua, mus, gg, d, ns, na = np.broadcast_arrays(
+        *(
+            np.asarray(x, dtype=np.float64)
+            for x in (mua_per_cm, mus_per_cm, g, thickness_cm, n_slab, n_ambient)
+        )
+    )
+    _check("mua_per_cm", mua, "1/cm", 0.0)
+    _check("mus_per_cm", mus, "1/cm", 0.0)
+    _check("g", gg, "-", -1.0, 1.0, low_open=True, high_open=True)
+    _check("thickness_cm", d, "cm", 0.0, low_open=True)
+    _check("n_slab", ns, "-", 0.0, low_open=True)
+    _check("n_ambient", na, "-", 0.0, low_open=True)
+    n_rel = ns / na
+    _check("n_slab / n_ambient", n_rel, "-", *_N_REL_RANGE)
+    return mua, mus, gg, d, n_rel
+
+
 def slab_rt(
     mua_per_cm: ArrayLike,
     mus_per_cm: ArrayLike,
@@ -154,30 +183,8 @@ def slab_rt(
     """
     import iadpython  # deferred: a few hundred ms of imports, needed only here
 
-    if (
-        isinstance(quad_pts, bool)
-        or not isinstance(quad_pts, int | np.integer)
-        or quad_pts % 2
-        or not QUAD_PTS_RANGE[0] <= quad_pts <= QUAD_PTS_RANGE[1]
-    ):
-        raise ConfigError(
-            f"quad_pts = {quad_pts!r} is invalid; expected an even integer in "
-            f"[{QUAD_PTS_RANGE[0]}, {QUAD_PTS_RANGE[1]}] [-]"
-        )
-    mua, mus, gg, d, ns, na = np.broadcast_arrays(
-        *(
-            np.asarray(x, dtype=np.float64)
-            for x in (mua_per_cm, mus_per_cm, g, thickness_cm, n_slab, n_ambient)
-        )
-    )
-    _check("mua_per_cm", mua, "1/cm", 0.0)
-    _check("mus_per_cm", mus, "1/cm", 0.0)
-    _check("g", gg, "-", -1.0, 1.0, low_open=True, high_open=True)
-    _check("thickness_cm", d, "cm", 0.0, low_open=True)
-    _check("n_slab", ns, "-", 0.0, low_open=True)
-    _check("n_ambient", na, "-", 0.0, low_open=True)
-    n_rel = ns / na
-    _check("n_slab / n_ambient", n_rel, "-", *_N_REL_RANGE)
+    mua, mus, gg, d, n_rel = _validated(mua_per_cm, mus_per_cm, g, thickness_cm, n_slab,
+                                        n_ambient, quad_pts)
 
     shape = mua.shape
     mut = (mua + mus).ravel()

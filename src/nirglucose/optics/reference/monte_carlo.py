@@ -1,13 +1,11 @@
-"""MCML-style Monte Carlo photon transport in layered turbid media.
+"""MCML Monte Carlo of layered turbid media: reflectance, transmittance, absorption.
 
-A small, vectorised re-implementation of the MCML photon-packet algorithm (Wang,
-Jacques & Zheng 1995): a pencil beam normally incident on a stack of plane-parallel
-layers, exponential free paths, Henyey-Greenstein scattering, Fresnel reflection and
-Snell refraction at every interface, absorption by weight reduction and Russian
-roulette. All live packets advance together, one step per loop iteration (no Python
-loop over photons). It exists to validate the deterministic solvers
-(:mod:`~nirglucose.optics.adding_doubling`, :mod:`~nirglucose.optics.diffusion`) in
-tests and scripts; it is not on any hot path.
+The front end of the photon engine (:mod:`~nirglucose.optics.reference.photon_engine`)
+with MCML's own physics (discrete absorption, Fresnel reflection and refraction at every
+interface; Wang, Jacques & Zheng 1995) and a tally of the classic MCML outputs. It exists
+to validate the deterministic solvers
+(:mod:`~nirglucose.optics.reference.adding_doubling`, :mod:`~nirglucose.optics.diffusion`)
+in tests and scripts; it is not on any hot path.
 
 Packet bookkeeping
 ------------------
@@ -18,11 +16,14 @@ Packet bookkeeping
   reflection" option; lower variance than all-or-none). At internal interfaces
   between layers the packet is reflected or refracted as a whole with the Fresnel
   probability.
-* Because free paths are exponential (memoryless), a fresh path is drawn after
-  every boundary crossing instead of carrying the remaining step: the two are
-  statistically identical.
 * Standard errors of the scalar tallies come from the per-packet totals (packets are
   independent); those of the radial profile from 20 interleaved batches of packets.
+
+References
+----------
+.. [1] L. Wang, S. L. Jacques, L. Zheng, "MCML - Monte Carlo modeling of light transport
+   in multi-layered tissues", Comput. Methods Programs Biomed. 47, 131-146 (1995),
+   doi:10.1016/0169-2607(95)01640-F
 """
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.exceptions import ConfigError
+
+from .photon_engine import Packets, Stack, run_photons
 
 __all__ = ["MCResult", "mc_layers", "mc_slab"]
 
@@ -102,30 +105,6 @@ class MCResult:
     def total_reflectance_se(self) -> float:
         """Standard error of ``total_reflectance`` (that of the diffuse part). [-]"""
         return self.diffuse_reflectance_se
-
-
-def _fresnel(
-    cos_i: NDArray[np.float64], n1: NDArray[np.float64], n2: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Unpolarised Fresnel reflectance and cosine of the refracted ray."""
-    ratio = n1 / n2
-    sin_t2 = ratio * ratio * (1.0 - cos_i * cos_i)
-    tir = sin_t2 >= 1.0
-    cos_t = np.sqrt(np.clip(1.0 - sin_t2, 0.0, None))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
-        rp = (n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i)
-        r = 0.5 * (rs * rs + rp * rp)
-    return np.where(tir, 1.0, r), cos_t
-
-
-def _hg_cos(g: NDArray[np.float64], xi: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Sample cos(theta) from the Henyey-Greenstein phase function."""
-    iso = np.abs(g) < 1e-6
-    gs = np.where(iso, 0.5, g)
-    tmp = (1.0 - gs * gs) / (1.0 - gs + 2.0 * gs * xi)
-    mu = (1.0 + gs * gs - tmp * tmp) / (2.0 * gs)
-    return np.clip(np.where(iso, 2.0 * xi - 1.0, mu), -1.0, 1.0)
 
 
 def _as_layers(name: str, v: ArrayLike, n_layers: int) -> NDArray[np.float64]:
@@ -246,6 +225,24 @@ def mc_layers(
     >>> abs(res.diffuse_reflectance - 0.0973) < 5 * res.diffuse_reflectance_se
     True
     """
+    stack, edges = _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers,
+                                    n_ambient, rho_edges_cm)
+    for name, v in (("weight_threshold", weight_threshold), ("roulette_chance", roulette_chance)):
+        _check(name, np.atleast_1d(float(v)), "-", 0.0, 1.0, low_open=True, high_open=True)
+    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
+        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
+    n_photons = int(n_photons)
+    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    tally = _LayerTally(n_photons, stack.n_layers, edges)
+    run_photons(stack, tally, n_photons, gen, absorption="discrete",
+                weight_threshold=weight_threshold, roulette_chance=roulette_chance,
+                max_steps=_MAX_STEPS)
+    return tally.result(stack.specular)
+
+
+def _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers, n_ambient,
+                     rho_edges_cm) -> tuple[Stack, NDArray[np.float64] | None]:
+    """The engine's :class:`Stack` and the radial bin edges, or ConfigError (one line)."""
     mua0 = np.atleast_1d(np.asarray(mua_per_cm, dtype=np.float64))
     if mua0.ndim != 1 or mua0.size == 0:
         raise ConfigError("mua_per_cm must be a scalar or a 1-D sequence with one value per layer")
@@ -262,203 +259,86 @@ def mc_layers(
     _check("thickness_cm", d[-1:], "cm", 0.0, np.inf, low_open=True, finite=False)
     _check("n_layers", nidx, "-", 0.0, np.inf, low_open=True)
     _check("n_ambient", np.atleast_1d(float(n_ambient)), "-", 0.0, np.inf, low_open=True)
-    _check(
-        "weight_threshold",
-        np.atleast_1d(float(weight_threshold)),
-        "-",
-        0.0,
-        1.0,
-        low_open=True,
-        high_open=True,
-    )
-    _check(
-        "roulette_chance",
-        np.atleast_1d(float(roulette_chance)),
-        "-",
-        0.0,
-        1.0,
-        low_open=True,
-        high_open=True,
-    )
-    semi_infinite = bool(np.isinf(d[-1]))
-    if semi_infinite and mua[-1] <= 0.0:
+    if np.isinf(d[-1]) and mua[-1] <= 0.0:
         raise ConfigError(
             f"mua_per_cm = {mua[-1]!r} of the semi-infinite last layer is out of range; "
             "valid range is (0, inf) [1/cm]"
         )
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    n_photons = int(n_photons)
     edges = None
     if rho_edges_cm is not None:
         edges = np.asarray(rho_edges_cm, dtype=np.float64)
         if edges.ndim != 1 or edges.size < 2 or edges[0] < 0 or np.any(np.diff(edges) <= 0):
             raise ConfigError("rho_edges_cm must be >= 2 increasing edges starting at >= 0 [cm]")
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    return Stack.from_layers(mua, mus, gl, d, nidx, n_ambient), edges
 
-    mut = mua + mus
-    with np.errstate(invalid="ignore", divide="ignore"):
-        frac_abs = np.where(mut > 0, mua / mut, 0.0)
-    z_top = np.concatenate([[0.0], np.cumsum(d)[:-1]])
-    z_bot = np.cumsum(d)
-    n_ext = np.concatenate([[n_ambient], nidx, [n_ambient]])  # index of layer L is n_ext[L+1]
-    specular = ((n_ambient - nidx[0]) / (n_ambient + nidx[0])) ** 2
 
-    # per-packet and per-layer tallies
-    rd_ph = np.zeros(n_photons)
-    tt_ph = np.zeros(n_photons)
-    tu_total = 0.0
-    absorbed = np.zeros(nl)
-    path_w = np.zeros(nl)  # sum over reflected weight of w * path in layer
-    if edges is not None:
-        nb = edges.size - 1
-        r_rho = np.zeros((_N_BATCHES, nb))
-        lw_rho = np.zeros(nb)
+class _LayerTally:
+    """MCML's tallies: per-packet reflectance and transmittance, absorption per layer,
+    mean paths of the reflected light, and optionally the radial profile R(rho) in
+    20 interleaved batches (Wang et al. 1995, section 4)."""
 
-    # packet state (compacted to the live packets)
-    pid = np.arange(n_photons)
-    x = np.zeros(n_photons)
-    y = np.zeros(n_photons)
-    z = np.zeros(n_photons)
-    ux = np.zeros(n_photons)
-    uy = np.zeros(n_photons)
-    uz = np.ones(n_photons)
-    w = np.full(n_photons, 1.0 - specular)
-    lay = np.zeros(n_photons, dtype=np.intp)
-    scattered = np.zeros(n_photons, dtype=bool)
-    path = np.zeros((n_photons, nl))
+    def __init__(self, n_photons: int, n_layers: int, edges: NDArray[np.float64] | None):
+        self.n_photons, self.edges = n_photons, edges
+        self.rd_ph = np.zeros(n_photons)
+        self.tt_ph = np.zeros(n_photons)
+        self.tu_total = 0.0
+        self.absorbed_w = np.zeros(n_layers)
+        self.path_w = np.zeros(n_layers)  # sum over reflected weight of w * path in layer
+        if edges is not None:
+            self.r_rho = np.zeros((_N_BATCHES, edges.size - 1))
+            self.lw_rho = np.zeros(edges.size - 1)
 
-    for _ in range(_MAX_STEPS):
-        n = pid.size
-        if n == 0:
-            break
-        mut_l = mut[lay]
-        with np.errstate(divide="ignore"):
-            s = -np.log1p(-gen.random(n)) / mut_l  # inf in a clear layer
-            db = np.where(
-                uz > 0, (z_bot[lay] - z) / uz, np.where(uz < 0, (z_top[lay] - z) / uz, np.inf)
+    def absorbed(self, layer, weight) -> None:
+        self.absorbed_w += np.bincount(layer, weights=weight, minlength=self.absorbed_w.size)
+
+    def escaped(self, pk: Packets, ob, esc, top) -> None:
+        self.rd_ph[pk.pid[ob[top]]] += esc[top]
+        bot = ~top
+        self.tt_ph[pk.pid[ob[bot]]] += esc[bot]
+        self.tu_total += float(np.sum(esc[bot & ~pk.scattered[ob]]))
+        self.path_w += (esc[top, None] * pk.path[ob[top]]).sum(axis=0)
+        if self.edges is not None and np.any(top):
+            nb = self.edges.size - 1
+            ot = ob[top]
+            rr = np.hypot(pk.x[ot], pk.y[ot])
+            k = np.searchsorted(self.edges, rr, side="right") - 1
+            inb = (k >= 0) & (k < nb)
+            np.add.at(self.r_rho, (pk.pid[ot[inb]] % _N_BATCHES, k[inb]), esc[top][inb])
+            self.lw_rho += np.bincount(
+                k[inb], weights=esc[top][inb] * pk.path[ot[inb]].sum(axis=1), minlength=nb
             )
-        hit = s >= db
-        step = np.where(hit, db, s)
-        x += step * ux
-        y += step * uy
-        z += step * uz
-        path[np.arange(n), lay] += step
 
-        # ---- interaction: absorption + scattering
-        it = np.flatnonzero(~hit)
-        if it.size:
-            li = lay[it]
-            dw = w[it] * frac_abs[li]
-            w[it] -= dw
-            absorbed += np.bincount(li, weights=dw, minlength=nl)
-            cos_t = _hg_cos(gl[li], gen.random(it.size))
-            psi = 2.0 * np.pi * gen.random(it.size)
-            sin_t = np.sqrt(1.0 - cos_t * cos_t)
-            cp, sp = np.cos(psi), np.sin(psi)
-            ux0, uy0, uz0 = ux[it], uy[it], uz[it]
-            vert = np.abs(uz0) > 1.0 - 1e-12
-            tmp = np.sqrt(np.where(vert, 1.0, 1.0 - uz0 * uz0))
-            nx = np.where(vert, sin_t * cp, sin_t * (ux0 * uz0 * cp - uy0 * sp) / tmp + ux0 * cos_t)
-            ny = np.where(vert, sin_t * sp, sin_t * (uy0 * uz0 * cp + ux0 * sp) / tmp + uy0 * cos_t)
-            nz = np.where(vert, np.sign(uz0) * cos_t, -sin_t * cp * tmp + uz0 * cos_t)
-            norm = np.sqrt(nx * nx + ny * ny + nz * nz)
-            ux[it], uy[it], uz[it] = nx / norm, ny / norm, nz / norm
-            scattered[it] = True
-
-        # ---- boundary: reflection / refraction / escape
-        hb = np.flatnonzero(hit)
-        if hb.size:
-            lb = lay[hb]
-            down = uz[hb] > 0
-            z[hb] = np.where(down, z_bot[lb], z_top[lb])
-            nxt = lb + np.where(down, 1, -1)
-            n1 = n_ext[lb + 1]
-            n2 = n_ext[nxt + 1]
-            refl, cos_tr = _fresnel(np.abs(uz[hb]), n1, n2)
-            outside = (nxt < 0) | (nxt >= nl)
-            # outer surface: split the packet
-            ob = hb[outside]
-            if ob.size:
-                r_o = refl[outside]
-                esc = w[ob] * (1.0 - r_o)
-                top = ~down[outside]
-                rd_ph[pid[ob[top]]] += esc[top]
-                bot = ~top
-                tt_ph[pid[ob[bot]]] += esc[bot]
-                tu_total += float(np.sum(esc[bot & ~scattered[ob]]))
-                path_w += (esc[top, None] * path[ob[top]]).sum(axis=0)
-                if edges is not None and np.any(top):
-                    ot = ob[top]
-                    rr = np.hypot(x[ot], y[ot])
-                    k = np.searchsorted(edges, rr, side="right") - 1
-                    inb = (k >= 0) & (k < nb)
-                    np.add.at(r_rho, (pid[ot[inb]] % _N_BATCHES, k[inb]), esc[top][inb])
-                    lw_rho += np.bincount(
-                        k[inb], weights=esc[top][inb] * path[ot[inb]].sum(axis=1), minlength=nb
-                    )
-                w[ob] *= r_o
-                uz[ob] = -uz[ob]
-            # internal interface: reflect or refract the whole packet
-            ib = hb[~outside]
-            if ib.size:
-                r_i = refl[~outside]
-                back = gen.random(ib.size) < r_i
-                ibr, ibt = ib[back], ib[~back]
-                uz[ibr] = -uz[ibr]
-                ratio = (n1 / n2)[~outside][~back]
-                ux[ibt] *= ratio
-                uy[ibt] *= ratio
-                uz[ibt] = np.sign(uz[ibt]) * cos_tr[~outside][~back]
-                lay[ibt] = nxt[~outside][~back]
-
-        # ---- Russian roulette and compaction
-        low = np.flatnonzero((w < weight_threshold) & (w > 0.0))
-        if low.size:
-            survive = gen.random(low.size) < roulette_chance
-            w[low] = np.where(survive, w[low] / roulette_chance, 0.0)
-        keep = w > 0.0
-        if not np.all(keep):
-            pid, x, y, z, ux, uy, uz, w, lay, scattered, path = (
-                a[keep] for a in (pid, x, y, z, ux, uy, uz, w, lay, scattered, path)
-            )
-    else:  # pragma: no cover - defensive
-        raise RuntimeError(f"Monte Carlo did not finish within {_MAX_STEPS} steps")
-
-    rd = float(rd_ph.mean())
-    tt = float(tt_ph.mean())
-    ddof = 1 if n_photons > 1 else 0
-    rd_se = float(np.std(rd_ph, ddof=ddof) / np.sqrt(n_photons))
-    tt_se = float(np.std(tt_ph, ddof=ddof) / np.sqrt(n_photons))
-    rd_total = float(rd_ph.sum())
-    mean_path = path_w / rd_total if rd_total > 0 else np.full(nl, np.nan)
-
-    rho_c = r_prof = r_prof_se = l_rho = None
-    if edges is not None:
-        area = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-        per_batch = r_rho / (n_photons / _N_BATCHES) / area
-        r_prof = r_rho.sum(axis=0) / n_photons / area
-        r_prof_se = per_batch.std(axis=0, ddof=1) / np.sqrt(_N_BATCHES)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            l_rho = lw_rho / r_rho.sum(axis=0)
-        rho_c = 0.5 * (edges[1:] + edges[:-1])
-
-    return MCResult(
-        n_photons=n_photons,
-        specular=float(specular),
-        specular_se=0.0,
-        diffuse_reflectance=rd,
-        diffuse_reflectance_se=rd_se,
-        total_transmittance=tt,
-        total_transmittance_se=tt_se,
-        unscattered_transmittance=tu_total / n_photons,
-        absorbed_per_layer=absorbed / n_photons,
-        mean_pathlength_cm=mean_path,
-        rho_cm=rho_c,
-        reflectance_per_cm2=r_prof,
-        reflectance_per_cm2_se=r_prof_se,
-        pathlength_at_rho_cm=l_rho,
-    )
+    def result(self, specular: float) -> MCResult:
+        """The run's :class:`MCResult`, per incident photon."""
+        n_photons, edges = self.n_photons, self.edges
+        ddof = 1 if n_photons > 1 else 0
+        rd_total = float(self.rd_ph.sum())
+        nl = self.path_w.size
+        rho_c = r_prof = r_prof_se = l_rho = None
+        if edges is not None:
+            area = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+            per_batch = self.r_rho / (n_photons / _N_BATCHES) / area
+            r_prof = self.r_rho.sum(axis=0) / n_photons / area
+            r_prof_se = per_batch.std(axis=0, ddof=1) / np.sqrt(_N_BATCHES)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                l_rho = self.lw_rho / self.r_rho.sum(axis=0)
+            rho_c = 0.5 * (edges[1:] + edges[:-1])
+        return MCResult(
+            n_photons=n_photons,
+            specular=float(specular),
+            specular_se=0.0,
+            diffuse_reflectance=float(self.rd_ph.mean()),
+            diffuse_reflectance_se=float(np.std(self.rd_ph, ddof=ddof) / np.sqrt(n_photons)),
+            total_transmittance=float(self.tt_ph.mean()),
+            total_transmittance_se=float(np.std(self.tt_ph, ddof=ddof) / np.sqrt(n_photons)),
+            unscattered_transmittance=self.tu_total / n_photons,
+            absorbed_per_layer=self.absorbed_w / n_photons,
+            mean_pathlength_cm=self.path_w / rd_total if rd_total > 0 else np.full(nl, np.nan),
+            rho_cm=rho_c,
+            reflectance_per_cm2=r_prof,
+            reflectance_per_cm2_se=r_prof_se,
+            pathlength_at_rho_cm=l_rho,
+        )
 
 
 def mc_slab(
@@ -475,7 +355,7 @@ def mc_slab(
 ) -> MCResult:
     r"""Monte Carlo reflectance and transmittance of one homogeneous slab.
 
-    Same conventions as :func:`~nirglucose.optics.adding_doubling.slab_rt`: a normally
+    Same conventions as :func:`~nirglucose.optics.reference.adding_doubling.slab_rt`: a normally
     incident pencil beam, the same ambient medium on both sides. ``thickness_cm =
     inf`` gives a semi-infinite medium (then ``mua_per_cm > 0``).
 

@@ -6,7 +6,7 @@ only the numba kernel it calls, compiled for one signature and cached on disk
 ever takes a few seconds), and imported lazily so that ``import nirglucose`` does not
 import numba.
 
-The kernel does what the numpy reference (``nirglucose.optics.lut.
+The kernel does what the numpy reference (``nirglucose.optics.lut.interpolate.
 _interpolate_node_lut_numpy``) does in a few dozen array passes over the whole slice,
 chunk by chunk of about 400 points, so that its scratch stays in the CPU's L1/L2 cache:
 
@@ -222,7 +222,9 @@ def node_reflectance(table, n_cells, ratio, axis_f, axis_i, mua_d, mua_s, mua_e,
     """R(rho) at every point of the simulator's layout, written to ``out``.
 
     Points are the flattened (n_rows, n_nodes) grid, row-major: point g belongs to node
-    g % n_nodes.
+    g % n_nodes. One long function on purpose: it is the compiled chunk loop, whose
+    scratch arrays must stay in local variables of one numba function to stay in the
+    CPU cache (module docstring).
 
     Parameters
     ----------

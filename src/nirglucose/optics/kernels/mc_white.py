@@ -43,6 +43,15 @@ Design choices, each for low or smooth noise:
   which cancels the u^2 term (bias O(h^4 R'''')) and vanishes at its edges (a photon's
   weight is continuous in its exit radius, for smooth common-random-number noise).
 
+Relation to the NumPy photon engine (:mod:`nirglucose.optics.reference.photon_engine`,
+the one reference engine, with pluggable tallies): same MCML physics, but this kernel
+stays separate and compiled because its random numbers are counter-based per photon and
+flight (common random numbers across the table's nodes), its optical depth is carried
+across the interface and its absorption is analog -- none of which a vectorised
+all-packets-per-step loop can give -- and because it must be tens of times faster (a few
+tens of microseconds per photon, against about 2 ms for the NumPy engine in skin). The
+reference engine validates it (``tests/optics/test_optics_mc_white.py``).
+
 Speed: about 0.3 us per scattering event on one core (numba), a few tens of
 microseconds per photon; :func:`white_mc_run` splits the photons into batches run on
 threads (the kernel releases the GIL) and joins them in batch order, so the result is
@@ -81,7 +90,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from ..exceptions import ConfigError
+from ...exceptions import ConfigError
 
 __all__ = [
     "SKIN_ANISOTROPY",
@@ -154,6 +163,11 @@ def _trace(seed, first, count, tau, q, g, n_rel, mua_ref, depths, r_lo, r_hi,  #
     of the photons escaping at ``r_lo <= r < r_hi``, and the numbers of photons escaping
     anywhere and transmitted (only when q = 0: the bottom layer is then empty space).
     Lengths in transport mean free paths of the skin.
+
+    One long function on purpose: it is the compiled per-photon loop (flight, boundary,
+    Fresnel escape, scattering, roulette, tally), and keeping the state in local
+    variables of one numba function is what makes it fast (helpers that return several
+    values allocate tuples inside the innermost loop).
     """
     n_dep = depths.size
     cap = 1024
@@ -346,11 +360,44 @@ class WhiteRun:
 def _n_threads(n_threads: int | None) -> int:
     if n_threads is not None:
         return max(1, int(n_threads))
-    env = os.environ.get("NIRGLUCOSE_MC_THREADS")
-    if env:
-        return max(1, int(env))
+    from ..lut.cache import mc_threads_from_env  # the optics' one reader of the environment
+
+    env = mc_threads_from_env()
+    if env is not None:
+        return env
     return max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                       else (os.cpu_count() or 1), 8))
+
+
+def _checked_run_args(skin_transport_thickness, musp_ratio, depths, radius_band, n_photons,
+                      mua_ref, g, first_photon) -> tuple:
+    """:func:`white_mc_run`'s inputs as (tau, q, depths, r_lo, r_hi), or ConfigError."""
+    tau = float(skin_transport_thickness)
+    q = float(musp_ratio)
+    dep = np.ascontiguousarray(np.atleast_1d(np.asarray(depths, dtype=float)))
+    r_lo, r_hi = (float(v) for v in radius_band)
+    checks = (
+        ("skin_transport_thickness", tau, np.isfinite(tau) and tau > 0, "(0, inf)"),
+        ("musp_ratio", q, np.isfinite(q) and q >= 0, "[0, inf)"),
+        ("mua_ref", float(mua_ref), float(mua_ref) >= 0, "[0, inf)"),
+        ("g", float(g), abs(float(g)) < 1, "(-1, 1)"),
+        ("depths", dep.tolist(), dep.ndim == 1 and bool(np.all((dep > 0) & (dep < tau))),
+         f"(0, {tau:g})"),
+        ("radius_band", (r_lo, r_hi), 0 <= r_lo < r_hi, "0 <= low < high"),
+    )
+    for name, v, ok, valid in checks:
+        if not ok:
+            raise ConfigError(f"{name} = {v!r} is out of range; valid range is {valid} [-]")
+    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
+        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
+    if isinstance(first_photon, bool) or not isinstance(first_photon, int | np.integer) \
+            or first_photon < 0:
+        raise ConfigError(f"first_photon = {first_photon!r} is invalid; expected an integer "
+                          f">= 0 [-]")
+    if float(mua_ref) == 0.0 and q > 0.0:
+        raise ConfigError("mua_ref = 0 never ends a photon in a semi-infinite medium; "
+                          "valid range is (0, inf) when musp_ratio > 0 [-]")
+    return tau, q, dep, r_lo, r_hi
 
 
 def white_mc_run(
@@ -428,31 +475,9 @@ def white_mc_run(
     >>> run.path.shape[1]
     3
     """
-    tau = float(skin_transport_thickness)
-    q = float(musp_ratio)
-    dep = np.ascontiguousarray(np.atleast_1d(np.asarray(depths, dtype=float)))
-    r_lo, r_hi = (float(v) for v in radius_band)
-    checks = (
-        ("skin_transport_thickness", tau, np.isfinite(tau) and tau > 0, "(0, inf)"),
-        ("musp_ratio", q, np.isfinite(q) and q >= 0, "[0, inf)"),
-        ("mua_ref", float(mua_ref), float(mua_ref) >= 0, "[0, inf)"),
-        ("g", float(g), abs(float(g)) < 1, "(-1, 1)"),
-        ("depths", dep.tolist(), dep.ndim == 1 and bool(np.all((dep > 0) & (dep < tau))),
-         f"(0, {tau:g})"),
-        ("radius_band", (r_lo, r_hi), 0 <= r_lo < r_hi, "0 <= low < high"),
-    )
-    for name, v, ok, valid in checks:
-        if not ok:
-            raise ConfigError(f"{name} = {v!r} is out of range; valid range is {valid} [-]")
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    if isinstance(first_photon, bool) or not isinstance(first_photon, int | np.integer) \
-            or first_photon < 0:
-        raise ConfigError(f"first_photon = {first_photon!r} is invalid; expected an integer "
-                          f">= 0 [-]")
-    if float(mua_ref) == 0.0 and q > 0.0:
-        raise ConfigError("mua_ref = 0 never ends a photon in a semi-infinite medium; "
-                          "valid range is (0, inf) when musp_ratio > 0 [-]")
+    tau, q, dep, r_lo, r_hi = _checked_run_args(skin_transport_thickness, musp_ratio,
+                                                depths, radius_band, n_photons, mua_ref, g,
+                                                first_photon)
     n_rel = float(n_tissue) / float(n_ambient)
     n, first = int(n_photons), int(first_photon)
     starts = list(range(first, first + n, _BATCH_PHOTONS))

@@ -7,7 +7,8 @@ that make it the right tool for partial path lengths:
 
 * absorption is applied continuously along each step, w <- w exp(-mua s) (the
   microscopic Beer-Lambert law), instead of as a fraction at each interaction, so a
-  photon's trajectory does not depend on mua;
+  photon's trajectory does not depend on mua (the photon engine's ``"continuous"``
+  model, :mod:`~nirglucose.optics.reference.photon_engine`);
 * for every weight packet that escapes inside the detector ring it records the escaping
   weight and the path it travelled in each layer.
 
@@ -39,8 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..exceptions import ConfigError
-from .monte_carlo import _fresnel, _hg_cos
+from ...exceptions import ConfigError
+from .photon_engine import Packets, Stack, run_photons
 
 __all__ = ["DetectedPaths", "mc_detected_paths", "reweight_detected"]
 
@@ -185,96 +186,46 @@ def mc_detected_paths(
         raise ConfigError("refractive indices must be positive [-]")
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
-    z_top = np.concatenate([[0.0], np.cumsum(thick)])
-    z_bot = np.concatenate([np.cumsum(thick), [np.inf]])
-    specular = ((n_tissue - n_ambient) / (n_tissue + n_ambient)) ** 2
-    n = int(n_photons)
-    pid = np.arange(n)
-    x, y, z = np.zeros(n), np.zeros(n), np.zeros(n)
-    ux, uy, uz = np.zeros(n), np.zeros(n), np.ones(n)
-    w = np.full(n, 1.0 - specular)
-    lay = np.zeros(n, dtype=np.intp)
-    path = np.zeros((n, n_layers))
-    det_w, det_p, det_b = [], [], []
-    escaped = 0.0
-
-    for _ in range(_MAX_STEPS):
-        m = w.size
-        if m == 0:
-            break
-        s = -np.log1p(-gen.random(m)) / mus[lay]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            db = np.where(uz > 0, (z_bot[lay] - z) / uz,
-                          np.where(uz < 0, (z_top[lay] - z) / uz, np.inf))
-        hit = s >= db
-        step = np.where(hit, db, s)
-        x += step * ux
-        y += step * uy
-        z += step * uz
-        path[np.arange(m), lay] += step
-        w *= np.exp(-mua0[lay] * step)  # [2], continuous absorption
-
-        it = np.flatnonzero(~hit)  # ---- scattering
-        if it.size:
-            cos_t = _hg_cos(gg[lay[it]], gen.random(it.size))
-            psi = 2.0 * np.pi * gen.random(it.size)
-            sin_t = np.sqrt(1.0 - cos_t * cos_t)
-            cp, sp = np.cos(psi), np.sin(psi)
-            ux0, uy0, uz0 = ux[it], uy[it], uz[it]
-            vert = np.abs(uz0) > 1.0 - 1e-12
-            tmp = np.sqrt(np.where(vert, 1.0, 1.0 - uz0 * uz0))
-            nx = np.where(vert, sin_t * cp, sin_t * (ux0 * uz0 * cp - uy0 * sp) / tmp + ux0 * cos_t)
-            ny = np.where(vert, sin_t * sp, sin_t * (uy0 * uz0 * cp + ux0 * sp) / tmp + uy0 * cos_t)
-            nz = np.where(vert, np.sign(uz0) * cos_t, -sin_t * cp * tmp + uz0 * cos_t)
-            norm = np.sqrt(nx * nx + ny * ny + nz * nz)
-            ux[it], uy[it], uz[it] = nx / norm, ny / norm, nz / norm
-
-        hb = np.flatnonzero(hit)  # ---- boundaries
-        if hb.size:
-            up = uz[hb] < 0
-            surface = up & (lay[hb] == 0)
-            top = hb[surface]
-            if top.size:
-                z[top] = 0.0
-                refl, _ = _fresnel(np.abs(uz[top]), np.full(top.size, float(n_tissue)),
-                                   np.full(top.size, float(n_ambient)))
-                esc = w[top] * (1.0 - refl)
-                escaped += float(esc.sum())
-                r = np.hypot(x[top], y[top])
-                inside = (r >= r_in) & (r < r_out)
-                if np.any(inside):
-                    det_w.append(esc[inside])
-                    det_p.append(path[top[inside]].copy())
-                    det_b.append(pid[top[inside]] % _N_BATCHES)
-                w[top] *= refl
-                uz[top] = -uz[top]
-            cross = hb[~surface]
-            if cross.size:
-                down = uz[cross] > 0
-                z[cross] = np.where(down, z_bot[lay[cross]], z_top[lay[cross]])
-                lay[cross] += np.where(down, 1, -1)
-
-        low = np.flatnonzero(w < weight_threshold)  # ---- roulette
-        if low.size:
-            survive = gen.random(low.size) < roulette_chance
-            w[low] = np.where(survive, w[low] / roulette_chance, 0.0)
-        keep = w > 0.0
-        if not np.all(keep):
-            pid, x, y, z, ux, uy, uz, w, lay, path = (
-                a[keep] for a in (pid, x, y, z, ux, uy, uz, w, lay, path)
-            )
-    else:  # pragma: no cover - defensive
-        raise RuntimeError(f"Monte Carlo did not finish within {_MAX_STEPS} steps")
-
+    stack = Stack.from_layers(mua0, mus, gg, np.append(thick, np.inf),
+                              np.full(n_layers, float(n_tissue)), float(n_ambient))
+    tally = _RingTally(r_in, r_out)
+    run_photons(stack, tally, int(n_photons), gen, absorption="continuous",
+                weight_threshold=weight_threshold, roulette_chance=roulette_chance,
+                max_steps=_MAX_STEPS)
     return DetectedPaths(
-        weight=np.concatenate(det_w) if det_w else np.zeros(0),
-        pathlength_cm=np.concatenate(det_p) if det_p else np.zeros((0, n_layers)),
-        batch=np.concatenate(det_b) if det_b else np.zeros(0, dtype=np.intp),
-        n_photons=n,
+        weight=np.concatenate(tally.det_w) if tally.det_w else np.zeros(0),
+        pathlength_cm=np.concatenate(tally.det_p) if tally.det_p else np.zeros((0, n_layers)),
+        batch=np.concatenate(tally.det_b) if tally.det_b else np.zeros(0, dtype=np.intp),
+        n_photons=int(n_photons),
         ring_area_cm2=float(np.pi * (r_out**2 - r_in**2)),
         mua_ref_per_cm=mua0,
-        diffuse_reflectance=escaped / n,
+        diffuse_reflectance=tally.escaped_w / int(n_photons),
     )
+
+
+class _RingTally:
+    """The weight escaping through the top, and each packet escaping at r_in <= r < r_out
+    with its path per layer and batch (0-19, for standard errors)."""
+
+    def __init__(self, r_in: float, r_out: float) -> None:
+        self.r_in, self.r_out = r_in, r_out
+        self.det_w: list[NDArray[np.float64]] = []
+        self.det_p: list[NDArray[np.float64]] = []
+        self.det_b: list[NDArray[np.intp]] = []
+        self.escaped_w = 0.0
+
+    def absorbed(self, layer, weight) -> None:  # continuous absorption: not called
+        pass
+
+    def escaped(self, pk: Packets, ob, esc, top) -> None:
+        esc, ot = esc[top], ob[top]  # the last layer is semi-infinite: all leave by the top
+        self.escaped_w += float(esc.sum())
+        r = np.hypot(pk.x[ot], pk.y[ot])
+        inside = (r >= self.r_in) & (r < self.r_out)
+        if np.any(inside):
+            self.det_w.append(esc[inside])
+            self.det_p.append(pk.path[ot[inside]].copy())
+            self.det_b.append(pk.pid[ot[inside]] % _N_BATCHES)
 
 
 def reweight_detected(

@@ -28,8 +28,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..exceptions import ConfigError
-from .tissue import SUBCUTIS, BandSpectra
+from ...exceptions import ConfigError
+from ..tissue import SUBCUTIS, BandSpectra
 
 __all__ = ["band_detected_fraction", "band_detected_fraction_lut"]
 
@@ -254,7 +254,7 @@ def band_detected_fraction_lut(
     """Band-averaged detected fraction of the ``rte-lut`` model, (n, n_led).
 
     The layer optics in one compiled pass, then the table kernel
-    (:func:`nirglucose.optics._lut_kernel.node_reflectance`), then the band weights:
+    (:func:`nirglucose.optics.kernels.lut_kernel.node_reflectance`), then the band weights:
     equal (to rounding) to weighting ``detected_fraction('rte-lut', tissue_optics(...))``
     over each band. Parameters as :func:`band_detected_fraction`, with ``node_lut`` the
     :class:`~nirglucose.optics.lut.NodeLUT` of the scenario's band nodes and
@@ -265,9 +265,6 @@ def band_detected_fraction_lut(
     ConfigError
         If a snapshot's optics fall outside the table (the message names the axis).
     """
-    from . import lut as lut_mod
-    from ._lut_kernel import node_reflectance
-
     n_led, n_pts = spectra.nodes_nm.shape
     if tuple(node_lut.node_shape) != (n_led, n_pts):
         raise ConfigError(f"the node table is for nodes {node_lut.node_shape}, "
@@ -295,6 +292,22 @@ def band_detected_fraction_lut(
     )
     t_cm = vec(skin_thickness_cm, (n,))
     ln_t = np.log(t_cm)
+    out = _table_reflectance(node_lut, (n_led, n_pts, n), t_cm, ln_t,
+                             mua_d, mua_s, mua_e, musp_d, musp_s)
+    weights = np.asarray(spectra.weights) * float(detector_area_cm2)
+    return (weights.reshape(k, 1) * out.reshape(k, n)).reshape(n_led, n_pts, n).sum(axis=1).T
+
+
+def _table_reflectance(node_lut, shape, t_cm, ln_t, mua_d, mua_s, mua_e, musp_d, musp_s):
+    """R(rho) of every (node, row) from the node table, node-major, (n_led * n_pts * n,).
+
+    Outside the table the NumPy reference path names the axis and raises ConfigError.
+    """
+    from ..lut import interpolate as lut_mod
+    from .lut_kernel import node_reflectance
+
+    n_led, n_pts, n = shape
+    k = n_led * n_pts
     out = np.empty(n * k)
     # node by node: each call reads one node's table (a few MB, cache-resident), where
     # row-major points would jump between all the nodes' tables
@@ -317,5 +330,4 @@ def band_detected_fraction_lut(
             musp_subcutis_per_cm=rowmajor(musp_s), skin_thickness_cm=t_cm,
         )
         raise ConfigError("the skin optics fall outside the look-up table")  # pragma: no cover
-    weights = np.asarray(spectra.weights) * float(detector_area_cm2)
-    return (weights.reshape(k, 1) * out.reshape(k, n)).reshape(n_led, n_pts, n).sum(axis=1).T
+    return out
