@@ -38,10 +38,7 @@ def _mc_hashes() -> dict:
 
     from nirglucose.optics import mc_layers, mc_slab
 
-    try:  # the module's path before and after issue 22
-        from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
-    except ImportError:
-        from nirglucose.optics.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
 
     out = {}
     res = mc_layers([1.0, 0.3, 2.0], [120.0, 80.0, 60.0], [0.9, 0.8, 0.7], [0.01, 0.05, 0.1],
