@@ -42,7 +42,7 @@ def _row(adc, ref, pmf=NOMINAL_PMF):
 
 @pytest.fixture(scope="module")
 def small():
-    return ng.simulate("paper", n_subjects=15, per_subject=2, seed=3)
+    return ng.simulate("wearable", n_subjects=15, per_subject=2, seed=3)
 
 
 def test_count_names_and_categories():
@@ -121,7 +121,7 @@ def test_scalar_kernels():
 
 
 def test_simulated_data_gives_finite_features(small):
-    for preset in ("paper", "physical", "lab", "field"):
+    for preset in ("wearable", "physical", "lab", "field"):  # the study's 12-entry vector
         ds = ng.simulate(preset, n_subjects=6, per_subject=2, seed=1)
         feats = enhanced_beer_lambert(ds)
         assert feats.shape == (12, 56) and list(feats.columns) == list(FEATURE_NAMES)

@@ -359,6 +359,16 @@ class DeviceSchema:
         """:meth:`raw` then :meth:`split`."""
         return self.split(self.raw(X))
 
+    def stacked(self, Xa: np.ndarray) -> np.ndarray:
+        """(n, k + m) absorbances then physiology, from validated raw columns."""
+        m = self.split(Xa)
+        return np.hstack([m.absorbance, m.physiology])
+
+    @property
+    def stacked_names(self) -> tuple[str, ...]:
+        """Names of :meth:`stacked`'s columns: ``A_<nm>`` per LED, then the physiology."""
+        return tuple(f"A_{w}" for w in self.labels) + tuple(self.physiology)
+
 
 def check_fit_size(n_rows: int, groups: Any = None) -> None:
     """The one fitting-size policy of every model.
@@ -464,13 +474,11 @@ class MeasurementTransformer(TransformerMixin, BaseEstimator):
         from .models._checks import require_fitted
 
         require_fitted(self, "schema_")
-        m = self.schema_.measurements(as_raw_input(self, X, self.schema_))
-        return np.hstack([m.absorbance, m.physiology])
+        return self.schema_.stacked(self.schema_.raw(as_raw_input(self, X, self.schema_)))
 
     def get_feature_names_out(self, input_features=None) -> np.ndarray:
         """``A_<nm>`` for each LED, then the physiological column names."""
-        s = self.schema_
-        return np.asarray([f"A_{w}" for w in s.labels] + list(s.physiology), dtype=object)
+        return np.asarray(self.schema_.stacked_names, dtype=object)
 
 
 def _is_device_frame(frame: pd.DataFrame) -> bool:

@@ -809,14 +809,12 @@ class PLSBaseline(_LinearBase):
         self.adc_bits = adc_bits
 
     def _features(self, Xa: np.ndarray) -> np.ndarray:
-        m = self.schema_.split(Xa)
-        return np.hstack([m.absorbance, m.physiology])
+        return self.schema_.stacked(Xa)
 
     @property
     def input_names_(self) -> tuple[str, ...]:
         """Names of the PLS inputs: ``A_<nm>`` per LED, then the physiological columns."""
-        s = self.schema_
-        return tuple(f"A_{w}" for w in s.labels) + s.physiology
+        return self.schema_.stacked_names
 
     def fit(self, X, y=None, groups=None):
         """Fit on measurements (same inputs as :meth:`EnhancedBeerLambert.fit`)."""

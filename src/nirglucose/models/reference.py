@@ -60,14 +60,12 @@ class _ReferenceBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         return self._inputs(predict_input(self, X))
 
     def _inputs(self, Xa: np.ndarray) -> np.ndarray:
-        m = self.schema_.split(Xa)
-        return np.hstack([m.absorbance, m.physiology])
+        return self.schema_.stacked(Xa)
 
     @property
     def input_names_(self) -> tuple[str, ...]:
         """Names of the inputs: ``A_<nm>`` per LED, then the physiological columns."""
-        s = self.schema_
-        return tuple(f"A_{w}" for w in s.labels) + s.physiology
+        return self.schema_.stacked_names
 
     def _check_width(self, name: str, width: int) -> None:
         """Refuse a state whose input width is not the saved device's (DataError)."""
