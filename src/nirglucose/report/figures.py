@@ -1058,10 +1058,20 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         add("training", "7", "Training dynamics", "Training and validation loss per epoch.",
             None, note="No histories.json in the results directory: figure not drawn.")
     else:
-        hist = {m: results.histories[m] for m in model_order(results.histories)}
+        hist = {m: results.histories[m] for m in model_order(results.histories)
+                if not is_ablation_row(m)}
+        has_val = any("val_loss" in h and h["val_loss"].notna().any() for h in hist.values())
         add("training", "7", "Training dynamics",
-            ("Training (solid) and validation (dashed) loss per epoch of each network, and "
-             "each loss term of the physics-informed ones." if hist else
+            ((f"Training (solid){' and validation (dashed)' if has_val else ''} loss per "
+              "epoch of each network, thick the total and thin each term of the "
+              "physics-informed ones (a term equal to another curve is named in that "
+              "curve's legend entry rather than drawn under it). Losses are mean squared "
+              "errors of glucose standardised on the training rows, so 1 is the training "
+              "mean's loss; physics terms are in their own squared residual units. "
+              + ("" if has_val else "These fits used no validation split, so there are no "
+                 "validation curves. ")
+              + "The physics-ablation refits are left out: their physics weight is 0, so "
+              "their total is their MSE.") if hist else
              "No networks in this run, so there are no training curves to show."),
             lambda: training.figure_training_dynamics(hist),
             note=None if hist else "No networks in this run.")
@@ -1070,13 +1080,14 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     radar_models = competitors(models)
     scores = radar_scores(results.metrics, radar_models)
     add("radar", "8", "Normalised scores",
-        "Each model's RMSE, MARD, Clarke zone A and share within ±15 % as a ratio to the "
-        "best model shown (1 = best), and its parameter count and latency scored 1 for the "
+        "One panel per model (its polygon in colour, the other models' outlines in grey "
+        "for comparison), with its mean score in the title: each model's RMSE, MARD, "
+        "Clarke zone A and share within ±15 % as a ratio to the best model shown "
+        "(1 = best), and its parameter count and latency scored 1 for the "
         "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound, and the "
         "training mean, no skill, are references rather than competitors and are left "
         "out; so are the ablation rows).",
-        lambda: _figure_one(lambda ax: tradeoffs.plot_radar(scores, ax=ax), (7.6, 5.0),
-                            plot_style, polar=True) if len(scores) else None,
+        lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
         note=None if len(scores) else "No model besides the oracle.")
     depth, left_out = physics_depth_table(results.metrics, models)
     refs = reference_values(results.metrics, models)
