@@ -1302,7 +1302,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
             None, note="No importance.csv in the results directory: figure not drawn.")
 
     # 12: forest
-    ft = forest_table(results.metrics, models)
+    ft = forest_table(results.metrics, [m for m in models if not is_ablation_row(m)])
     add("forest", "12", "RMSE with 95 % CI",
         "Each model's RMSE with its 95 % cluster-bootstrap confidence interval, next to "
         "the value the study reported from its single 48-snapshot test set (open diamonds).",
