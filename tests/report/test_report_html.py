@@ -17,10 +17,11 @@ from nirglucose.report import build_report, load_results
 
 #: Every figure of the report: anchor key -> printed number.
 FIGURES = {
-    "data": "1", "environment": "2", "physiology": "3", "pipeline": "4", "clarke": "5",
-    "parkes_type1": "6", "parkes_type2": "7", "bland_altman": "8", "linearity": "9",
-    "training": "10", "radar": "11", "physics_depth": "12", "efficiency": "13",
-    "wavelengths": "14", "forest": "15",
+    "data": "1", "environment": "2", "physiology": "3", "pipeline": "4",
+    "architecture": "5", "features": "6", "clarke": "7", "parkes_type1": "8",
+    "parkes_type2": "9", "bland_altman": "10", "linearity": "11", "training": "12",
+    "radar": "13", "physics_depth": "14", "efficiency": "15", "performance": "16",
+    "wavelengths": "17", "forest": "18",
 }
 
 

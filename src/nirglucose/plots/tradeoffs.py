@@ -33,6 +33,7 @@ from .style import (
 )
 
 __all__ = [
+    "figure_radar_grid",
     "plot_radar",
     "plot_physics_depth",
     "plot_efficiency",
@@ -134,6 +135,59 @@ def plot_radar(scores: pd.DataFrame, *, title: str | None = None, ax: Axes | Non
     ax.set_title(title if title is not None else "Normalised scores (1 = best on each axis)",
                  pad=18)
     return ax
+
+
+#: Outline colour of the other models in a radar small multiple (context, not data ink).
+_OTHERS_GREY = "#C8C8C8"
+
+
+def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
+    """Radar small multiples: one polar panel per model, the others in thin grey.
+
+    Parameters
+    ----------
+    scores : pandas.DataFrame
+        As for :func:`plot_radar`. [-]
+    ncols : int
+        Panels per row. [-]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One polar Axes per model: its polygon filled in its colour, every other model's
+        outline thin and grey for comparison, the mean score in the title.
+    """
+    models = [str(m) for m in scores.index]
+    ncols = max(1, min(ncols, len(models)))
+    nrows = -(-len(models) // ncols)
+    names = [str(c) for c in scores.columns]
+    n = len(names)
+    angles = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    closed = np.append(angles, angles[:1])
+    colors = model_colors(scores.index)
+    radii = {m: np.append(r := np.nan_to_num(scores.loc[m].to_numpy(float), nan=0.0), r[:1])
+             for m in models}
+    with plot_style():
+        fig = Figure(figsize=(3.3 * ncols, 3.1 * nrows), layout="constrained")
+        for i, model in enumerate(models):
+            ax = fig.add_subplot(nrows, ncols, i + 1, projection="polar")
+            for other in models:
+                if other != model:
+                    ax.plot(closed, radii[other], color=_OTHERS_GREY, lw=0.7, zorder=1)
+            ax.plot(closed, radii[model], color=colors[model], lw=1.8, zorder=3,
+                    marker=model_marker(model), ms=3.5)
+            ax.fill(closed, radii[model], color=colors[model], alpha=0.25, zorder=2)
+            ax.set_theta_offset(np.pi / 2.0)
+            ax.set_theta_direction(-1)
+            ax.set_xticks(angles)
+            ax.set_xticklabels(names, fontsize=7.5)
+            ax.tick_params(axis="x", pad=1)
+            ax.set_ylim(0.0, 1.05)
+            ax.set_yticks([0.5, 1.0])
+            ax.set_yticklabels([])
+            mean = float(np.nanmean(scores.loc[model].to_numpy(float)))
+            ax.set_title(f"{model_label(model)}\nmean score {mean:.2f}", fontsize=9, pad=10)
+    return fig
 
 
 @styled

@@ -27,12 +27,28 @@ from .style import (
 )
 
 __all__ = ["TOTAL_LOSS_COLUMNS", "loss_term_columns", "plot_training_history",
-           "figure_training_dynamics", "NO_NETWORKS_TEXT"]
+           "figure_training_dynamics", "NO_NETWORKS_TEXT",
+           "LOSS_AXIS_LABEL"]
 
 #: Columns of a history holding the total losses.
 TOTAL_LOSS_COLUMNS: tuple[str, str] = ("train_loss", "val_loss")
 
 _METRIC_SUFFIXES = ("_mgdl", "_pct")
+
+#: Loss axis label: every network standardises glucose (zero mean, unit variance on the
+#: training rows) and its data term is the mean squared error there, so 1 is the
+#: training mean's loss; physics terms are mean squares of their own residuals.
+LOSS_AXIS_LABEL = "loss [MSE, standardised units²]"
+
+#: Relative tolerance under which two loss curves count as one. [-]
+_SAME_CURVE_RTOL = 1e-3
+
+
+def _same_curve(a: np.ndarray, b: np.ndarray) -> bool:
+    ok = np.isfinite(a) & np.isfinite(b)
+    return bool(ok.any() and np.array_equal(np.isfinite(a), np.isfinite(b))
+                and np.allclose(a[ok], b[ok], rtol=_SAME_CURVE_RTOL, atol=0.0))
+
 
 #: Text of the panel drawn when a run has no networks.
 NO_NETWORKS_TEXT = "no networks in this run"
@@ -102,21 +118,34 @@ def plot_training_history(
     else:
         epoch = np.arange(1, len(history) + 1, dtype=float)
     color = color or OKABE_ITO["blue"]
-    values = []
-    for col, ls, lab in (("train_loss", "-", "train (total)"),
-                         ("val_loss", "--", "validation (total)")):
+    # Each curve: (split, name, values, colour, total?); a curve equal to one already
+    # kept (an SDNN's mse is its total; a physics term that is a single sub-term) is not
+    # drawn again but named in that curve's legend entry, so no entry is hidden.
+    curves: list[list] = []
+    for col, split in (("train_loss", "train"), ("val_loss", "validation")):
         if col in history.columns:
-            y = history[col].to_numpy(float)
-            ax.plot(epoch, y, color=color, ls=ls, lw=1.6, label=lab, zorder=3)
-            values.append(y)
+            curves.append([split, "total", history[col].to_numpy(float), color, True])
     term_colors = [c for c in _TERM_COLORS if c.lower() != color.lower()]
     terms: dict[str, str] = {}  # term -> colour, shared by its train and val curves
     for col in loss_term_columns(history):
         split, term = col.split("_", 1)
-        c = terms.setdefault(term, term_colors[len(terms) % len(term_colors)])
+        split = "validation" if split == "val" else "train"
         y = history[col].to_numpy(float)
-        ax.plot(epoch, y, color=c, ls="--" if split == "val" else "-", lw=0.9,
-                label=f"{'validation' if split == 'val' else 'train'} {term}")
+        if not np.isfinite(y).any():
+            continue
+        same = next((c for c in curves if c[0] == split and _same_curve(c[2], y)), None)
+        if same is not None:
+            same[1] += f" = {term}"
+            continue
+        c = terms.setdefault(term, term_colors[len(terms) % len(term_colors)])
+        curves.append([split, term, y, c, False])
+    values = []
+    for split, name, y, c, total in curves:
+        if not np.isfinite(y).any():
+            continue  # e.g. no validation split: no empty legend entry
+        ax.plot(epoch, y, color=c, ls="--" if split == "validation" else "-",
+                lw=1.8 if total else 0.9, zorder=3 if total else 2,
+                label=f"{split} {'(' + name + ')' if total else name}")
         values.append(y)
     finite = np.concatenate(values) if values else np.array([])
     finite = finite[np.isfinite(finite)]
@@ -131,7 +160,7 @@ def plot_training_history(
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0),
                   bbox_transform=below, ncol=2, frameon=False)
     ax.set_xlabel("epoch [-]")
-    ax.set_ylabel("loss [model units]")
+    ax.set_ylabel(LOSS_AXIS_LABEL)
     ax.set_title(title if title is not None else "Training dynamics")
     return ax
 

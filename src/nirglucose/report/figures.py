@@ -61,6 +61,11 @@ __all__ = [
     "environment_panels",
     "physiology_panels",
     "render_figures",
+    "ARCHITECTURE_MODELS",
+    "fitted_architectures",
+    "feature_categories",
+    "ebl_feature_table",
+    "performance_table",
 ]
 
 logger = logging.getLogger(__name__)
@@ -362,6 +367,115 @@ def load_results(results_dir: str | Path) -> Results:
 
 
 # --------------------------------------------------------------------------- helpers
+
+#: Model families of the architecture figure, in the study's order.
+ARCHITECTURE_MODELS: Final = ("ebl", "original-pinn", "optimized-pinn", "rte-pinn",
+                              "selective-rte-pinn", "sdnn")
+
+
+def _module_blocks(module) -> list[tuple[str, str]]:
+    """Blocks of a fitted torch module: each top-level child with its layer widths."""
+    import torch.nn as nn
+
+    inner = getattr(module, "inner", module)
+    blocks: list[tuple[str, str]] = []
+    for name, child in inner.named_children():
+        if isinstance(child, nn.MultiheadAttention):
+            blocks.append((name, f"attention {child.embed_dim}-d, {child.num_heads} head(s)"))
+            continue
+        linears = [m for m in child.modules() if isinstance(m, nn.Linear)]
+        if not linears:
+            continue  # norms, dropout: no widths to show
+        widths = [linears[0].in_features] + [m.out_features for m in linears]
+        drop = [m.p for m in child.modules() if isinstance(m, nn.Dropout) and m.p > 0]
+        blocks.append((name, "→".join(str(w) for w in widths)
+                       + (f", dropout {drop[0]:g}" if drop else "")))
+    return blocks
+
+
+def fitted_architectures(dataset, preset: str | None,
+                         models: Sequence[str] = ARCHITECTURE_MODELS
+                         ) -> dict[str, tuple[list[tuple[str, str]], int]]:
+    """Layer sizes of each model family, read from models fitted for one epoch.
+
+    Each model is built with the run's tuned parameters
+    (:func:`nirglucose.models.tuned_params`) and fitted on ``dataset`` for one epoch
+    (the sizes do not depend on training), so the diagram shows the widths that ran.
+    """
+    from ..models import make_model, tuned_params
+
+    out: dict[str, tuple[list[tuple[str, str]], int]] = {}
+    for name in models:
+        params = dict(tuned_params(name, preset)) if preset else {}
+        if name != "ebl":
+            params["max_epochs"] = 1
+        m = make_model(name, **params).fit(dataset)
+        if name == "ebl":
+            schema = m.schema_
+            n_a = len(schema.labels)
+            n_p = int(m.n_features_in_) - n_a
+            blocks = [("inputs", f"{n_a} absorbances + {n_p} physiology"),
+                      ("features", f"{len(m.table_)} engineered (Beer–Lambert)"),
+                      ("standardise", f"{len(m.table_)}"),
+                      ("ridge", f"{len(m.table_)}→1, α = {m.alpha_:.0e}"),
+                      ("output", "glucose [mg/dL]")]
+        else:
+            blocks = [("inputs", f"{m.n_features_in_} columns")] + _module_blocks(m.module_) \
+                + [("output", "glucose [mg/dL]")]
+        out[name] = (blocks, int(m.n_parameters))
+    return out
+
+
+def ebl_feature_table(dataset, preset: str | None) -> tuple[tuple, int, int]:
+    """The Enhanced Beer–Lambert features of ``dataset``'s device, from a fitted model.
+
+    Returns
+    -------
+    tuple
+        (feature table of :func:`nirglucose.features.feature_table`, LED channels,
+        physiological entries).
+    """
+    from ..models import make_model, tuned_params
+
+    m = make_model("ebl", **(tuned_params("ebl", preset) if preset else {})).fit(dataset)
+    n_a = len(m.schema_.labels)
+    return tuple(m.table_), n_a, int(m.n_features_in_) - n_a
+
+
+#: What each feature operation (:attr:`nirglucose.features.FeatureSpec.op`) reads.
+_OP_SOURCE: Final = {"A": "absorbance", "lin": "absorbance", "AA": "absorbance",
+                     "w": "both", "envA": "both", "pmf": "physiology", "env2": "physiology"}
+
+
+def feature_categories(table) -> tuple[dict[str, list[str]], dict[str, str]]:
+    """Feature names by category (table order), and what each category is computed from.
+
+    The source is ``"absorbance"``, ``"physiology"`` or ``"both"``, from the operations
+    of the category's features (``"both"`` when unknown or mixed).
+    """
+    cats: dict[str, list[str]] = {}
+    src: dict[str, set[str]] = {}
+    for spec in table:
+        cats.setdefault(spec.category, []).append(spec.name)
+        op = spec.op[0] if spec.op else None
+        src.setdefault(spec.category, set()).add(_OP_SOURCE.get(op, "both"))
+    return cats, {c: next(iter(s)) if len(s) == 1 else "both" for c, s in src.items()}
+
+
+def performance_table(metrics_by_preset: Mapping[str, pd.DataFrame],
+                      models: Sequence[str]) -> pd.DataFrame:
+    """Long table of the performance panel: one row per preset and model."""
+    cols = ("rmse_mgdl", "rmse_ci_low", "rmse_ci_high", "mard_pct", "n_parameters",
+            "latency_single_ms")
+    rows = []
+    for preset, met in metrics_by_preset.items():
+        m = met.drop_duplicates("model").set_index("model")
+        for model in models:
+            if model in m.index:
+                rows.append({"preset": preset, "model": model,
+                             **{c: m.at[model, c] for c in cols if c in m.columns}})
+    return pd.DataFrame(rows)
+
 
 
 def model_order(models: Iterable[str]) -> list[str]:
@@ -879,7 +993,8 @@ def _adc_by_wavelength(frame: pd.DataFrame, wavelengths: Sequence[float]
 
 def render_figures(results: Results, figures_dir: str | Path | None = None,
                    formats: Sequence[str] = ("png", "svg"), *,
-                   include: Iterable[str] | None = None) -> list[RenderedFigure]:
+                   include: Iterable[str] | None = None,
+                   compare: Mapping[str, pd.DataFrame] | None = None) -> list[RenderedFigure]:
     """Build every figure of the report from loaded results.
 
     Parameters
@@ -893,13 +1008,16 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         File formats written to ``figures_dir``. [-]
     include : iterable of str, optional
         Keys of the figures to render (``"clarke"``, ``"training"``, ...); all by default.
+    compare : mapping of str to pandas.DataFrame, optional
+        Metrics of each preset of a multi-preset run (the primary first): the
+        performance panel then shows every preset on shared axes.
 
     Returns
     -------
     list of RenderedFigure
         In page order; a figure whose inputs are missing has no PNG and a ``note``.
     """
-    from ..plots import agreement, data, forest, grids, pipeline, tradeoffs, training
+    from ..plots import agreement, architecture, data, forest, grids, pipeline, tradeoffs, training
     from ..plots import wavelengths as wl_plots
     from ..plots.style import figure_bytes, plot_style, save_figure
 
@@ -998,6 +1116,42 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         add("pipeline", "2", "Data-generation pipeline", "The simulator's layers.", None,
             note="No resolved configuration in the results: diagram not drawn.")
 
+    # model architectures and the feature engineering, from models fitted for one epoch
+    arch_models = [m for m in ARCHITECTURE_MODELS if m in models] or list(ARCHITECTURE_MODELS)
+    if ds is not None and not user_data and (wanted is None or wanted & {"architecture",
+                                                                        "features"}):
+        try:
+            archs = fitted_architectures(ds, results.meta.get("preset"), arch_models)
+            arch_err = None
+        except (ImportError, ValueError, RuntimeError) as exc:
+            archs, arch_err = {}, f"Models could not be built on this dataset: {exc}"
+    else:
+        archs, arch_err = {}, "No simulated dataset in the results: diagram not drawn."
+    add("architecture", "2b", "Model architectures",
+        "One block diagram per model family, inputs at the top and glucose at the bottom; "
+        "the layer widths (a→b→c: the Linear layers of each block) and parameter counts "
+        "are read from each model built with this preset's tuned parameters and fitted "
+        "for one epoch on this run's dataset, so they are the sizes that ran.",
+        (lambda: architecture.figure_architectures(archs)) if archs else None,
+        note=arch_err)
+    feat: dict[str, list[str]] = {}
+    feat_src: dict[str, str] = {}
+    n_ch = n_phys = 0
+    if ds is not None and not user_data and (wanted is None or "features" in wanted):
+        try:
+            table, n_ch, n_phys = ebl_feature_table(ds, results.meta.get("preset"))
+            feat, feat_src = feature_categories(table)
+        except (ImportError, ValueError) as exc:
+            logger.warning("feature table not built: %s", exc)
+    add("features", "2c", "Feature engineering",
+        f"How the Enhanced Beer–Lambert model turns the {n_ch} raw LED intensities and the "
+        f"{n_phys}-entry physiological vector into its "
+        f"{sum(len(v) for v in feat.values())} features, by category (count and first "
+        "names; the full list is features.feature_table).",
+        (lambda: architecture.figure_feature_engineering(
+            n_ch, n_phys, feat, feat_src)) if feat else None,
+        note=None if feat else "No simulated dataset in the results: diagram not drawn.")
+
     # 3, 4: error grids
     cg, clipped = error_grid_inputs(preds, pred_models, kind="clarke")
     clip_txt = f" ({clipped} negative predictions placed at 0 mg/dL)" if clipped else ""
@@ -1058,10 +1212,20 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         add("training", "7", "Training dynamics", "Training and validation loss per epoch.",
             None, note="No histories.json in the results directory: figure not drawn.")
     else:
-        hist = {m: results.histories[m] for m in model_order(results.histories)}
+        hist = {m: results.histories[m] for m in model_order(results.histories)
+                if not is_ablation_row(m)}
+        has_val = any("val_loss" in h and h["val_loss"].notna().any() for h in hist.values())
         add("training", "7", "Training dynamics",
-            ("Training (solid) and validation (dashed) loss per epoch of each network, and "
-             "each loss term of the physics-informed ones." if hist else
+            ((f"Training (solid){' and validation (dashed)' if has_val else ''} loss per "
+              "epoch of each network, thick the total and thin each term of the "
+              "physics-informed ones (a term equal to another curve is named in that "
+              "curve's legend entry rather than drawn under it). Losses are mean squared "
+              "errors of glucose standardised on the training rows, so 1 is the training "
+              "mean's loss; physics terms are in their own squared residual units. "
+              + ("" if has_val else "These fits used no validation split, so there are no "
+                 "validation curves. ")
+              + "The physics-ablation refits are left out: their physics weight is 0, so "
+              "their total is their MSE.") if hist else
              "No networks in this run, so there are no training curves to show."),
             lambda: training.figure_training_dynamics(hist),
             note=None if hist else "No networks in this run.")
@@ -1070,13 +1234,14 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     radar_models = competitors(models)
     scores = radar_scores(results.metrics, radar_models)
     add("radar", "8", "Normalised scores",
-        "Each model's RMSE, MARD, Clarke zone A and share within ±15 % as a ratio to the "
-        "best model shown (1 = best), and its parameter count and latency scored 1 for the "
+        "One panel per model (its polygon in colour, the other models' outlines in grey "
+        "for comparison), with its mean score in the title: each model's RMSE, MARD, "
+        "Clarke zone A and share within ±15 % as a ratio to the best model shown "
+        "(1 = best), and its parameter count and latency scored 1 for the "
         "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound, and the "
         "training mean, no skill, are references rather than competitors and are left "
         "out; so are the ablation rows).",
-        lambda: _figure_one(lambda ax: tradeoffs.plot_radar(scores, ax=ax), (7.6, 5.0),
-                            plot_style, polar=True) if len(scores) else None,
+        lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
         note=None if len(scores) else "No model besides the oracle.")
     depth, left_out = physics_depth_table(results.metrics, models)
     refs = reference_values(results.metrics, models)
@@ -1101,6 +1266,21 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         f"edge and are joined by a dashed line.{ref_txt}",
         lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
 
+    # performance panel: the presets on shared axes
+    by_preset = dict(compare) if compare else {
+        str(results.meta.get("preset") or "this run"): results.metrics}
+    perf_models = [m for m in models if not is_ablation_row(m) and m not in REFERENCE_ROWS]
+    perf = performance_table(by_preset, perf_models)
+    add("performance", "10b", "Performance comparison",
+        "Error metrics (RMSE with its 95 % CI, MARD), trainable parameters and "
+        "single-sample latency side by side"
+        + (f", one bar per preset ({', '.join(by_preset)}) on shared axes"
+           if len(by_preset) > 1 else "")
+        + "; parameters and latency on log scales. Latency is the median single-sample "
+        "prediction time measured during each run, so it depends on that machine's load.",
+        (lambda: architecture.figure_performance_panel(perf)) if len(perf) else None,
+        note=None if len(perf) else "No competitor models in this run.")
+
     # 11: wavelength importance
     if results.importance is not None and len(results.importance):
         mat = importance_matrix(results.importance, [m for m in models
@@ -1122,7 +1302,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
             None, note="No importance.csv in the results directory: figure not drawn.")
 
     # 12: forest
-    ft = forest_table(results.metrics, models)
+    ft = forest_table(results.metrics, [m for m in models if not is_ablation_row(m)])
     add("forest", "12", "RMSE with 95 % CI",
         "Each model's RMSE with its 95 % cluster-bootstrap confidence interval, next to "
         "the value the study reported from its single 48-snapshot test set (open diamonds).",

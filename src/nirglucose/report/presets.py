@@ -147,9 +147,14 @@ def presets_section(dirs: list[Path]) -> str:
     names = [m.get("preset") or d.name for d, (m, _) in zip(dirs, loaded, strict=True)]
     study = {str(r["model"]): r for r in STUDY_TABLE}
     models = list(dict.fromkeys(m for _, met in loaded for m in met.index))
-    head = "<th>Model</th>" + "".join(
-        f"<th>RMSE {_esc(n)} [mg/dL, 95 % CI]</th><th>MARD {_esc(n)} [%]</th>" for n in names
-    ) + "<th>study RMSE [mg/dL]</th>"
+    metrics = (("rmse_mgdl", "RMSE [mg/dL, 95 % CI]", "rmse"), ("mard_pct", "MARD [%]", None),
+               ("clarke_a_pct", "Clarke A [%]", None))
+    # metric-major: each metric's presets in adjacent columns, so they read at a glance
+    head1 = "<th rowspan=2>Model</th>" + "".join(
+        f"<th colspan={len(names)}>{_esc(h)}</th>" for _, h, _ in metrics
+    ) + f"<th rowspan=2>Δ RMSE {_esc(names[1])} − {_esc(names[0])} [mg/dL]</th>" \
+        "<th rowspan=2>study RMSE [mg/dL]</th>"
+    head2 = "".join(f"<th>{_esc(n)}</th>" for _ in metrics for n in names)
     rows = []
     label = {m: MODEL_LABELS.get(m, m) for m in models}
     for _, met in loaded:
@@ -157,37 +162,51 @@ def presets_section(dirs: list[Path]) -> str:
             label.update({m: str(v) for m, v in met["label"].items() if isinstance(v, str)})
     for model in models:
         cells = [f"<td>{_esc(label[model])}</td>"]
-        for _, met in loaded:
-            if model in met.index:
-                r = met.loc[model]
-                cells.append(
-                    f"<td>{_num(r.get('rmse_mgdl'))} [{_num(r.get('rmse_ci_low'))}, "
-                    f"{_num(r.get('rmse_ci_high'))}]</td><td>{_num(r.get('mard_pct'))}</td>"
-                )
-            else:
-                cells.append("<td>–</td><td>–</td>")
+        for col, _, ci in metrics:
+            for _, met in loaded:
+                if model in met.index and col in met.columns:
+                    r = met.loc[model]
+                    txt = _num(r.get(col))
+                    if ci and _num(r.get(f"{ci}_ci_low")) != "–":
+                        txt += f" [{_num(r.get(f'{ci}_ci_low'))}, {_num(r.get(f'{ci}_ci_high'))}]"
+                    cells.append(f"<td>{txt}</td>")
+                else:
+                    cells.append("<td>–</td>")
+        a, b = loaded[0][1], loaded[1][1]
+        diff = (float(b.loc[model, "rmse_mgdl"]) - float(a.loc[model, "rmse_mgdl"])
+                if model in a.index and model in b.index else float("nan"))
+        cells.append(f"<td>{_num(diff, 1, True)}</td>")
         cells.append(f'<td class="study">{_num(study.get(model, {}).get("rmse_mgdl"))}</td>')
         rows.append("<tr>" + "".join(cells) + "</tr>")
+    head = f"{head1}</tr><tr>{head2}"
     parts = [
         '<h2 id="presets">Presets compared</h2>',
         f"<p>The same benchmark on {len(names)} presets: "
         + ", ".join(f"<code>{_esc(n)}</code>" for n in names)
-        + f". The sections above are the <code>{_esc(names[0])}</code> run.</p>",
+        + f". The sections above are the <code>{_esc(names[0])}</code> run; below, the key "
+        "metrics of every preset next to each other (each metric's presets in adjacent "
+        "columns), and the performance-comparison figure draws all presets on shared "
+        "axes.</p>",
         '<div class="scroll"><table id="presets-table"><thead><tr>'
         f"{head}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>",
         "<h3>What separates the presets</h3>",
         _separation(names, loaded, label),
     ]
+    ablations = [(n, ablation_section(d, f"Physics ablation on {n}"))
+                 for d, n in zip(dirs, names, strict=True)]
+    ablations = [(n, a) for n, a in ablations if a]
+    if ablations:
+        parts.append('<h3>Physics ablation, presets side by side</h3><div class="side">'
+                     + "".join(f"<div>{a}</div>" for _, a in ablations) + "</div>")
     for d, n in zip(dirs[1:], names[1:], strict=True):
         res = load_results(d)
-        parts += [
-            f"<h2 id=\"preset-{_esc(n)}\">Reproduced table on <code>{_esc(n)}</code></h2>",
-            _reproduced_table(res),
-        ]
+        inner = [_reproduced_table(res)]
         if res.table_md:
-            text = strip_ablation(res.table_md)
-            parts.append(markdown_to_html(text, skip_tables=True, skip_h1=True))
-        parts.append(ablation_section(d, f"Physics ablation on {n}"))
+            inner.append(markdown_to_html(strip_ablation(res.table_md), skip_tables=True,
+                                          skip_h1=True))
+        parts.append(f'<details id="preset-{_esc(n)}"><summary>Full reproduced table and '
+                     f"significance statements on <code>{_esc(n)}</code></summary>"
+                     + "\n".join(inner) + "</details>")
     return "\n".join(p for p in parts if p)
 
 

@@ -1,0 +1,186 @@
+"""The study's model-architecture, feature-engineering and performance figures.
+
+Plain block diagrams and bar panels from numbers the report computes: layer sizes read
+from fitted models, feature counts per category, metrics per model and preset.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.patches import FancyBboxPatch
+
+from .style import GREY, OKABE_ITO, model_color, model_label, plot_style
+
+__all__ = ["figure_architectures", "figure_feature_engineering", "figure_performance_panel"]
+
+#: Colour of each preset's bars (the primary first).
+_PRESET_COLORS = (OKABE_ITO["blue"], OKABE_ITO["vermillion"], OKABE_ITO["bluish_green"])
+
+
+def _box(ax: Axes, x: float, y: float, w: float, h: float, text: str, color: str,
+         fontsize: float = 8.0) -> None:
+    ax.add_patch(FancyBboxPatch((x - w / 2, y - h / 2), w, h, boxstyle="round,pad=0.01",
+                                fc=color, ec="black", lw=0.8, alpha=0.9))
+    ax.text(x, y, text, ha="center", va="center", fontsize=fontsize)
+
+
+def _arrow(ax: Axes, xy_from: tuple[float, float], xy_to: tuple[float, float]) -> None:
+    ax.annotate("", xy=xy_to, xytext=xy_from,
+                arrowprops={"arrowstyle": "-|>", "color": GREY, "lw": 1.0})
+
+
+def figure_architectures(archs: Mapping[str, tuple[Sequence[tuple[str, str]], int]],
+                         *, ncols: int = 3) -> Figure:
+    """One block diagram per model family, top (inputs) to bottom (glucose).
+
+    Parameters
+    ----------
+    archs : mapping of str to (sequence of (str, str), int)
+        Model -> (blocks as ``(name, sizes)``, trainable parameter count). [-]
+    ncols : int
+        Panels per row. [-]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One Axes per model, with one box per block.
+    """
+    models = list(archs)
+    ncols = max(1, min(ncols, len(models)))
+    nrows = -(-max(len(models), 1) // ncols)
+    depth = max((len(b) for b, _ in archs.values()), default=1)
+    with plot_style():
+        fig = Figure(figsize=(4.4 * ncols, (0.62 * depth + 0.9) * nrows), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+        for ax, model in zip(axes, models, strict=False):
+            blocks, n_params = archs[model]
+            color = model_color(model)
+            ax.set_xlim(0, 1)
+            ax.set_ylim(-depth + 0.4, 0.6)
+            for i, (name, sizes) in enumerate(blocks):
+                _box(ax, 0.5, -i, 0.92, 0.62, f"{name}\n{sizes}",
+                     "white" if i in (0, len(blocks) - 1) else color + "40")
+                if i:
+                    _arrow(ax, (0.5, -i + 0.69), (0.5, -i + 0.31))
+            ax.set_title(f"{model_label(model)}\n{n_params:,} trainable parameters",
+                         fontsize=9.5)
+            ax.set_axis_off()
+        for ax in axes[len(models):]:
+            ax.set_axis_off()
+    return fig
+
+
+def figure_feature_engineering(n_channels: int, n_physiology: int,
+                               categories: Mapping[str, Sequence[str]],
+                               sources: Mapping[str, str] | None = None) -> Figure:
+    """Raw intensities to absorbances to the engineered features, by category.
+
+    Parameters
+    ----------
+    n_channels : int
+        LED channels (raw intensities). [-]
+    n_physiology : int
+        Entries of the physiological vector. [-]
+    categories : mapping of str to sequence of str
+        Category -> the names of its features, in table order. [-]
+    sources : mapping of str to str, optional
+        Category -> what it is computed from: ``"absorbance"``, ``"physiology"`` or
+        ``"both"`` (arrows drawn from those boxes only); both by default. [-]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    cats = list(categories)
+    n_feat = sum(len(v) for v in categories.values())
+    h = max(len(cats), 3)
+    with plot_style():
+        fig = Figure(figsize=(12.0, 0.55 * h + 1.2), layout="constrained")
+        ax = fig.add_subplot()
+        ax.set_xlim(0, 12)
+        ax.set_ylim(-0.7, h - 0.3)
+        mid = (h - 1) / 2
+        _box(ax, 1.2, mid + 0.8, 2.1, 1.0,
+             f"raw intensities\nI_λ, dark I0_λ\n({n_channels} LEDs)", "white", 8.5)
+        _box(ax, 1.2, mid - 0.8, 2.1, 1.0,
+             f"physiological\nvector\n({n_physiology} entries)", "white", 8.5)
+        _box(ax, 3.7, mid + 0.8, 1.9, 1.0, f"absorbances\nA = log10(I0/I)\n({n_channels})",
+             OKABE_ITO["sky_blue"] + "60", 8.5)
+        _arrow(ax, (2.25, mid + 0.8), (2.75, mid + 0.8))
+        for i, cat in enumerate(cats):
+            y = h - 1 - i
+            names = list(categories[cat])
+            shown = ", ".join(names[:3]) + (", …" if len(names) > 3 else "")
+            _box(ax, 7.3, y, 4.6, 0.46, f"{cat} ({len(names)}): {shown}",
+                 OKABE_ITO["yellow"] + "60", 7.5)
+            src = (sources or {}).get(cat, "both")
+            if src in ("absorbance", "both"):
+                _arrow(ax, (4.65, mid + 0.8), (5.0, y))
+            if src in ("physiology", "both"):
+                _arrow(ax, (2.25, mid - 0.8), (5.0, y))
+        _box(ax, 10.9, mid, 1.8, 1.0, f"{n_feat} features\n→ scaled\n→ ridge → glucose",
+             OKABE_ITO["blue"] + "40", 8.5)
+        for i in range(len(cats)):
+            _arrow(ax, (9.6, h - 1 - i), (10.0, mid))
+        ax.set_axis_off()
+    return fig
+
+
+def figure_performance_panel(table: pd.DataFrame) -> Figure:
+    """Error metrics, parameters and latency side by side, one bar per model and preset.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Columns ``preset``, ``model``, ``rmse_mgdl`` (optionally ``rmse_ci_low`` and
+        ``rmse_ci_high``), ``mard_pct``, ``n_parameters``, ``latency_single_ms``.
+        [-, -, mg/dL, %, -, ms]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four Axes sharing the model axis; parameters and latency on log scales.
+    """
+    presets = list(dict.fromkeys(table["preset"]))
+    models = list(dict.fromkeys(table["model"]))
+    panels = (("rmse_mgdl", "RMSE [mg/dL]", False), ("mard_pct", "MARD [%]", False),
+              ("n_parameters", "trainable parameters [-]", True),
+              ("latency_single_ms", "single-sample latency [ms]", True))
+    bar_h = 0.8 / max(len(presets), 1)
+    y0 = np.arange(len(models), dtype=float)
+    with plot_style():
+        fig = Figure(figsize=(13.0, 0.42 * len(models) * max(len(presets), 1) ** 0.5 + 1.6),
+                     layout="constrained")
+        axes = fig.subplots(1, len(panels), sharey=True)
+        for ax, (col, xlabel, log) in zip(axes, panels, strict=True):
+            for k, preset in enumerate(presets):
+                t = table[table["preset"] == preset].set_index("model").reindex(models)
+                v = t[col].to_numpy(float) if col in t else np.full(len(models), np.nan)
+                y = y0 - 0.4 + bar_h * (k + 0.5)
+                xerr = None
+                if col == "rmse_mgdl" and {"rmse_ci_low", "rmse_ci_high"} <= set(t.columns):
+                    lo = t["rmse_ci_low"].to_numpy(float)
+                    hi = t["rmse_ci_high"].to_numpy(float)
+                    xerr = np.nan_to_num(np.vstack([v - lo, hi - v]), nan=0.0)
+                ax.barh(y, np.nan_to_num(v, nan=0.0), height=bar_h * 0.9,
+                        color=_PRESET_COLORS[k % len(_PRESET_COLORS)], xerr=xerr,
+                        error_kw={"lw": 0.8, "capsize": 2},
+                        label=preset if len(presets) > 1 else None)
+            if log:
+                ax.set_xscale("log")
+            else:
+                ax.set_xlim(left=0)
+            ax.set_xlabel(xlabel)
+            ax.grid(axis="x", color="#DDDDDD", lw=0.6)
+        axes[0].set_yticks(y0)
+        axes[0].set_yticklabels([model_label(m) for m in models])
+        axes[0].invert_yaxis()
+        if len(presets) > 1:
+            fig.legend(*axes[0].get_legend_handles_labels(), title="preset", fontsize=8,
+                       loc="outside upper center", ncol=len(presets))
+    return fig
