@@ -167,7 +167,7 @@ def test_two_presets_write_one_directory_each_and_one_report(tmp_path, capsys):
     assert main(["report", str(out), "--out", str(tmp_path / "report.html")]) == 0
     page = (tmp_path / "report.html").read_text()
     assert 'id="presets-table"' in page
-    assert "Reproduced table on <code>lab</code>" in page
+    assert "Full reproduced table and significance statements on <code>lab</code>" in page
     assert "settings differ between <code>paper</code> and <code>lab</code>" in page
 
 

@@ -385,6 +385,7 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
         )
     for msg in dict.fromkeys(str(w.message).replace("\n", " ") for w in caught):
         _say(f"warning: {msg}")
+    import numpy as np
     from rich import box
 
     table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
@@ -398,7 +399,8 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
             f"{r['mard_pct']:.1f}",
             f"{r['clarke_a_pct']:.1f}",
-            f"{r['coverage90_pct']:.0f}% / {r['width90_mgdl']:.0f}",
+            (f"{r['coverage90_pct']:.0f}% / {r['width90_mgdl']:.0f}"
+             if np.isfinite(r["width90_mgdl"]) else "– (too few subjects)"),
             f"{int(r['n_parameters']):,}",
             f"{r['latency_single_ms']:.3f}",
         )

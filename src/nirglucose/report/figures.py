@@ -410,17 +410,17 @@ def fitted_architectures(dataset, preset: str | None,
         if name != "ebl":
             params["max_epochs"] = 1
         m = make_model(name, **params).fit(dataset)
+        schema = m.schema_
+        n_a, n_p = len(schema.labels), len(schema.physiology)
         if name == "ebl":
-            schema = m.schema_
-            n_a = len(schema.labels)
-            n_p = int(m.n_features_in_) - n_a
             blocks = [("inputs", f"{n_a} absorbances + {n_p} physiology"),
                       ("features", f"{len(m.table_)} engineered (Beer–Lambert)"),
                       ("standardise", f"{len(m.table_)}"),
                       ("ridge", f"{len(m.table_)}→1, α = {m.alpha_:.0e}"),
                       ("output", "glucose [mg/dL]")]
         else:
-            blocks = [("inputs", f"{m.n_features_in_} columns")] + _module_blocks(m.module_) \
+            blocks = [("inputs", f"{n_a} absorbances + {n_p} physiology")] \
+                + _module_blocks(m.module_) \
                 + [("output", "glucose [mg/dL]")]
         out[name] = (blocks, int(m.n_parameters))
     return out
@@ -438,8 +438,7 @@ def ebl_feature_table(dataset, preset: str | None) -> tuple[tuple, int, int]:
     from ..models import make_model, tuned_params
 
     m = make_model("ebl", **(tuned_params("ebl", preset) if preset else {})).fit(dataset)
-    n_a = len(m.schema_.labels)
-    return tuple(m.table_), n_a, int(m.n_features_in_) - n_a
+    return tuple(m.table_), len(m.schema_.labels), len(m.schema_.physiology)
 
 
 #: What each feature operation (:attr:`nirglucose.features.FeatureSpec.op`) reads.
