@@ -37,7 +37,6 @@ def _mc_hashes() -> dict:
     import dataclasses
 
     from nirglucose.optics import mc_layers, mc_slab
-
     from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
 
     out = {}

@@ -9,12 +9,9 @@ Protocol, per preset:
   CV (:class:`sklearn.model_selection.GroupKFold` on ``subject_id``, as the benchmark
   uses), RMSE of the 240 pooled out-of-fold predictions; mean and SD over the seeds, for
 
-  - ``ebl``: today's ``make_model("ebl")`` (reads the 12 study columns only);
-  - ``ebl_ppg_standin``: a STAND-IN, not a package model, for the EBL that the models
-    engineer is extending to read every physiological column present: EBL's 56
-    features plus ``blood_volume_pct``, ``spo2_pct`` and their products with the four
-    absorbances, standardised, ridge with the penalty chosen by inner subject-grouped
-    5-fold CV on the training folds only (equal to ``ebl`` where the columns are absent);
+  - ``ebl``: ``make_model("ebl")`` (every physiological column the device records,
+    the PPG columns of ``paper`` included; its ridge penalty by its own inner
+    subject-grouped CV on the training folds);
   - ``no_skill``: the training folds' mean glucose.
 
 Options: ``--presets paper,wearable`` (default: all), ``--set key=value`` (applied to
@@ -36,8 +33,6 @@ import numpy as np
 
 N_RHO_SUBJECTS, RHO_PER_SUBJECT = 5_000, 4  # 20,000 snapshots
 N_SUBJECTS, PER_SUBJECT, N_SPLITS = 80, 3, 5
-ALPHAS = np.logspace(-3, 4, 29)
-PPG = ("blood_volume_pct", "spo2_pct")
 
 
 def raw_correlation(frame) -> float:
@@ -47,46 +42,8 @@ def raw_correlation(frame) -> float:
     return max(abs(np.corrcoef(g, np.log(frame[c].to_numpy(float)))[0, 1]) for c in cols)
 
 
-def _standin_features(frame) -> np.ndarray:
-    """EBL's 56 features, plus the PPG columns and their products with the absorbances."""
-    from nirglucose.dataset import measured_columns
-    from nirglucose.features import ebl_feature_matrix
-
-    x = ebl_feature_matrix(frame[measured_columns()].to_numpy(float))
-    extra = [c for c in PPG if c in frame.columns]
-    if not extra:
-        return x
-    wl = ("850", "940", "1050", "1150")
-    absorb = np.column_stack(
-        [np.log10(frame[f"adc_ref_{w}"].to_numpy(float) / frame[f"adc_{w}"].to_numpy(float))
-         for w in wl]
-    )
-    cols = [x]
-    for c in extra:
-        v = frame[c].to_numpy(float)[:, None]
-        cols += [v, v * absorb]
-    return np.hstack(cols)
-
-
-def _ridge_fit(x, y, groups):
-    """Standardise, choose the ridge penalty by inner grouped CV, refit on all rows."""
-    from sklearn.linear_model import Ridge
-    from sklearn.model_selection import GroupKFold
-
-    mu, sd = x.mean(0), x.std(0)
-    sd[sd == 0] = 1.0
-    z = (x - mu) / sd
-    mse = np.zeros(len(ALPHAS))
-    for tr, te in GroupKFold(n_splits=N_SPLITS).split(z, y, groups):
-        for i, a in enumerate(ALPHAS):
-            pred = Ridge(alpha=a).fit(z[tr], y[tr]).predict(z[te])
-            mse[i] += np.sum((pred - y[te]) ** 2)
-    model = Ridge(alpha=ALPHAS[int(np.argmin(mse))]).fit(z, y)
-    return lambda xt: model.predict((xt - mu) / sd)
-
-
 def accuracy(preset: str, seed: int, overrides: dict) -> dict:
-    """Grouped-CV RMSE of ebl, the stand-in and the no-skill mean for one seed."""
+    """Grouped-CV RMSE of ebl and the no-skill mean for one seed."""
     from sklearn.model_selection import GroupKFold
 
     import nirglucose as ng
@@ -96,13 +53,11 @@ def accuracy(preset: str, seed: int, overrides: dict) -> dict:
     frame = ds.frame
     y = frame["glucose_mgdl"].to_numpy(float)
     groups = frame["subject_id"].to_numpy()
-    xs = _standin_features(frame)
-    pred = {k: np.empty_like(y) for k in ("ebl", "ebl_ppg_standin", "no_skill")}
+    pred = {k: np.empty_like(y) for k in ("ebl", "no_skill")}
     for tr, te in GroupKFold(n_splits=N_SPLITS).split(frame, y, groups):
         train = ng.Dataset(frame.iloc[tr].reset_index(drop=True), config=ds.config)
         test = ng.Dataset(frame.iloc[te].reset_index(drop=True), config=ds.config)
         pred["ebl"][te] = make_model("ebl").fit(train).predict(test)
-        pred["ebl_ppg_standin"][te] = _ridge_fit(xs[tr], y[tr], groups[tr])(xs[te])
         pred["no_skill"][te] = y[tr].mean()
     return {k: float(np.sqrt(np.mean((p - y) ** 2))) for k, p in pred.items()}
 

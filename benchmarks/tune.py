@@ -12,10 +12,8 @@ reported seeds 0-4). The configuration with the lowest pooled RMSE is written. T
 budget (configurations x folds x seeds) for every family; nothing here reads the
 reported seeds or the study's numbers.
 
-Presets: once the simulator has a ``wearable`` preset (issue 18), both presets are used
-as they are. Before that, ``wearable`` is today's ``paper`` and ``paper`` is today's
-``paper`` with :data:`~nirglucose.models.tuning.PAPER_STANDIN_OVERRIDES` (recorded in
-the JSON as ``standin``): re-run this script after the merge.
+Presets are simulated as they are (``config.PRESETS``); re-run this script after
+changing the simulator or a model.
 
 Usage::
 
@@ -38,14 +36,12 @@ import torch
 from sklearn.model_selection import GroupKFold
 
 import nirglucose as ng
-from nirglucose.config import PRESETS
 from nirglucose.dataset import Dataset
 from nirglucose.models import make_model
 from nirglucose.models.tuning import (
     LAMBDA_PHYS_GRID,
     N_CONFIGS,
     N_FOLDS,
-    PAPER_STANDIN_OVERRIDES,
     TUNED_PRESETS,
     TUNING_SEEDS,
     search_space,
@@ -64,17 +60,6 @@ FAMILIES = (
 N_SUBJECTS, PER_SUBJECT = 80, 3
 OUT = Path(__file__).resolve().parents[1] / "src" / "nirglucose" / "data" / "tuned_params.json"
 SAMPLING_SEED = 0  # draws the configurations (the same draws for every network)
-
-
-def preset_source(preset: str) -> tuple[str, dict, bool]:
-    """``(preset to simulate, overrides, standin)`` for a tuned preset name."""
-    if "wearable" in PRESETS:  # the simulator's presets have landed
-        return preset, {}, False
-    if preset == "wearable":
-        return "paper", {}, True  # today's paper is the future wearable exactly
-    if preset == "paper":
-        return "paper", dict(PAPER_STANDIN_OVERRIDES), True
-    return preset, {}, False
 
 
 def configurations(name: str) -> list[dict]:
@@ -119,11 +104,10 @@ def main() -> None:
     sources = doc.get("presets", {})
     fits = 0
     for preset in presets:
-        base, overrides, standin = preset_source(preset)
-        sources[preset] = {"simulated_as": base, "overrides": overrides, "standin": standin}
+        sources[preset] = {"simulated_as": preset}
         data = []
         for seed in TUNING_SEEDS:
-            ds = ng.simulate(base, N_SUBJECTS, PER_SUBJECT, seed=seed, overrides=overrides or None)
+            ds = ng.simulate(preset, N_SUBJECTS, PER_SUBJECT, seed=seed)
             y = ds.frame["glucose_mgdl"].to_numpy()
             groups = ds.frame["subject_id"].to_numpy()
             folds = list(GroupKFold(N_FOLDS).split(y, groups=groups))

@@ -13,7 +13,6 @@ from nirglucose.models import available_models, make_model, tuned_params
 from nirglucose.models.tuning import (
     LAMBDA_PHYS_GRID,
     N_CONFIGS,
-    PAPER_STANDIN_OVERRIDES,
     TUNED_PRESETS,
     TUNING_SEEDS,
     search_space,
@@ -71,8 +70,8 @@ def test_tuning_never_used_the_reported_seeds_and_one_budget_for_all():
     for preset in TUNED_PRESETS:
         for name, score in doc["scores"][preset].items():
             assert len(score["all_configs_rmse_mgdl"]) == N_CONFIGS, (preset, name)
-    if doc["presets"]["paper"]["standin"]:
-        assert doc["presets"]["paper"]["overrides"] == PAPER_STANDIN_OVERRIDES
+    for preset in TUNED_PRESETS:  # each preset tuned as the simulator defines it
+        assert doc["presets"][preset] == {"simulated_as": preset}
 
 
 def test_search_spaces():
@@ -94,9 +93,9 @@ def test_search_spaces():
 
 @pytest.fixture(scope="module")
 def quiet_split():
-    """A quiet regime (the paper stand-in: glucose dominates what moves the signal),
+    """A quiet regime (``paper``: the device knows the snapshot-level nuisances),
     60 training subjects and 20 held-out subjects; a seed disjoint from the study's."""
-    ds = ng.simulate("paper", 80, 3, seed=2024, overrides=PAPER_STANDIN_OVERRIDES)
+    ds = ng.simulate("paper", 80, 3, seed=2024)
     f = ds.frame
     held_out = f.subject_id.isin(np.unique(f.subject_id)[-20:]).to_numpy()
 

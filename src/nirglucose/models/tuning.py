@@ -26,7 +26,6 @@ import copy
 import json
 from functools import lru_cache
 from importlib import resources
-from typing import Any
 
 from ..exceptions import ConfigError
 
@@ -38,7 +37,6 @@ __all__ = [
     "N_CONFIGS",
     "N_FOLDS",
     "TUNED_PRESETS",
-    "PAPER_STANDIN_OVERRIDES",
     "LAMBDA_PHYS_GRID",
 ]
 
@@ -50,22 +48,6 @@ N_CONFIGS = 12
 N_FOLDS = 3
 #: Presets tuned by ``benchmarks/tune.py``.
 TUNED_PRESETS = ("wearable", "paper")
-
-#: Stand-in for the quiet ``paper`` preset until the simulator's lands (issue 18): the
-#: physiological vector exact, LED output monitored (no flicker, ageing or thermal
-#: drift), constant-force probe, perfusion and SO2 fixed, glucose signal gain 11 (the
-#: issue's values). Used only when ``config.PRESETS`` has no ``wearable`` preset yet.
-PAPER_STANDIN_OVERRIDES: dict[str, Any] = {
-    "noise.pmf_measurement.enabled": False,
-    "noise.led_flicker.enabled": False,
-    "noise.led_ageing.enabled": False,
-    "noise.led_thermal_drift.enabled": False,
-    "noise.contact_pressure.enabled": False,
-    "physiology.saturation_sd": 0.0,
-    "physiology.blood_fraction_log_sd_subject": 0.0,
-    "physiology.blood_fraction_log_sd_state": 0.0,
-    "glucose.signal_gain": 11.0,
-}
 
 #: Physics weights tried for every PINN; 0 (the plain network) is always on the grid.
 LAMBDA_PHYS_GRID = (0.0, 0.01, 0.1, 1.0)
