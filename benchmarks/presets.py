@@ -9,9 +9,10 @@ Protocol, per preset:
   CV (:class:`sklearn.model_selection.GroupKFold` on ``subject_id``, as the benchmark
   uses), RMSE of the 240 pooled out-of-fold predictions; mean and SD over the seeds, for
 
-  - ``ebl``: ``make_model("ebl")`` (every physiological column the device records,
-    the PPG columns of ``paper`` included; its ridge penalty by its own inner
-    subject-grouped CV on the training folds);
+  - ``ebl``: ``make_model("ebl", **tuned_params("ebl", preset))`` as the benchmark
+    builds it (every physiological column the device records, the PPG columns of
+    ``paper`` included; the ridge penalty tuned on seeds 1000-1002, disjoint from these;
+    its own inner subject-grouped CV for a preset the tuning does not cover);
   - ``no_skill``: the training folds' mean glucose.
 
 Options: ``--presets paper,wearable`` (default: all), ``--set key=value`` (applied to
@@ -35,6 +36,7 @@ N_RHO_SUBJECTS, RHO_PER_SUBJECT = 5_000, 4  # 20,000 snapshots
 N_SUBJECTS, PER_SUBJECT, N_SPLITS = 80, 3, 5
 
 
+
 def raw_correlation(frame) -> float:
     """max over channels of |r(glucose_mgdl, log adc_<nm>)|."""
     g = frame["glucose_mgdl"].to_numpy(float)
@@ -47,7 +49,8 @@ def accuracy(preset: str, seed: int, overrides: dict) -> dict:
     from sklearn.model_selection import GroupKFold
 
     import nirglucose as ng
-    from nirglucose.models import make_model
+    from nirglucose.models import make_model, tuned_params
+    from nirglucose.models.tuning import TUNED_PRESETS
 
     ds = ng.simulate(preset, N_SUBJECTS, PER_SUBJECT, seed=seed, overrides=overrides)
     frame = ds.frame
@@ -57,7 +60,8 @@ def accuracy(preset: str, seed: int, overrides: dict) -> dict:
     for tr, te in GroupKFold(n_splits=N_SPLITS).split(frame, y, groups):
         train = ng.Dataset(frame.iloc[tr].reset_index(drop=True), config=ds.config)
         test = ng.Dataset(frame.iloc[te].reset_index(drop=True), config=ds.config)
-        pred["ebl"][te] = make_model("ebl").fit(train).predict(test)
+        ebl = make_model("ebl", **(tuned_params("ebl", preset) if preset in TUNED_PRESETS else {}))
+        pred["ebl"][te] = ebl.fit(train).predict(test)
         pred["no_skill"][te] = y[tr].mean()
     return {k: float(np.sqrt(np.mean((p - y) ** 2))) for k, p in pred.items()}
 

@@ -149,6 +149,7 @@ __all__ = [
     "FeatureSpec",
     "ALPHA_SKIN_PER_MM",
     "ALPHA_PERF",
+    "NOMINAL_BLOOD_PCT",
     "ALPHA_MEL",
     "SKIN_TEMP_CENTER_C",
     "HYDRATION_CENTER_PCT",
@@ -198,6 +199,10 @@ ALPHA_SKIN_PER_MM = (0.0109, 0.0199, 0.0189, 0.0717)
 #: Blood at nominal perfusion (2 % blood, SO2 0.7; Bosschaart 2014) along 1 mm of
 #: dermal path, per unit perfusion index. [-]
 ALPHA_PERF = (0.0094, 0.0117, 0.0082, 0.0053)
+#: The blood volume at which the perfusion index is 1 (the 2 % of :data:`ALPHA_PERF`):
+#: a device that measures ``blood_volume_pct`` (PPG) gives P = blood_volume_pct / 2
+#: instead of the temperature/pressure proxy :func:`perfusion_index`. [%]
+NOMINAL_BLOOD_PCT = 2.0
 #: Melanosome absorption (Jacques 1998) over a round trip through an 80 um epidermis,
 #: per unit melanosome volume fraction. [-]
 ALPHA_MEL = (1.8565, 1.3278, 0.9186, 0.6785)
@@ -718,8 +723,12 @@ def compute_features(table, schema, absorbance, physiology) -> np.ndarray:
             out[r] = A[op[1]] * A[op[2]]
         elif kind == "w":
             if perf is None:
-                perf = perfusion_index(
-                    col["skin_temp_c"], col["systolic_bp_mmhg"], col["pressure_mbar"]
+                perf = (
+                    col["blood_volume_pct"] / NOMINAL_BLOOD_PCT  # measured (PPG)
+                    if "blood_volume_pct" in col
+                    else perfusion_index(
+                        col["skin_temp_c"], col["systolic_bp_mmhg"], col["pressure_mbar"]
+                    )
                 )
             _, k, a_s, a_p, a_m = op
             out[r] = (
