@@ -166,10 +166,18 @@ int main(int argc, char **argv)
 @pytest.mark.parametrize("name", ["ebl", "pls"])
 @pytest.mark.parametrize(
     ("n_leds", "bits", "keep"),
-    [(1, 10, "none"), (1, 12, "all"), (3, 14, "all"), (3, 12, "some"), (4, 16, "all")],
+    [
+        (1, 10, "none"),
+        (1, 12, "all"),
+        (3, 14, "all"),
+        (3, 12, "some"),
+        (4, 16, "all"),
+        (4, 12, "paper"),
+    ],
 )
 def test_any_device_compiles_and_matches_python(name, n_leds, bits, keep, tmp_path):
-    """gcc parity at N = 1, 3 and 4 LEDs, with and without references and physiology."""
+    """gcc parity at N = 1, 3 and 4 LEDs, with and without references and physiology;
+    "paper": the paper device's PPG columns, whose blood volume is EBL's perfusion."""
     from device_data import device_overrides
 
     wl = (850.0, 940.0, 1050.0, 1150.0) if n_leds == 4 else None
@@ -177,8 +185,9 @@ def test_any_device_compiles_and_matches_python(name, n_leds, bits, keep, tmp_pa
         from device_data import LED_SETS
 
         wl = LED_SETS[n_leds]
-    train = ng.simulate("wearable", 30, 3, seed=1, overrides=device_overrides(wl, bits))
-    test = ng.simulate("wearable", 200, 3, seed=2, overrides=device_overrides(wl, bits))
+    preset = "paper" if keep == "paper" else "wearable"
+    train = ng.simulate(preset, 30, 3, seed=1, overrides=device_overrides(wl, bits))
+    test = ng.simulate(preset, 200, 3, seed=2, overrides=device_overrides(wl, bits))
     f = train.frame
     if keep == "none":  # a bare one-LED device: no reference codes, no physiology
         cols = [c for c in f if c.startswith("adc_") and not c.startswith("adc_ref")]
@@ -187,8 +196,9 @@ def test_any_device_compiles_and_matches_python(name, n_leds, bits, keep, tmp_pa
     else:
         cols = list(f.columns)
     model = (EnhancedBeerLambert if name == "ebl" else PLSBaseline)(adc_bits=bits)
-    model.fit(f[[*cols, "glucose_mgdl", "subject_id"]] if keep != "all" else train)
+    model.fit(f[[*cols, "glucose_mgdl", "subject_id"]] if keep in ("none", "some") else train)
     s = model.schema_
+    assert ("blood_volume_pct" in s.physiology) == (keep == "paper")
     assert s.n_channels == n_leds and s.adc_bits == bits
     out = tmp_path / "fw"
     export_c(model, out)

@@ -40,6 +40,7 @@ from ..dataset import atomic_write
 from ..exceptions import ConfigError, DataError
 from ..features import (
     HYDRATION_CENTER_PCT,
+    NOMINAL_BLOOD_PCT,
     PERFUSION_COEFFS,
     PRESSURE_CENTER_MBAR,
     SKIN_TEMP_CENTER_C,
@@ -265,12 +266,19 @@ def _ebl_body(schema: DeviceSchema) -> str:
         lines += [
             f"    const float t = {pmf['skin_thickness_mm']};",
             f"    const float mel = {pmf['melanin_fraction']};",
-            f"    const float perf = expf({c_float(pc['temp'])} * ({pmf['skin_temp_c']} - "
-            f"{c_float(SKIN_TEMP_CENTER_C)}) + {c_float(pc['sbp'])} * "
-            f"({pmf['systolic_bp_mmhg']} - {c_float(pc['sbp_center'])})",
-            f"                            + {c_float(pc['pressure'])} * "
-            f"({pmf['pressure_mbar']} - {p0}));",
         ]
+        if "blood_volume_pct" in pmf:  # measured perfusion (features.NOMINAL_BLOOD_PCT)
+            lines.append(
+                f"    const float perf = {pmf['blood_volume_pct']} / {c_float(NOMINAL_BLOOD_PCT)};"
+            )
+        else:
+            lines += [
+                f"    const float perf = expf({c_float(pc['temp'])} * ({pmf['skin_temp_c']} - "
+                f"{c_float(SKIN_TEMP_CENTER_C)}) + {c_float(pc['sbp'])} * "
+                f"({pmf['systolic_bp_mmhg']} - {c_float(pc['sbp_center'])})",
+                f"                            + {c_float(pc['pressure'])} * "
+                f"({pmf['pressure_mbar']} - {p0}));",
+            ]
     lines.append(f"    float x[{len(table)}];")
     for f, spec in enumerate(table):
         op = spec.op
