@@ -27,7 +27,7 @@ def test_readme_lists_every_feature(paper_small):
     study = ng.simulate("wearable", n_subjects=4, per_subject=1, seed=0)
     assert len(enhanced_beer_lambert(study.frame).columns) == 56
     names = enhanced_beer_lambert(paper_small.frame.head(3)).columns
-    assert len(names) == 58
+    assert len(names) == 66  # + 2 PPG entries + blood volume and SpO2 x A_k
     missing = [n for n in names if f"`{n}`" not in text]
     assert not missing, missing
 

@@ -150,6 +150,7 @@ __all__ = [
     "ALPHA_SKIN_PER_MM",
     "ALPHA_PERF",
     "NOMINAL_BLOOD_PCT",
+    "NOMINAL_SO2_PCT",
     "ALPHA_MEL",
     "SKIN_TEMP_CENTER_C",
     "HYDRATION_CENTER_PCT",
@@ -203,6 +204,8 @@ ALPHA_PERF = (0.0094, 0.0117, 0.0082, 0.0053)
 #: a device that measures ``blood_volume_pct`` (PPG) gives P = blood_volume_pct / 2
 #: instead of the temperature/pressure proxy :func:`perfusion_index`. [%]
 NOMINAL_BLOOD_PCT = 2.0
+#: The oxygen saturation at which :data:`ALPHA_PERF` is tabulated (SO2 0.7). [%]
+NOMINAL_SO2_PCT = 70.0
 #: Melanosome absorption (Jacques 1998) over a round trip through an 80 um epidermis,
 #: per unit melanosome volume fraction. [-]
 ALPHA_MEL = (1.8565, 1.3278, 0.9186, 0.6785)
@@ -529,6 +532,11 @@ _ENV = {
     "dT": ("skin_temp_c", SKIN_TEMP_CENTER_C, 1.0),
     "dH": ("hydration_pct", HYDRATION_CENTER_PCT, HYDRATION_CENTER_PCT),
     "dP": ("pressure_mbar", PRESSURE_CENTER_MBAR, PRESSURE_CENTER_MBAR),
+    # A device that measures perfusion and saturation (PPG): blood's share of each
+    # absorbance scales with its volume, and its spectrum with its saturation, relative to
+    # the nominal blood of ALPHA_PERF (2 %, SO2 0.7).
+    "dB": ("blood_volume_pct", NOMINAL_BLOOD_PCT, NOMINAL_BLOOD_PCT),
+    "dS": ("spo2_pct", NOMINAL_SO2_PCT, NOMINAL_SO2_PCT),
 }
 _W_COLUMNS = (
     "skin_thickness_mm",
@@ -658,6 +666,8 @@ def feature_table(schema) -> tuple[FeatureSpec, ...]:
         "dT": ("temp", "LED/water-band thermal drift"),
         "dH": ("hydration", "water share of absorbance"),
         "dP": ("pressure", "perfusion/contact with pressure"),
+        "dB": ("blood-volume", "blood's share of the absorbance (PPG perfusion)"),
+        "dS": ("saturation", "Hb/HbO2 balance of the blood's spectrum (PPG SpO2)"),
     }
     for s in syms:
         for i in range(k):

@@ -38,8 +38,8 @@ import numpy as np
 
 from ..dataset import atomic_write
 from ..exceptions import ConfigError, DataError
+from ..features import _ENV as ENV_SYMBOLS
 from ..features import (
-    HYDRATION_CENTER_PCT,
     NOMINAL_BLOOD_PCT,
     PERFUSION_COEFFS,
     PRESSURE_CENTER_MBAR,
@@ -252,14 +252,11 @@ def _ebl_body(schema: DeviceSchema) -> str:
         s for f in table if f.op[0] == "env2" for s in f.op[1:]
     }
     lines = _absorbances(schema)
-    if "dT" in env:
-        lines.append(f"    const float dT = {pmf['skin_temp_c']} - {c_float(SKIN_TEMP_CENTER_C)};")
-    if "dH" in env:
-        h0 = c_float(HYDRATION_CENTER_PCT)
-        lines.append(f"    const float dH = ({pmf['hydration_pct']} - {h0}) / {h0};")
-    if "dP" in env:
-        p0 = c_float(PRESSURE_CENTER_MBAR)
-        lines.append(f"    const float dP = ({pmf['pressure_mbar']} - {p0}) / {p0};")
+    for sym, (column, center, scale) in ENV_SYMBOLS.items():  # the features' own table
+        if sym in env:
+            x = f"{pmf[column]} - {c_float(center)}"
+            x = x if scale == 1.0 else f"({x}) / {c_float(scale)}"
+            lines.append(f"    const float {sym} = {x};")
     if "w" in ops:
         pc = PERFUSION_COEFFS
         p0 = c_float(PRESSURE_CENTER_MBAR)
