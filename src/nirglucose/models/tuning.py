@@ -47,7 +47,7 @@ N_CONFIGS = 12
 #: Subject-grouped folds per tuning seed.
 N_FOLDS = 3
 #: Presets tuned by ``benchmarks/tune.py``.
-TUNED_PRESETS = ("wearable", "paper")
+TUNED_PRESETS = ("wearable", "paper", "lab", "field", "physical")
 
 #: Physics weights tried for every PINN; 0 (the plain network) is always on the grid.
 LAMBDA_PHYS_GRID = (0.0, 0.01, 0.1, 1.0)
