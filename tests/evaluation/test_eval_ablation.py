@@ -110,8 +110,8 @@ def test_tuned_parameters_hook(data, tmp_path, monkeypatch):
     assert all(s["params"] == {"alphas": [1.0]} for s in seen)
 
 
-def test_tuned_parameters_fallback_without_the_helper(monkeypatch):
-    import nirglucose.models as models
+def test_model_params_are_the_packaged_tuned_ones():
+    from nirglucose.models import tuned_params
 
-    monkeypatch.delattr(models, "tuned_params", raising=False)
-    assert bm._model_params("ebl", "paper") == {}
+    assert bm._model_params("sdnn", "paper") == tuned_params("sdnn", "paper") != {}
+    assert bm._model_params("sdnn", None) == {}  # a user's data: no preset, defaults

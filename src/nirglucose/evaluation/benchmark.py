@@ -521,15 +521,13 @@ def _model_params(name: str, preset: str | None) -> dict[str, Any]:
     """Tuned constructor arguments of model ``name`` on ``preset`` ({} when none).
 
     The one place the benchmark asks for tuned hyper-parameters
-    (``nirglucose.models.tuned_params``, when that exists).
+    (:func:`nirglucose.models.tuned_params`).
     """
-    try:
-        from ..models import tuned_params
-    except ImportError:
-        return {}
+    from ..models import tuned_params
+
     if preset is None:
         return {}
-    return dict(tuned_params(name, preset) or {})
+    return dict(tuned_params(name, preset))
 
 
 def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str, Any]]]:

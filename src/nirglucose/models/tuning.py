@@ -27,7 +27,7 @@ import json
 from functools import lru_cache
 from importlib import resources
 
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, unknown_name
 
 __all__ = [
     "tuned_params",
@@ -157,12 +157,10 @@ def tuned_params(name: str, preset: str) -> dict:
 
     names = available_models()
     if name not in names:
-        raise ConfigError(f"unknown model {name!r}; valid: {', '.join(names)}")
+        raise ConfigError(unknown_name("model", name, names))
     params = _document().get("params", {})
     if preset not in params and preset not in PRESETS:
-        raise ConfigError(
-            f"unknown preset {preset!r}; valid: {', '.join(sorted(set(PRESETS) | set(params)))}"
-        )
+        raise ConfigError(unknown_name("preset", preset, sorted(set(PRESETS) | set(params))))
     out = copy.deepcopy(params.get(preset, {}).get(name, {}))
     if isinstance(out.get("alphas"), list):  # JSON has no tuples; EBL's grid is one
         out["alphas"] = tuple(out["alphas"])
