@@ -147,3 +147,19 @@ def test_pipeline_reflects_the_config():
     hw = boxes["Hardware"]
     assert "shot" in hw["noise_off"] and "johnson ×2" in hw["noise_on"]
     assert "ambient light" in boxes["Environment"]["noise_on"]
+
+
+def test_pipeline_says_what_the_device_knows():
+    """The measured-outputs box follows the device capabilities (paper vs wearable)."""
+
+    def measured(preset):
+        cols = pipeline_columns(resolve_config(preset))
+        return next(b for col in cols for b in col if b["title"] == "Measured outputs")["details"]
+
+    paper, wearable = measured("paper"), measured("wearable")
+    assert "adc_ref_<nm>: monitor photodiode, per reading" in paper
+    assert "physiological vector (14 exact values)" in paper
+    assert "  humidity compensation" in paper
+    assert "adc_ref_<nm>: start-up reference" in wearable
+    assert "physiological vector (12 measured values)" in wearable
+    assert "device capabilities:" not in wearable

@@ -918,13 +918,26 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
             ], "hardware"),
         ],
         [
-            box("Measured outputs", ("measurement",), [
-                "adc_<nm>: codes per LED",
-                "adc_ref_<nm>: start-up reference",
-                "PMF vector (12 measured values)",
-            ], "output"),
+            box("Measured outputs", ("measurement",), _measured_lines(config), "output"),
         ],
     ]
+
+
+def _measured_lines(config) -> list[str]:
+    """What the device records and knows, from its capabilities (``device.*``)."""
+    from ..config import device_capabilities
+    from ..simulate.measurement import PMF_COLUMNS, PPG_COLUMNS
+
+    caps = device_capabilities(config)
+    n_phys = len(PMF_COLUMNS) + (len(PPG_COLUMNS) if "ppg_perfusion_spo2" in caps else 0)
+    ref = ("monitor photodiode, per reading" if "monitor_photodiode" in caps
+           else "start-up reference")
+    how = "exact" if "exact_physiology" in caps else "measured"
+    lines = ["adc_<nm>: codes per LED", f"adc_ref_<nm>: {ref}",
+             f"physiological vector ({n_phys} {how} values)"]
+    if caps:
+        lines += ["device capabilities:", *(f"  {c.replace('_', ' ')}" for c in caps)]
+    return lines
 
 
 def _panel(frame: pd.DataFrame, cols: Sequence[str], xlabel: str, log: bool = False
