@@ -173,6 +173,28 @@ def _smoothed_argmin(values: list[float], window: int) -> int:
     return int(np.argmin((c[hi] - c[lo]) / (hi - lo))) + 1
 
 
+def _start_at_mean(module: nn.Module) -> nn.Module:
+    """Zero the glucose output layer(s) of a fresh ``module``; return it.
+
+    Every network here ends its glucose head in a ``Linear(n, 1)`` (the only one-output
+    layer; the RTE networks' optics head has two per wavelength). With its weights and
+    bias at zero the untrained network predicts 0 in standardised target units, the
+    training mean: training starts from the no-skill predictor, and early stopping on
+    a validation split can return it (epoch 0) when no epoch beats it. The hidden
+    layers keep PyTorch's default initialisation, so no symmetry is introduced; a
+    zero-initialised last layer is common practice (Goyal et al. 2017, "Accurate,
+    large minibatch SGD", arXiv:1706.02677, sec. 5.1, zero-initialises the last
+    normalisation of each residual block for the same reason: start at a simple
+    function).
+    """
+    with torch.no_grad():
+        for layer in module.modules():
+            if isinstance(layer, nn.Linear) and layer.out_features == 1:
+                layer.weight.zero_()
+                layer.bias.zero_()
+    return module
+
+
 #: State-dict key of the whitening matrix (a buffer, not a trained parameter).
 WHITENING_KEY = "whitening"
 
@@ -272,8 +294,13 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         units; ``val_*`` are None without a validation set.
     best_epoch_ : int
         With a validation set: the epoch with the lowest validation MSE (whose weights
-        were kept) or, after a refit, how many epochs the refit ran. Without one: the
-        last epoch (its weights are kept).
+        were kept) or, after a refit, how many epochs the refit ran; 0 when no epoch
+        beat the untrained network, which predicts the training mean (its glucose
+        output layer starts at zero). Without one: the last epoch (its weights are
+        kept).
+    start_val_mse_ : float or None
+        Validation MSE of the untrained network, i.e. of the training mean (epoch 0
+        of early stopping); None without a validation set. [standardised units]
     n_epochs_ : int
         Epochs run before early stopping.
     refit_epochs_ : int
@@ -590,6 +617,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         try:
             with torch.random.fork_rng(devices=[]):
                 torch.manual_seed(init_seed)
+                self.start_val_mse_ = None
                 self.history_, self.best_epoch_ = self._train(train, val, shuffle_seed)
                 self.n_epochs_ = len(self.history_)
                 self.refit_history_ = []
@@ -598,9 +626,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                     # selected number of epochs at the learning rates they had.
                     torch.manual_seed(init_seed)
                     every = self._tensors({**self._transform(Xa), "y": self._scale_y(y)})
-                    self.best_epoch_ = _smoothed_argmin(
-                        [r["val_mse"] for r in self.history_], _SMOOTHING_EPOCHS
-                    )
+                    curve = [self.start_val_mse_]
+                    curve += [r["val_mse"] for r in self.history_]
+                    self.best_epoch_ = _smoothed_argmin(curve, _SMOOTHING_EPOCHS) - 1
                     plan = [r["lr"] for r in self.history_[: self.best_epoch_]]
                     self.refit_history_, _ = self._train(every, None, shuffle_seed, lr_plan=plan)
         finally:
@@ -687,7 +715,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         exactly ``len(lr_plan)`` epochs at those learning rates, keeping the last
         weights (the refit).
         """
-        self.module_ = self._wrap_inputs(self.build_module(), self.__dict__.get("_whitening"))
+        self.module_ = self._wrap_inputs(
+            _start_at_mean(self.build_module()), self.__dict__.get("_whitening")
+        )
         self._optimizer = torch.optim.AdamW(
             self.module_.parameters(),
             lr=self.lr,
@@ -718,6 +748,13 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         y_scale = self.scaler_["y_scale"]
         history: list[dict] = []
         best, best_epoch, best_state, stale = math.inf, 0, None, 0
+        if val is not None and lr_plan is None:
+            # Epoch 0 is a candidate: the untrained network predicts the training mean
+            # (its glucose output starts at 0, see _start_at_mean), so early stopping
+            # never returns weights worse on the validation subjects than no skill.
+            best = self._evaluate(val)["mse"]
+            best_state = copy.deepcopy(self.module_.state_dict())
+            self.start_val_mse_ = best
         for epoch in range(1, max_epochs + 1):
             self.module_.train()
             if lr_plan is not None:
@@ -751,7 +788,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                     f"{type(self).__name__}: training diverged at epoch {epoch} "
                     f"(loss {monitor}); lower lr (now {self.lr})"
                 )
-            if monitor < best - _MIN_IMPROVEMENT * abs(best) or epoch == 1:
+            if monitor < best - _MIN_IMPROVEMENT * abs(best) or (epoch == 1 and val is None):
                 best, stale = monitor, 0
                 if val is not None and lr_plan is None:
                     # The weights early stopping returns to; without a validation set
@@ -959,6 +996,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             "best_epoch": self.best_epoch_,
             "n_epochs": self.n_epochs_,
             "refit_history": self.refit_history_,
+            "start_val_mse": self.start_val_mse_,
             "n_parameters": self.n_parameters,
             "weights_file": weights.name,
         }
@@ -1022,6 +1060,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         est.n_epochs_ = doc.get("n_epochs", len(est.history_))
         est.refit_history_ = doc.get("refit_history", [])
         est.refit_epochs_ = len(est.refit_history_)
+        est.start_val_mse_ = doc.get("start_val_mse")
         if "conformal" in doc:  # the interval calibration saved with the model
             from ..evaluation.conformal import check_calibration_doc
 

@@ -17,7 +17,7 @@ Examples
 --------
 >>> from nirglucose.models import tuned_params
 >>> sorted(tuned_params("sdnn", "wearable"))  # doctest: +SKIP
-['dropout', 'lr', 'max_epochs', 'weight_decay']
+['dropout', 'lr', 'max_epochs', 'val_fraction', 'weight_decay']
 """
 
 from __future__ import annotations
@@ -53,11 +53,16 @@ TUNED_PRESETS = ("wearable", "paper", "lab", "field", "physical")
 LAMBDA_PHYS_GRID = (0.0, 0.01, 0.1, 1.0)
 
 #: Training hyper-parameters shared by every network (same values, same draws).
+#: ``val_fraction`` 0.2 early-stops on a fifth of the training subjects (epoch 0, the
+#: training mean, included; Prechelt 1998, "Early stopping - but when?", in *Neural
+#: Networks: Tricks of the Trade*, LNCS 1524, 55-69, doi:10.1007/3-540-49430-8_3) and
+#: refits on every row for the chosen epochs; 0 trains ``max_epochs`` on every row.
 _NETWORK_SPACE: dict[str, tuple] = {
     "lr": (3e-3, 1e-2),
     "weight_decay": (0.03, 0.3, 1.0, 3.0, 10.0),
     "max_epochs": (100, 200),
     "dropout": (0.0, 0.1),
+    "val_fraction": (0.0, 0.2),
 }
 _NETWORKS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
 _PINNS = _NETWORKS[1:]
@@ -87,8 +92,8 @@ def search_space(name: str) -> dict[str, tuple]:
     """The grid ``benchmarks/tune.py`` samples :data:`N_CONFIGS` points of, for ``name``.
 
     Networks share one training grid (learning rate, AdamW weight decay, epochs,
-    dropout); the PINNs add :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty
-    (one value per configuration, so its own inner CV is bypassed), PLS its number of
+    dropout, early stopping on a subject split or not); the PINNs add
+    :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty (one value per configuration, so its own inner CV is bypassed), PLS its number of
     components, gradient boosting (``gbr``) its stages, shrinkage, tree depth and row
     fraction. The Gaussian process (``gp``) has none: its kernel's hyper-parameters
     are fitted by marginal likelihood inside each ``fit``.
