@@ -93,8 +93,9 @@ def search_space(name: str) -> dict[str, tuple]:
 
     Networks share one training grid (learning rate, AdamW weight decay, epochs,
     dropout, early stopping on a subject split or not); the PINNs add
-    :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty (one value per configuration, so its own inner CV is bypassed), PLS its number of
-    components, gradient boosting (``gbr``) its stages, shrinkage, tree depth and row
+    :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty (one value per
+    configuration, so its own inner CV is bypassed), PLS its number of components,
+    gradient boosting (``gbr``) its stages, shrinkage, tree depth and row
     fraction. The Gaussian process (``gp``) has none: its kernel's hyper-parameters
     are fitted by marginal likelihood inside each ``fit``.
 
