@@ -836,9 +836,14 @@ def _study_rows() -> dict[str, dict[str, Any]]:
     return {str(r["model"]): dict(r) for r in STUDY_TABLE}
 
 
-def forest_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
-    """Inputs of figure 12: RMSE, its interval, and the study's RMSE where it has one."""
-    study = _study_rows()
+def forest_table(metrics: pd.DataFrame, models: Sequence[str], *,
+                 with_study: bool = True) -> pd.DataFrame:
+    """Inputs of the forest plot: RMSE, its interval, and the study's RMSE where it has one.
+
+    ``with_study=False`` (a user's data, measured on another device) leaves the study's
+    values out (all NaN).
+    """
+    study = _study_rows() if with_study else {}
     return pd.DataFrame({
         "model": list(models),
         "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
@@ -1034,7 +1039,8 @@ class _Page:
 
     @property
     def user_data(self) -> bool:
-        return self.results.config is None
+        """A user's measurements: no simulation configuration and no preset recorded."""
+        return self.results.config is None and not self.results.meta.get("preset")
 
     @property
     def rep_note(self) -> str:
@@ -1090,10 +1096,12 @@ def _section_data(page: _Page) -> None:
     g = frame["glucose_mgdl"].to_numpy(float)
     corr = channel_correlations(g, adc)
     corr_txt = ", ".join(f"{w:g} nm r = {r:+.2f}" for w, r in corr.items())
+    by_status = ("by diabetes status (left)" if "diabetes_status" in frame
+                 else "(left; the diabetes status is not recorded)")
     page.add("data", "Glucose and NIR signal",
-             f"Reference glucose of the {len(frame)} {what} snapshots by diabetes status "
-             f"(left) and the log ADC code of each LED channel against glucose, with the "
-             f"Pearson correlation ({corr_txt}).",
+             f"Reference glucose of the {len(frame)} {what} snapshots {by_status} and the "
+             f"log ADC code of each LED channel against glucose, with the Pearson "
+             f"correlation ({corr_txt}).",
              lambda: data.figure_data_characteristics(
                  g, frame["diabetes_status"].astype(str).to_numpy()
                  if "diabetes_status" in frame else np.full(len(frame), "unknown"),
@@ -1108,8 +1116,9 @@ def _section_data(page: _Page) -> None:
     phys = physiology_panels(frame)
     if phys:
         page.add("physiology", "Physiology",
-                 "Distributions of the measured physiological vector the models see (its "
-                 "humidity and pressure entries are shown with the environment).",
+                 "Distributions of the measured physiological vector the models see"
+                 + (" (its humidity and pressure entries are shown with the environment)."
+                    if env else "."),
                  lambda: data.figure_distributions(phys, ncols=5))
 
 
@@ -1119,6 +1128,8 @@ def _section_pipeline(page: _Page) -> None:
     from ..plots.style import plot_style
 
     cfg = page.results.config
+    if page.user_data:
+        return  # measured, not simulated: there is no simulator pipeline to draw
     if cfg is None:
         page.add("pipeline", "Data-generation pipeline", "The simulator's layers.", None,
                  note="No resolved configuration in the results: diagram not drawn.")
@@ -1140,8 +1151,8 @@ def _section_architecture(page: _Page) -> None:
     models = page.models
     arch_models = [m for m in ARCHITECTURE_MODELS if m in models] or list(ARCHITECTURE_MODELS)
     archs: dict[str, Any] = {}
-    arch_err: str | None = "No simulated dataset in the results: diagram not drawn."
-    if ds is not None and not page.user_data and page.wants("architecture", "features"):
+    arch_err: str | None = "No dataset.parquet in the results: diagram not drawn."
+    if ds is not None and page.wants("architecture", "features"):
         try:
             archs = fitted_architectures(ds, page.results.meta.get("preset"), arch_models)
             arch_err = None
@@ -1150,8 +1161,11 @@ def _section_architecture(page: _Page) -> None:
     page.add("architecture", "Model architectures",
              "One block diagram per model family, inputs at the top and glucose at the "
              "bottom; the layer widths (a→b→c: the Linear layers of each block) and parameter "
-             "counts are read from each model built with this preset's tuned parameters and "
-             "fitted for one epoch on this run's dataset, so they are the sizes that ran.",
+             "counts are read from each model built with "
+             + ("the default parameters" if page.user_data else "this preset's tuned "
+                "parameters")
+             + " and fitted for one epoch on this run's dataset, so they are the sizes that "
+             "ran.",
              (lambda: architecture.figure_architectures(archs)) if archs else None,
              note=arch_err)
 
@@ -1164,7 +1178,7 @@ def _section_features(page: _Page) -> None:
     feat: dict[str, list[str]] = {}
     feat_src: dict[str, str] = {}
     n_ch = n_phys = 0
-    if ds is not None and not page.user_data and page.wants("features"):
+    if ds is not None and page.wants("features"):
         try:
             table, n_ch, n_phys = ebl_feature_table(ds, page.results.meta.get("preset"))
             feat, feat_src = feature_categories(table)
@@ -1177,7 +1191,7 @@ def _section_features(page: _Page) -> None:
              "names; the full list is features.feature_table).",
              (lambda: architecture.figure_feature_engineering(
                  n_ch, n_phys, feat, feat_src)) if feat else None,
-             note=None if feat else "No simulated dataset in the results: diagram not drawn.")
+             note=None if feat else "No dataset.parquet in the results: diagram not drawn.")
 
 
 def _diabetes_status(page: _Page) -> pd.Series | None:
@@ -1281,9 +1295,11 @@ def _reference_text(refs: Mapping[str, float]) -> str:
     """Caption sentence naming the reference rows drawn as horizontal lines."""
     if not refs:
         return ""
-    return (" The " + " and ".join(
-        f"{'oracle (a bound, not a competitor)' if r == 'oracle' else 'training mean (no skill)'}"
-        for r in refs) + " are drawn as horizontal reference lines.")
+    names = [("oracle (a bound, not a competitor)" if r == "oracle" else
+              "training mean (no skill)") for r in refs]
+    return (" The " + " and ".join(names)
+            + (" are drawn as horizontal reference lines." if len(names) > 1 else
+               " is drawn as a horizontal reference line."))
 
 
 def _section_radar(page: _Page) -> None:
@@ -1382,11 +1398,12 @@ def _section_forest(page: _Page) -> None:
     from ..plots import forest
     from ..plots.style import plot_style
 
-    ft = forest_table(page.results.metrics, [m for m in page.models if not is_ablation_row(m)])
+    ft = forest_table(page.results.metrics, [m for m in page.models if not is_ablation_row(m)],
+                      with_study=not page.user_data)
     page.add("forest", "RMSE with 95 % CI",
-             "Each model's RMSE with its 95 % cluster-bootstrap confidence interval, next to "
-             "the value the study reported from its single 48-snapshot test set (open "
-             "diamonds).",
+             "Each model's RMSE with its 95 % cluster-bootstrap confidence interval"
+             + ("." if page.user_data else ", next to the value the study reported from its "
+                "single 48-snapshot test set (open diamonds)."),
              lambda: _figure_one(lambda ax: forest.plot_rmse_forest(ft, ax=ax),
                                  (7.0, 0.5 * len(ft) + 1.5), plot_style))
 
