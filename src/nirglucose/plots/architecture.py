@@ -14,7 +14,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyBboxPatch
 
-from .style import GREY, OKABE_ITO, model_color, model_label, plot_style
+from .style import GREY, OKABE_ITO, model_color, model_label, plain_log_ticks, plot_style
 
 __all__ = ["figure_architectures", "figure_feature_engineering", "figure_performance_panel"]
 
@@ -173,8 +173,15 @@ def figure_performance_panel(table: pd.DataFrame) -> Figure:
                         color=_PRESET_COLORS[k % len(_PRESET_COLORS)], xerr=xerr,
                         error_kw={"lw": 0.8, "capsize": 2},
                         label=preset if len(presets) > 1 else None)
-            if log:
+            if log:  # bars from the decade below the smallest value, not from an
+                # arbitrary autoscaled edge, so that their lengths compare
                 ax.set_xscale("log")
+                shown = table[col].to_numpy(float) if col in table else np.array([])
+                shown = shown[np.isfinite(shown) & (shown > 0)]
+                if shown.size:
+                    ax.set_xlim(10.0 ** np.floor(np.log10(shown.min())), 1.6 * shown.max())
+                    plain_log_ticks(ax.xaxis, np.r_[shown, 10.0 ** np.floor(
+                        np.log10(shown.min()))])
             else:
                 ax.set_xlim(left=0)
             ax.set_xlabel(xlabel)
