@@ -40,3 +40,20 @@ def test_heatmap_cells_and_annotations():
     assert len(ax.texts) == 7  # finite cells only
     assert [t.get_text() for t in ax.get_xticklabels()] == ["850", "940", "1050", "1150"]
     assert ax.get_xlabel() == "LED wavelength [nm]"
+
+
+def test_forest_every_row_has_a_visible_marker():
+    """The no-skill row too: a line marker ('_') would vanish into its error bar."""
+    from matplotlib.lines import Line2D
+
+    models = ["ebl", "oracle", "gbr", "mean"]
+    t = pd.DataFrame({"model": models, "rmse_mgdl": [14.0, 5.0, 16.0, 40.0],
+                      "rmse_ci_low": [12.0, 4.0, 14.0, 35.0],
+                      "rmse_ci_high": [16.0, 6.0, 18.0, 45.0]})
+    ax = plot_rmse_forest(t)
+    assert len(ax.containers) == len(models)
+    for model, cont in zip(models, ax.containers, strict=True):
+        line = cont.lines[0]  # the data marker of the error bar
+        assert line.get_marker() in Line2D.filled_markers, (model, line.get_marker())
+        assert line.get_markersize() >= 5, model
+        assert line.get_markeredgecolor() != line.get_markerfacecolor(), model

@@ -89,3 +89,31 @@ def test_efficiency_landscape_three_panels():
     fig = figure_efficiency_landscape(t)
     assert len(fig.axes) == 3
     assert all(len(ax.collections) == len(MODELS) for ax in fig.axes)
+
+
+def _reference_lines_within(ax, refs):
+    lo, hi = ax.get_ylim()
+    drawn = [ln.get_ydata()[0] for ln in ax.lines if len(set(ln.get_ydata())) == 1
+             and tuple(ln.get_xdata()) == (0, 1)]
+    assert sorted(drawn) == sorted(refs.values())  # one axhline per reference
+    for name, v in refs.items():
+        assert lo <= v <= hi, (name, v, (lo, hi))
+
+
+def test_physics_depth_reference_lines_lie_within_the_axes():
+    """The no-skill line above every model must be inside the y-limits, not only in the legend."""
+    t = pd.DataFrame({"model": MODELS, "physics_depth": [4, 0, 1, 0],
+                      "rmse_mgdl": [13.6, 20.0, 14.6, 35.1],
+                      "n_parameters": [56, 17, 163_000, 3_713]})
+    refs = {"oracle": 0.8, "mean": 60.0}
+    ax = plot_physics_depth(t, references=refs, ax=Figure().add_subplot())
+    _reference_lines_within(ax, refs)
+    assert ax.get_ylim()[0] == 0.0
+
+
+def test_efficiency_reference_lines_lie_within_the_axes():
+    refs = {"oracle": 0.8, "mean": 60.0}
+    ax = plot_efficiency([56, 17, 163_000, 3_713], [13.6, 20.0, 14.6, 35.1], MODELS,
+                         xlabel="parameters [-]", log_x=True, references=refs,
+                         ax=Figure().add_subplot())
+    _reference_lines_within(ax, refs)

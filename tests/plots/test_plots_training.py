@@ -43,3 +43,20 @@ def test_figure_without_networks_says_so():
     fig = figure_training_dynamics({})
     texts = [t.get_text() for ax in fig.axes for t in ax.texts]
     assert texts == [NO_NETWORKS_TEXT]
+
+
+def test_a_loss_term_has_one_colour_in_every_panel():
+    """'train mse' and 'train physics' look the same whatever the model's colour."""
+    other = PINN.assign(train_reflectance=0.3 / EPOCHS)[
+        ["epoch", "train_loss", "train_reflectance", "train_mse", "train_physics"]]
+    fig = figure_training_dynamics({"original-pinn": PINN, "optimized-pinn": other,
+                                    "rte-pinn": PINN})
+    colours: dict[str, set] = {}
+    for ax in fig.axes:
+        for line in ax.lines:
+            name = line.get_label()
+            if "(total" not in name:
+                colours.setdefault(name, set()).add(line.get_color())
+    assert {"train mse", "train physics", "train reflectance"} <= set(colours)
+    assert all(len(c) == 1 for c in colours.values()), colours
+    assert len({next(iter(c)) for c in colours.values()}) == len(colours)  # distinct terms

@@ -14,7 +14,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyBboxPatch
 
-from .style import GREY, OKABE_ITO, model_color, model_label, plot_style
+from .style import GREY, OKABE_ITO, model_color, model_label, plain_log_ticks, plot_style
 
 __all__ = ["figure_architectures", "figure_feature_engineering", "figure_performance_panel"]
 
@@ -25,7 +25,7 @@ _PRESET_COLORS = (OKABE_ITO["blue"], OKABE_ITO["vermillion"], OKABE_ITO["bluish_
 def _box(ax: Axes, x: float, y: float, w: float, h: float, text: str, color: str,
          fontsize: float = 8.0) -> None:
     ax.add_patch(FancyBboxPatch((x - w / 2, y - h / 2), w, h, boxstyle="round,pad=0.01",
-                                fc=color, ec="black", lw=0.8, alpha=0.9))
+                                fc=color, ec="black", lw=0.8))  # the colour carries its alpha
     ax.text(x, y, text, ha="center", va="center", fontsize=fontsize)
 
 
@@ -105,13 +105,15 @@ def figure_feature_engineering(n_channels: int, n_physiology: int,
         ax.set_xlim(0, 12)
         ax.set_ylim(-0.7, h - 0.3)
         mid = (h - 1) / 2
-        _box(ax, 1.2, mid + 0.8, 2.1, 1.0,
-             f"raw intensities\nI_λ, dark I0_λ\n({n_channels} LEDs)", "white", 8.5)
-        _box(ax, 1.2, mid - 0.8, 2.1, 1.0,
-             f"physiological\nvector\n({n_physiology} entries)", "white", 8.5)
-        _box(ax, 3.7, mid + 0.8, 1.9, 1.0, f"absorbances\nA = log10(I0/I)\n({n_channels})",
+        # inputs in one column (absorbances above the physiological vector) so that no
+        # arrow to a feature category crosses another box
+        _box(ax, 0.95, mid + 0.8, 1.7, 1.0,
+             f"raw intensities\nI_λ, reference I0_λ\n({n_channels} LEDs)", "white", 8.5)
+        _box(ax, 3.2, mid + 0.8, 1.9, 1.0, f"absorbances\nA = log10(I0/I)\n({n_channels})",
              OKABE_ITO["sky_blue"] + "60", 8.5)
-        _arrow(ax, (2.25, mid + 0.8), (2.75, mid + 0.8))
+        _box(ax, 3.2, mid - 0.8, 1.9, 1.0,
+             f"physiological\nvector\n({n_physiology} entries)", "white", 8.5)
+        _arrow(ax, (1.8, mid + 0.8), (2.25, mid + 0.8))
         for i, cat in enumerate(cats):
             y = h - 1 - i
             names = list(categories[cat])
@@ -120,9 +122,9 @@ def figure_feature_engineering(n_channels: int, n_physiology: int,
                  OKABE_ITO["yellow"] + "60", 7.5)
             src = (sources or {}).get(cat, "both")
             if src in ("absorbance", "both"):
-                _arrow(ax, (4.65, mid + 0.8), (5.0, y))
+                _arrow(ax, (4.15, mid + 0.8), (5.0, y))
             if src in ("physiology", "both"):
-                _arrow(ax, (2.25, mid - 0.8), (5.0, y))
+                _arrow(ax, (4.15, mid - 0.8), (5.0, y))
         _box(ax, 10.9, mid, 1.8, 1.0, f"{n_feat} features\n→ scaled\n→ ridge → glucose",
              OKABE_ITO["blue"] + "40", 8.5)
         for i in range(len(cats)):
@@ -171,8 +173,15 @@ def figure_performance_panel(table: pd.DataFrame) -> Figure:
                         color=_PRESET_COLORS[k % len(_PRESET_COLORS)], xerr=xerr,
                         error_kw={"lw": 0.8, "capsize": 2},
                         label=preset if len(presets) > 1 else None)
-            if log:
+            if log:  # bars from the decade below the smallest value, not from an
+                # arbitrary autoscaled edge, so that their lengths compare
                 ax.set_xscale("log")
+                shown = table[col].to_numpy(float) if col in table else np.array([])
+                shown = shown[np.isfinite(shown) & (shown > 0)]
+                if shown.size:
+                    ax.set_xlim(10.0 ** np.floor(np.log10(shown.min())), 1.6 * shown.max())
+                    plain_log_ticks(ax.xaxis, np.r_[shown, 10.0 ** np.floor(
+                        np.log10(shown.min()))])
             else:
                 ax.set_xlim(left=0)
             ax.set_xlabel(xlabel)

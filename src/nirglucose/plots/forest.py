@@ -50,8 +50,10 @@ def plot_rmse_forest(
         err = None
         if np.isfinite(lo) and np.isfinite(hi):
             err = [[max(row["rmse_mgdl"] - lo, 0.0)], [max(hi - row["rmse_mgdl"], 0.0)]]
-        ax.errorbar([row["rmse_mgdl"]], [y[k]], xerr=err, fmt=model_marker(m), ms=6,
-                    color=colors[m], ecolor=colors[m], elinewidth=1.6, capsize=3, zorder=3)
+        # a dark edge keeps pale markers (the no-skill row's light grey) visible
+        ax.errorbar([row["rmse_mgdl"]], [y[k]], xerr=err, fmt=model_marker(m), ms=7,
+                    color=colors[m], ecolor=colors[m], mec="black", mew=0.6, elinewidth=1.6,
+                    capsize=3, zorder=3)
     handles = [Line2D([], [], color="black", marker="o", ls="-", lw=1.6,
                       label="this run: RMSE, 95 % CI")]
     if "study_rmse_mgdl" in t and t["study_rmse_mgdl"].notna().any():

@@ -20,6 +20,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.transforms import offset_copy
 from numpy.typing import ArrayLike
 
 from ..metrics import PARKES_LINES, ZONE_LABELS
@@ -100,7 +101,7 @@ def _pairs(reference: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.n
 
 
 def _zone_legend(ax: Axes, scatter_label: str, zone_pct: Mapping[str, float] | None,
-                 color: str) -> None:
+                 color: str, note: str = "") -> None:
     handles = [Line2D([], [], ls="none", marker="o", ms=5, color=color, alpha=0.8)]
     labels = [scatter_label]
     if zone_pct:
@@ -108,24 +109,28 @@ def _zone_legend(ax: Axes, scatter_label: str, zone_pct: Mapping[str, float] | N
             if z in zone_pct:
                 handles.append(Line2D([], [], ls="none"))
                 labels.append(f"zone {z}: {zone_pct[z]:5.1f} %")
-    # below the grid, so that no zone (and no point) is hidden behind it
-    ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, -0.17),
-              ncol=3, handlelength=0.8, handletextpad=0.4, columnspacing=1.0,
-              borderaxespad=0.0, fontsize=8.5, frameon=False)
+    # below the grid (so that no zone and no point is hidden behind it), a fixed distance
+    # under the x label whatever the panel size, two columns so that it stays within the
+    # panel's width and clear of its neighbours
+    below = offset_copy(ax.transAxes, fig=ax.figure, y=-30, units="points")
+    ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+              bbox_transform=below, ncol=2, handlelength=0.8, handletextpad=0.4,
+              columnspacing=1.0, borderaxespad=0.0, fontsize=8.5, frameon=False,
+              title=note or None, title_fontsize=7.5)
 
 
 def _scatter(ax: Axes, ref: np.ndarray, pred: np.ndarray, lim: float, color: str,
-             point_size: float) -> None:
+             point_size: float) -> str:
+    """Draw the points; return the legend's note on points beyond the axes ('' if none)."""
     ax.scatter(ref, pred, s=point_size, color=color, alpha=0.6, linewidths=0, zorder=3)
     outside = int(np.count_nonzero((ref > lim) | (pred > lim)))
-    if outside:
-        ax.text(0.98, 0.02, f"{outside} beyond {lim:g} mg/dL not shown", transform=ax.transAxes,
-                ha="right", va="bottom", fontsize=7, color=GREY)
     ax.set_xlim(0, lim)
     ax.set_ylim(0, lim)
     ax.set_aspect("equal")
     ax.set_xlabel("reference glucose [mg/dL]")
     ax.set_ylabel("predicted glucose [mg/dL]")
+    # said in the legend: a note inside the grid would sit on a zone label
+    return f"{outside} beyond {lim:g} mg/dL not shown" if outside else ""
 
 
 @styled
@@ -181,8 +186,8 @@ def plot_clarke_grid(
         for x, y in positions:
             ax.text(x, y, zone, **_ZONE_TEXT)
     color = color or OKABE_ITO["blue"]
-    _scatter(ax, ref, pred, lim, color, point_size)
-    _zone_legend(ax, f"{label} (n = {ref.size})", zone_pct, color)
+    beyond = _scatter(ax, ref, pred, lim, color, point_size)
+    _zone_legend(ax, f"{label} (n = {ref.size})", zone_pct, color, note=beyond)
     ax.set_title(title if title is not None else "Clarke error grid")
     return ax
 
@@ -248,8 +253,8 @@ def plot_parkes_grid(
         for x, y in positions:
             ax.text(x, y, zone, **_ZONE_TEXT)
     color = color or OKABE_ITO["blue"]
-    _scatter(ax, ref, pred, lim, color, point_size)
-    _zone_legend(ax, f"{label} (n = {ref.size})", zone_pct, color)
+    beyond = _scatter(ax, ref, pred, lim, color, point_size)
+    _zone_legend(ax, f"{label} (n = {ref.size})", zone_pct, color, note=beyond)
     ax.set_title(title if title is not None else f"Parkes error grid, type {diabetes_type}")
     return ax
 
@@ -287,7 +292,8 @@ def figure_error_grids(
     nrows = -(-n // ncols)
     colors = model_colors(models)
     with plot_style():
-        fig = Figure(figsize=(3.6 * ncols, 3.9 * nrows), layout="compressed")
+        # constrained, not compressed: the layout then makes room for the legends below
+        fig = Figure(figsize=(3.6 * ncols, 4.6 * nrows), layout="constrained")
         axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
         for ax, model in zip(axes, models, strict=False):
             g = grids[model]

@@ -89,7 +89,7 @@ MODEL_MARKERS: dict[str, str] = {
     "sdnn": "X",
     "gp": "h",
     "gbr": "p",
-    "mean": "_",
+    "mean": "d",  # a filled marker: a line marker vanishes into a horizontal error bar
 }
 
 #: Colour of each diabetes status of the simulated cohort.

@@ -254,7 +254,8 @@ def plot_physics_depth(
         ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
     y = t["rmse_mgdl"].to_numpy(float)
     lines = _reference_lines(ax, references)
-    top = max([float(np.nanmax(y))] if y.size else [1.0] + [v for _, v in lines])
+    # the reference lines too: a no-skill line above the data must not fall off the axes
+    top = max(([float(np.nanmax(y))] if y.size else [1.0]) + [v for _, v in lines])
     ax.set_ylim(0.0, 1.25 * top)  # from zero: differences keep their true proportion
     refs = [v for v in (1e2, 1e4, 1e6) if v <= 1.5 * pmax] or [pmax]
     handles = [Line2D([], [], ls="none", marker="o", ms=np.sqrt(bubble_area([v], pmax)[0]),
@@ -351,7 +352,7 @@ def plot_efficiency(
         plain_log_ticks(ax.xaxis, xv)
     ax.margins(x=0.15)
     lines = _reference_lines(ax, references)
-    top = max([float(np.nanmax(yv))] if yv.size else [1.0] + [v for _, v in lines])
+    top = max(([float(np.nanmax(yv))] if yv.size else [1.0]) + [v for _, v in lines])
     ax.set_ylim(0.0, 1.2 * top)  # from zero: a 5 mg/dL gap keeps its true proportion
     ax.set_xlabel(xlabel)
     ax.set_ylabel("RMSE [mg/dL]")

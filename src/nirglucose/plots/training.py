@@ -53,13 +53,17 @@ def _same_curve(a: np.ndarray, b: np.ndarray) -> bool:
 #: Text of the panel drawn when a run has no networks.
 NO_NETWORKS_TEXT = "no networks in this run"
 
-_TERM_COLORS = (
-    OKABE_ITO["vermillion"],
-    OKABE_ITO["bluish_green"],
-    OKABE_ITO["reddish_purple"],
-    OKABE_ITO["orange"],
-    OKABE_ITO["sky_blue"],
-)
+#: Colour of each loss term, the same in every panel (a term's colour used to depend on
+#: the model's own colour and the order of its terms). Paul Tol's "muted" colours (Tol P,
+#: Colour Schemes, SRON/EPS/TN/09-002, 2021): none is a network's colour.
+_TERM_COLOR_BY_NAME = {
+    "mse": "#332288",
+    "physics": "#CC6677",
+    "reflectance": "#117733",
+    "scattering_prior": "#AA4499",
+}
+#: Colours of any other term, in order of appearance.
+_TERM_COLORS = ("#44AA99", "#88CCEE", "#DDCC77", "#882255")
 
 
 def loss_term_columns(history: pd.DataFrame) -> list[str]:
@@ -125,7 +129,6 @@ def plot_training_history(
     for col, split in (("train_loss", "train"), ("val_loss", "validation")):
         if col in history.columns:
             curves.append([split, "total", history[col].to_numpy(float), color, True])
-    term_colors = [c for c in _TERM_COLORS if c.lower() != color.lower()]
     terms: dict[str, str] = {}  # term -> colour, shared by its train and val curves
     for col in loss_term_columns(history):
         split, term = col.split("_", 1)
@@ -137,7 +140,9 @@ def plot_training_history(
         if same is not None:
             same[1] += f" = {term}"
             continue
-        c = terms.setdefault(term, term_colors[len(terms) % len(term_colors)])
+        c = terms.setdefault(term, _TERM_COLOR_BY_NAME.get(
+            term, _TERM_COLORS[sum(t not in _TERM_COLOR_BY_NAME for t in terms)
+                               % len(_TERM_COLORS)]))
         curves.append([split, term, y, c, False])
     values = []
     for split, name, y, c, total in curves:

@@ -205,6 +205,16 @@ def is_user_data(results: Results) -> bool:
     return results.config is None and not results.meta.get("preset")
 
 
+def _user_data_md(md: str) -> str:
+    """The benchmark's table.md text for a user's data: no preset, no study protocol.
+
+    The benchmark writes one paragraph for every run; on measured data its preset is
+    ``None`` and the study it compares against was measured on another device.
+    """
+    md = re.sub(r",? preset `(None|null)`", "", md)
+    return re.sub(r" ?Study: [^.]*?test n = \d+\.", "", md)
+
+
 def _reproduced_table(results: Results) -> str:
     from ..evaluation.reference import STUDY_TABLE
 
@@ -260,8 +270,10 @@ def _significance(results: Results) -> str:
     if results.table_md:
         from .presets import strip_ablation
 
-        parts.append(markdown_to_html(strip_ablation(results.table_md), skip_tables=True,
-                                      skip_h1=True))
+        md = strip_ablation(results.table_md)
+        if is_user_data(results):
+            md = _user_data_md(md)
+        parts.append(markdown_to_html(md, skip_tables=True, skip_h1=True))
     c = results.comparisons
     if c is not None and len(c):
         if not results.table_md:
@@ -341,8 +353,10 @@ def _run_info(results: Results) -> str:
         out.append(f"<details><summary>Resolved configuration (JSON)</summary>"
                    f'<pre id="config">{_esc(cfg_json)}</pre></details>')
     else:
-        out.append('<p class="note">The resolved configuration is not recorded in these '
-                   "results.</p>")
+        out.append('<p class="note">' + (
+            "Your data were measured, not simulated: there is no simulator configuration."
+            if is_user_data(results) else
+            "The resolved configuration is not recorded in these results.") + "</p>")
     rest = {k: v for k, v in meta.items() if k != "config"}
     if rest:
         out.append(f"<details><summary>All run metadata (JSON)</summary>"
