@@ -457,7 +457,9 @@ def sweep(
     resamples: ResamplesOption = DEFAULT_RESAMPLES,
     jobs: JobsOption = None,
     scheduler: Annotated[
-        str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
+        str | None,
+        typer.Option(help="Dask scheduler address, e.g. tcp://host:8786, or 'local': a "
+                     "Dask cluster of --jobs worker processes started for this run."),
     ] = None,
     figures: Annotated[bool, typer.Option(help="Write figures to OUT/figures.")] = True,
     calibration: Annotated[
