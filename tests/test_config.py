@@ -239,3 +239,100 @@ def test_simulate_modules_hold_no_scenario_constants():
             )
         ]
         assert numbers == [], (module.__name__, numbers)
+
+
+# --- issue 20: every numeric value has a physical range ----------------------------------
+
+
+def test_every_numeric_value_has_an_explicit_physical_bound():
+    """Each number of the config (fields, tuple items, dict values) has both bounds,
+    narrower than the generic +-MAX_ABS_VALUE rule: a new unbounded field fails here."""
+    from nirglucose.config import MAX_ABS_VALUE
+    from nirglucose.config_keys import numeric_leaves
+
+    leaves = numeric_leaves()
+    assert len(leaves) > 150  # the walk sees the whole model (tuples, dicts, LED records)
+    loose = [
+        (path, str(b))
+        for path, b in leaves
+        if b.lo is None or b.hi is None or b.lo < -MAX_ABS_VALUE or b.hi > MAX_ABS_VALUE
+        or b.hi - b.lo >= 2 * MAX_ABS_VALUE
+    ]
+    assert loose == []
+
+
+def test_bound_walk_sees_an_unbounded_field():
+    from typing import Annotated
+
+    from pydantic import BaseModel, Field
+
+    from nirglucose.config_keys import numeric_leaves
+
+    class Probe(BaseModel):
+        free: float = 1.0
+        half: float = Field(1.0, ge=0)
+        pair: tuple[Annotated[float, Field(ge=0, le=1)], float] = (0.0, 1.0)
+
+    got = {p: (b.lo, b.hi) for p, b in numeric_leaves(Probe)}
+    assert got == {
+        "free": (None, None), "half": (0, None), "pair.0": (0, 1), "pair.1": (None, None)
+    }
+
+
+@pytest.mark.parametrize("preset", list(PRESETS))
+def test_presets_lie_within_the_bounds(preset):
+    from nirglucose.config_keys import bounds_of, numeric_leaves
+
+    data = resolve_config(preset).model_dump(mode="json")
+    checked = 0
+
+    def walk(node, path):
+        nonlocal checked
+        if isinstance(node, dict):
+            for k, v in node.items():
+                walk(v, f"{path}.{k}" if path else k)
+        elif isinstance(node, list):
+            for i, v in enumerate(node):
+                walk(v, f"{path}.{i}")
+        elif isinstance(node, int | float) and not isinstance(node, bool):
+            b = bounds_of(path)
+            assert b is not None, path
+            assert b.lo <= node <= b.hi, (path, node, str(b))
+            checked += 1
+
+    walk(data, "")
+    assert checked >= len(numeric_leaves()) - 10  # variable-length items counted per item
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "words"),
+    [
+        ("hardware.adc_bits", 40, ["hardware.adc_bits=40", "between 8 and 24", "[bit]"]),
+        ("environment.temperature_c", (-40.0, 30.0),
+         ["environment.temperature_c[0]=-40.0", "between -20 and 50", "[degC]"]),
+        ("optics.source_detector_mm", 0.2, ["> 0.5 and <= 20", "[mm]"]),
+        ("leds.emitters.1.wavelength_nm", 1400, ["between 700 and 1300", "[nm]"]),
+        ("glucose.meal_peak_mgdl", {"normal": 35.0, "prediabetes": 60.0, "type1": 900.0,
+                                    "type2": 95.0},
+         ["glucose.meal_peak_mgdl[type1]=900.0", "between 0 and 500", "[mg/dL]"]),
+    ],
+)
+def test_out_of_range_message_names_key_value_range_and_unit(key, value, words):
+    with pytest.raises(ConfigError) as err:
+        resolve_config("paper", {key: value})
+    msg = str(err.value)
+    assert "is out of range: must be" in msg and "\n" not in msg
+    for w in words:
+        assert w in msg, msg
+
+
+def test_bounds_text():
+    from nirglucose.config_keys import Bounds, key_range
+
+    assert str(Bounds(8, 24)) == "between 8 and 24"
+    assert str(Bounds(0, 1, lo_open=True)) == "> 0 and <= 1"
+    assert str(Bounds(100, 1e9)) == "between 100 and 1e9"
+    assert key_range("hardware.adc_bits") == "between 8 and 24"
+    assert key_range("glucose.fasting_mgdl") == "0: between 20 and 600; 1: between 0 and 200"
+    assert "wavelength_nm: between 700 and 1300" in key_range("leds")
+    assert key_range("device.physiology") == ""

@@ -223,9 +223,9 @@ def simulate(
 
 @app.command()
 def keys() -> None:
-    """List every config key accepted by --set: default on the paper preset, unit, meaning."""
+    """List every config key accepted by --set: paper preset default, unit, range, meaning."""
     from .config import resolve_config, valid_keys
-    from .config_keys import key_info
+    from .config_keys import key_info, key_range
 
     data = resolve_config("paper").model_dump(mode="json")
     for key in valid_keys():
@@ -235,7 +235,8 @@ def keys() -> None:
         info = key_info(key)
         unit = f" [{info.unit}]" if info.unit else ""
         desc = f"  # {info.description}" if info.description else ""
-        _say(f"{key} = {node}{unit}{desc}", err=False)
+        rng = f" ({key_range(key)})" if key_range(key) else ""
+        _say(f"{key} = {node}{unit}{rng}{desc}", err=False)
 
 
 @app.command("models")
@@ -456,7 +457,9 @@ def sweep(
     resamples: ResamplesOption = DEFAULT_RESAMPLES,
     jobs: JobsOption = None,
     scheduler: Annotated[
-        str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
+        str | None,
+        typer.Option(help="Dask scheduler address, e.g. tcp://host:8786, or 'local': a "
+                     "Dask cluster of --jobs worker processes started for this run."),
     ] = None,
     figures: Annotated[bool, typer.Option(help="Write figures to OUT/figures.")] = True,
     calibration: Annotated[

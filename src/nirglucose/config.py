@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 import re
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -107,6 +107,17 @@ class _Model(BaseModel):
         return v
 
 
+def _num(lo: float, hi: float, *, gt: bool = False) -> Any:
+    """A float type within ``[lo, hi]`` (``(lo, hi]`` with ``gt``), as pydantic constraints."""
+    return Annotated[float, Field(gt=lo, le=hi) if gt else Field(ge=lo, le=hi)]
+
+
+def _pair(lo: float, hi: float, *, gt: bool = False) -> Any:
+    """A ``(low, high)`` range type whose two values lie within ``[lo, hi]`` (see :func:`_num`)."""
+    item = _num(lo, hi, gt=gt)
+    return tuple[item, item]
+
+
 def _check_range(value: tuple[float, float], name: str) -> tuple[float, float]:
     low, high = value
     if not low < high:
@@ -118,35 +129,36 @@ class LED(_Model):
     """One LED of the set: where it emits, how wide, how strong, how well it is detected."""
 
     wavelength_nm: float = Field(
-        ..., description="Centre wavelength, within the optics tables' 700-1300 nm. [nm]"
+        ...,
+        ge=700,
+        le=1300,
+        description="Centre wavelength, within the optics tables' 700-1300 nm grid "
+        "(data/optics/SOURCES.md). [nm]",
     )
     fwhm_nm: float = Field(
         ...,
         gt=0,
+        le=150,
         description="Emission full width at half maximum, typical of IR LEDs "
-        "(e.g. Vishay VSLY5850 30 nm, TSAL6200 40 nm at 940 nm; longer wavelengths wider). [nm]",
+        "(e.g. Vishay VSLY5850 30 nm, TSAL6200 40 nm at 940 nm; longer wavelengths wider); "
+        "at most 150 nm, a quarter of the optics tables' span. [nm]",
     )
     power_mw: float = Field(
         ...,
         gt=0,
+        le=1000,
         description="Optical power at 25 degC as driven (IR LEDs give 5-40 mW at 20-100 mA; "
-        "chosen per channel so tissue codes sit mid-scale). [mW]",
+        "chosen per channel so tissue codes sit mid-scale); at most 1 W, the class of "
+        "high-power IR emitters. [mW]",
     )
     responsivity_a_per_w: float = Field(
         ...,
         gt=0,
+        le=1.05,
         description="Photodiode responsivity at this LED (the study's set: Hamamatsu S1336 "
-        "typical spectral response read at 850/940/1050/1150 nm). [A/W]",
+        "typical spectral response read at 850/940/1050/1150 nm); at most 1.05, quantum "
+        "efficiency 1 at 1300 nm (lambda / 1239.8 nm A/W). [A/W]",
     )
-
-    @field_validator("wavelength_nm")
-    @classmethod
-    def _in_tables(cls, v: float) -> float:
-        if not 700.0 <= v <= 1300.0:
-            raise ValueError(
-                f"LED wavelength {v} nm is outside the optics tables' 700-1300 nm range"
-            )
-        return v
 
 
 #: The study's four LEDs: FWHM typical of IR LEDs, power per channel for mid-scale
@@ -222,30 +234,70 @@ class LEDConfig(_Model):
 class PhysiologyConfig(_Model):
     """Cohort traits (fixed per subject) and state (varying per measurement)."""
 
-    age_yr: tuple[float, float] = Field((18.0, 80.0), description="Age range. [yr]")
+    age_yr: _pair(0, 122) = Field(
+        (18.0, 80.0),
+        description="Age range. Bound: 0-122 yr, the longest documented human life. [yr]",
+    )
     bmi_kgm2_mean: float = Field(
-        28.0, gt=0, description="Mean BMI, near the NHANES 2017-2020 adult mean (29.6). [kg/m^2]"
+        28.0,
+        ge=10,
+        le=100,
+        description="Mean BMI, near the NHANES 2017-2020 adult mean (29.6). Bound: 10-100 "
+        "kg/m^2, the span of living adults (an assumption). [kg/m^2]",
     )
-    bmi_kgm2_sd: float = Field(5.0, ge=0, description="BMI standard deviation. [kg/m^2]")
-    bmi_kgm2: tuple[float, float] = Field((18.0, 40.0), description="BMI range. [kg/m^2]")
-    fitzpatrick_probs: tuple[float, ...] = Field(
-        (1 / 6,) * 6, description="Probability of Fitzpatrick types I-VI. [-]"
+    bmi_kgm2_sd: float = Field(
+        5.0,
+        ge=0,
+        le=20,
+        description="BMI standard deviation. At most 20 (an assumption: beyond, the 10-100 span "
+        "clips). [kg/m^2]",
     )
-    skin_thickness_mm: tuple[float, float] = Field(
-        (0.5, 4.0), description="Epidermis + dermis thickness range. [mm]"
+    bmi_kgm2: _pair(10, 100) = Field(
+        (18.0, 40.0),
+        description="BMI range. Bound: 10-100 kg/m^2, the span of living adults (an "
+        "assumption). [kg/m^2]",
+    )
+    fitzpatrick_probs: tuple[_num(0, 1), ...] = Field(
+        (1 / 6,) * 6,
+        description="Probability of Fitzpatrick types I-VI. Each a probability in 0-1. [-]",
+    )
+    skin_thickness_mm: _pair(0.5, 4) = Field(
+        (0.5, 4.0),
+        description="Epidermis + dermis thickness range. [mm]",
     )
     skin_thickness_mm_mean: float = Field(
-        1.8, gt=0, description="Mean skin thickness (dermis about 1-2 mm, Meglinski 2002). [mm]"
+        1.8,
+        ge=0.5,
+        le=4,
+        description="Mean skin thickness (dermis about 1-2 mm, Meglinski 2002). Bound: 0.5-4 "
+        "mm, the simulator's skin-layer range. [mm]",
     )
-    skin_thickness_mm_sd: float = Field(0.6, ge=0, description="Between-subject SD. [mm]")
+    skin_thickness_mm_sd: float = Field(
+        0.6,
+        ge=0,
+        le=2,
+        description="Between-subject SD. At most 2 mm, half the 0.5-4 mm range. [mm]",
+    )
     hydration_pct_sd_subject: float = Field(
-        4.0, ge=0, description="Between-subject SD of dermal water, % of nominal. [%]"
+        4.0,
+        ge=0,
+        le=50,
+        description="Between-subject SD of dermal water, % of nominal. At most 50 %, so dermal "
+        "water (nominal 0.65) stays below 1. [%]",
     )
     hydration_pct_sd_state: float = Field(
-        3.0, ge=0, description="Within-subject SD of dermal water, % of nominal. [%]"
+        3.0,
+        ge=0,
+        le=50,
+        description="Within-subject SD of dermal water, % of nominal. At most 50 %, so dermal "
+        "water (nominal 0.65) stays below 1. [%]",
     )
     hydration_pct_limit: float = Field(
-        10.0, gt=0, description="Hydration stays within +/- this of nominal (issue spec). [%]"
+        10.0,
+        gt=0,
+        le=50,
+        description="Hydration stays within +/- this of nominal (issue spec). At most 50 %, so "
+        "dermal water (nominal 0.65) stays below 1. [%]",
     )
     blood_fraction_median: float = Field(
         0.02,
@@ -254,66 +306,145 @@ class PhysiologyConfig(_Model):
         description="Median dermal blood volume fraction (0.002-0.05, Meglinski 2002). [-]",
     )
     blood_fraction_log_sd_subject: float = Field(
-        0.35, ge=0, description="Between-subject SD of ln(blood fraction). [-]"
+        0.35,
+        ge=0,
+        le=2,
+        description="Between-subject SD of ln(blood fraction). At most 2: a factor e^2 = 7.4 "
+        "per SD already spans Meglinski's 0.002-0.05. [-]",
     )
     blood_fraction_log_sd_state: float = Field(
-        0.15, ge=0, description="Within-subject SD of ln(blood fraction). [-]"
+        0.15,
+        ge=0,
+        le=2,
+        description="Within-subject SD of ln(blood fraction). At most 2: a factor e^2 = 7.4 per "
+        "SD already spans Meglinski's 0.002-0.05. [-]",
     )
     saturation_mean: float = Field(
         0.7, gt=0, lt=1, description="Dermal mixed SO2, 0.6-0.8 (SOURCES.md layer table). [-]"
     )
-    saturation_sd: float = Field(0.05, ge=0, description="SD of dermal SO2. [-]")
-    systolic_bp_mmhg: tuple[float, float] = Field((90.0, 180.0), description="Range. [mmHg]")
-    heart_rate_bpm: tuple[float, float] = Field((50.0, 120.0), description="Range. [1/min]")
-    resp_rate_bpm: tuple[float, float] = Field((12.0, 20.0), description="Range. [1/min]")
+    saturation_sd: float = Field(
+        0.05,
+        ge=0,
+        le=0.5,
+        description="SD of dermal SO2. At most 0.5, half of SO2's 0-1 span. [-]",
+    )
+    systolic_bp_mmhg: _pair(50, 250) = Field(
+        (90.0, 180.0),
+        description="Range. Bound: 50-250 mmHg, shock to hypertensive crisis. [mmHg]",
+    )
+    heart_rate_bpm: _pair(20, 250) = Field(
+        (50.0, 120.0),
+        description="Range. Bound: 20-250 /min, the span of human heart rates. [1/min]",
+    )
+    resp_rate_bpm: _pair(4, 60) = Field(
+        (12.0, 20.0),
+        description="Range. Bound: 4-60 /min, the span of human breathing rates. [1/min]",
+    )
     # --- vital signs: cohort (mean, between-subject SD) and within-subject SD ---------
     heart_rate_bpm_mean: float = Field(
-        72.0, gt=0, description="Resting adult heart rate, 72 +/- 9 /min (normal 60-100; "
-        "Fleming et al., Lancet 377, 1011 (2011)). [1/min]"
+        72.0,
+        ge=20,
+        le=250,
+        description="Resting adult heart rate, 72 +/- 9 /min (normal 60-100; Fleming et al., "
+        "Lancet 377, 1011 (2011)). Bound: 20-250 /min, the span of human heart rates. [1/min]",
     )
-    heart_rate_bpm_sd: float = Field(9.0, ge=0, description="Between-subject SD. [1/min]")
+    heart_rate_bpm_sd: float = Field(
+        9.0,
+        ge=0,
+        le=50,
+        description="Between-subject SD. At most 50 (an assumption). [1/min]",
+    )
     heart_rate_bpm_sd_state: float = Field(
-        4.0, ge=0, description="Within-subject SD between snapshots (an assumption). [1/min]"
+        4.0,
+        ge=0,
+        le=50,
+        description="Within-subject SD between snapshots (an assumption). At most 50. [1/min]",
     )
     resp_rate_bpm_mean: float = Field(
-        16.0, gt=0, description="Adult respiratory rate, 16 +/- 1.5 /min (normal 12-20; "
-        "Fleming et al. 2011). [1/min]"
+        16.0,
+        ge=4,
+        le=60,
+        description="Adult respiratory rate, 16 +/- 1.5 /min (normal 12-20; Fleming et al. "
+        "2011). Bound: 4-60 /min, the span of human breathing rates. [1/min]",
     )
-    resp_rate_bpm_sd: float = Field(1.5, ge=0, description="Between-subject SD. [1/min]")
+    resp_rate_bpm_sd: float = Field(
+        1.5,
+        ge=0,
+        le=20,
+        description="Between-subject SD. At most 20 (an assumption). [1/min]",
+    )
     resp_rate_bpm_sd_state: float = Field(
-        1.0, ge=0, description="Within-subject SD between snapshots (an assumption). [1/min]"
+        1.0,
+        ge=0,
+        le=20,
+        description="Within-subject SD between snapshots (an assumption). At most 20. [1/min]",
     )
     systolic_bp_mmhg_at_18: float = Field(
-        110.0, gt=0, description="Mean systolic pressure at 18 yr (Framingham). [mmHg]"
+        110.0,
+        ge=50,
+        le=250,
+        description="Mean systolic pressure at 18 yr (Framingham). Bound: 50-250 mmHg, shock to "
+        "hypertensive crisis. [mmHg]",
     )
     systolic_bp_mmhg_per_yr: float = Field(
-        0.5, description="Rise of systolic pressure per year of age (Framingham). [mmHg/yr]"
+        0.5,
+        ge=-2,
+        le=2,
+        description="Rise of systolic pressure per year of age (Framingham). At most +-2: a "
+        "century then spans 50-250 mmHg. [mmHg/yr]",
     )
-    systolic_bp_mmhg_sd: float = Field(12.0, ge=0, description="Between-subject SD. [mmHg]")
+    systolic_bp_mmhg_sd: float = Field(
+        12.0,
+        ge=0,
+        le=50,
+        description="Between-subject SD. At most 50 (an assumption). [mmHg]",
+    )
     systolic_bp_mmhg_sd_state: float = Field(
-        5.0, ge=0, description="Within-subject SD between snapshots (an assumption). [mmHg]"
+        5.0,
+        ge=0,
+        le=50,
+        description="Within-subject SD between snapshots (an assumption). At most 50. [mmHg]",
     )
     stress_systolic_mmhg: float = Field(
-        8.0, description="Systolic rise under acute mental stress (order of the laboratory "
-        "responses reviewed by Kario et al., Hypertens. Res. 26, 355 (2003)). [mmHg]"
+        8.0,
+        ge=0,
+        le=60,
+        description="Systolic rise under acute mental stress (order of the laboratory responses "
+        "reviewed by Kario et al., Hypertens. Res. 26, 355 (2003)). At most 60, above Kario's "
+        "largest responses. [mmHg]",
     )
     stress_heart_rate_bpm: float = Field(
-        10.0, description="Heart-rate rise under acute mental stress (Kario et al. 2003). [1/min]"
+        10.0,
+        ge=0,
+        le=60,
+        description="Heart-rate rise under acute mental stress (Kario et al. 2003). At most 60 "
+        "(an assumption). [1/min]",
     )
     # --- skin thickness and subcutaneous fat -------------------------------------------
     skin_thickness_mm_per_bmi: float = Field(
-        0.03, description="Skin-thickness growth per kg/m^2 of BMI (an assumption of size). "
-        "[mm/(kg/m^2)]"
+        0.03,
+        ge=-0.1,
+        le=0.1,
+        description="Skin-thickness growth per kg/m^2 of BMI (an assumption of size). At most "
+        "+-0.1: 6 mm across BMI 10-70, beyond the 0.5-4 mm range. [mm/(kg/m^2)]",
     )
     skin_thickness_bmi_ref_kgm2: float = Field(
-        25.0, gt=0, description="BMI at which skin_thickness_mm_mean applies. [kg/m^2]"
+        25.0,
+        ge=10,
+        le=100,
+        description="BMI at which skin_thickness_mm_mean applies. Bound: 10-100 kg/m^2, the "
+        "span of living adults (an assumption). [kg/m^2]",
     )
     skin_thickness_loss_per_decade: float = Field(
         0.06, ge=0, le=1, description="Relative thinning per decade of age (Shuster et al., "
         "Br. J. Dermatol. 93, 639 (1975)). [1/decade]"
     )
     skin_thickness_loss_onset_yr: float = Field(
-        40.0, ge=0, description="Age at which thinning starts (Shuster et al. 1975). [yr]"
+        40.0,
+        ge=0,
+        le=122,
+        description="Age at which thinning starts (Shuster et al. 1975). Bound: 0-122 yr, the "
+        "longest documented human life. [yr]",
     )
     subcutis_fat_fraction_min: float = Field(
         0.7, gt=0, lt=1, description="Subcutis fat volume fraction at the lowest BMI of "
@@ -323,8 +454,10 @@ class PhysiologyConfig(_Model):
         0.2, ge=0, lt=1, description="Rise of the fat fraction across subcutis_fat_bmi_kgm2, "
         "linear in BMI (an assumption; SOURCES.md: 0.7-0.9). [-]"
     )
-    subcutis_fat_bmi_kgm2: tuple[float, float] = Field(
-        (18.0, 40.0), description="BMI range over which the fat fraction rises. [kg/m^2]"
+    subcutis_fat_bmi_kgm2: _pair(10, 100) = Field(
+        (18.0, 40.0),
+        description="BMI range over which the fat fraction rises. Bound: 10-100 kg/m^2, the "
+        "span of living adults (an assumption). [kg/m^2]",
     )
     water_fraction_nominal: float = Field(
         WATER_FRACTION_DERMIS_NOMINAL,
@@ -338,30 +471,51 @@ class PhysiologyConfig(_Model):
     )
     # --- skin temperature and perfusion ------------------------------------------------
     skin_temp_c_neutral: float = Field(
-        33.0, description="Skin temperature under the probe at skin_temp_ambient_ref_c "
-        "(thermoneutral skin about 33 degC). [degC]"
+        33.0,
+        ge=10,
+        le=42,
+        description="Skin temperature under the probe at skin_temp_ambient_ref_c (thermoneutral "
+        "skin about 33 degC). Bound: 10-42 degC, cold-exposed skin to fever. [degC]",
     )
     skin_temp_ambient_ref_c: float = Field(
-        25.0, description="Ambient temperature at which skin sits at skin_temp_c_neutral. [degC]"
+        25.0,
+        ge=-20,
+        le=50,
+        description="Ambient temperature at which skin sits at skin_temp_c_neutral. Bound: -20 "
+        "to 50 degC, as environment.temperature_c. [degC]",
     )
     skin_temp_per_ambient: float = Field(
         0.3, ge=0, le=1, description="Skin-temperature change per degC of ambient (an "
         "assumption of the wrist's coupling). [-]"
     )
     skin_temp_c_sd_state: float = Field(
-        0.7, ge=0, description="Within-subject SD of skin temperature (an assumption). [degC]"
+        0.7,
+        ge=0,
+        le=5,
+        description="Within-subject SD of skin temperature (an assumption). At most 5 degC (an "
+        "assumption). [degC]",
     )
     perfusion_per_c: float = Field(
-        0.03, description="Relative perfusion change per degC of skin above skin_temp_c_neutral "
+        0.03,
+        ge=-0.5,
+        le=0.5,
+        description="Relative perfusion change per degC of skin above skin_temp_c_neutral "
         "(vasodilation; sign from Charkoudian, Mayo Clin. Proc. 78, 603 (2003), size an "
-        "assumption). [1/degC]"
+        "assumption). At most +-0.5 (an assumption). [1/degC]",
     )
     perfusion_per_mmhg: float = Field(
-        0.002, description="Relative perfusion change per mmHg of systolic pressure above "
-        "perfusion_ref_systolic_mmhg (an assumption). [1/mmHg]"
+        0.002,
+        ge=-0.05,
+        le=0.05,
+        description="Relative perfusion change per mmHg of systolic pressure above "
+        "perfusion_ref_systolic_mmhg (an assumption). At most +-0.05 (an assumption). [1/mmHg]",
     )
     perfusion_ref_systolic_mmhg: float = Field(
-        120.0, gt=0, description="Systolic pressure of nominal perfusion. [mmHg]"
+        120.0,
+        ge=50,
+        le=250,
+        description="Systolic pressure of nominal perfusion. Bound: 50-250 mmHg, shock to "
+        "hypertensive crisis. [mmHg]",
     )
     pulse_depth: float = Field(
         0.02, ge=0, lt=1, description="Cardiac blood-volume modulation depth: PPG perfusion "
@@ -371,18 +525,22 @@ class PhysiologyConfig(_Model):
         0.005, ge=0, lt=1, description="Respiratory blood-volume modulation depth, smaller "
         "than the cardiac one (an assumption). [-]"
     )
-    saturation_limits: tuple[float, float] = Field(
-        (0.3, 0.98), description="Dermal SO2 is clipped to this range. [-]"
+    saturation_limits: _pair(0, 1) = Field(
+        (0.3, 0.98),
+        description="Dermal SO2 is clipped to this range. Each a fraction in 0-1. [-]",
     )
-    blood_fraction_limits: tuple[float, float] = Field(
-        (1e-4, 0.2), description="Dermal blood volume fraction is clipped to this range "
-        "(above Meglinski 2002's 0.002-0.05 either side). [-]"
+    blood_fraction_limits: _pair(0, 1, gt=True) = Field(
+        (1e-4, 0.2),
+        description="Dermal blood volume fraction is clipped to this range (above Meglinski "
+        "2002's 0.002-0.05 either side). Each a fraction in 0-1, above 0 (its log is drawn). "
+        "[-]",
     )
     variation_scale: float = Field(
         1.0,
         ge=0,
+        le=10,
         description="Multiplies every between- and within-subject spread (0: all subjects "
-        "nominal, a cuvette-like phantom). [-]",
+        "nominal, a cuvette-like phantom). At most 10 (an assumption: wider spreads clip). [-]",
     )
 
     _ranges = field_validator(
@@ -404,22 +562,16 @@ class PhysiologyConfig(_Model):
             raise ValueError("fitzpatrick_probs needs 6 non-negative probabilities summing to 1")
         return v
 
-    @field_validator("skin_thickness_mm")
-    @classmethod
-    def _thickness(cls, v: tuple[float, float]) -> tuple[float, float]:
-        if v[0] < 0.5 or v[1] > 4.0:
-            raise ValueError(f"skin_thickness_mm must lie within 0.5-4 mm, got {v}")
-        return v
-
 
 class GlucoseConfig(_Model):
     """Glucose snapshots by diabetes status, and the glucose signal's optical magnitudes."""
 
-    status_probs: dict[str, float] = Field(
+    status_probs: dict[str, _num(0, 1)] = Field(
         {"normal": 0.35, "prediabetes": 0.2, "type1": 0.15, "type2": 0.3},
-        description="Cohort share of each diabetes status (an assumption; a clinic-like mix). [-]",
+        description="Cohort share of each diabetes status (an assumption; a clinic-like mix). "
+        "[-]",
     )
-    fasting_mgdl: dict[str, tuple[float, float]] = Field(
+    fasting_mgdl: dict[str, tuple[_num(20, 600), _num(0, 200)]] = Field(
         {
             "normal": (88.0, 8.0),
             "prediabetes": (112.0, 8.0),
@@ -427,66 +579,90 @@ class GlucoseConfig(_Model):
             "type2": (145.0, 30.0),
         },
         description="(mean, SD) of fasting glucose per status; ADA thresholds: normal < 100, "
-        "prediabetes 100-125, diabetes >= 126 mg/dL (ADA Standards of Care 2024, 2.1). [mg/dL]",
+        "prediabetes 100-125, diabetes >= 126 mg/dL (ADA Standards of Care 2024, 2.1). Means "
+        "within 20-600 mg/dL (range_mgdl's bound), SDs 0-200. [mg/dL]",
     )
-    meal_peak_mgdl: dict[str, float] = Field(
+    meal_peak_mgdl: dict[str, _num(0, 500)] = Field(
         {"normal": 35.0, "prediabetes": 60.0, "type1": 130.0, "type2": 95.0},
-        description="Mean postprandial excursion at its peak, about 1 h after a meal "
-        "(normal < 140 mg/dL at 2 h, ADA; diabetic excursions larger). [mg/dL]",
+        description="Mean postprandial excursion at its peak, about 1 h after a meal (normal < "
+        "140 mg/dL at 2 h, ADA; diabetic excursions larger). Each 0-500 (an assumption). "
+        "[mg/dL]",
     )
-    meal_peak_h: float = Field(1.0, gt=0, description="Time of the postprandial peak. [h]")
+    meal_peak_h: float = Field(
+        1.0,
+        gt=0,
+        le=12,
+        description="Time of the postprandial peak. At most 12 h (an assumption). [h]",
+    )
     stress_prob: float = Field(0.15, ge=0, le=1, description="Share of stressed snapshots. [-]")
-    stress_mgdl: tuple[float, float] = Field(
-        (10.0, 35.0), description="Stress (cortisol) rise range (an assumption). [mg/dL]"
+    stress_mgdl: _pair(0, 200) = Field(
+        (10.0, 35.0),
+        description="Stress (cortisol) rise range (an assumption). Each 0-200 (an assumption). "
+        "[mg/dL]",
     )
-    dawn_mgdl: dict[str, float] = Field(
+    dawn_mgdl: dict[str, _num(0, 200)] = Field(
         {"normal": 5.0, "prediabetes": 10.0, "type1": 25.0, "type2": 20.0},
-        description="Dawn-phenomenon rise, peaking about 06:00 (an assumption of size). [mg/dL]",
+        description="Dawn-phenomenon rise, peaking about 06:00 (an assumption of size). Each "
+        "0-200 (an assumption). [mg/dL]",
     )
-    range_mgdl: tuple[float, float] = Field(
-        (60.0, 400.0), description="Snapshots are reflected into this range. [mg/dL]"
+    range_mgdl: _pair(20, 600) = Field(
+        (60.0, 400.0),
+        description="Snapshots are reflected into this range. Within 20-600 mg/dL, the span "
+        "glucose meters report. [mg/dL]",
     )
-    hours_since_meal_h: tuple[float, float] = Field(
-        (0.0, 6.0), description="Range of the time since the last meal, drawn uniformly "
-        "(an excursion has decayed 6 h after a meal). [h]"
+    hours_since_meal_h: _pair(0, 24) = Field(
+        (0.0, 6.0),
+        description="Range of the time since the last meal, drawn uniformly (an excursion has "
+        "decayed 6 h after a meal). Within 0-24 h. [h]",
     )
     meal_size_log_sd: float = Field(
-        0.3, ge=0, description="SD of ln(meal size), a log-normal factor on the excursion "
-        "(an assumption). [-]"
+        0.3,
+        ge=0,
+        le=2,
+        description="SD of ln(meal size), a log-normal factor on the excursion (an assumption). "
+        "At most 2 (a factor 7.4 per SD). [-]",
     )
     dawn_peak_hour: float = Field(
         6.0, ge=0, le=24, description="Hour of day of the dawn-phenomenon peak (Rizza et al., "
         "N. Engl. J. Med. 310, 746 (1984): early morning). [h]"
     )
     dawn_width_h: float = Field(
-        2.0, gt=0, description="Width of the Gaussian dawn rise (an assumption). [h]"
+        2.0,
+        gt=0,
+        le=12,
+        description="Width of the Gaussian dawn rise (an assumption). At most 12 h. [h]",
     )
     # --- optical magnitudes (SOURCES.md, Glucose section: weakly sourced) -------------
     water_displacement_per_mm: float = Field(
         1.1e-4,
         ge=0,
+        le=1e-3,
         description="Fraction of water displaced per mM glucose (partial molar volume 112 "
-        "mL/mol). [1/mM]",
+        "mL/mol). At most 1e-3, ten times the literature. [1/mM]",
     )
     absorptivity_per_cm_per_mm: float = Field(
         1.0e-4,
         ge=0,
+        le=1e-3,
         description="Glucose's own absorption at the 2nd C-H overtone peak (about 1150 nm), "
-        "order-of-magnitude estimate (SOURCES.md: <= 1e-4 of water's mua per mM). [1/(cm mM)]",
+        "order-of-magnitude estimate (SOURCES.md: <= 1e-4 of water's mua per mM). At most 1e-3, "
+        "ten times the estimate. [1/(cm mM)]",
     )
     scattering_rel_per_mm: float = Field(
         -1.25e-3,
+        ge=-1e-2,
         le=0,
-        description="Relative change of mus' per mM from refractive-index matching: "
-        "-2 (dn/dC)/(n_s - n_ecf) with dn/dC = 2.5e-5/mM and n_s - n_ecf = 0.04 "
-        "(Maier et al. 1994). [1/mM]",
+        description="Relative change of mus' per mM from refractive-index matching: -2 "
+        "(dn/dC)/(n_s - n_ecf) with dn/dC = 2.5e-5/mM and n_s - n_ecf = 0.04 (Maier et al. "
+        "1994). At least -1e-2, eight times Maier's. [1/mM]",
     )
     signal_gain: float = Field(
         1.0,
         gt=0,
+        le=100,
         description="Multiplies all three glucose optical effects. 1 keeps literature "
         "magnitudes; the presets raise it to reach the study's correlation (PAPER_SIGNAL_GAIN, "
-        "WEARABLE_SIGNAL_GAIN). [-]",
+        "WEARABLE_SIGNAL_GAIN). At most 100, eight times the presets' gains. [-]",
     )
 
     @model_validator(mode="after")
@@ -506,33 +682,42 @@ class GlucoseConfig(_Model):
             or abs(sum(self.status_probs.values()) - 1) > 1e-6
         ):
             raise ValueError("glucose.status_probs must be non-negative and sum to 1")
-        lo, hi = _check_range(self.range_mgdl, "glucose.range_mgdl")
-        if lo < 20 or hi > 600:
-            raise ValueError(
-                f"glucose.range_mgdl must lie within 20-600 mg/dL, got {self.range_mgdl}"
-            )
-        m_lo, m_hi = _check_range(self.hours_since_meal_h, "glucose.hours_since_meal_h")
-        if m_lo < 0:
-            raise ValueError(f"glucose.hours_since_meal_h must be >= 0, got {m_lo}")
+        # the bounds of each value are the fields' own (issue 20); here only low < high
+        _check_range(self.range_mgdl, "glucose.range_mgdl")
+        _check_range(self.hours_since_meal_h, "glucose.hours_since_meal_h")
         return self
 
 
 class EnvironmentConfig(_Model):
     """Ambient temperature, humidity, pressure and light."""
 
-    temperature_c: tuple[float, float] = Field(
-        (18.0, 30.0), description="Range of a session's ambient temperature. [degC]"
+    temperature_c: _pair(-20, 50) = Field(
+        (18.0, 30.0),
+        description="Range of a session's ambient temperature. Within -20 to 50 degC, where "
+        "wearables are specified to work (an assumption). [degC]",
     )
     temperature_within_sd_c: float = Field(
-        1.0, ge=0, description="SD of ambient temperature within a subject's session. [degC]"
+        1.0,
+        ge=0,
+        le=20,
+        description="SD of ambient temperature within a subject's session. At most 20 degC (an "
+        "assumption). [degC]",
     )
     humidity_within_sd_pct: float = Field(
-        5.0, ge=0, description="SD of relative humidity within a session. [%]"
+        5.0,
+        ge=0,
+        le=50,
+        description="SD of relative humidity within a session. At most 50 %, half the RH scale. "
+        "[%]",
     )
     pressure_within_sd_mbar: float = Field(
-        1.0, ge=0, description="SD of pressure within a session (weather over hours). [mbar]"
+        1.0,
+        ge=0,
+        le=50,
+        description="SD of pressure within a session (weather over hours). At most 50 mbar (an "
+        "assumption). [mbar]",
     )
-    humidity_pct: tuple[float, float] = Field((30.0, 90.0), description="RH range. [%]")
+    humidity_pct: _pair(0, 100) = Field((30.0, 90.0), description="RH range. Within 0-100 %. [%]")
     humidity_coupling_loss: float = Field(
         0.03,
         ge=0,
@@ -543,12 +728,22 @@ class EnvironmentConfig(_Model):
     pressure_mbar_mean: float = Field(
         1013.25, ge=300, le=1100, description="Mean barometric pressure. [mbar]"
     )
-    pressure_mbar_sd: float = Field(12.0, ge=0, description="SD of pressure. [mbar]")
-    pressure_mbar: tuple[float, float] = Field((950.0, 1050.0), description="Range. [mbar]")
+    pressure_mbar_sd: float = Field(
+        12.0,
+        ge=0,
+        le=100,
+        description="SD of pressure. At most 100 mbar (an assumption). [mbar]",
+    )
+    pressure_mbar: _pair(300, 1100) = Field(
+        (950.0, 1050.0),
+        description="Range. Within 300-1100 mbar, as pressure_mbar_mean. [mbar]",
+    )
     perfusion_per_mbar: float = Field(
         1.0e-3,
-        description="Relative blood-volume change per mbar above perfusion_reference_mbar "
-        "(an assumption). [1/mbar]",
+        ge=-0.01,
+        le=0.01,
+        description="Relative blood-volume change per mbar above perfusion_reference_mbar (an "
+        "assumption). At most +-0.01 (an assumption). [1/mbar]",
     )
     perfusion_reference_mbar: float = Field(
         1013.25,
@@ -556,13 +751,21 @@ class EnvironmentConfig(_Model):
         le=1100,
         description="Pressure of nominal perfusion: the standard atmosphere (ISO 2533). [mbar]",
     )
-    ambient_lux: tuple[float, float] = Field(
-        (10.0, 1000.0), description="Illuminance range, drawn log-uniformly. [lx]"
+    ambient_lux: _pair(0.1, 100_000) = Field(
+        (10.0, 1000.0),
+        description="Illuminance range, drawn log-uniformly. Within 0.1 lx (night) to 100,000 "
+        "lx (direct sun). [lx]",
     )
-    light_source_probs: dict[str, float] = Field(
-        {"sun": 0.1, "fluorescent": 0.45, "led": 0.45}, description="Ambient spectrum mix. [-]"
+    light_source_probs: dict[str, _num(0, 1)] = Field(
+        {"sun": 0.1, "fluorescent": 0.45, "led": 0.45},
+        description="Ambient spectrum mix. [-]",
     )
-    baffle_optical_density: float = Field(2.0, ge=0, description="Baffle OD (issue). [-]")
+    baffle_optical_density: float = Field(
+        2.0,
+        ge=0,
+        le=10,
+        description="Baffle OD (issue). At most OD 10 (1e-10 leaks). [-]",
+    )
 
     _ranges = field_validator("temperature_c", "humidity_pct", "pressure_mbar", "ambient_lux")(
         lambda v, info: _check_range(v, info.field_name)
@@ -570,12 +773,6 @@ class EnvironmentConfig(_Model):
 
     @model_validator(mode="after")
     def _limits(self) -> EnvironmentConfig:
-        if self.humidity_pct[0] < 0 or self.humidity_pct[1] > 100:
-            raise ValueError(f"humidity_pct must lie within 0-100 %, got {self.humidity_pct}")
-        if self.ambient_lux[0] < 0.1 or self.ambient_lux[1] > 100_000:
-            raise ValueError(f"ambient_lux must lie within 0.1-100000 lx, got {self.ambient_lux}")
-        if self.temperature_c[0] < -20 or self.temperature_c[1] > 50:
-            raise ValueError(f"temperature_c must lie within -20-50 degC, got {self.temperature_c}")
         valid = {"sun", "fluorescent", "led"}
         if not set(self.light_source_probs) <= valid:
             raise ValueError(f"light_source_probs keys must be among {sorted(valid)}")
@@ -600,9 +797,18 @@ class ReferenceTissue(_Model):
     subcutis_fat_fraction: float = Field(
         0.8, gt=0, lt=1, description="Subcutis fat at the cohort's mid BMI (0.7-0.9). [-]"
     )
-    glucose_mgdl: float = Field(100.0, gt=0, description="A normal fasting glucose. [mg/dL]")
+    glucose_mgdl: float = Field(
+        100.0,
+        ge=20,
+        le=600,
+        description="A normal fasting glucose. Within glucose.range_mgdl's 20-600. [mg/dL]",
+    )
     skin_thickness_mm: float = Field(
-        1.8, gt=0, description="As physiology.skin_thickness_mm_mean. [mm]"
+        1.8,
+        ge=0.5,
+        le=4,
+        description="As physiology.skin_thickness_mm_mean. Bound: 0.5-4 mm, the simulator's "
+        "skin-layer range. [mm]",
     )
 
     @property
@@ -621,7 +827,11 @@ class OpticsConfig(_Model):
         3.0, gt=0.5, le=20, description="Source-detector separation (a wrist-probe value). [mm]"
     )
     detector_area_mm2: float = Field(
-        6.6, gt=0, description="Photodiode active area (Hamamatsu S1223: 2.4 x 2.8 mm). [mm^2]"
+        6.6,
+        gt=0,
+        le=100,
+        description="Photodiode active area (Hamamatsu S1223: 2.4 x 2.8 mm). At most 100 mm^2 "
+        "(10 x 10 mm, e.g. Hamamatsu S1337-1010BR). [mm^2]",
     )
     water_source: Literal["kou1993", "segelstein1981", "hale_querry1973"] = "kou1993"
     epidermis_thickness_mm: float = Field(
@@ -642,28 +852,41 @@ class HardwareConfig(_Model):
     """LEDs, photodiode, transimpedance amplifier and ADC."""
 
     led_self_heating_c: float = Field(
-        8.0, ge=0, description="Junction temperature above ambient while pulsed. [degC]"
+        8.0,
+        ge=0,
+        le=75,
+        description="Junction temperature above ambient while pulsed. At most 75 degC: a "
+        "junction max of 100 degC (TSAL6200) at 25 degC. [degC]",
     )
     led_self_heating_sd_c: float = Field(
-        0.5, ge=0, description="SD of the junction temperature between readings at the same "
-        "drive (an assumption). [degC]"
+        0.5,
+        ge=0,
+        le=10,
+        description="SD of the junction temperature between readings at the same drive (an "
+        "assumption). At most 10 degC (an assumption). [degC]",
     )
-    led_age_h: tuple[float, float] = Field((0.0, 5000.0), description="Device age range. [h]")
-    hours_since_reference_h: tuple[float, float] = Field(
+    led_age_h: _pair(0, 100_000) = Field(
+        (0.0, 5000.0),
+        description="Device age range. Within 0-100,000 h, beyond IR LEDs' rated lifetimes. [h]",
+    )
+    hours_since_reference_h: _pair(0, 8760) = Field(
         (0.0, 72.0),
         description="Range of the time between a subject's start-up reference and each "
-        "measurement (snapshots over up to three days). [h]",
+        "measurement (snapshots over up to three days). Within a year, 0-8760 h. [h]",
     )
     led_thermal_coeff_per_c: float = Field(
         LED_THERMAL_COEFF_PER_C,
         ge=0,
+        le=0.02,
         description="Relative LED power loss per degC above 25 (Vishay TSAL6200 datasheet, "
-        "about -0.2 %/K). [1/degC]",
+        "about -0.2 %/K). At most 2 %/K, ten times the datasheet. [1/degC]",
     )
     led_ageing_per_1000h: float = Field(
         LED_AGEING_PER_1000H,
         ge=0,
-        description="Relative LED power loss per 1000 h of operation (DESIGN.md). [1/(1000 h)]",
+        le=1,
+        description="Relative LED power loss per 1000 h of operation (DESIGN.md). At most 1: "
+        "all the power lost per 1000 h. [1/(1000 h)]",
     )
     board_skin_weight: float = Field(
         0.5,
@@ -673,40 +896,68 @@ class HardwareConfig(_Model):
         "air and skin (an assumption: halfway). [-]",
     )
     led_flicker_rel: float = Field(
-        0.001, ge=0, description="Relative flicker SD, N(0, 0.1 %) (DESIGN.md). [-]"
+        0.001,
+        ge=0,
+        le=0.1,
+        description="Relative flicker SD, N(0, 0.1 %) (DESIGN.md). At most 10 % (an "
+        "assumption). [-]",
     )
     led_wavelength_shift_nm_per_c: float = Field(
         0.25,
         ge=0,
-        description="Peak shift with junction temperature, 0.2-0.3 nm/K "
-        "(Vishay TSAL6200 / VSLY5850 datasheets). [nm/degC]",
+        le=1,
+        description="Peak shift with junction temperature, 0.2-0.3 nm/K (Vishay TSAL6200 / "
+        "VSLY5850 datasheets). At most 1 nm/K, 4x the datasheets. [nm/degC]",
     )
     dark_current_25c_na: float = Field(
-        0.1, ge=0, description="Dark current at 25 degC (S1223: 0.1 nA typ at 10 V). [nA]"
+        0.1,
+        ge=0,
+        le=1000,
+        description="Dark current at 25 degC (S1223: 0.1 nA typ at 10 V). At most 1 uA, "
+        "large-area photodiodes' class. [nA]",
     )
     dark_current_per_c: float = Field(
         DARK_CURRENT_DOUBLING_COEFF_PER_C,
         ge=0,
+        le=0.2,
         description="Dark current grows as exp(k (T - 25)), doubling about every 7 degC "
-        "(Hamamatsu 'Si photodiodes' technical note). [1/degC]",
+        "(Hamamatsu 'Si photodiodes' technical note). At most 0.2, doubling every 3.5 degC. "
+        "[1/degC]",
     )
     bandwidth_hz: float = Field(
-        10.0, gt=0, description="Equivalent noise bandwidth after in-device averaging. [Hz]"
+        10.0,
+        gt=0,
+        le=1e6,
+        description="Equivalent noise bandwidth after in-device averaging. At most 1 MHz, a "
+        "photodiode TIA's class. [Hz]",
     )
     tia_gain_ohm: float = Field(
         1.0e5,
-        gt=0,
-        description="Transimpedance (feedback resistor); also the Johnson-noise resistor. [Ohm]",
+        ge=100,
+        le=1e9,
+        description="Transimpedance (feedback resistor); also the Johnson-noise resistor. "
+        "Within 100 Ohm-1 GOhm, feedback resistors' span. [Ohm]",
     )
     adc_bits: int = Field(12, ge=8, le=24, description="ADC resolution (the study's 12). [bit]")
-    adc_vref_v: float = Field(3.3, gt=0, description="ADC full-scale voltage. [V]")
+    adc_vref_v: float = Field(
+        3.3,
+        gt=0,
+        le=10,
+        description="ADC full-scale voltage. At most 10 V, ADC references' span. [V]",
+    )
     adc_inl_lsb: float = Field(
         2.0,
         ge=0,
-        description="Peak integral non-linearity (ESP32 SAR ADC class: several LSB). [LSB]",
+        le=64,
+        description="Peak integral non-linearity (ESP32 SAR ADC class: several LSB). At most 64 "
+        "LSB (an assumption). [LSB]",
     )
     adc_offset_drift_lsb_per_c: float = Field(
-        0.1, ge=0, description="Offset drift with board temperature. [LSB/degC]"
+        0.1,
+        ge=0,
+        le=10,
+        description="Offset drift with board temperature. At most 10 LSB/degC (an assumption). "
+        "[LSB/degC]",
     )
     reference_transmission: float = Field(
         0.02,
@@ -722,27 +973,86 @@ class HardwareConfig(_Model):
         description="Fraction of ambient photocurrent removed by the LED-off subtraction. [-]",
     )
     calibration_temperature_sd_c: float = Field(
-        0.0, ge=0, description="Extra SD of the device temperature at start-up. [degC]"
+        0.0,
+        ge=0,
+        le=10,
+        description="Extra SD of the device temperature at start-up. At most 10 degC (an "
+        "assumption). [degC]",
     )
 
 
 class MeasurementConfig(_Model):
     """Standard deviations of the measured physiological vector (what a device knows)."""
 
-    age_yr: float = Field(0.5, ge=0, description="Age recorded in whole years. [yr]")
-    bmi_kgm2: float = Field(0.5, ge=0, description="Scale + tape measure. [kg/m^2]")
+    age_yr: float = Field(
+        0.5,
+        ge=0,
+        le=10,
+        description="Age recorded in whole years. At most 10 (an assumption). [yr]",
+    )
+    bmi_kgm2: float = Field(
+        0.5,
+        ge=0,
+        le=10,
+        description="Scale + tape measure. At most 10 (an assumption). [kg/m^2]",
+    )
     fitzpatrick_misclass: float = Field(
         0.2, ge=0, le=1, description="Probability a self-reported type is off by one. [-]"
     )
-    melanin_fraction: float = Field(0.01, ge=0, description="Reflectance melanin meter. [-]")
-    skin_thickness_mm: float = Field(0.15, ge=0, description="Ultrasound estimate. [mm]")
-    hydration_pct: float = Field(2.0, ge=0, description="Corneometer-type estimate. [%]")
-    systolic_bp_mmhg: float = Field(5.0, ge=0, description="Cuff (AAMI: SD <= 8). [mmHg]")
-    heart_rate_bpm: float = Field(2.0, ge=0, description="PPG estimate. [1/min]")
-    resp_rate_bpm: float = Field(1.0, ge=0, description="Estimate. [1/min]")
-    skin_temp_c: float = Field(0.2, ge=0, description="Thermistor. [degC]")
-    humidity_pct: float = Field(2.0, ge=0, description="RH sensor (e.g. SHT3x +/- 2 %). [%]")
-    pressure_mbar: float = Field(1.0, ge=0, description="Barometer (e.g. BMP280 +/- 1 hPa). [mbar]")
+    melanin_fraction: float = Field(
+        0.01,
+        ge=0,
+        le=0.5,
+        description="Reflectance melanin meter. At most 0.5 (an assumption). [-]",
+    )
+    skin_thickness_mm: float = Field(
+        0.15,
+        ge=0,
+        le=2,
+        description="Ultrasound estimate. At most 2 (an assumption). [mm]",
+    )
+    hydration_pct: float = Field(
+        2.0,
+        ge=0,
+        le=50,
+        description="Corneometer-type estimate. At most 50 (an assumption). [%]",
+    )
+    systolic_bp_mmhg: float = Field(
+        5.0,
+        ge=0,
+        le=50,
+        description="Cuff (AAMI: SD <= 8). At most 50 (an assumption). [mmHg]",
+    )
+    heart_rate_bpm: float = Field(
+        2.0,
+        ge=0,
+        le=50,
+        description="PPG estimate. At most 50 (an assumption). [1/min]",
+    )
+    resp_rate_bpm: float = Field(
+        1.0,
+        ge=0,
+        le=20,
+        description="Estimate. At most 20 (an assumption). [1/min]",
+    )
+    skin_temp_c: float = Field(
+        0.2,
+        ge=0,
+        le=5,
+        description="Thermistor. At most 5 (an assumption). [degC]",
+    )
+    humidity_pct: float = Field(
+        2.0,
+        ge=0,
+        le=50,
+        description="RH sensor (e.g. SHT3x +/- 2 %). At most 50 (an assumption). [%]",
+    )
+    pressure_mbar: float = Field(
+        1.0,
+        ge=0,
+        le=100,
+        description="Barometer (e.g. BMP280 +/- 1 hPa). At most 100 (an assumption). [mbar]",
+    )
 
 
 class NoiseSource(_Model):
@@ -790,10 +1100,10 @@ class ContactConfig(_Model):
         le=0.5,
         description="Skin-thickness loss at full contact pressure (assumption). [-]",
     )
-    pressure_beta: tuple[float, float] = Field(
+    pressure_beta: _pair(0, 100, gt=True) = Field(
         (2.0, 2.0),
         description="Beta(a, b) shape of a hand-placed probe's contact pressure, a share of "
-        "full scale (an assumption: unimodal, mean 0.5). [-]",
+        "full scale (an assumption: unimodal, mean 0.5). Each above 0, at most 100. [-]",
     )
     constant_force_pressure: float = Field(
         0.5,
@@ -861,9 +1171,9 @@ class DeviceConfig(_Model):
     )
     spo2_error_pct: float = Field(
         SPO2_ARMS_PCT,
-        ge=0,
-        description="SD of spo2_pct: pulse-oximeter A_rms (FDA 2013 guidance: <= 3 % "
-        "transmittance, 3.5 % reflectance; ISO 80601-2-61: <= 4 %). [%]",
+        ge=0, le=50, description="SD of spo2_pct: pulse-oximeter A_rms (FDA 2013 guidance: <= 3 % "
+        "transmittance, 3.5 % reflectance; ISO 80601-2-61: <= 4 %). "
+        "At most 50 %, half of SpO2's scale. [%]",
     )
     blood_volume_error_rel: float = Field(
         0.1,
@@ -1193,6 +1503,10 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
     return out
 
 
+#: pydantic error types of a number outside its ``ge/gt/le/lt`` bounds.
+_RANGE_ERRORS = ("greater_than", "greater_than_equal", "less_than", "less_than_equal")
+
+
 def resolve_config(
     preset: str | ScenarioConfig = "paper", overrides: dict[str, Any] | None = None
 ) -> ScenarioConfig:
@@ -1229,8 +1543,12 @@ def resolve_config(
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = ".".join(str(p) for p in err["loc"]) or "config"
-        from .config_keys import unit_of
+        from .config_keys import out_of_range_message, unit_of
 
+        if err["type"] in _RANGE_ERRORS:
+            msg = out_of_range_message(loc, err.get("input"))
+            if msg is not None:
+                raise ConfigError(msg) from None
         unit = unit_of(loc)
         raise ConfigError(
             f"invalid value for {loc}: {err['msg']}{f' [{unit}]' if unit else ''} "

@@ -76,3 +76,50 @@ def test_absurd_magnitudes_are_one_line(cli, workdir, setting):
     assert_one_line_error(code, err, contains=[setting.split("=")[0].split(".")[-1]]
                           if "1e30" in setting else [])
     assert not (workdir / "a.csv").exists()
+
+
+#: One out-of-range value per section: (setting, key as shown, range, unit).
+OUT_OF_RANGE = [
+    ("noise_scale=101", "noise_scale=101", "between 0 and 100", "[-]"),
+    ("leds.emitters.0.power_mw=5000", "leds.emitters.0.power_mw=5000", "> 0 and <= 1000", "[mW]"),
+    ("leds.band_points=0", "leds.band_points=0", "between 1 and 31", "[-]"),
+    ("physiology.heart_rate_bpm_mean=400", "physiology.heart_rate_bpm_mean=400",
+     "between 20 and 250", "[1/min]"),
+    ("physiology.age_yr=[18,300]", "physiology.age_yr[1]=300", "between 0 and 122", "[yr]"),
+    ("glucose.range_mgdl=[10,400]", "glucose.range_mgdl[0]=10", "between 20 and 600",
+     "[mg/dL]"),
+    ("glucose.status_probs={\"normal\":1.5,\"type2\":-0.5}", "glucose.status_probs[normal]=1.5",
+     "between 0 and 1", "[-]"),
+    ("environment.humidity_pct=[30,120]", "environment.humidity_pct[1]=120",
+     "between 0 and 100", "[%]"),
+    ("optics.detector_area_mm2=1000", "optics.detector_area_mm2=1000", "> 0 and <= 100",
+     "[mm^2]"),
+    ("optics.reference_tissue.glucose_mgdl=5", "optics.reference_tissue.glucose_mgdl=5",
+     "between 20 and 600", "[mg/dL]"),
+    ("hardware.led_self_heating_c=200", "hardware.led_self_heating_c=200", "between 0 and 75",
+     "[degC]"),
+    ("hardware.adc_bits=40", "hardware.adc_bits=40", "between 8 and 24", "[bit]"),
+    ("contact.pressure_beta=[0,2]", "contact.pressure_beta[0]=0", "> 0 and <= 100", "[-]"),
+    ("measurement.skin_temp_c=-1", "measurement.skin_temp_c=-1", "between 0 and 5", "[degC]"),
+    ("device.spo2_error_pct=80", "device.spo2_error_pct=80", "between 0 and 50", "[%]"),
+    ("noise.shot.scale=-2", "noise.shot.scale=-2", "between 0 and 100", "[-]"),
+]
+
+
+@pytest.mark.parametrize(("setting", "shown", "bounds", "unit"), OUT_OF_RANGE,
+                         ids=[s for s, *_ in OUT_OF_RANGE])
+def test_out_of_range_is_one_line_with_key_range_and_unit(cli, workdir, setting, shown, bounds,
+                                                          unit):
+    code, _, err = cli("simulate", "--out", "a.csv", "--subjects", 2, "--set", setting)
+    line = assert_one_line_error(code, err, contains=[shown, "is out of range", bounds, unit])
+    assert line.endswith(f"must be {bounds} {unit}"), line
+    assert not (workdir / "a.csv").exists()
+
+
+def test_keys_shows_each_range(cli):
+    code, out, _ = cli("keys")
+    assert code == 0
+    lines = {ln.split(" = ")[0]: ln for ln in out.splitlines()}
+    assert "[bit] (between 8 and 24)" in lines["hardware.adc_bits"]
+    assert "[degC] (between -20 and 50)" in lines["environment.temperature_c"]
+    assert "(between 0 and 100)" in lines["noise.shot.scale"]

@@ -33,7 +33,7 @@ def test_keys_have_units_and_descriptions(cli):
     lines = out.strip().splitlines()
     assert len(lines) == len(valid_keys())
     by_key = {ln.split(" = ")[0]: ln for ln in lines}
-    assert re.search(r"\[mbar\]  # Mean barometric pressure", by_key[
+    assert re.search(r"\[mbar\] \(between 300 and 1100\)  # Mean barometric pressure", by_key[
         "environment.pressure_mbar_mean"])
     assert "[bit]" in by_key["hardware.adc_bits"]
     assert sum("[" in ln and "#" in ln for ln in lines) >= 0.9 * len(lines)

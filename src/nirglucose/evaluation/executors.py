@@ -10,9 +10,16 @@ loop serves every backend:
 ``jobs=N``
     A local pool of ``N`` worker processes (joblib's loky backend; workers are reused,
     BLAS threads are limited so that ``N`` workers do not oversubscribe the cores).
+``scheduler="local"``
+    A Dask ``LocalCluster`` of ``jobs`` single-threaded worker processes that this
+    process starts and closes. Each Dask worker process exits when the pipe its parent
+    holds open closes (``distributed.process.AsyncProcess``), so none outlives this
+    process, even SIGKILLed (tests/cli/test_bad_dask.py checks it).
 ``scheduler="tcp://host:8786"`` (or a :class:`distributed.Client`)
     An existing Dask cluster. The workers need the same ``nirglucose`` version
-    installed; nothing else changes.
+    installed; nothing else changes. They are not ours: an interrupted run (Ctrl-C,
+    SIGTERM turned into an exception, the caller closing the stream) cancels its
+    unfinished futures and leaves the workers running.
 
 A task must be seeded from its own specification, never from the order or the place
 it ran, so results are the same for every backend (the sweep's tasks are).
@@ -36,6 +43,7 @@ from ..exceptions import ConfigError
 
 __all__ = [
     "BACKENDS",
+    "LOCAL_SCHEDULER",
     "available_cores",
     "resolve_backend",
     "run_unordered",
@@ -45,6 +53,9 @@ __all__ = [
 
 #: Backend names :func:`resolve_backend` returns.
 BACKENDS = ("serial", "processes", "dask")
+
+#: ``scheduler`` value that starts a Dask LocalCluster of ``jobs`` worker processes.
+LOCAL_SCHEDULER = "local"
 
 
 def available_cores() -> int:
@@ -64,12 +75,14 @@ def resolve_backend(jobs: int | None, scheduler: Any = None) -> tuple[str, int]:
         Local worker processes; None uses :func:`available_cores`. Ignored with a
         scheduler. [-]
     scheduler : str or distributed.Client, optional
-        Dask scheduler address (``tcp://host:8786``) or a connected client.
+        Dask scheduler address (``tcp://host:8786``), a connected client, or
+        :data:`LOCAL_SCHEDULER` (a LocalCluster of ``jobs`` worker processes).
 
     Returns
     -------
     tuple of (str, int)
-        One of :data:`BACKENDS` and the local worker count (0 for Dask).
+        One of :data:`BACKENDS` and the local worker count (0 for a remote Dask
+        cluster, ``jobs`` for a LocalCluster).
 
     Raises
     ------
@@ -77,11 +90,15 @@ def resolve_backend(jobs: int | None, scheduler: Any = None) -> tuple[str, int]:
         ``jobs`` not a positive integer, or a scheduler that is neither an address
         nor a client.
     """
+    if scheduler == LOCAL_SCHEDULER:
+        _, n = resolve_backend(jobs)
+        return "dask", n
     if scheduler is not None:
         if isinstance(scheduler, str):
             if "://" not in scheduler:
                 raise ConfigError(
-                    f"scheduler {scheduler!r} is not an address; use e.g. tcp://host:8786"
+                    f"scheduler {scheduler!r} is not an address; use e.g. tcp://host:8786 "
+                    f"or {LOCAL_SCHEDULER!r} (a local Dask cluster)"
                 )
         elif not hasattr(scheduler, "submit"):
             raise ConfigError(
@@ -197,7 +214,7 @@ def run_unordered(
     if not items:
         return
     if backend == "dask":
-        yield from _run_dask(fn, items, scheduler, keys)
+        yield from _run_dask(fn, items, scheduler, keys, n)
     elif backend == "serial" or len(items) == 1:
         for i, item in enumerate(items):
             yield i, fn(item)
@@ -210,7 +227,11 @@ def run_unordered(
 
 
 def _run_dask(
-    fn: Callable[[Any], Any], items: list[Any], scheduler: Any, keys: Sequence[str] | None
+    fn: Callable[[Any], Any],
+    items: list[Any],
+    scheduler: Any,
+    keys: Sequence[str] | None,
+    jobs: int | None = None,
 ) -> Iterator[tuple[int, Any]]:
     try:
         from distributed import Client, as_completed
@@ -219,7 +240,10 @@ def _run_dask(
             "a Dask scheduler needs the 'distributed' package; pip install 'dask[distributed]'"
         ) from None
     own = isinstance(scheduler, str)
-    if own:
+    cluster = None
+    if scheduler == LOCAL_SCHEDULER:
+        cluster, client = _local_client(jobs or available_cores())
+    elif own:
         try:
             client = Client(scheduler, timeout="10s", set_as_default=False)
         except (OSError, TimeoutError) as exc:
@@ -245,3 +269,28 @@ def _run_dask(
             client.cancel(pending)
         if own:
             client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _local_client(n_workers: int) -> tuple[Any, Any]:
+    """A LocalCluster of ``n_workers`` single-threaded worker processes and its client.
+
+    The nannies and the scheduler run in this process; each worker process watches a
+    pipe from it and exits when it closes (this process died, SIGKILL included), so
+    no worker is left behind (no extra watch needed). The dashboard is off.
+    """
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+        silence_logs=logging.ERROR,
+    )
+    try:
+        client = Client(cluster, set_as_default=False)
+    except BaseException:
+        cluster.close()
+        raise
+    return cluster, client

@@ -1,0 +1,156 @@
+"""Dask backends: no local worker outlives a killed run; a remote cluster's are left alone
+but our futures are cancelled (issue 20).
+
+The kill test runs the real CLI (``sweep --scheduler local``) in a subprocess.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("distributed")
+psutil = pytest.importorskip("psutil")
+
+from cli_helpers import PROGRESS  # noqa: E402
+
+from nirglucose.evaluation.executors import resolve_backend, run_unordered  # noqa: E402
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+SWEEP = ["sweep", "--vary", "noise_scale=0.5,1,2,4", "--seeds", "3", "--models", "ebl,pls",
+         "--subjects", "40", "--resamples", "20", "--no-figures"]
+
+
+def _env():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = SRC + os.pathsep + env.get("PYTHONPATH", "")
+    env.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    return env
+
+
+def _cli(*args, **kwargs):
+    return subprocess.Popen(
+        [sys.executable, "-c", "import sys; from nirglucose.cli import main; sys.exit(main())",
+         *args], env=_env(), text=True, **kwargs)
+
+
+def _dask_workers(proc: psutil.Process) -> list[psutil.Process]:
+    return [c for c in proc.children(recursive=True)
+            if "spawn_main" in " ".join(c.cmdline())]
+
+
+def _alive(p: psutil.Process) -> bool:
+    try:
+        return p.is_running() and p.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
+
+
+def _gone(procs, timeout_s: float = 5.0) -> bool:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout_s:
+        if not any(_alive(p) for p in procs):
+            return True
+        time.sleep(0.1)
+    return False
+
+
+def test_local_scheduler_is_a_dask_backend_of_jobs_workers():
+    assert resolve_backend(3, "local") == ("dask", 3)
+    assert resolve_backend(None, "tcp://h:8786") == ("dask", 0)
+
+
+def test_no_dask_worker_outlives_a_sigkilled_sweep(tmp_path):
+    proc = _cli(*SWEEP, "--jobs", "2", "--scheduler", "local", "--out", str(tmp_path / "res"),
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    parent = psutil.Process(proc.pid)
+    t0 = time.monotonic()
+    workers: list[psutil.Process] = []
+    while time.monotonic() - t0 < 30 and len(workers) < 2:
+        time.sleep(0.2)
+        workers = _dask_workers(parent)
+    if len(workers) < 2:
+        proc.kill()
+        pytest.fail("no Dask workers started")
+    time.sleep(1.0)  # tasks running
+    descendants = parent.children(recursive=True)  # workers, resource tracker
+    assert proc.poll() is None, "the sweep ended before the kill: make it longer"
+    proc.kill()  # SIGKILL: no handler, no cleanup in the parent
+    proc.wait(timeout=10)
+    survivors = [p for p in descendants if _alive(p)] if not _gone(descendants) else []
+    for p in survivors:
+        p.kill()
+    assert survivors == [], "a Dask worker outlived its SIGKILLed parent"
+
+
+def nap(s: float) -> float:
+    time.sleep(s)
+    return s
+
+
+@pytest.fixture
+def remote():
+    """A Dask cluster that is not ours (threads in this process) and a client of it."""
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
+                           protocol="tcp://", host="127.0.0.1", dashboard_address=None)
+    client = Client(cluster, set_as_default=False)
+    yield cluster, client
+    client.close()
+    cluster.close()
+
+
+def _n_tasks(client) -> int:
+    return client.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks))
+
+
+def test_closing_the_stream_cancels_our_futures_on_a_remote_cluster(remote, monkeypatch):
+    cluster, client = remote
+    cancelled = []
+    cancel = client.cancel
+    monkeypatch.setattr(client, "cancel", lambda fs, **kw: (cancelled.extend(fs),
+                                                            cancel(fs, **kw)))
+    stream = run_unordered(nap, [0.05, 2.0, 2.0], scheduler=client)
+    assert next(stream) == (0, 0.05)
+    assert _n_tasks(client) >= 2
+    stream.close()  # what Ctrl-C / SIGTERM (turned into an exception) does to the run
+    assert sorted(f.key[-1] for f in cancelled) == ["1", "2"]  # the unfinished ones, explicitly
+    t0 = time.monotonic()
+    while _n_tasks(client) and time.monotonic() - t0 < 5:
+        time.sleep(0.05)
+    assert _n_tasks(client) == 0  # cancelled while our client stays connected
+    assert client.status == "running" and len(cluster.workers) == 1  # workers not ours: kept
+
+
+def test_sigterm_on_a_remote_cluster_cancels_and_keeps_its_workers(tmp_path, remote):
+    cluster, client = remote
+    proc = _cli(*SWEEP, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "r"),
+                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    while _n_tasks(client) == 0 and time.monotonic() - t0 < 30:
+        time.sleep(0.1)
+    assert _n_tasks(client) > 0, "no task reached the scheduler"
+    proc.send_signal(signal.SIGTERM)
+    try:
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("the run did not stop")
+    assert proc.returncode == 143, err
+    lines = [ln for ln in err.splitlines() if ln.strip() and not PROGRESS.match(ln)]
+    assert len(lines) == 1 and lines[0].startswith("error: terminated"), err
+    t0 = time.monotonic()
+    while _n_tasks(client) and time.monotonic() - t0 < 5:
+        time.sleep(0.05)
+    assert _n_tasks(client) == 0
+    assert len(cluster.workers) == 1 and client.status == "running"
