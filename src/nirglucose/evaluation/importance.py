@@ -1,7 +1,7 @@
 """Permutation importance of each wavelength channel on held-out data.
 
 The same method for every estimator [1]_: the channel of one LED (its ``adc_<nm>``
-code *and* its start-up reference ``adc_ref_<nm>``, permuted together with one
+code *and*, where the device records one, its reference ``adc_ref_<nm>``, permuted together with one
 permutation so that the pair stays consistent) is shuffled across the held-out rows,
 and the increase of the RMSE over the unshuffled prediction is recorded; the mean over
 ``n_repeats`` permutations is reported. All permuted copies are predicted in one call.
@@ -71,10 +71,10 @@ def permutation_importance(
     # copy 0 is the data as is; copy 1 + i * n_rep + r permutes channel i (repeat r)
     big = frame.iloc[np.tile(np.arange(n), n_copies)].reset_index(drop=True)
     for i, w in enumerate(wl):
-        cols = [f"adc_{w:g}", f"adc_ref_{w:g}"]
-        missing = [c for c in cols if c not in frame]
-        if missing:
-            raise DataError(f"no columns {missing} for wavelength {w:g} nm")
+        if f"adc_{w:g}" not in frame:
+            raise DataError(f"no column 'adc_{w:g}' for wavelength {w:g} nm")
+        # A device without reference codes (full scale as I0) has its code alone.
+        cols = [c for c in (f"adc_{w:g}", f"adc_ref_{w:g}") if c in frame]
         values = frame[cols].to_numpy()
         block = np.tile(values, (n_copies, 1))
         for r in range(n_rep):
