@@ -45,6 +45,7 @@ __all__ = [
     "derived_seed",
     "external_code_digest",
     "prepare_out",
+    "sha256_hex",
     "source_digest",
     "stamp",
     "task_key",
@@ -112,15 +113,19 @@ def stamp(spec: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
+def sha256_hex(text: str) -> str:
+    """SHA-256 of ``text`` (UTF-8) in hex."""
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def task_key(spec: Mapping[str, Any]) -> str:
     """The task's key: SHA-256 of its canonical JSON (sorted keys), 20 hex digits."""
-    return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:_KEY_DIGITS]
+    return sha256_hex(json.dumps(spec, sort_keys=True))[:_KEY_DIGITS]
 
 
 def checksum(result: Mapping[str, Any]) -> str:
     """SHA-256 of a result's canonical JSON (NaN allowed)."""
-    text = json.dumps(result, sort_keys=True, allow_nan=True)
-    return hashlib.sha256(text.encode()).hexdigest()
+    return sha256_hex(json.dumps(result, sort_keys=True, allow_nan=True))
 
 
 def derived_seed(*parts: Any) -> int:
