@@ -124,7 +124,9 @@ def _log_ratio(cfg: ScenarioConfig, frame: pd.DataFrame) -> np.ndarray:
     schema = _device_schema(cfg)
     Xa = schema.raw(frame)
     k = schema.n_channels
-    return np.log(Xa[:, :k] / Xa[:, k : 2 * k])
+    # column-major like a DataFrame block: the reductions downstream (mean, covariance)
+    # then sum in the same order as before, so results stay byte-identical
+    return np.asfortranarray(np.log(Xa[:, :k] / Xa[:, k : 2 * k]))
 
 
 def _model_log_ratio(
