@@ -15,6 +15,9 @@ try:
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0.0.0+unknown"
 
+# The simulator subpackage first: importing it later would rebind the package attribute
+# ``simulate`` from the function below to the subpackage (nothing else imports it now).
+from . import simulate as _simulate_package  # noqa: F401
 from .api import simulate
 from .config import PRESETS, ScenarioConfig, resolve_config
 from .dataset import Dataset, load_dataset

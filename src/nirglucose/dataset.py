@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -30,14 +30,19 @@ import pyarrow.parquet as pq
 
 from .config import ScenarioConfig
 from .constants import DEFAULT_LED_WAVELENGTHS_NM, PHYSIOLOGICAL_RANGES
+from .dataset_meta import parse_meta
 from .exceptions import DataError
-from .simulate.measurement import PMF_COLUMNS
 
 __all__ = [
     "Dataset",
+    "PartitionedDataset",
     "load_dataset",
+    "open_partitioned",
     "scan_dataset",
     "PMF_COLUMNS",
+    "PPG_COLUMNS",
+    "MANIFEST",
+    "PART_PATTERN",
     "COLUMN_UNITS",
     "adc_columns",
     "ref_columns",
@@ -56,6 +61,30 @@ __all__ = [
 #: File suffixes :meth:`Dataset.save` and :func:`load_dataset` understand.
 SUFFIXES = (".parquet", ".csv")
 _META_KEY = b"nirglucose"
+#: Name of the file listing the parts of a finished partitioned write.
+MANIFEST = "manifest.json"
+#: Glob pattern of the part files of a partitioned dataset.
+PART_PATTERN = "part-*.parquet"
+
+#: The measured physiological vector, in the study's order (the simulator's
+#: :func:`~nirglucose.simulate.measurement.measure_physiology` fills it).
+PMF_COLUMNS = (
+    "age_yr",
+    "bmi_kgm2",
+    "fitzpatrick_type",
+    "melanin_fraction",
+    "skin_thickness_mm",
+    "hydration_pct",
+    "systolic_bp_mmhg",
+    "heart_rate_bpm",
+    "resp_rate_bpm",
+    "skin_temp_c",
+    "humidity_pct",
+    "pressure_mbar",
+)
+#: Columns of the PPG perfusion and saturation estimates (``device.ppg_perfusion_spo2``),
+#: present only when that capability is on.
+PPG_COLUMNS = ("blood_volume_pct", "spo2_pct")
 
 
 def _wl_label(wavelength_nm: float) -> str:
@@ -323,12 +352,147 @@ class Dataset:
         return h.hexdigest()[:16]
 
 
+# --------------------------------------------------------------------------- parts
+def _part_paths(path: Path) -> tuple[list[Path], dict[str, Any] | None]:
+    """The parts of a directory (the manifest's when there is one) and the manifest."""
+    manifest = None
+    mpath = path / MANIFEST
+    if mpath.exists():
+        try:
+            manifest = json.loads(mpath.read_text(encoding="utf-8"))
+            parts = [path / p["file"] for p in manifest["parts"]]
+        except (OSError, ValueError, KeyError, TypeError):
+            raise DataError(f"{str(mpath)!r} is malformed; rewrite the dataset") from None
+        missing = [p.name for p in parts if not p.exists()]
+        if missing:
+            raise DataError(f"{str(path)!r} lacks parts listed in its manifest: "
+                            f"{missing[:3]}{' ...' if len(missing) > 3 else ''}")
+        return parts, manifest
+    parts = sorted(path.glob("*.parquet"))
+    if not parts:
+        raise DataError(f"directory {str(path)!r} holds no .parquet files")
+    return parts, None
+
+
+class PartitionedDataset(Dataset):
+    """A dataset stored as Parquet parts; ``frame`` is read on first access.
+
+    Parameters
+    ----------
+    path : Path
+        The directory.
+    parts : sequence of Path
+        Part files in row order.
+    config, seed, metadata
+        As :class:`~nirglucose.dataset.Dataset`.
+    n_rows : int
+        Total rows (from the manifest or the parts' footers).
+
+    Attributes
+    ----------
+    path, parts
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        parts: Sequence[Path],
+        config: ScenarioConfig | None,
+        seed: int | None,
+        metadata: dict[str, Any],
+        n_rows: int,
+    ) -> None:
+        self._frame: pd.DataFrame | None = None
+        self.path = Path(path)
+        self.parts = list(parts)
+        self._n_rows = int(n_rows)
+        super().__init__(None, config=config, seed=seed, metadata=metadata)  # type: ignore[arg-type]
+
+    @property
+    def frame(self) -> pd.DataFrame:  # type: ignore[override]
+        """Every row as one DataFrame (read from the parts on first access)."""
+        if self._frame is None:
+            frames = [pq.read_table(p).to_pandas() for p in self.parts]
+            self._frame = frames[0] if len(frames) == 1 else pd.concat(frames, ignore_index=True)
+        return self._frame
+
+    @frame.setter
+    def frame(self, value: pd.DataFrame | None) -> None:
+        self._frame = value
+
+    @property
+    def loaded(self) -> bool:
+        """Whether ``frame`` has been read into memory."""
+        return self._frame is not None
+
+    def __len__(self) -> int:
+        return self._n_rows if self._frame is None else len(self._frame)
+
+    def __repr__(self) -> str:
+        preset = self.config.preset if self.config is not None else "user data"
+        return (f"PartitionedDataset({len(self)} snapshots in {len(self.parts)} parts, "
+                f"preset={preset!r}, seed={self.seed}, path={str(self.path)!r})")
+
+    def iter_frames(self, columns: Sequence[str] | None = None) -> Iterator[pd.DataFrame]:
+        """Yield the parts one at a time as DataFrames (bounded memory)."""
+        for p in self.parts:
+            yield pq.read_table(p, columns=list(columns) if columns else None).to_pandas()
+
+    def scan(self):
+        """The parts as a :class:`pyarrow.dataset.Dataset` (lazy, filter/project pushdown)."""
+        import pyarrow.dataset as pads
+
+        return pads.dataset([str(p) for p in self.parts], format="parquet")
+
+    def to_dask(self, columns: Sequence[str] | None = None):
+        """The parts as a lazy :class:`dask.dataframe.DataFrame` (one partition per part)."""
+        import dask.dataframe as dd
+
+        return dd.read_parquet([str(p) for p in self.parts],
+                               columns=list(columns) if columns else None)
+
+
+def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
+    """Open a partitioned Parquet directory without reading its rows.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A directory written by
+        :func:`~nirglucose.simulate.partitioned.write_partitioned` (or any directory
+        of Parquet files of the dataset schema, read in name order).
+
+    Returns
+    -------
+    PartitionedDataset
+
+    Raises
+    ------
+    DataError
+        No parts, a malformed manifest or metadata, a missing part.
+    """
+    path = Path(path)
+    parts, manifest = _part_paths(path)
+    try:
+        raw = pq.read_schema(parts[0]).metadata or {}
+        n_rows = (int(manifest["n_rows"]) if manifest is not None else
+                  sum(pq.ParquetFile(p).metadata.num_rows for p in parts))
+    except (OSError, ValueError, KeyError, TypeError, pa.ArrowException) as exc:
+        raise DataError(f"cannot read {str(path)!r}: {exc}") from None
+    meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
+    extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
+    if manifest is not None:
+        extra.update(n_subjects=manifest.get("n_subjects"), per_subject=manifest.get("per_subject"))
+    return PartitionedDataset(path, parts, config, seed,
+                              {**extra, "source": str(path)}, n_rows)
+
+
 def load_dataset(path: str | os.PathLike) -> Dataset:
     """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
 
     A directory is opened as a partitioned Parquet dataset (the parts its
     ``manifest.json`` lists, else all ``*.parquet`` files in name order) without reading
-    its rows: a :class:`~nirglucose.simulate.partitioned.PartitionedDataset`, whose
+    its rows: a :class:`PartitionedDataset`, whose
     ``frame`` is read on first access.
 
     Raises
@@ -336,16 +500,12 @@ def load_dataset(path: str | os.PathLike) -> Dataset:
     DataError
         Missing file, unknown suffix, unreadable content or malformed metadata.
     """
-    from .dataset_meta import parse_meta
-
     path = Path(path)
     if not path.exists():
         raise DataError(f"no such file {str(path)!r}")
     meta: dict[str, Any] = {}
     try:
         if path.is_dir():
-            from .simulate.partitioned import open_partitioned
-
             return open_partitioned(path)
         if path.suffix == ".parquet":
             table = pq.read_table(path)
@@ -377,8 +537,6 @@ def scan_dataset(path: str | os.PathLike):
     DataError
         Not a directory of Parquet parts.
     """
-    from .simulate.partitioned import open_partitioned
-
     path = Path(path)
     if not path.is_dir():
         raise DataError(f"{str(path)!r} is not a partitioned dataset directory")

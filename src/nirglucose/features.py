@@ -141,6 +141,8 @@ from sklearn.base import BaseEstimator, TransformerMixin
 from .constants import DEFAULT_LED_WAVELENGTHS_NM
 from .dataset import PMF_COLUMNS, Dataset, measured_columns
 from .exceptions import DataError
+from .fitted import require_fitted
+from .schema import DeviceSchema, as_raw_input, fit_schema
 
 __all__ = [
     "N_FEATURES",
@@ -787,8 +789,6 @@ def enhanced_beer_lambert(
     >>> enhanced_beer_lambert(ds).shape
     (4, 56)
     """
-    from .schema import DeviceSchema
-
     schema = DeviceSchema.infer(frame, adc_bits)
     if isinstance(frame, Dataset):
         frame = frame.frame
@@ -891,8 +891,6 @@ class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
 
     def fit(self, X, y=None):
         """Record the device's schema and feature table; returns self."""
-        from .schema import fit_schema
-
         self.schema_ = fit_schema(self, X, self.adc_bits)
         self.table_ = feature_table(self.schema_)
         if isinstance(X, pd.DataFrame | Dataset):
@@ -901,9 +899,6 @@ class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
 
     def transform(self, X) -> np.ndarray:
         """The (n, p) feature matrix."""
-        from .models._checks import require_fitted
-        from .schema import as_raw_input
-
         require_fitted(self, "schema_")
         Xa = self.schema_.raw(as_raw_input(self, X, self.schema_))
         if self.schema_.is_study:
@@ -913,8 +908,6 @@ class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
 
     def get_feature_names_out(self, input_features=None) -> np.ndarray:
         """The feature names."""
-        from .models._checks import require_fitted
-
         require_fitted(self, "schema_")
         return np.asarray([f.name for f in self.table_], dtype=object)
 

@@ -51,6 +51,7 @@ from .dataset import (
     Dataset,
 )
 from .exceptions import DataError
+from .fitted import require_fitted
 
 __all__ = [
     "DeviceSchema",
@@ -471,8 +472,6 @@ class MeasurementTransformer(TransformerMixin, BaseEstimator):
 
     def transform(self, X) -> np.ndarray:
         """(n, k + m) absorbances then physiology."""
-        from .models._checks import require_fitted
-
         require_fitted(self, "schema_")
         return self.schema_.stacked(self.schema_.raw(as_raw_input(self, X, self.schema_)))
 

@@ -94,7 +94,7 @@ def test_study_scenarios():
 
 
 def test_task_hash_covers_the_specification(monkeypatch):
-    from nirglucose.evaluation import sweep
+    from nirglucose.evaluation import tasks
     from nirglucose.evaluation.sweep import _task_key
 
     base = plan_sweep(grid_scenarios(VARY), seeds=[0], models=["pls"])
@@ -106,7 +106,7 @@ def test_task_hash_covers_the_specification(monkeypatch):
         kw = {"seeds": [0], "models": ["pls"], **change}
         other = plan_sweep(grid_scenarios(VARY), **kw)
         assert _task_key(other[0]) != _task_key(base[0]), change
-    monkeypatch.setattr(sweep, "source_digest", lambda: "edited code")
+    monkeypatch.setattr(tasks, "source_digest", lambda: "edited code")
     edited = plan_sweep(grid_scenarios(VARY), seeds=[0], models=["pls"])
     assert _task_key(edited[0]) != _task_key(base[0])
 

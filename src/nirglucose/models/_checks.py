@@ -1,29 +1,14 @@
-"""Fitted-state checks shared by the estimators.
+"""Fitted-state checks shared by the estimators (defined in :mod:`nirglucose.fitted`).
 
 Input checks live at the schema boundary (:mod:`nirglucose.schema`, through
 :func:`~nirglucose.models._base.fit_input` and
-:func:`~nirglucose.models._base.predict_input`).
+:func:`~nirglucose.models._base.predict_input`). The fitted-state helpers moved to the
+leaf module :mod:`nirglucose.fitted` so that :mod:`nirglucose.features` and
+:mod:`nirglucose.schema` need not import this package; they are re-exported here.
 """
 
 from __future__ import annotations
 
-from sklearn.exceptions import NotFittedError as _SkNotFittedError
-from sklearn.utils.validation import check_is_fitted
-
-from ..exceptions import NotFittedError
+from ..fitted import EstimatorNotFittedError, require_fitted
 
 __all__ = ["EstimatorNotFittedError", "require_fitted"]
-
-
-class EstimatorNotFittedError(NotFittedError, _SkNotFittedError):
-    """Used before ``fit``: both nirglucose's and scikit-learn's NotFittedError."""
-
-
-def require_fitted(est, attr: str) -> None:
-    """Raise :class:`EstimatorNotFittedError` unless ``est`` has the fitted ``attr``."""
-    try:
-        check_is_fitted(est, attr)
-    except _SkNotFittedError:
-        raise EstimatorNotFittedError(
-            f"this {type(est).__name__} is not fitted yet; call fit before using it"
-        ) from None

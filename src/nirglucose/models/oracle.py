@@ -45,9 +45,9 @@ import pandas as pd
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from ..config import ScenarioConfig
-from ..dataset import Dataset, adc_columns, ref_columns, validate_measurements
+from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
-from ..schema import check_fit_size, check_reference_glucose
+from ..schema import DeviceSchema, check_fit_size, check_reference_glucose
 from ._checks import require_fitted
 from ._json_io import JsonModelMixin
 from .registry import register
@@ -108,12 +108,25 @@ def _check_truth(cfg: ScenarioConfig, frame: pd.DataFrame) -> None:
         )
 
 
+def _device_schema(cfg: ScenarioConfig) -> DeviceSchema:
+    """The scenario's device as the schema boundary sees it: its LEDs (in the scenario's
+    order), reference codes, its ADC resolution; the oracle reads no measured physiology."""
+    return DeviceSchema(
+        wavelengths_nm=tuple(float(w) for w in cfg.leds.wavelengths_nm),
+        reference=True,
+        adc_bits=int(cfg.hardware.adc_bits),
+        physiology=(),
+    )
+
+
 def _log_ratio(cfg: ScenarioConfig, frame: pd.DataFrame) -> np.ndarray:
-    wl = cfg.leds.wavelengths_nm
-    checked = validate_measurements(frame, wavelengths_nm=wl, adc_bits=cfg.hardware.adc_bits)
-    adc = checked[adc_columns(wl)].to_numpy(dtype=float)
-    ref = checked[ref_columns(wl)].to_numpy(dtype=float)
-    return np.log(adc / ref)
+    """ln(adc / adc_ref) per LED, the codes read and checked by the schema (as every model's)."""
+    schema = _device_schema(cfg)
+    Xa = schema.raw(frame)
+    k = schema.n_channels
+    # column-major like a DataFrame block: the reductions downstream (mean, covariance)
+    # then sum in the same order as before, so results stay byte-identical
+    return np.asfortranarray(np.log(Xa[:, :k] / Xa[:, k : 2 * k]))
 
 
 def _model_log_ratio(

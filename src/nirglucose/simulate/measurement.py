@@ -12,29 +12,11 @@ import numpy as np
 
 from ..config import ScenarioConfig
 from ..constants import PHYSIOLOGICAL_RANGES
+from ..dataset import PMF_COLUMNS, PPG_COLUMNS  # the data schema owns the column names
 from ._random import RandomStreams
 
 __all__ = ["PMF_COLUMNS", "PPG_COLUMNS", "measure_physiology", "measure_ppg"]
 
-#: The measured physiological vector, in the order models and the C export use.
-PMF_COLUMNS = (
-    "age_yr",
-    "bmi_kgm2",
-    "fitzpatrick_type",
-    "melanin_fraction",
-    "skin_thickness_mm",
-    "hydration_pct",
-    "systolic_bp_mmhg",
-    "heart_rate_bpm",
-    "resp_rate_bpm",
-    "skin_temp_c",
-    "humidity_pct",
-    "pressure_mbar",
-)
-
-#: Columns of the PPG perfusion and saturation estimates (``device.ppg_perfusion_spo2``),
-#: present only when that capability is on.
-PPG_COLUMNS = ("blood_volume_pct", "spo2_pct")
 
 #: Measured column -> the truth it measures.
 _TRUTH = {

@@ -1,0 +1,386 @@
+"""What the benchmark writes: its columns, :class:`BenchmarkResult` and ``table.md``.
+
+The column tuples name every output table of
+:func:`~nirglucose.evaluation.benchmark.run_benchmark`; :class:`BenchmarkResult`
+holds the tables and writes them (:data:`OUTPUT_FILES`, each atomically);
+``table.md`` sets our values (95 % CIs) beside the reference study's Table 1.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..dataset import Dataset, atomic_write
+from .calibration import CALIBRATION_COLUMNS
+from .reference import STUDY_TABLE
+from .stats import PAIRED_COLUMNS
+from .tasks import prepare_out
+
+__all__ = [
+    "BenchmarkResult",
+    "METRIC_COLUMNS",
+    "PREDICTION_COLUMNS",
+    "COMPARISON_COLUMNS",
+    "IMPORTANCE_COLUMNS",
+    "OUTPUT_FILES",
+    "ORACLE",
+    "REFERENCE_MODELS",
+    "PINN_MODELS",
+    "NO_PHYSICS",
+    "ABLATION_COLUMNS",
+]
+
+#: Registry name of the oracle bound.
+ORACLE = "oracle"
+#: Reference learners added by ``references=True`` (no skill and off-the-shelf).
+REFERENCE_MODELS = ("mean", "gp", "gbr")
+#: The physics-informed networks of the study (ablated by ``ablation=True``).
+PINN_MODELS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
+#: Suffix of a PINN's row with its physics term off.
+NO_PHYSICS = "/no-physics"
+#: Columns of ``ablation.csv``: one row per PINN, with physics minus without.
+ABLATION_COLUMNS = (
+    "model",
+    "ablated_model",
+    "rmse_mgdl",
+    "ablated_rmse_mgdl",
+    "rmse_diff_mgdl",
+    "ci_low",
+    "ci_high",
+    "p_value",
+    "p_holm",
+    "p_wilcoxon",
+    "significant",
+    "physics_helps",
+)
+
+#: Columns of ``BenchmarkResult.metrics`` / ``metrics.csv``, in order.
+METRIC_COLUMNS = (
+    "model",
+    "label",
+    "rmse_mgdl",
+    "rmse_ci_low",
+    "rmse_ci_high",
+    "mard_pct",
+    "mard_ci_low",
+    "mard_ci_high",
+    "clarke_a_pct",
+    "clarke_a_ci_low",
+    "clarke_a_ci_high",
+    "clarke_ab_pct",
+    "parkes_a_pct",
+    "parkes_ab_pct",
+    "within15_pct",
+    "within15_ci_low",
+    "within15_ci_high",
+    "within20_pct",
+    "iso15197_pct",
+    "bias_mgdl",
+    "bias_ci_low",
+    "bias_ci_high",
+    "loa_low_mgdl",
+    "loa_high_mgdl",
+    "n_parameters",
+    "latency_single_ms",
+    "latency_single_p90_ms",
+    "throughput_per_s",
+    "latency_input",
+    "rmse_vs_oracle",
+    "fit_time_s",
+    "n_predictions",
+    "n_invalid_predictions",
+    "coverage90_pct",
+    "coverage90_ci_low",
+    "coverage90_ci_high",
+    "width90_mgdl",
+    "coverage80_pct",
+    "width80_mgdl",
+)
+#: Columns of ``predictions.parquet``.
+PREDICTION_COLUMNS = (
+    "model",
+    "subject_id",
+    "measurement_id",
+    "repeat",
+    "fold",
+    "reference_mgdl",
+    "predicted_mgdl",
+    "scored_mgdl",
+    "lower90_mgdl",
+    "upper90_mgdl",
+)
+#: Columns of ``comparisons.csv``.
+COMPARISON_COLUMNS = ("family", *PAIRED_COLUMNS, "study_holds")
+#: Columns of ``importance.csv``.
+IMPORTANCE_COLUMNS = (
+    "model",
+    "wavelength_nm",
+    "rmse_increase_mgdl",
+    "rmse_increase_sd_mgdl",
+    "n_tasks",
+)
+#: Files :meth:`BenchmarkResult.save` writes.
+OUTPUT_FILES = (
+    "metrics.csv",
+    "metrics.json",
+    "table.md",
+    "predictions.parquet",
+    "comparisons.csv",
+    "histories.json",
+    "importance.csv",
+    "ablation.csv",
+    "calibration.csv",
+    "dataset.parquet",
+    "meta.json",
+)
+
+
+# --------------------------------------------------------------------------- result
+@dataclass
+class BenchmarkResult:
+    """What :func:`run_benchmark` computed.
+
+    Attributes
+    ----------
+    metrics : pandas.DataFrame
+        One row per model (:data:`METRIC_COLUMNS`), best RMSE first.
+    predictions : pandas.DataFrame
+        Every out-of-fold prediction (:data:`PREDICTION_COLUMNS`).
+    comparisons : pandas.DataFrame
+        Paired tests (:data:`COMPARISON_COLUMNS`): family ``"vs_best"`` (every model
+        against the best non-oracle model) and ``"study_order"`` (every pair the study
+        ranked, worse minus better; ``study_holds`` says whether our ranking agrees).
+    histories : dict
+        Model -> per-epoch dicts of the first fold of the first repeat (empty list for
+        models without training history).
+    importance : pandas.DataFrame
+        Permutation importance per model and wavelength (:data:`IMPORTANCE_COLUMNS`).
+    meta : dict
+        Protocol, seeds, dataset hash and config, versions, task counts, methods;
+        ``study_orderings`` says which of the study's pairwise orderings hold here.
+    ablation : pandas.DataFrame
+        Physics ablation (:data:`ABLATION_COLUMNS`); empty without ``ablation=True``.
+    dataset : Dataset, optional
+        The dataset benchmarked (written to ``dataset.parquet``).
+    calibration : pandas.DataFrame
+        Personal calibration (:data:`~nirglucose.evaluation.calibration.CALIBRATION_COLUMNS`);
+        empty without ``calibration=k``.
+    """
+
+    metrics: pd.DataFrame
+    predictions: pd.DataFrame
+    comparisons: pd.DataFrame
+    histories: dict[str, list[dict[str, Any]]]
+    importance: pd.DataFrame
+    meta: dict[str, Any]
+    dataset: Dataset | None = field(default=None, repr=False)
+    ablation: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=ABLATION_COLUMNS))
+    calibration: pd.DataFrame = field(
+        default_factory=lambda: pd.DataFrame(columns=CALIBRATION_COLUMNS)
+    )
+
+    def table_markdown(self) -> str:
+        """The study's Table 1 layout with our values (95 % CIs) beside the study's."""
+        return _table_markdown(self)
+
+    def save(self, out: str | Path) -> Path:
+        """Write :data:`OUTPUT_FILES` into directory ``out`` (created if its parent exists)."""
+        out = prepare_out(out)
+        _write_csv(out / "metrics.csv", self.metrics)
+        _write_text(
+            out / "metrics.json",
+            _dumps(
+                {
+                    "meta": self.meta,
+                    "metrics": self.metrics.to_dict(orient="records"),
+                    "ablation": self.ablation.to_dict(orient="records"),
+                    "calibration": self.calibration.to_dict(orient="records"),
+                }
+            ),
+        )
+        _write_text(out / "table.md", self.table_markdown())
+        atomic_write(
+            out / "predictions.parquet", lambda tmp: self.predictions.to_parquet(tmp, index=False)
+        )
+        _write_csv(out / "comparisons.csv", self.comparisons)
+        _write_text(out / "histories.json", _dumps(self.histories))
+        _write_csv(out / "importance.csv", self.importance)
+        _write_csv(out / "ablation.csv", self.ablation)
+        _write_csv(out / "calibration.csv", self.calibration)
+        if self.dataset is not None:
+            self.dataset.save(out / "dataset.parquet")
+        _write_text(out / "meta.json", _dumps(self.meta))
+        return out
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-safe copy: NaN/inf -> None, numpy scalars -> Python, tuples -> lists."""
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return [_clean(v) for v in obj.tolist()]
+    if isinstance(obj, np.bool_ | bool):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    return obj
+
+
+def _dumps(obj: Any) -> str:
+    return json.dumps(_clean(obj), indent=2, sort_keys=False, allow_nan=False) + "\n"
+
+
+def _write_text(path: Path, text: str) -> None:
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+
+
+def _write_csv(path: Path, frame: pd.DataFrame) -> None:
+    atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False))
+
+
+
+# --------------------------------------------------------------------------- table.md
+def _fmt(v: Any, digits: int = 1) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "–"
+    if isinstance(v, int | np.integer):
+        return f"{int(v):,}"
+    return f"{float(v):.{digits}f}"
+
+
+def _fmt_ms(v: Any) -> str:
+    if v is None or not math.isfinite(float(v)):
+        return "–"
+    v = float(v)
+    return f"{v:.3f}" if v < 0.1 else f"{v:.2f}" if v < 10 else f"{v:.1f}"
+
+
+def _table_markdown(res: BenchmarkResult) -> str:
+    study = {row["model"]: row for row in STUDY_TABLE}
+    m = res.meta
+    layout = (
+        "one 60/20/20 split by subject"
+        if m["protocol"] == "paper-split"
+        else f"grouped {m['n_splits']}-fold CV × {m['repeats']} repeats"
+    )
+    lines = [
+        "# Benchmark against the reference study (Table 1)",
+        "",
+        f"Ours: {layout} (protocol `{m['protocol']}`, seed {m['seed']}), "
+        f"{m['n_subjects']} subjects, {m['n_snapshots']} snapshots, preset "
+        f"`{m['preset']}`, dataset {m['dataset_hash']}; 95 % CIs from a cluster bootstrap "
+        f"over subjects ({m['n_boot']:,} resamples). Study: one 60/20/20 split by subject, "
+        f"test n = 48. Inference: our median single-sample `predict` time.",
+        "",
+        "| Model | RMSE mg/dL | study | MARD % | study | Clarke A % | study | ±15 % | study "
+        "| Params | study | Inference ms | study | RMSE / oracle |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for _, r in res.metrics.iterrows():
+        s = study.get(r["model"], {})
+
+        def ci(stem, col, r=r):
+            return f"{_fmt(r[col])} [{_fmt(r[stem + '_ci_low'])}, {_fmt(r[stem + '_ci_high'])}]"
+
+        lines.append(
+            f"| {r['label']} | {ci('rmse', 'rmse_mgdl')} | {_fmt(s.get('rmse_mgdl'))} "
+            f"| {ci('mard', 'mard_pct')} | {_fmt(s.get('mard_pct'))} "
+            f"| {ci('clarke_a', 'clarke_a_pct')} | {_fmt(s.get('clarke_a_pct'))} "
+            f"| {ci('within15', 'within15_pct')} | {_fmt(s.get('within15_pct'))} "
+            f"| {_fmt(int(r['n_parameters']))} | {_fmt(s.get('n_parameters'))} "
+            f"| {_fmt_ms(r['latency_single_ms'])} | {_fmt_ms(s.get('latency_single_ms', np.nan))} "
+            f"| {_fmt(r['rmse_vs_oracle'], 2)} |"
+        )
+    lines.append("")
+    lines.extend(_significance_lines(res))
+    lines.extend(_ablation_lines(res))
+    return "\n".join(lines) + "\n"
+
+
+def _ablation_lines(res: BenchmarkResult) -> list[str]:
+    a = res.ablation
+    if a is None or not len(a):
+        return []
+    label = {r["model"]: r["label"] for _, r in res.metrics.iterrows()}
+    out = [
+        "",
+        "## Physics ablation",
+        "",
+        "Each PINN refitted with its physics term off (`lambda_phys = 0`), everything else "
+        "identical (same splits, seeds and parameters). Δ RMSE = with physics − without "
+        "(negative: the physics term helps); paired cluster bootstrap over subjects, "
+        f"Holm over the {len(a)} PINNs, α = {res.meta['alpha']}.",
+        "",
+        "| PINN | RMSE with physics | RMSE without | Δ RMSE mg/dL [95 % CI] | p_holm | verdict |",
+        "|---|---|---|---|---|---|",
+    ]
+    for _, r in a.iterrows():
+        if r["significant"]:
+            verdict = "physics helps" if r["physics_helps"] else "physics hurts"
+        else:
+            verdict = "no significant difference"
+        out.append(
+            f"| {label.get(r['model'], r['model'])} | {_fmt(r['rmse_mgdl'])} "
+            f"| {_fmt(r['ablated_rmse_mgdl'])} | {r['rmse_diff_mgdl']:+.2f} "
+            f"[{r['ci_low']:+.2f}, {r['ci_high']:+.2f}] | {r['p_holm']:.3g} | {verdict} |"
+        )
+    return out
+
+
+def _significance_lines(res: BenchmarkResult) -> list[str]:
+    c = res.comparisons
+    label = {r["model"]: r["label"] for _, r in res.metrics.iterrows()}
+    out = []
+    vb = c[c["family"] == "vs_best"]
+    if len(vb):
+        best = vb["reference_model"].iloc[0]
+        worse = vb["significant"] & (vb["rmse_diff_mgdl"] > 0)
+        better = vb["significant"] & (vb["rmse_diff_mgdl"] < 0)
+
+        def names(mask):
+            return ", ".join(label[m] for m in vb.loc[mask, "model"]) or "none"
+
+        out.append(
+            f"Significant rankings (paired cluster bootstrap of the RMSE difference over "
+            f"subjects, Holm-adjusted, α = {res.meta['alpha']}): best model is {label[best]}; "
+            f"significantly worse than it: {names(worse)}; "
+            f"not distinguishable from it: {names(~vb['significant'])}"
+            + (
+                f"; significantly better (a bound, not a competitor): {names(better)}."
+                if better.any()
+                else "."
+            )
+        )
+    so = c[c["family"] == "study_order"]
+    if len(so):
+        n_hold = int(so["study_holds"].sum())
+        n_sig = int((so["study_holds"] & so["significant"]).sum())
+        out += [
+            "",
+            f"Study orderings (study: row model better than column model): "
+            f"{n_hold} of {len(so)} hold here, {n_sig} of them significantly:",
+            "",
+        ]
+        for _, r in so.iterrows():
+            verdict = "holds" if r["study_holds"] else "reversed"
+            sig = "significant" if r["significant"] else "not significant"
+            out.append(
+                f"- {label[r['reference_model']]} < {label[r['model']]}: {verdict} "
+                f"(Δ RMSE {r['rmse_diff_mgdl']:+.1f} mg/dL [{r['ci_low']:+.1f}, "
+                f"{r['ci_high']:+.1f}], p_holm = {r['p_holm']:.3g}, {sig})"
+            )
+    if res.meta.get("oracle_note"):
+        out += ["", f"Note: {res.meta['oracle_note']}."]
+    return out
