@@ -620,7 +620,7 @@ def test_training_parameters_are_declared_once():
     for cls in (SDNN, OriginalPINN, OptimizedPINN, RTEPINN, SelectiveRTEPINN):
         names = list(inspect.signature(cls).parameters)
         assert names[-len(TRAINING_PARAMS) :] == list(TRAINING_PARAMS), cls
-        assert "__init__" not in vars(cls), cls
+        assert getattr(cls.__init__, "generated", False), cls  # no hand-written __init__
         for klass in cls.__mro__:
             assert set(vars(klass).get("own_params", {})).isdisjoint(TRAINING_PARAMS)
     assert OptimizedPINN().dropout == 0.1 and OriginalPINN().dropout == 0.0

@@ -294,6 +294,7 @@ def _keyword_init(cls: type) -> Callable[..., None]:
     )
     __init__.__qualname__ = f"{cls.__qualname__}.__init__"
     __init__.__module__ = cls.__module__
+    __init__.generated = True  # see test_training_parameters_are_declared_once
     return __init__
 
 
