@@ -608,3 +608,26 @@ def test_sklearn_common_checks(estimator, check):
 def test_base_class_is_abstract():
     with pytest.raises(NotImplementedError):
         TorchRegressor().build_module()
+
+
+def test_training_parameters_are_declared_once():
+    # Every network's constructor is generated from its own parameters plus the one
+    # TRAINING_PARAMS table: no subclass re-declares the training keywords.
+    import inspect
+
+    from nirglucose.models._torch_base import TRAINING_PARAMS
+
+    for cls in (SDNN, OriginalPINN, OptimizedPINN, RTEPINN, SelectiveRTEPINN):
+        names = list(inspect.signature(cls).parameters)
+        assert names[-len(TRAINING_PARAMS) :] == list(TRAINING_PARAMS), cls
+        assert getattr(cls.__init__, "generated", False), cls  # no hand-written __init__
+        for klass in cls.__mro__:
+            assert set(vars(klass).get("own_params", {})).isdisjoint(TRAINING_PARAMS)
+    assert OptimizedPINN().dropout == 0.1 and OriginalPINN().dropout == 0.0
+    assert list(inspect.signature(OptimizedPINN).parameters)[:3] == [
+        "d_model",
+        "n_heads",
+        "lambda_phys",
+    ]
+    with pytest.raises(TypeError, match="unexpected keyword argument 'max_epoch'"):
+        SDNN(max_epoch=3)

@@ -64,10 +64,11 @@ References
 from __future__ import annotations
 
 import copy
+import inspect
 import json
 import logging
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -230,6 +231,73 @@ class _WhitenedInputs(nn.Module):
         return run
 
 
+#: The training keyword arguments every network takes (name -> default), in the
+#: constructor's order; documented in :class:`TorchRegressor`.
+TRAINING_PARAMS: dict[str, Any] = {
+    "max_epochs": DEFAULT_EPOCHS,
+    "batch_size": None,
+    "lr": DEFAULT_LR,
+    "weight_decay": DEFAULT_WEIGHT_DECAY,
+    "dropout": 0.0,
+    "whiten_inputs": True,
+    "patience": None,
+    "val_fraction": 0.0,
+    "lr_schedule": "cosine",
+    "refit": True,
+    "random_state": None,
+}
+
+
+def _constructor_defaults(cls: type) -> dict[str, Any]:
+    """``cls``'s constructor parameters and defaults: its own (most derived first),
+    then :data:`TRAINING_PARAMS` with the hierarchy's ``training_defaults``."""
+    own: dict[str, Any] = {}
+    training = dict(TRAINING_PARAMS)
+    for klass in reversed(cls.__mro__):
+        training.update(klass.__dict__.get("training_defaults", {}))
+    for klass in cls.__mro__:
+        for name, default in klass.__dict__.get("own_params", {}).items():
+            own.setdefault(name, default)
+    clash = sorted(set(own) & set(training))
+    if clash:
+        raise TypeError(f"{cls.__name__}.own_params repeats training parameters {clash}")
+    return {**own, **training}
+
+
+def _keyword_init(cls: type) -> Callable[..., None]:
+    """A keyword-only ``__init__`` for ``cls`` storing each parameter unchanged.
+
+    scikit-learn reads an estimator's parameters from its ``__init__`` signature
+    (``BaseEstimator._get_param_names``), so the generated function carries an explicit
+    ``__signature__``: ``get_params``, ``clone`` and ``set_params`` see every
+    parameter, and no network re-declares the eleven training ones.
+    """
+    defaults = _constructor_defaults(cls)
+
+    def __init__(self, **params: Any) -> None:
+        unknown = sorted(set(params) - set(defaults))
+        if unknown:
+            raise TypeError(
+                f"{cls.__name__}() got an unexpected keyword argument {unknown[0]!r}; "
+                f"parameters: {', '.join(defaults)}"
+            )
+        for name, default in defaults.items():
+            setattr(self, name, params.get(name, default))
+
+    self_param = inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    __init__.__signature__ = inspect.Signature(
+        [self_param]
+        + [
+            inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default)
+            for name, default in defaults.items()
+        ]
+    )
+    __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+    __init__.__module__ = cls.__module__
+    __init__.generated = True  # see test_training_parameters_are_declared_once
+    return __init__
+
+
 class TorchRegressor(RegressorMixin, BaseEstimator):
     """Base of the network estimators: one seeded training loop, save/load, fast predict.
 
@@ -321,32 +389,16 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
     #: Set by :func:`~nirglucose.models.registry.register`.
     registry_name: ClassVar[str] = ""
 
-    def __init__(
-        self,
-        *,
-        max_epochs: int = DEFAULT_EPOCHS,
-        batch_size: int | None = None,
-        lr: float = DEFAULT_LR,
-        weight_decay: float = DEFAULT_WEIGHT_DECAY,
-        dropout: float = 0.0,
-        whiten_inputs: bool = True,
-        patience: int | None = None,
-        val_fraction: float = 0.0,
-        lr_schedule: str = "cosine",
-        refit: bool = True,
-        random_state: int | np.random.RandomState | None = None,
-    ) -> None:
-        self.max_epochs = max_epochs
-        self.batch_size = batch_size
-        self.lr = lr
-        self.weight_decay = weight_decay
-        self.dropout = dropout
-        self.whiten_inputs = whiten_inputs
-        self.patience = patience
-        self.val_fraction = val_fraction
-        self.lr_schedule = lr_schedule
-        self.refit = refit
-        self.random_state = random_state
+    #: A subclass's own constructor parameters (name -> default), placed before the
+    #: training ones; collected along the class hierarchy, the subclass's first.
+    own_params: ClassVar[dict[str, Any]] = {}
+    #: Training defaults a subclass changes (e.g. the Optimized PINN's dropout 0.1).
+    training_defaults: ClassVar[dict[str, Any]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "__init__" not in cls.__dict__:
+            cls.__init__ = _keyword_init(cls)
 
     # ------------------------------------------------------------------ overridables
 
@@ -1094,6 +1146,9 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         est._prepare_physics_tensors()
         est._build_fast_path()
         return est
+
+
+TorchRegressor.__init__ = _keyword_init(TorchRegressor)  # subclasses: __init_subclass__
 
 
 def _read_weights(doc_path: Path, name: Any) -> dict[str, torch.Tensor]:

@@ -47,7 +47,7 @@ from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..optics.diffusion import farrell_reflectance
-from ._torch_base import DEFAULT_EPOCHS, DEFAULT_LR, DEFAULT_WEIGHT_DECAY, TorchRegressor
+from ._torch_base import TorchRegressor
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
     beer_lambert_loss,
@@ -123,6 +123,13 @@ def _lambda_ok(est: Any) -> None:
 
 class _BeerLambertPINN(TorchRegressor):
     """Shared physics of the Original and Optimized PINNs (not registered)."""
+
+    own_params: ClassVar[dict[str, Any]] = {
+        "lambda_phys": 0.01,
+        "physics_form": "absolute",
+        "absorptivity_per_cm_per_mm": None,
+        "signal_gain": None,
+    }
 
     def _validate_extra_params(self) -> None:
         _lambda_ok(self)
@@ -261,43 +268,6 @@ class OriginalPINN(_BeerLambertPINN):
     See the module references.
     """
 
-    def __init__(
-        self,
-        *,
-        lambda_phys: float = 0.01,
-        physics_form: str = "absolute",
-        absorptivity_per_cm_per_mm: float | None = None,
-        signal_gain: float | None = None,
-        max_epochs: int = DEFAULT_EPOCHS,
-        batch_size: int | None = None,
-        lr: float = DEFAULT_LR,
-        weight_decay: float = DEFAULT_WEIGHT_DECAY,
-        dropout: float = 0.0,
-        whiten_inputs: bool = True,
-        patience: int | None = None,
-        val_fraction: float = 0.0,
-        lr_schedule: str = "cosine",
-        refit: bool = True,
-        random_state: int | np.random.RandomState | None = None,
-    ) -> None:
-        super().__init__(
-            max_epochs=max_epochs,
-            batch_size=batch_size,
-            lr=lr,
-            weight_decay=weight_decay,
-            dropout=dropout,
-            whiten_inputs=whiten_inputs,
-            patience=patience,
-            val_fraction=val_fraction,
-            lr_schedule=lr_schedule,
-            refit=refit,
-            random_state=random_state,
-        )
-        self.lambda_phys = lambda_phys
-        self.physics_form = physics_form
-        self.absorptivity_per_cm_per_mm = absorptivity_per_cm_per_mm
-        self.signal_gain = signal_gain
-
     def build_module(self) -> OriginalPINNNet:
         """:class:`~nirglucose.models.networks.OriginalPINNNet`."""
         return OriginalPINNNet(**self._input_widths(), dropout=float(self.dropout))
@@ -328,46 +298,8 @@ class OptimizedPINN(_BeerLambertPINN):
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
     """
 
-    def __init__(
-        self,
-        *,
-        d_model: int = 64,
-        n_heads: int = 4,
-        lambda_phys: float = 0.01,
-        physics_form: str = "absolute",
-        absorptivity_per_cm_per_mm: float | None = None,
-        signal_gain: float | None = None,
-        max_epochs: int = DEFAULT_EPOCHS,
-        batch_size: int | None = None,
-        lr: float = DEFAULT_LR,
-        weight_decay: float = DEFAULT_WEIGHT_DECAY,
-        dropout: float = 0.1,
-        whiten_inputs: bool = True,
-        patience: int | None = None,
-        val_fraction: float = 0.0,
-        lr_schedule: str = "cosine",
-        refit: bool = True,
-        random_state: int | np.random.RandomState | None = None,
-    ) -> None:
-        super().__init__(
-            max_epochs=max_epochs,
-            batch_size=batch_size,
-            lr=lr,
-            weight_decay=weight_decay,
-            dropout=dropout,
-            whiten_inputs=whiten_inputs,
-            patience=patience,
-            val_fraction=val_fraction,
-            lr_schedule=lr_schedule,
-            refit=refit,
-            random_state=random_state,
-        )
-        self.d_model = d_model
-        self.n_heads = n_heads
-        self.lambda_phys = lambda_phys
-        self.physics_form = physics_form
-        self.absorptivity_per_cm_per_mm = absorptivity_per_cm_per_mm
-        self.signal_gain = signal_gain
+    own_params: ClassVar[dict[str, Any]] = {"d_model": 64, "n_heads": 4}
+    training_defaults: ClassVar[dict[str, Any]] = {"dropout": 0.1}
 
     def _validate_extra_params(self) -> None:
         super()._validate_extra_params()
@@ -434,41 +366,10 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
 class _RTEPINNBase(TorchRegressor):
     """Shared physics of the RTE-inspired PINNs (not registered)."""
 
+    own_params: ClassVar[dict[str, Any]] = {"lambda_phys": 0.1, "stability_weight": 0.1}
+
     #: Wavelengths the optical heads predict and the regulariser covers. [nm]
     REGULARISED_NM: ClassVar[tuple[float, ...]] = DEFAULT_LED_WAVELENGTHS_NM
-
-    def __init__(
-        self,
-        *,
-        lambda_phys: float = 0.1,
-        stability_weight: float = 0.1,
-        max_epochs: int = DEFAULT_EPOCHS,
-        batch_size: int | None = None,
-        lr: float = DEFAULT_LR,
-        weight_decay: float = DEFAULT_WEIGHT_DECAY,
-        dropout: float = 0.0,
-        whiten_inputs: bool = True,
-        patience: int | None = None,
-        val_fraction: float = 0.0,
-        lr_schedule: str = "cosine",
-        refit: bool = True,
-        random_state: int | np.random.RandomState | None = None,
-    ) -> None:
-        super().__init__(
-            max_epochs=max_epochs,
-            batch_size=batch_size,
-            lr=lr,
-            weight_decay=weight_decay,
-            dropout=dropout,
-            whiten_inputs=whiten_inputs,
-            patience=patience,
-            val_fraction=val_fraction,
-            lr_schedule=lr_schedule,
-            refit=refit,
-            random_state=random_state,
-        )
-        self.lambda_phys = lambda_phys
-        self.stability_weight = stability_weight
 
     def _validate_extra_params(self) -> None:
         _lambda_ok(self)
