@@ -57,7 +57,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "plots/pipeline.py:plot_pipeline": "figure code; plots owner's",
     "plots/tradeoffs.py:plot_physics_depth": "figure code; plots owner's",
     "report/figures.py:load_results": "report owner's",
-    "report/figures.py:render_figures": "report owner's",
     "report/presets.py:presets_section": "report owner's",
     "report/sweep.py:sweep_section": "report owner's",
     "simulate/hardware.py:apply_hardware": "the hardware chain in order; simulator's",
