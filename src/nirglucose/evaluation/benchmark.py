@@ -31,8 +31,9 @@ Reference rows and the physics ablation
     ``references=True`` adds :data:`REFERENCE_MODELS` (no skill, a Gaussian process
     with one length scale per input, gradient boosting) to the models. Every model is
     built with the tuned hyper-parameters of the data's preset (:func:`_model_params`),
-    overridden by ``model_params``. ``ablation=True`` also runs every PINN of
-    :data:`PINN_MODELS` with its physics term off (``lambda_phys=0``; everything else
+    overridden by ``model_params``. ``ablation=True`` also runs every PINN (a
+    network with a ``lambda_phys``, :func:`~nirglucose.models.registry.is_pinn`; the
+    study's are :data:`PINN_MODELS`) with its physics term off (``lambda_phys=0``; everything else
     identical: the same folds, the same seeds, the same other parameters) as the row
     ``<name>/no-physics``; ``ablation.csv`` holds the paired RMSE difference (with
     physics minus without) with its cluster-bootstrap CI and Holm-adjusted p-value.
@@ -266,11 +267,14 @@ def _model_params(name: str, preset: str | None) -> dict[str, Any]:
 
 
 def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str, Any]]]:
-    """Row name -> (registered model, forced parameters); PINNs twice under ablation."""
+    """Row name -> (registered model, forced parameters); PINNs (networks with a
+    ``lambda_phys``) twice under ablation."""
+    from ..models.registry import is_pinn
+
     out: dict[str, tuple[str, dict[str, Any]]] = {n: (n, {}) for n in names}
     if ablation:
         for n in names:
-            if n in PINN_MODELS:
+            if is_pinn(n):
                 out[n + NO_PHYSICS] = (n, {"lambda_phys": 0.0})
     return out
 

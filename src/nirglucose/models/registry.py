@@ -21,20 +21,15 @@ __all__ = [
     "available_models",
     "load_model",
     "MODEL_MODULES",
+    "MODELS",
+    "is_network",
+    "is_pinn",
 ]
 
-#: Modules that define registered estimators (imported on first use).
-MODEL_MODULES = (
-    "nirglucose.models.linear",
-    "nirglucose.models.oracle",
-    "nirglucose.models.pinn",
-    "nirglucose.models.sdnn",
-    "nirglucose.models.reference",
-)
-
-#: Registered name -> the module that defines it, so that looking up a linear model
-#: does not import torch.
-_NAME_MODULES = {
+#: Registered name -> the module that defines it. Adding a model is a module with a
+#: ``@register(name)`` class and one line here; the module is imported on first use, so
+#: looking up a linear model does not import torch.
+MODELS = {
     "ebl": "nirglucose.models.linear",
     "pls": "nirglucose.models.linear",
     "oracle": "nirglucose.models.oracle",
@@ -47,6 +42,8 @@ _NAME_MODULES = {
     "gp": "nirglucose.models.reference",
     "gbr": "nirglucose.models.reference",
 }
+#: Modules that define registered estimators (imported on first use).
+MODEL_MODULES = tuple(dict.fromkeys(MODELS.values()))
 
 _REGISTRY: dict[str, type] = {}
 _loaded = False
@@ -84,13 +81,27 @@ def available_models() -> list[str]:
 
 def get_model_class(name: str) -> type:
     """The estimator class registered under ``name``; unknown names raise ConfigError."""
-    if name in _NAME_MODULES and name not in _REGISTRY:
-        importlib.import_module(_NAME_MODULES[name])
+    if name in MODELS and name not in _REGISTRY:
+        importlib.import_module(MODELS[name])
     if name not in _REGISTRY:
         _load_all()
     if name not in _REGISTRY:
         raise ConfigError(unknown_name("model", name, sorted(_REGISTRY)))
     return _REGISTRY[name]
+
+
+def is_network(name: str) -> bool:
+    """Whether ``name`` is a torch network (trained by the shared loop, tuned on the
+    shared training grid)."""
+    from ._torch_base import TorchRegressor
+
+    return issubclass(get_model_class(name), TorchRegressor)
+
+
+def is_pinn(name: str) -> bool:
+    """Whether ``name`` is a physics-informed network: a network with a physics weight
+    ``lambda_phys`` (0 switches its physics term off, e.g. for the ablation)."""
+    return is_network(name) and "lambda_phys" in get_model_class(name)._get_param_names()
 
 
 def make_model(name: str, **params: Any):

@@ -64,8 +64,6 @@ _NETWORK_SPACE: dict[str, tuple] = {
     "dropout": (0.0, 0.1),
     "val_fraction": (0.0, 0.2),
 }
-_NETWORKS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
-_PINNS = _NETWORKS[1:]
 
 #: Gradient boosting's grid (2 x 3 x 2 x 3 = 36 points, 12 drawn). Shrinkage at or below
 #: scikit-learn's 0.1, with more stages for the smaller steps (Friedman 2001, Ann.
@@ -104,9 +102,11 @@ def search_space(name: str) -> dict[str, tuple]:
     ConfigError
         If ``name`` has no search space (``gp``, ``mean``, ``oracle``).
     """
-    if name in _NETWORKS:
+    from .registry import is_network, is_pinn
+
+    if is_network(name):
         space = dict(_NETWORK_SPACE)
-        if name in _PINNS:
+        if is_pinn(name):
             space["lambda_phys"] = LAMBDA_PHYS_GRID
         return space
     if name == "ebl":
@@ -119,7 +119,7 @@ def search_space(name: str) -> dict[str, tuple]:
     if name == "gbr":
         return dict(_GBR_SPACE)
     why = f" ({_NO_GRID[name]})" if name in _NO_GRID else ""
-    tuned = ", ".join(("ebl", "pls", "gbr", *_NETWORKS))
+    tuned = "ebl, pls, gbr and every network"
     raise ConfigError(f"no tuning search space for model {name!r}{why}; tuned: {tuned}")
 
 
