@@ -63,13 +63,8 @@ References
 
 from __future__ import annotations
 
-import copy
-import inspect
-import json
 import logging
 import math
-from collections.abc import Callable, Iterator
-from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -81,17 +76,42 @@ from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit
 from sklearn.utils import check_random_state
 from torch import nn
 
-from ..dataset import Dataset, atomic_write
+from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, NotFittedError
 from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
-from ._validate import check_torch_doc, check_weights
+from ._constructor import (
+    DEFAULT_EPOCHS,
+    DEFAULT_LR,
+    DEFAULT_WEIGHT_DECAY,
+    TRAINING_PARAMS,
+    keyword_init,
+)
+from ._torch_io import FORMAT_VERSION, WHITENING_KEY, TorchIOMixin
+from ._torch_predict import _PREDICT_CHUNK, NUMPY_ROWS, TorchPredictMixin
+from ._training import (
+    LR_SCHEDULES,
+    SMOOTHING_EPOCHS,
+    EarlyStopping,
+    batches,
+    make_scheduler,
+    smoothed_argmin,
+    start_at_mean,
+    step_scheduler,
+)
 from ._whitening import scale_of as _scale_of
 from ._whitening import zca_whitening
 from .networks import count_parameters
 
+# Names the tests and older imports use.
+_smoothed_argmin, _start_at_mean = smoothed_argmin, start_at_mean
+
 __all__ = [
     "TorchRegressor",
+    "DEFAULT_EPOCHS",
+    "DEFAULT_LR",
+    "DEFAULT_WEIGHT_DECAY",
+    "TRAINING_PARAMS",
     "LR_SCHEDULES",
     "FORMAT_VERSION",
     "NUMPY_ROWS",
@@ -101,24 +121,6 @@ __all__ = [
 ]
 
 logger = logging.getLogger(__name__)
-
-#: Valid ``lr_schedule`` names.
-LR_SCHEDULES = ("plateau", "cosine", "none")
-#: Version of the saved-model JSON layout.
-FORMAT_VERSION = 1
-
-_PREDICT_CHUNK = 65536
-#: Batches up to this many rows are predicted through the NumPy closure.
-NUMPY_ROWS = 8
-_MIN_IMPROVEMENT = 1e-4  # relative improvement that resets the early-stopping counter
-_SMOOTHING_EPOCHS = 5  # window of the validation curve's moving average (refit only)
-#: Default training: full-batch AdamW for a fixed number of epochs with cosine annealing
-#: and no validation split (the epoch count, lr and weight decay are hyper-parameters,
-#: chosen per preset by ``benchmarks/tune.py``; see :func:`nirglucose.models.tuned_params`).
-#: These untuned defaults are mid-grid values of that search's space.
-DEFAULT_EPOCHS = 300
-DEFAULT_LR = 3e-3
-DEFAULT_WEIGHT_DECAY = 1e-3
 
 
 class _UnfittedError(NotFittedError, _SklearnNotFittedError):
@@ -159,47 +161,6 @@ def nir_pmf_features(
     return a, pmf
 
 
-def _smoothed_argmin(values: list[float], window: int) -> int:
-    """1-based index of the minimum of a centred moving average of ``values``.
-
-    The edges average over the part of the window that exists. A small validation set
-    gives a noisy loss curve whose raw minimum is often a lucky epoch; the smoothed
-    minimum picks the epoch count for the refit more stably.
-    """
-    v = np.asarray(values, dtype=float)
-    half = window // 2
-    c = np.concatenate(([0.0], np.cumsum(v)))
-    idx = np.arange(len(v))
-    lo, hi = np.maximum(idx - half, 0), np.minimum(idx + half + 1, len(v))
-    return int(np.argmin((c[hi] - c[lo]) / (hi - lo))) + 1
-
-
-def _start_at_mean(module: nn.Module) -> nn.Module:
-    """Zero the glucose output layer(s) of a fresh ``module``; return it.
-
-    Every network here ends its glucose head in a ``Linear(n, 1)`` (the only one-output
-    layer; the RTE networks' optics head has two per wavelength). With its weights and
-    bias at zero the untrained network predicts 0 in standardised target units, the
-    training mean: training starts from the no-skill predictor, and early stopping on
-    a validation split can return it (epoch 0) when no epoch beats it. The hidden
-    layers keep PyTorch's default initialisation, so no symmetry is introduced; a
-    zero-initialised last layer is common practice (Goyal et al. 2017, "Accurate,
-    large minibatch SGD", arXiv:1706.02677, sec. 5.1, zero-initialises the last
-    normalisation of each residual block for the same reason: start at a simple
-    function).
-    """
-    with torch.no_grad():
-        for layer in module.modules():
-            if isinstance(layer, nn.Linear) and layer.out_features == 1:
-                layer.weight.zero_()
-                layer.bias.zero_()
-    return module
-
-
-#: State-dict key of the whitening matrix (a buffer, not a trained parameter).
-WHITENING_KEY = "whitening"
-
-
 class _WhitenedInputs(nn.Module):
     """A fixed linear map on ``[x_nir | x_pmf]`` before the network (see ``whiten_inputs``).
 
@@ -231,74 +192,7 @@ class _WhitenedInputs(nn.Module):
         return run
 
 
-#: The training keyword arguments every network takes (name -> default), in the
-#: constructor's order; documented in :class:`TorchRegressor`.
-TRAINING_PARAMS: dict[str, Any] = {
-    "max_epochs": DEFAULT_EPOCHS,
-    "batch_size": None,
-    "lr": DEFAULT_LR,
-    "weight_decay": DEFAULT_WEIGHT_DECAY,
-    "dropout": 0.0,
-    "whiten_inputs": True,
-    "patience": None,
-    "val_fraction": 0.0,
-    "lr_schedule": "cosine",
-    "refit": True,
-    "random_state": None,
-}
-
-
-def _constructor_defaults(cls: type) -> dict[str, Any]:
-    """``cls``'s constructor parameters and defaults: its own (most derived first),
-    then :data:`TRAINING_PARAMS` with the hierarchy's ``training_defaults``."""
-    own: dict[str, Any] = {}
-    training = dict(TRAINING_PARAMS)
-    for klass in reversed(cls.__mro__):
-        training.update(klass.__dict__.get("training_defaults", {}))
-    for klass in cls.__mro__:
-        for name, default in klass.__dict__.get("own_params", {}).items():
-            own.setdefault(name, default)
-    clash = sorted(set(own) & set(training))
-    if clash:
-        raise TypeError(f"{cls.__name__}.own_params repeats training parameters {clash}")
-    return {**own, **training}
-
-
-def _keyword_init(cls: type) -> Callable[..., None]:
-    """A keyword-only ``__init__`` for ``cls`` storing each parameter unchanged.
-
-    scikit-learn reads an estimator's parameters from its ``__init__`` signature
-    (``BaseEstimator._get_param_names``), so the generated function carries an explicit
-    ``__signature__``: ``get_params``, ``clone`` and ``set_params`` see every
-    parameter, and no network re-declares the eleven training ones.
-    """
-    defaults = _constructor_defaults(cls)
-
-    def __init__(self, **params: Any) -> None:
-        unknown = sorted(set(params) - set(defaults))
-        if unknown:
-            raise TypeError(
-                f"{cls.__name__}() got an unexpected keyword argument {unknown[0]!r}; "
-                f"parameters: {', '.join(defaults)}"
-            )
-        for name, default in defaults.items():
-            setattr(self, name, params.get(name, default))
-
-    self_param = inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)
-    __init__.__signature__ = inspect.Signature(
-        [self_param]
-        + [
-            inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default)
-            for name, default in defaults.items()
-        ]
-    )
-    __init__.__qualname__ = f"{cls.__qualname__}.__init__"
-    __init__.__module__ = cls.__module__
-    __init__.generated = True  # see test_training_parameters_are_declared_once
-    return __init__
-
-
-class TorchRegressor(RegressorMixin, BaseEstimator):
+class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstimator):
     """Base of the network estimators: one seeded training loop, save/load, fast predict.
 
     Subclasses implement :meth:`build_module` and may override :meth:`get_loss`
@@ -398,7 +292,7 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if "__init__" not in cls.__dict__:
-            cls.__init__ = _keyword_init(cls)
+            cls.__init__ = keyword_init(cls)
 
     # ------------------------------------------------------------------ overridables
 
@@ -630,18 +524,45 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             raise DataError(f"fitting needs at least 2 samples, got {len(Xa)}")
         rs = check_random_state(self.random_state)
         split_seed, init_seed, shuffle_seed = (int(s) for s in rs.randint(0, 2**31 - 1, size=3))
+        (Xt, yt), (Xv, yv) = self._train_val_rows(Xa, y, groups, X_val, y_val, split_seed)
+        refit = bool(self.refit) and X_val is None and Xv is not None
+        self._fit_scaling(X, Xa, y)
+        train = self._tensors({**self._transform(Xt), "y": self._scale_y(yt)})
+        val = None
+        if Xv is not None and len(Xv):
+            val = self._tensors({**self._transform(Xv), "y": self._scale_y(yv)})
+        every = None
+        if refit:
+            every = self._tensors({**self._transform(Xa), "y": self._scale_y(y)})
+        # Subnormal floats (weights, gradients and Adam moments that strong weight decay
+        # drives towards 0) are 10-100x slower on x86 CPUs: flush them to 0 while
+        # training (RTE PINN at weight_decay=10: 2.8 -> 1.1 s per fit). Restored after.
+        flushing = torch.set_flush_denormal(True)
+        try:
+            with torch.random.fork_rng(devices=[]):
+                self._select_and_refit(train, val, every, init_seed, shuffle_seed)
+        finally:
+            if flushing:
+                torch.set_flush_denormal(False)  # torch's default
+            self.__dict__.pop("_optimizer", None)
+            self.__dict__.pop("_whitening", None)
+        self.refit_epochs_ = len(self.refit_history_)
+        self._build_fast_path()
+        return self
 
+    def _train_val_rows(self, Xa, y, groups, X_val, y_val, split_seed: int):
+        """``((X_train, y_train), (X_val, y_val))``: an explicit validation set, or an
+        internal subject split of ``val_fraction`` (``(None, None)`` without one)."""
         if X_val is not None:
             Xv, yv, _ = self._measurements(X_val, y_val, require_target=True)
-            Xt, yt = Xa, y
-        else:
-            tr, va = self._split(len(Xa), groups, split_seed)
-            Xt, yt = Xa[tr], y[tr]
-            Xv, yv = (Xa[va], y[va]) if va is not None else (None, None)
-        refit = bool(self.refit) and X_val is None and Xv is not None
+            return (Xa, y), (Xv, yv)
+        tr, va = self._split(len(Xa), groups, split_seed)
+        return (Xa[tr], y[tr]), ((Xa[va], y[va]) if va is not None else (None, None))
 
-        # Scaling and physics constants from every row given for training (an internal
-        # validation split is part of the training data; an explicit X_val is not).
+    def _fit_scaling(self, X: Any, Xa: np.ndarray, y: np.ndarray) -> None:
+        """Scaler, physics constants and input whitening from every row given for
+        training (an internal validation split is part of the training data; an
+        explicit ``X_val`` is not)."""
         a_train, pmf_train = self._nir_pmf(Xa)
         self.scaler_ = {
             "nir_mean": a_train.mean(axis=0),
@@ -657,40 +578,25 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         if self.whiten_inputs:
             z = self._transform(Xa)
             self._whitening = (zca_whitening(np.hstack((z["nir"], z["pmf"]))), z["nir"].shape[1])
-        train = self._tensors({**self._transform(Xt), "y": self._scale_y(yt)})
-        val = None
-        if Xv is not None and len(Xv):
-            val = self._tensors({**self._transform(Xv), "y": self._scale_y(yv)})
 
-        # Subnormal floats (weights, gradients and Adam moments that strong weight decay
-        # drives towards 0) are 10-100x slower on x86 CPUs: flush them to 0 while
-        # training (RTE PINN at weight_decay=10: 2.8 -> 1.1 s per fit). Restored after.
-        flushing = torch.set_flush_denormal(True)
-        try:
-            with torch.random.fork_rng(devices=[]):
-                torch.manual_seed(init_seed)
-                self.start_val_mse_ = None
-                self.history_, self.best_epoch_ = self._train(train, val, shuffle_seed)
-                self.n_epochs_ = len(self.history_)
-                self.refit_history_ = []
-                if refit:
-                    # Same initial weights and shuffling seed, every training row, the
-                    # selected number of epochs at the learning rates they had.
-                    torch.manual_seed(init_seed)
-                    every = self._tensors({**self._transform(Xa), "y": self._scale_y(y)})
-                    curve = [self.start_val_mse_]
-                    curve += [r["val_mse"] for r in self.history_]
-                    self.best_epoch_ = _smoothed_argmin(curve, _SMOOTHING_EPOCHS) - 1
-                    plan = [r["lr"] for r in self.history_[: self.best_epoch_]]
-                    self.refit_history_, _ = self._train(every, None, shuffle_seed, lr_plan=plan)
-        finally:
-            if flushing:
-                torch.set_flush_denormal(False)  # torch's default
-            self.__dict__.pop("_optimizer", None)
-            self.__dict__.pop("_whitening", None)
-        self.refit_epochs_ = len(self.refit_history_)
-        self._build_fast_path()
-        return self
+    def _select_and_refit(
+        self, train: dict, val: dict | None, every: dict | None, init_seed: int, shuffle_seed: int
+    ) -> None:
+        """Train on ``train`` (early stopping on ``val``); with ``every``, refit on every
+        row from the same initial weights and shuffling seed for the selected number of
+        epochs at the learning rates they had (the smoothed validation minimum, epoch 0
+        included)."""
+        torch.manual_seed(init_seed)
+        self.start_val_mse_ = None
+        self.history_, self.best_epoch_ = self._train(train, val, shuffle_seed)
+        self.n_epochs_ = len(self.history_)
+        self.refit_history_ = []
+        if every is not None:
+            torch.manual_seed(init_seed)
+            curve = [self.start_val_mse_] + [r["val_mse"] for r in self.history_]
+            self.best_epoch_ = smoothed_argmin(curve, SMOOTHING_EPOCHS) - 1
+            plan = [r["lr"] for r in self.history_[: self.best_epoch_]]
+            self.refit_history_, _ = self._train(every, None, shuffle_seed, lr_plan=plan)
 
     def _wrap_inputs(self, module: nn.Module, whitening: Any) -> nn.Module:
         """``module`` behind the input whitening when ``whiten_inputs`` (else as is).
@@ -724,29 +630,11 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             return all_rows, None
         return tr, va
 
-    @staticmethod
-    def _batches(
-        tensors: dict[str, torch.Tensor], batch_size: int | None, order: torch.Tensor | None = None
-    ) -> Iterator[tuple[int, dict[str, torch.Tensor]]]:
-        n = len(tensors["y"])
-        if batch_size is None or batch_size >= n:
-            yield n, tensors  # full batch: the row order does not change the step
-            return
-        for start in range(0, n, batch_size):
-            if order is None:
-                yield (
-                    min(batch_size, n - start),
-                    {k: v[start : start + batch_size] for k, v in tensors.items()},
-                )
-            else:
-                idx = order[start : start + batch_size]
-                yield len(idx), {k: v[idx] for k, v in tensors.items()}
-
     def _evaluate(self, tensors: dict[str, torch.Tensor]) -> dict[str, float]:
         self.module_.eval()
         sums: dict[str, torch.Tensor] = {}
         n = 0
-        for size, batch in self._batches(tensors, _PREDICT_CHUNK // 8):
+        for size, batch in batches(tensors, _PREDICT_CHUNK // 8):
             for k, v in self.validation_step(batch).items():
                 sums[k] = sums.get(k, 0.0) + v * size
             n += size
@@ -763,12 +651,13 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
         """Train a fresh module; return ``(history, best_epoch)``.
 
         Without ``lr_plan``: up to ``max_epochs`` with the schedule and early stopping,
-        keeping the best weights on ``val`` (the last weights without ``val``). With it:
-        exactly ``len(lr_plan)`` epochs at those learning rates, keeping the last
-        weights (the refit).
+        keeping the best weights on ``val``, the untrained network (the training mean)
+        included as epoch 0 (the last weights without ``val``). With it: exactly
+        ``len(lr_plan)`` epochs at those learning rates, keeping the last weights (the
+        refit).
         """
         self.module_ = self._wrap_inputs(
-            _start_at_mean(self.build_module()), self.__dict__.get("_whitening")
+            start_at_mean(self.build_module()), self.__dict__.get("_whitening")
         )
         self._optimizer = torch.optim.AdamW(
             self.module_.parameters(),
@@ -776,63 +665,23 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
             weight_decay=float(self.weight_decay),
             foreach=True,  # one fused call per step instead of one per tensor
         )
-        patience = self.patience if lr_plan is None else None
         max_epochs = int(self.max_epochs) if lr_plan is None else len(lr_plan)
-        if lr_plan is not None:
-            sched = None
-        elif self.lr_schedule == "plateau":
-            sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
-                self._optimizer,
-                mode="min",
-                factor=0.5,
-                patience=max(1, (patience or 20) // 4),
+        sched = None
+        if lr_plan is None:
+            sched = make_scheduler(
+                self._optimizer, self.lr_schedule, patience=self.patience, max_epochs=max_epochs
             )
-        elif self.lr_schedule == "cosine":
-            sched = torch.optim.lr_scheduler.CosineAnnealingLR(
-                self._optimizer, T_max=self.max_epochs
-            )
-        else:
-            sched = None
+        keep_best = val is not None and lr_plan is None
+        stopper = EarlyStopping(self.patience if lr_plan is None else None, keep_best)
+        if keep_best:
+            self.start_val_mse_ = stopper.start(self._evaluate(val)["mse"], self.module_)
         gen = torch.Generator().manual_seed(shuffle_seed)
-        n_train = len(train["y"])
-        batch_size = None if self.batch_size is None else int(self.batch_size)
-        full_batch = batch_size is None or batch_size >= n_train
-        y_scale = self.scaler_["y_scale"]
         history: list[dict] = []
-        best, best_epoch, best_state, stale = math.inf, 0, None, 0
-        if val is not None and lr_plan is None:
-            # Epoch 0 is a candidate: the untrained network predicts the training mean
-            # (its glucose output starts at 0, see _start_at_mean), so early stopping
-            # never returns weights worse on the validation subjects than no skill.
-            best = self._evaluate(val)["mse"]
-            best_state = copy.deepcopy(self.module_.state_dict())
-            self.start_val_mse_ = best
         for epoch in range(1, max_epochs + 1):
-            self.module_.train()
             if lr_plan is not None:
                 for group in self._optimizer.param_groups:
                     group["lr"] = lr_plan[epoch - 1]
-            lr_now = self._optimizer.param_groups[0]["lr"]
-            order = None if full_batch else torch.randperm(n_train, generator=gen)
-            sums: dict[str, torch.Tensor] = {}
-            for size, batch in self._batches(train, batch_size, order):
-                for k, v in self.train_step(batch).items():
-                    sums[k] = sums.get(k, 0.0) + v * size
-            record: dict[str, Any] = {"epoch": epoch, "lr": lr_now}
-            train_terms = {k: float(v) / n_train for k, v in sums.items()}
-            record["train_loss"] = train_terms.pop("loss")
-            record.update({f"train_{k}": v for k, v in train_terms.items()})
-            if val is not None:
-                val_terms = self._evaluate(val)
-                record["val_loss"] = val_terms.pop("loss")
-                record.update({f"val_{k}": v for k, v in val_terms.items()})
-                record["val_rmse_mgdl"] = math.sqrt(max(val_terms["mse"], 0.0)) * y_scale
-                monitor = val_terms["mse"]
-            else:
-                record["val_loss"] = None
-                record.update({f"val_{k}": None for k in train_terms})
-                record["val_rmse_mgdl"] = None
-                monitor = record["train_loss"]
+            record, monitor = self._epoch(train, val, epoch, gen)
             history.append(record)
             logger.debug("%s epoch %d: %s", type(self).__name__, epoch, record)
             if not math.isfinite(monitor):
@@ -840,340 +689,44 @@ class TorchRegressor(RegressorMixin, BaseEstimator):
                     f"{type(self).__name__}: training diverged at epoch {epoch} "
                     f"(loss {monitor}); lower lr (now {self.lr})"
                 )
-            if monitor < best - _MIN_IMPROVEMENT * abs(best) or (epoch == 1 and val is None):
-                best, stale = monitor, 0
-                if val is not None and lr_plan is None:
-                    # The weights early stopping returns to; without a validation set
-                    # the last weights are kept (no copy per epoch).
-                    best_epoch = epoch
-                    best_state = copy.deepcopy(self.module_.state_dict())
-            else:
-                stale += 1
-            if val is None or lr_plan is not None:
-                best_epoch = epoch
-            if isinstance(sched, torch.optim.lr_scheduler.ReduceLROnPlateau):
-                sched.step(monitor)
-            elif sched is not None:
-                sched.step()
-            if patience is not None and stale >= patience:
+            stop = stopper.update(monitor, epoch, self.module_)
+            step_scheduler(sched, monitor)
+            if stop:
                 break
-        if best_state is not None:
-            self.module_.load_state_dict(best_state)
+        stopper.restore(self.module_)
         self.module_.eval()
-        return history, best_epoch
+        return history, stopper.best_epoch
 
-    # ------------------------------------------------------------------ predict
+    def _epoch(
+        self, train: dict, val: dict | None, epoch: int, gen: torch.Generator
+    ) -> tuple[dict[str, Any], float]:
+        """One epoch of training steps; ``(history record, monitored loss)``.
 
-    def _inputs32(self, Xa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Standardised float32 network inputs ``(nir, pmf)`` from measured columns."""
-        a, pmf = self._nir_pmf(Xa)
-        s = self.scaler_
-        nir = ((a - s["nir_mean"]) / s["nir_scale"]).astype(np.float32)
-        return nir, ((pmf - s["pmf_mean"]) / s["pmf_scale"]).astype(np.float32)
-
-    def predict(self, X: Any) -> np.ndarray:
-        """Glucose estimates.
-
-        Up to :data:`NUMPY_ROWS` rows go through the network's NumPy closure (the
-        low-latency path, see :meth:`predict_one`); larger batches through the torch
-        module in ``torch.inference_mode`` in chunks of 65,536 rows. The two paths
-        agree to float32 rounding.
-
-        Parameters
-        ----------
-        X : Dataset, pandas.DataFrame or array_like (n, 20)
-            Measurements.
-
-        Returns
-        -------
-        numpy.ndarray
-            (n,) glucose. [mg/dL]
+        The monitored loss is the validation MSE, or the training loss without ``val``.
         """
-        self._check_fitted()
-        Xa, _, _ = self._measurements(X)
-        fast = self.__dict__.get("_fast")
-        if len(Xa) <= NUMPY_ROWS and fast is not None and fast["fn"] is not None:
-            x = np.concatenate(self._nir_pmf(Xa), axis=1)
-            x -= fast["mu"]
-            x *= fast["inv_scale"]
-            out = self._glucose(fast["fn"](x.astype(np.float32))).astype(np.float64)
-        else:
-            nir, pmf = self._inputs32(Xa)
-            out = np.empty(len(Xa), dtype=np.float64)
-            nir_t, pmf_t = torch.from_numpy(nir), torch.from_numpy(pmf)
-            self.module_.eval()
-            with torch.inference_mode():
-                for start in range(0, len(Xa), _PREDICT_CHUNK):
-                    stop = start + _PREDICT_CHUNK
-                    g = self._glucose(self.module_(nir_t[start:stop], pmf_t[start:stop]))
-                    out[start:stop] = g.numpy()
-        return out * self.scaler_["y_scale"] + self.scaler_["y_mean"]
-
-    def predict_one(self, adc: Any, adc_ref: Any, pmf: Any) -> float:
-        """Glucose from one snapshot, on the low-latency path.
-
-        No DataFrame handling and no autograd: the inputs are standardised into a
-        pre-allocated float32 buffer and run through the network's NumPy closure
-        (:meth:`~nirglucose.models.networks.OriginalPINNNet.numpy_forward` and
-        siblings), a snapshot of the fitted weights that evaluates the same function
-        as the torch module (tested to float32 rounding) without PyTorch's per-module
-        dispatch cost. Not thread-safe: the buffers belong to the estimator.
-
-        Parameters
-        ----------
-        adc : array_like
-            The device's ADC codes, one per LED in ``schema_`` order. [code]
-        adc_ref : array_like or None
-            Its reference codes (None for a device without them). [code]
-        pmf : array_like
-            Its physiological values in ``schema_.physiology`` order. [column units]
-
-        Returns
-        -------
-        float
-            Glucose. [mg/dL]
-        """
-        self._check_fitted()
-        fast = self._fast
-        sch = self.schema_
-        k = sch.n_channels
-        i = np.asarray(adc, dtype=np.float64)
-        r = np.asarray(adc_ref, dtype=np.float64) if sch.reference else float(sch.full_scale)
-        p = np.asarray(pmf if pmf is not None else [], dtype=np.float64)
-        if i.shape != (k,) or np.shape(r) not in ((k,), ()) or p.shape != (len(sch.physiology),):
-            raise DataError(
-                f"predict_one takes {k} ADC codes, {k if sch.reference else 'no'} reference "
-                f"codes and {len(sch.physiology)} physiological values; got shapes "
-                f"{np.shape(adc)}, {np.shape(adc_ref)}, {p.shape}"
-            )
-        with np.errstate(divide="ignore", invalid="ignore"):
-            a = np.log10(r / i)
-        if not sch.physiology:
-            p = np.zeros(1)
-        u = np.concatenate((a, p))
-        u -= fast["mu"]
-        u *= fast["inv_scale"]
-        x = fast["x"]
-        x[0] = u
-        if not np.isfinite(x).all():
-            raise DataError("predict_one: codes must be > 0 and every value finite")
-        if fast["fn"] is not None:
-            g = self._glucose(fast["fn"](x))
-        else:
-            with torch.inference_mode():
-                t = torch.from_numpy(x)
-                g = self._glucose(self.module_(t[:, :k], t[:, k:]))
-        return float(g[0]) * fast["y_scale"] + fast["y_mean"]
-
-    def _build_fast_path(self) -> None:
-        """Snapshot the fitted weights and scaler for the low-latency path."""
-        s = self.scaler_
-        self.module_.eval()
-        numpy_forward = getattr(self.module_, "numpy_forward", None)
-        self._fast = {
-            "fn": numpy_forward() if callable(numpy_forward) else None,
-            "x": np.zeros((1, len(self._fast_mu())), dtype=np.float32),
-            "mu": np.concatenate((s["nir_mean"], s["pmf_mean"])).astype(np.float64),
-            "inv_scale": 1.0 / np.concatenate((s["nir_scale"], s["pmf_scale"])).astype(np.float64),
-            "y_mean": float(s["y_mean"]),
-            "y_scale": float(s["y_scale"]),
-        }
-
-    def _fast_mu(self) -> np.ndarray:
-        s = self.scaler_
-        return np.concatenate((s["nir_mean"], s["pmf_mean"]))
-
-    def __getstate__(self) -> dict:
-        state = self.__dict__.copy()
-        state.pop("_fast", None)  # closures do not pickle; rebuilt on unpickling
-        return state
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        if getattr(self, "module_", None) is not None:
-            self._build_fast_path()
-
-    # ------------------------------------------------------------------ save / load
-
-    def _json_params(self) -> dict:
-        params = self.get_params(deep=False)
-        rs = params.get("random_state")
-        if not (rs is None or isinstance(rs, int | np.integer)):
-            params["random_state"] = None  # a RandomState object has no JSON form
-        return {k: (v.item() if isinstance(v, np.generic) else v) for k, v in params.items()}
-
-    def save(self, path: str | Path) -> Path:
-        """Write the model: ``path`` (JSON) and ``<stem>.safetensors`` beside it.
-
-        Both files are written atomically (temporary file, then rename); the weights
-        first, so a JSON document never names weights that are not there.
-
-        Parameters
-        ----------
-        path : str or Path
-            Destination of the JSON document (e.g. ``model.json``).
-
-        Returns
-        -------
-        Path
-            ``path``.
-        """
-        from safetensors.torch import save_file
-
-        from .. import __version__
-
-        self._check_fitted()
-        path = Path(path)
-        weights = path.with_name(path.stem + ".safetensors")
-        if weights == path:
-            raise DataError(
-                f"{str(path)!r}: the model document needs a suffix other than "
-                f"'.safetensors' (e.g. 'model.json')"
-            )
-        tensors = {
-            k: v.detach().to("cpu").contiguous() for k, v in self.module_.state_dict().items()
-        }
-        meta = {"format": "nirglucose-model", "model": self.registry_name}
-        atomic_write(weights, lambda tmp: save_file(tensors, tmp, metadata=meta))
-        doc = {
-            "format": "nirglucose-model",
-            "format_version": FORMAT_VERSION,
-            "model": self.registry_name,
-            "nirglucose_version": __version__,
-            "params": self._json_params(),
-            "schema": self.schema_.to_json(),
-            "scaler": {k: np.asarray(v).tolist() for k, v in self.scaler_.items()},
-            "physics": self.physics_,
-            "history": self.history_,
-            "best_epoch": self.best_epoch_,
-            "n_epochs": self.n_epochs_,
-            "refit_history": self.refit_history_,
-            "start_val_mse": self.start_val_mse_,
-            "n_parameters": self.n_parameters,
-            "weights_file": weights.name,
-        }
-        if getattr(self, "conformal_", None) is not None:  # its interval calibration
-            doc["conformal"] = self.conformal_
-        text = json.dumps(doc, indent=1, allow_nan=False)
-        atomic_write(path, lambda tmp: Path(tmp).write_text(text))
-        return path
-
-    @classmethod
-    def load(cls, path: str | Path):
-        """Load a model written by :meth:`save`.
-
-        Reads JSON and safetensors (or a ``.pt`` file through
-        ``torch.load(weights_only=True)``); never executes code from the files.
-
-        Raises
-        ------
-        DataError
-            If the document is not a model of this class, or the weights miss keys,
-            have extra keys or wrong shapes.
-        """
-        path = Path(path)
-        if not path.exists():
-            raise DataError(f"no such model file {str(path)!r}")
-        try:
-            doc = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
-        if not isinstance(doc, dict) or doc.get("format") != "nirglucose-model":
-            raise DataError(f"{str(path)!r} is not a nirglucose model file")
-        if doc.get("model") != cls.registry_name:
-            raise DataError(
-                f"{str(path)!r} holds a {doc.get('model')!r} model, not {cls.registry_name!r}"
-            )
-        if doc.get("format_version") != FORMAT_VERSION:
-            raise DataError(
-                f"{str(path)!r} has format_version {doc.get('format_version')!r}; "
-                f"this nirglucose reads {FORMAT_VERSION}"
-            )
-        required = ("params", "scaler", "physics", "history", "weights_file")
-        missing = [k for k in required if k not in doc]
-        if missing:
-            raise DataError(f"{str(path)!r} lacks {missing}")
-        check_torch_doc(doc, path)  # types, finite values, positive scales (issue 20)
-        params = doc["params"]
-        valid = cls().get_params(deep=False)
-        unknown = sorted(set(params) - set(valid))
-        if unknown:
-            raise DataError(f"{str(path)!r}: unknown parameters {unknown}; valid: {sorted(valid)}")
-        est = cls(**params)
-        # Files written before the schema was saved are the study's device.
-        est.schema_ = DeviceSchema.from_json(doc["schema"]) if "schema" in doc else DeviceSchema()
-        est.scaler_ = {
-            k: (float(v) if k.startswith("y_") else np.asarray(v, dtype=np.float64))
-            for k, v in doc["scaler"].items()
-        }
-        est.physics_ = doc["physics"]
-        est.history_ = doc["history"]
-        est.best_epoch_ = doc.get("best_epoch", len(est.history_))
-        est.n_epochs_ = doc.get("n_epochs", len(est.history_))
-        est.refit_history_ = doc.get("refit_history", [])
-        est.refit_epochs_ = len(est.refit_history_)
-        est.start_val_mse_ = doc.get("start_val_mse")
-        if "conformal" in doc:  # the interval calibration saved with the model
-            from ..evaluation.conformal import check_calibration_doc
-
-            est.conformal_ = check_calibration_doc(doc["conformal"], repr(str(path)))
-        est.n_features_in_ = len(est.schema_.raw_columns)
-        if not est.schema_.is_plain:
-            est.feature_names_in_ = np.asarray(est.schema_.raw_columns, dtype=object)
-        state = _read_weights(path, doc["weights_file"])
-        module = est._wrap_inputs(est.build_module(), state.get(WHITENING_KEY))
-        expected = module.state_dict()
-        missing_keys = sorted(set(expected) - set(state))
-        extra_keys = sorted(set(state) - set(expected))
-        if missing_keys or extra_keys:
-            raise DataError(
-                f"weights for {cls.registry_name!r} do not match its network: "
-                f"missing keys {missing_keys}, unexpected keys {extra_keys}"
-            )
-        bad = [k for k in expected if tuple(state[k].shape) != tuple(expected[k].shape)]
-        if bad:
-            k = bad[0]
-            raise DataError(
-                f"weights for {cls.registry_name!r}: {k} has shape {tuple(state[k].shape)}, "
-                f"the network needs {tuple(expected[k].shape)}"
-            )
-        check_weights(state, path)  # finite, sane magnitudes (issue 20)
-        module.load_state_dict(
-            {k: state[k].to(dtype=expected[k].dtype) for k in expected}, strict=True
-        )
-        module.eval()
-        est.module_ = module
-        est._prepare_physics_tensors()
-        est._build_fast_path()
-        return est
+        self.module_.train()
+        n_train = len(train["y"])
+        batch_size = None if self.batch_size is None else int(self.batch_size)
+        full_batch = batch_size is None or batch_size >= n_train
+        record: dict[str, Any] = {"epoch": epoch, "lr": self._optimizer.param_groups[0]["lr"]}
+        order = None if full_batch else torch.randperm(n_train, generator=gen)
+        sums: dict[str, torch.Tensor] = {}
+        for size, batch in batches(train, batch_size, order):
+            for k, v in self.train_step(batch).items():
+                sums[k] = sums.get(k, 0.0) + v * size
+        train_terms = {k: float(v) / n_train for k, v in sums.items()}
+        record["train_loss"] = train_terms.pop("loss")
+        record.update({f"train_{k}": v for k, v in train_terms.items()})
+        if val is None:
+            record["val_loss"] = None
+            record.update({f"val_{k}": None for k in train_terms})
+            record["val_rmse_mgdl"] = None
+            return record, record["train_loss"]
+        val_terms = self._evaluate(val)
+        record["val_loss"] = val_terms.pop("loss")
+        record.update({f"val_{k}": v for k, v in val_terms.items()})
+        record["val_rmse_mgdl"] = math.sqrt(max(val_terms["mse"], 0.0)) * self.scaler_["y_scale"]
+        return record, val_terms["mse"]
 
 
-TorchRegressor.__init__ = _keyword_init(TorchRegressor)  # subclasses: __init_subclass__
-
-
-def _read_weights(doc_path: Path, name: Any) -> dict[str, torch.Tensor]:
-    """Tensors of the weight file ``name`` beside ``doc_path`` (no code execution)."""
-    if not isinstance(name, str) or Path(name).name != name or name in ("", ".", ".."):
-        raise DataError(f"weights_file must be a plain file name beside the model, got {name!r}")
-    wpath = doc_path.with_name(name)
-    if not wpath.exists():
-        raise DataError(f"weights file {str(wpath)!r} is missing")
-    if wpath.suffix == ".safetensors":
-        from safetensors import SafetensorError
-        from safetensors.torch import load_file
-
-        try:
-            return load_file(str(wpath), device="cpu")
-        except (SafetensorError, OSError, ValueError) as exc:
-            raise DataError(f"{str(wpath)!r} is not a readable safetensors file: {exc}") from None
-    if wpath.suffix in (".pt", ".pth"):
-        try:
-            state = torch.load(wpath, map_location="cpu", weights_only=True)
-        except Exception as exc:  # noqa: BLE001 - any unpickling refusal is a data error
-            raise DataError(f"{str(wpath)!r} is not a weights-only torch file: {exc}") from None
-        if not isinstance(state, dict) or not all(
-            isinstance(v, torch.Tensor) for v in state.values()
-        ):
-            raise DataError(f"{str(wpath)!r} does not hold a state_dict of tensors")
-        return state
-    raise DataError(f"unknown weights format {wpath.suffix!r}; valid: .safetensors, .pt, .pth")
+TorchRegressor.__init__ = keyword_init(TorchRegressor)  # subclasses: __init_subclass__

@@ -1,0 +1,173 @@
+"""The training extras of the torch networks: schedules, early stopping, batches.
+
+:class:`~nirglucose.models._torch_base.TorchRegressor` runs the epochs; the pieces
+here decide the learning rate of each epoch (:func:`make_scheduler`), when to stop and
+which weights to keep (:class:`EarlyStopping`), how many epochs the refit on every row
+runs (:func:`smoothed_argmin`), how rows are batched (:func:`batches`), and where an
+untrained network starts (:func:`start_at_mean`).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import torch
+from torch import nn
+
+__all__ = [
+    "LR_SCHEDULES",
+    "MIN_IMPROVEMENT",
+    "SMOOTHING_EPOCHS",
+    "EarlyStopping",
+    "batches",
+    "make_scheduler",
+    "smoothed_argmin",
+    "start_at_mean",
+    "step_scheduler",
+]
+
+#: Valid ``lr_schedule`` names.
+LR_SCHEDULES = ("plateau", "cosine", "none")
+#: Relative improvement of the monitored loss that resets the early-stopping counter.
+MIN_IMPROVEMENT = 1e-4
+#: Window of the validation curve's moving average (the refit's epoch count only).
+SMOOTHING_EPOCHS = 5
+
+
+def smoothed_argmin(values: list[float], window: int) -> int:
+    """1-based index of the minimum of a centred moving average of ``values``.
+
+    The edges average over the part of the window that exists. A small validation set
+    gives a noisy loss curve whose raw minimum is often a lucky epoch; the smoothed
+    minimum picks the epoch count for the refit more stably.
+    """
+    v = np.asarray(values, dtype=float)
+    half = window // 2
+    c = np.concatenate(([0.0], np.cumsum(v)))
+    idx = np.arange(len(v))
+    lo, hi = np.maximum(idx - half, 0), np.minimum(idx + half + 1, len(v))
+    return int(np.argmin((c[hi] - c[lo]) / (hi - lo))) + 1
+
+
+def start_at_mean(module: nn.Module) -> nn.Module:
+    """Zero the glucose output layer(s) of a fresh ``module``; return it.
+
+    Every network here ends its glucose head in a ``Linear(n, 1)`` (the only one-output
+    layer; the RTE networks' optics head has two per wavelength). With its weights and
+    bias at zero the untrained network predicts 0 in standardised target units, the
+    training mean: training starts from the no-skill predictor, and early stopping on
+    a validation split can return it (epoch 0) when no epoch beats it. The hidden
+    layers keep PyTorch's default initialisation, so no symmetry is introduced; a
+    zero-initialised last layer is common practice (Goyal et al. 2017, "Accurate,
+    large minibatch SGD", arXiv:1706.02677, sec. 5.1, zero-initialises the last
+    normalisation of each residual block for the same reason: start at a simple
+    function).
+    """
+    with torch.no_grad():
+        for layer in module.modules():
+            if isinstance(layer, nn.Linear) and layer.out_features == 1:
+                layer.weight.zero_()
+                layer.bias.zero_()
+    return module
+
+
+def make_scheduler(
+    optimizer: torch.optim.Optimizer, schedule: str, *, patience: int | None, max_epochs: int
+):
+    """The learning-rate scheduler of ``schedule`` (None for ``'none'``).
+
+    ``'plateau'`` halves the rate when the monitored loss stalls for ``patience // 4``
+    epochs (20 // 4 without patience); ``'cosine'`` anneals over ``max_epochs``.
+    """
+    if schedule == "plateau":
+        return torch.optim.lr_scheduler.ReduceLROnPlateau(
+            optimizer, mode="min", factor=0.5, patience=max(1, (patience or 20) // 4)
+        )
+    if schedule == "cosine":
+        return torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, T_max=max_epochs)
+    return None
+
+
+def step_scheduler(sched, monitor: float) -> None:
+    """Advance ``sched`` one epoch (the plateau scheduler reads ``monitor``)."""
+    if isinstance(sched, torch.optim.lr_scheduler.ReduceLROnPlateau):
+        sched.step(monitor)
+    elif sched is not None:
+        sched.step()
+
+
+def batches(
+    tensors: dict[str, torch.Tensor], batch_size: int | None, order: torch.Tensor | None = None
+) -> Iterator[tuple[int, dict[str, torch.Tensor]]]:
+    """``(rows, batch)`` pairs over ``tensors`` (one full batch when ``batch_size`` is
+    None or covers every row), in ``order`` when given."""
+    n = len(tensors["y"])
+    if batch_size is None or batch_size >= n:
+        yield n, tensors  # full batch: the row order does not change the step
+        return
+    for start in range(0, n, batch_size):
+        if order is None:
+            yield (
+                min(batch_size, n - start),
+                {k: v[start : start + batch_size] for k, v in tensors.items()},
+            )
+        else:
+            idx = order[start : start + batch_size]
+            yield len(idx), {k: v[idx] for k, v in tensors.items()}
+
+
+class EarlyStopping:
+    """Patience on a monitored loss, and the weights to return to.
+
+    Parameters
+    ----------
+    patience : int or None
+        Stop after this many epochs without a relative improvement of
+        :data:`MIN_IMPROVEMENT`; None never stops early. [-]
+    keep_best : bool
+        Keep a copy of the best epoch's weights (a validation set is monitored) and
+        count the module as built, epoch 0, as a candidate (:meth:`start`). False: the
+        last epoch is the one kept (training loss, or a refit).
+
+    Attributes
+    ----------
+    best_epoch : int
+        The epoch whose weights are kept (0: the module as built).
+    """
+
+    def __init__(self, patience: int | None, keep_best: bool) -> None:
+        self.patience = patience
+        self.keep_best = keep_best
+        self.best = math.inf
+        self.best_epoch = 0
+        self.best_state: dict | None = None
+        self.stale = 0
+
+    def start(self, monitor: float, module: nn.Module) -> float:
+        """Record the untrained ``module`` (epoch 0) with its loss ``monitor``; return it."""
+        self.best = monitor
+        self.best_state = copy.deepcopy(module.state_dict())
+        return monitor
+
+    def update(self, monitor: float, epoch: int, module: nn.Module) -> bool:
+        """Score ``epoch``; return True when training should stop."""
+        if monitor < self.best - MIN_IMPROVEMENT * abs(self.best) or (
+            epoch == 1 and not self.keep_best
+        ):
+            self.best, self.stale = monitor, 0
+            if self.keep_best:
+                self.best_epoch = epoch
+                self.best_state = copy.deepcopy(module.state_dict())
+        else:
+            self.stale += 1
+        if not self.keep_best:
+            self.best_epoch = epoch
+        return self.patience is not None and self.stale >= self.patience
+
+    def restore(self, module: nn.Module) -> None:
+        """Load the kept weights into ``module`` (nothing to do without a copy)."""
+        if self.best_state is not None:
+            module.load_state_dict(self.best_state)
