@@ -34,7 +34,6 @@ ALLOWED_LONG_MODULES = {
     "cli.py": "one command per function; splitting waits for the CLI owner",
     "config.py": "the pydantic schema of every section; split with the config bounds work",
     "features.py": "the study's 56 features and the any-device table; split is a follow-up",
-    "models/linear.py": "EBL and PLS with their scalar C-parity paths; the integrator's",
     "report/figures.py": "every report figure; the report owner's module",
 }
 
@@ -48,8 +47,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "evaluation/stats.py:compare_models": "paired tests in one pass; split is a follow-up",
     "features.py:_build_table": "the study's feature table spelled out row by row",
     "features.py:feature_table": "the any-device table spelled out block by block",
-    "models/_json_io.py:JsonModelMixin.load": "the one model-file reader; integrator's",
-    "models/linear.py:EnhancedBeerLambert.predict_one": "scalar C-parity path; integrator's",
     "plots/pipeline.py:plot_pipeline": "figure code; plots owner's",
     "plots/tradeoffs.py:plot_physics_depth": "figure code; plots owner's",
     "report/figures.py:load_results": "report owner's",

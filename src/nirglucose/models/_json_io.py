@@ -121,30 +121,8 @@ class JsonModelMixin:
             a malformed state.
         """
         path = Path(path)
-        name = cls.registry_name
-        if not path.is_file():
-            raise DataError(f"no such model file {str(path)!r}")
-        try:
-            doc = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
-        if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-            raise DataError(
-                f"{str(path)!r} is not a nirglucose model file (format is not {FORMAT!r})"
-            )
-        if doc.get("format_version") != FORMAT_VERSION:
-            raise DataError(
-                f"{str(path)!r} has format_version {doc.get('format_version')!r}; this "
-                f"nirglucose reads version {FORMAT_VERSION}"
-            )
-        if doc.get("model") != name:
-            raise DataError(
-                f"{str(path)!r} holds a {doc.get('model')!r} model, not {name!r}; load it "
-                "with nirglucose.models.load_model"
-            )
-        params, state = doc.get("params"), doc.get("state")
-        if not isinstance(params, dict) or not isinstance(state, dict):
-            raise DataError(f"{str(path)!r} lacks the 'params' and 'state' objects")
+        doc = _read_document(path, cls.registry_name)
+        params, state = doc["params"], doc["state"]
         valid = set(cls().get_params(deep=False))
         unknown = sorted(set(params) - valid)
         if unknown:
@@ -158,28 +136,7 @@ class JsonModelMixin:
         for key, shape in cls._STATE.items():
             if key not in state:
                 raise DataError(f"{str(path)!r} lacks state {key!r}")
-            value = state[key]
-            if shape == "json":
-                setattr(model, key, value)
-                continue
-            positive = key.endswith(("scale_", "var_"))  # scales and variances
-            arr = check_array(path, f"state {key}", value, positive=positive)
-            if shape is None:
-                ok = arr.ndim == 0 and math.isfinite(float(arr))
-                value = float(arr) if ok else None
-            else:
-                ok = (
-                    arr.ndim == len(shape)
-                    and all(s == -1 or s == d for s, d in zip(shape, arr.shape, strict=True))
-                    and bool(np.all(np.isfinite(arr)))
-                )
-                value = arr
-            if not ok:
-                raise DataError(
-                    f"{str(path)!r}: state {key!r} has the wrong shape or non-finite values "
-                    f"(expected shape {shape})"
-                )
-            setattr(model, key, value)
+            setattr(model, key, _state_value(path, key, state[key], shape))
         model._restore()
         if "conformal" in doc:
             from ..evaluation.conformal import check_calibration_doc
@@ -189,3 +146,53 @@ class JsonModelMixin:
 
     def _restore(self) -> None:
         """Rebuild derived attributes after :meth:`load` (override)."""
+
+
+def _read_document(path: Path, name: str) -> dict[str, Any]:
+    """The checked JSON document of a saved ``name`` model (DataError otherwise)."""
+    if not path.is_file():
+        raise DataError(f"no such model file {str(path)!r}")
+    try:
+        doc = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise DataError(f"{str(path)!r} is not a nirglucose model file (format is not {FORMAT!r})")
+    if doc.get("format_version") != FORMAT_VERSION:
+        raise DataError(
+            f"{str(path)!r} has format_version {doc.get('format_version')!r}; this "
+            f"nirglucose reads version {FORMAT_VERSION}"
+        )
+    if doc.get("model") != name:
+        raise DataError(
+            f"{str(path)!r} holds a {doc.get('model')!r} model, not {name!r}; load it "
+            "with nirglucose.models.load_model"
+        )
+    if not isinstance(doc.get("params"), dict) or not isinstance(doc.get("state"), dict):
+        raise DataError(f"{str(path)!r} lacks the 'params' and 'state' objects")
+    return doc
+
+
+def _state_value(path: Path, key: str, value: Any, shape: Any) -> Any:
+    """One saved state entry, checked: ``shape`` is ``'json'`` (as is), None (a finite
+    scalar) or a tuple (-1: any length); DataError on a wrong shape or non-finite value."""
+    if shape == "json":
+        return value
+    positive = key.endswith(("scale_", "var_"))  # scales and variances
+    arr = check_array(path, f"state {key}", value, positive=positive)
+    if shape is None:
+        ok = arr.ndim == 0 and math.isfinite(float(arr))
+        value = float(arr) if ok else None
+    else:
+        ok = (
+            arr.ndim == len(shape)
+            and all(s == -1 or s == d for s, d in zip(shape, arr.shape, strict=True))
+            and bool(np.all(np.isfinite(arr)))
+        )
+        value = arr
+    if not ok:
+        raise DataError(
+            f"{str(path)!r}: state {key!r} has the wrong shape or non-finite values "
+            f"(expected shape {shape})"
+        )
+    return value
