@@ -1,7 +1,8 @@
 """Tune every model family on the same footing; write ``src/nirglucose/data/tuned_params.json``.
 
-For each preset (``wearable`` and ``paper``) and each family (EBL, PLS, gradient
-boosting and the five networks; the GP tunes itself inside each fit),
+For each preset (every preset of :data:`~nirglucose.models.tuning.TUNED_PRESETS` by
+default) and each family with a search space (EBL, PLS, gradient boosting and every
+network, a newly registered one included; the GP tunes itself inside each fit),
 :data:`~nirglucose.models.tuning.N_CONFIGS` configurations are drawn from the family's
 grid (:func:`~nirglucose.models.tuning.search_space`; the networks share one training
 grid and the same draws, the PINNs add ``lambda_phys`` with every grid
@@ -37,7 +38,9 @@ from sklearn.model_selection import GroupKFold
 
 import nirglucose as ng
 from nirglucose.dataset import Dataset
+from nirglucose.exceptions import ConfigError
 from nirglucose.models import make_model
+from nirglucose.models.registry import MODELS
 from nirglucose.models.tuning import (
     LAMBDA_PHYS_GRID,
     N_CONFIGS,
@@ -47,16 +50,18 @@ from nirglucose.models.tuning import (
     search_space,
 )
 
-FAMILIES = (
-    "ebl",
-    "pls",
-    "gbr",
-    "sdnn",
-    "original-pinn",
-    "optimized-pinn",
-    "rte-pinn",
-    "selective-rte-pinn",
-)
+
+def _has_search_space(name: str) -> bool:
+    try:
+        search_space(name)
+    except ConfigError:
+        return False
+    return True
+
+
+#: Every registered family with a search space (the linear models, gradient boosting
+#: and every network), in the registry's order.
+FAMILIES = tuple(name for name in MODELS if _has_search_space(name))
 N_SUBJECTS, PER_SUBJECT = 80, 3
 OUT = Path(__file__).resolve().parents[1] / "src" / "nirglucose" / "data" / "tuned_params.json"
 SAMPLING_SEED = 0  # draws the configurations (the same draws for every network)
