@@ -36,7 +36,6 @@ ALLOWED_LONG_MODULES = {
     "features.py": "the study's 56 features and the any-device table; split is a follow-up",
     "models/_torch_base.py": "the shared torch trainer; the integrator's module",
     "models/linear.py": "EBL and PLS with their scalar C-parity paths; the integrator's",
-    "report/figures.py": "every report figure; the report owner's module",
 }
 
 #: Functions over 60 code lines without the reason in their docstring: qualname -> reason.
@@ -56,7 +55,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "models/linear.py:EnhancedBeerLambert.predict_one": "scalar C-parity path; integrator's",
     "plots/pipeline.py:plot_pipeline": "figure code; plots owner's",
     "plots/tradeoffs.py:plot_physics_depth": "figure code; plots owner's",
-    "report/figures.py:load_results": "report owner's",
     "report/presets.py:presets_section": "report owner's",
     "report/sweep.py:sweep_section": "report owner's",
     "simulate/hardware.py:apply_hardware": "the hardware chain in order; simulator's",
