@@ -53,8 +53,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "models/_torch_base.py:TorchRegressor._train": "torch trainer; integrator's",
     "models/_torch_base.py:TorchRegressor.load": "torch trainer; integrator's",
     "models/linear.py:EnhancedBeerLambert.predict_one": "scalar C-parity path; integrator's",
-    "plots/pipeline.py:plot_pipeline": "figure code; plots owner's",
-    "plots/tradeoffs.py:plot_physics_depth": "figure code; plots owner's",
     "simulate/hardware.py:apply_hardware": "the hardware chain in order; simulator's",
     "simulate/physiology.py:sample_state": "the subject state in order; simulator's",
     "simulate/simulator.py:_band_detected_fraction": "simulator's",
