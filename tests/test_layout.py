@@ -34,7 +34,6 @@ ALLOWED_LONG_MODULES = {
     "cli.py": "one command per function; splitting waits for the CLI owner",
     "config.py": "the pydantic schema of every section; split with the config bounds work",
     "features.py": "the study's 56 features and the any-device table; split is a follow-up",
-    "report/figures.py": "every report figure; the report owner's module",
 }
 
 #: Functions over 60 code lines without the reason in their docstring: qualname -> reason.
@@ -47,11 +46,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "evaluation/stats.py:compare_models": "paired tests in one pass; split is a follow-up",
     "features.py:_build_table": "the study's feature table spelled out row by row",
     "features.py:feature_table": "the any-device table spelled out block by block",
-    "plots/pipeline.py:plot_pipeline": "figure code; plots owner's",
-    "plots/tradeoffs.py:plot_physics_depth": "figure code; plots owner's",
-    "report/figures.py:load_results": "report owner's",
-    "report/presets.py:presets_section": "report owner's",
-    "report/sweep.py:sweep_section": "report owner's",
     "simulate/hardware.py:apply_hardware": "the hardware chain in order; simulator's",
     "simulate/physiology.py:sample_state": "the subject state in order; simulator's",
     "simulate/simulator.py:_band_detected_fraction": "simulator's",

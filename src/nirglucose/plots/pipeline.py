@@ -58,6 +58,71 @@ def pipeline_height_in(columns: Sequence[Sequence[Mapping[str, object]]]) -> flo
     return 0.16 * rows + 0.7
 
 
+#: Horizontal gap between columns. [% of the width]
+_COLUMN_GAP = 5.0
+#: Text size of the box lines (titles 0.8 pt larger). [pt]
+_FONT_PT = 8.0
+
+
+def _column_width(ncol: int) -> float:
+    """Width of one column of boxes. [% of the width]"""
+    return (100.0 - _COLUMN_GAP * (ncol - 1)) / ncol
+
+
+def _chars_per_box(ax: Axes, width: float, fontsize: float) -> int:
+    """Characters that fit in a box: its width in points over an average glyph width."""
+    frac = ax.get_position().width
+    if ax.figure.get_layout_engine() is not None:  # the layout will widen a lone Axes
+        frac = max(frac, 0.95)
+    box_pt = ax.figure.get_figwidth() * frac * 72.0 * width / 100.0
+    return max(12, int(box_pt / (0.52 * fontsize)) - 2)
+
+
+def _draw_boxes(ax: Axes, columns: Sequence[Sequence[Mapping[str, object]]],
+                wrapped: list[list[list[tuple[str, str, bool]]]], width: float, gap: float,
+                fontsize: float) -> list[list[tuple[float, float, float, float]]]:
+    """Draw each column's boxes, centred vertically; (x, y, width, height) of each box.
+
+    The vertical layout is in text-line units; the y limits fit the tallest column.
+    """
+    pad, vgap = 0.6, 1.0
+    heights = [[len(lines) + 2 * pad for lines in col] for col in wrapped]
+    totals = [sum(h) + vgap * (len(h) - 1) for h in heights]
+    tallest = max(totals)
+    ax.set_xlim(0, 100)
+    ax.set_ylim(-tallest / 2 - 0.3, tallest / 2 + 0.3)
+    extents: list[list[tuple[float, float, float, float]]] = []
+    for c, col in enumerate(columns):
+        x0 = c * (width + gap)
+        y = totals[c] / 2.0
+        col_ext = []
+        for box, lines, h in zip(col, wrapped[c], heights[c], strict=True):
+            y0 = y - h
+            face = STAGE_COLORS.get(str(box.get("kind", "input")), STAGE_COLORS["input"])
+            ax.add_patch(FancyBboxPatch((x0, y0), width, h,
+                                        boxstyle="round,pad=0,rounding_size=0.5",
+                                        fc=face, ec=GREY, lw=0.8, mutation_aspect=0.15))
+            for k, (text, color, bold) in enumerate(lines):
+                ax.text(x0 + 1.0, y - pad - (k + 0.5), text, ha="left", va="center",
+                        fontsize=fontsize + (0.8 if bold else 0), color=color,
+                        fontweight="bold" if bold else "normal")
+            col_ext.append((x0, y0, width, h))
+            y = y0 - vgap
+        extents.append(col_ext)
+    return extents
+
+
+def _draw_arrows(ax: Axes, extents: list[list[tuple[float, float, float, float]]]) -> None:
+    """An arrow from every box of a column to every box of the next."""
+    for left, right in zip(extents[:-1], extents[1:], strict=True):
+        for x0, y0, w, h in left:
+            for x1, y1, _, h1 in right:
+                ax.add_patch(FancyArrowPatch(
+                    (x0 + w, y0 + h / 2), (x1, y1 + h1 / 2), arrowstyle="-|>",
+                    mutation_scale=10, color=OKABE_ITO["black"], lw=0.9, shrinkA=0, shrinkB=1,
+                ))
+
+
 @styled
 def plot_pipeline(
     columns: Sequence[Sequence[Mapping[str, object]]],
@@ -92,51 +157,11 @@ def plot_pipeline(
         ax.text(50, 50, "no pipeline description", ha="center", va="center")
         return ax
 
-    ncol = len(columns)
-    gap = 5.0  # horizontal gap between columns [% of the width]
-    width = (100.0 - gap * (ncol - 1)) / ncol
-    fontsize = 8.0
-    # characters that fit in a box: box width in points over an average glyph width
-    frac = ax.get_position().width
-    if ax.figure.get_layout_engine() is not None:  # the layout will widen a lone Axes
-        frac = max(frac, 0.95)
-    box_pt = ax.figure.get_figwidth() * frac * 72.0 * width / 100.0
-    max_chars = max(12, int(box_pt / (0.52 * fontsize)) - 2)
+    width, gap, fontsize = _column_width(len(columns)), _COLUMN_GAP, _FONT_PT
+    max_chars = _chars_per_box(ax, width, fontsize)
     wrapped = [[_wrap(_box_lines(b), max_chars) for b in col] for col in columns]
-    # vertical layout in text-line units
-    pad, vgap = 0.6, 1.0
-    heights = [[len(lines) + 2 * pad for lines in col] for col in wrapped]
-    totals = [sum(h) + vgap * (len(h) - 1) for h in heights]
-    tallest = max(totals)
-    ax.set_xlim(0, 100)
-    ax.set_ylim(-tallest / 2 - 0.3, tallest / 2 + 0.3)
-
-    extents: list[list[tuple[float, float, float, float]]] = []
-    for c, col in enumerate(columns):
-        x0 = c * (width + gap)
-        y = totals[c] / 2.0
-        col_ext = []
-        for box, lines, h in zip(col, wrapped[c], heights[c], strict=True):
-            y0 = y - h
-            face = STAGE_COLORS.get(str(box.get("kind", "input")), STAGE_COLORS["input"])
-            ax.add_patch(FancyBboxPatch((x0, y0), width, h,
-                                        boxstyle="round,pad=0,rounding_size=0.5",
-                                        fc=face, ec=GREY, lw=0.8, mutation_aspect=0.15))
-            for k, (text, color, bold) in enumerate(lines):
-                ax.text(x0 + 1.0, y - pad - (k + 0.5), text, ha="left", va="center",
-                        fontsize=fontsize + (0.8 if bold else 0), color=color,
-                        fontweight="bold" if bold else "normal")
-            col_ext.append((x0, y0, width, h))
-            y = y0 - vgap
-        extents.append(col_ext)
-
-    for left, right in zip(extents[:-1], extents[1:], strict=True):
-        for x0, y0, w, h in left:
-            for x1, y1, _, h1 in right:
-                ax.add_patch(FancyArrowPatch(
-                    (x0 + w, y0 + h / 2), (x1, y1 + h1 / 2), arrowstyle="-|>",
-                    mutation_scale=10, color=OKABE_ITO["black"], lw=0.9, shrinkA=0, shrinkB=1,
-                ))
+    extents = _draw_boxes(ax, columns, wrapped, width, gap, fontsize)
+    _draw_arrows(ax, extents)
     if title:
         ax.set_title(title)
     return ax

@@ -228,11 +228,33 @@ def plot_physics_depth(
     own = ax is None
     ax = new_axes(ax, figsize=(7.0, 4.4))
     t = table.reset_index(drop=True)
-    colors = model_colors(t["model"])
     pmax = float(np.nanmax(t["n_parameters"].to_numpy(float))) if len(t) else 1.0
+    front = t["on_front"].to_numpy(bool) if "on_front" in t else np.zeros(len(t), bool)
+    _draw_bubbles(ax, t, pmax, front)
+    levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
+    ax.set_xticks(levels)
+    ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
+    if levels:
+        ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
+    y = t["rmse_mgdl"].to_numpy(float)
+    lines = _reference_lines(ax, references)
+    # the reference lines too: a no-skill line above the data must not fall off the axes
+    top = max(([float(np.nanmax(y))] if y.size else [1.0]) + [v for _, v in lines])
+    ax.set_ylim(0.0, 1.25 * top)  # from zero: differences keep their true proportion
+    _bubble_legend(ax, pmax, bool(front.any()), [name for name, _ in lines])
+    ax.set_xlabel("physics depth (how much of the forward model a method uses)")
+    ax.set_ylabel("RMSE [mg/dL]")
+    ax.set_title(title if title is not None else "Accuracy vs physics depth")
+    if own:
+        place_labels(ax.figure)
+    return ax
+
+
+def _draw_bubbles(ax: Axes, t: pd.DataFrame, pmax: float, front: np.ndarray) -> None:
+    """One bubble per model at its depth (nudged by ``x_offset``), Pareto ones ringed, labelled."""
+    colors = model_colors(t["model"])
     areas = bubble_area(t["n_parameters"].to_numpy(float), pmax)
     offset = t["x_offset"].to_numpy(float) if "x_offset" in t else np.zeros(len(t))
-    front = t["on_front"].to_numpy(bool) if "on_front" in t else np.zeros(len(t), bool)
     x = t["physics_depth"].to_numpy(float) + offset
     # biggest first, so small bubbles stay on top and visible
     for k in np.argsort(-areas, kind="stable"):
@@ -247,25 +269,19 @@ def plot_physics_depth(
                   for m, p in zip(t["model"], t["n_parameters"], strict=True)],
                  marker_radius_pt=np.sqrt(np.where(front, np.maximum(1.6 * areas, 110.0),
                                                    areas)) / 2.0)
-    levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
-    ax.set_xticks(levels)
-    ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
-    if levels:
-        ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
-    y = t["rmse_mgdl"].to_numpy(float)
-    lines = _reference_lines(ax, references)
-    # the reference lines too: a no-skill line above the data must not fall off the axes
-    top = max(([float(np.nanmax(y))] if y.size else [1.0]) + [v for _, v in lines])
-    ax.set_ylim(0.0, 1.25 * top)  # from zero: differences keep their true proportion
+
+
+def _bubble_legend(ax: Axes, pmax: float, any_front: bool, references: Sequence[str]) -> None:
+    """Legend right of the Axes: bubble sizes, the Pareto ring and the reference lines."""
     refs = [v for v in (1e2, 1e4, 1e6) if v <= 1.5 * pmax] or [pmax]
     handles = [Line2D([], [], ls="none", marker="o", ms=np.sqrt(bubble_area([v], pmax)[0]),
                       mfc="none", mec=GREY) for v in refs]
     labels = [f"{v:,.0f} parameters" for v in refs]
-    if front.any():
+    if any_front:
         handles.append(Line2D([], [], ls="none", marker="o", ms=10, mfc="none", mec="black",
                               mew=1.5))
         labels.append("Pareto-optimal\n(parameters vs RMSE)")
-    for name, _ in lines:
+    for name in references:
         handles.append(Line2D([], [], color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0))
         labels.append(f"{model_label(name)}\n(reference, not a competitor)")
     biggest = float(np.sqrt(bubble_area([max(refs)], pmax)[0]))
@@ -273,12 +289,6 @@ def plot_physics_depth(
               labelspacing=max(1.0, biggest / 14.0), borderpad=0.9,
               handlelength=max(2.0, biggest / 7.0), handletextpad=0.8,
               title="bubble area ∝ parameters", title_fontsize=8, frameon=False)
-    ax.set_xlabel("physics depth (how much of the forward model a method uses)")
-    ax.set_ylabel("RMSE [mg/dL]")
-    ax.set_title(title if title is not None else "Accuracy vs physics depth")
-    if own:
-        place_labels(ax.figure)
-    return ax
 
 
 @styled

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import pandas as pd
 
@@ -139,46 +139,10 @@ def presets_section(dirs: list[Path]) -> str:
     """
     if len(dirs) < 2:
         raise DataError("a preset comparison needs at least two results directories")
-    from ..evaluation.reference import MODEL_LABELS, STUDY_TABLE
-    from .figures import load_results
-    from .html import _reproduced_table, markdown_to_html
-
     loaded = [_load(d) for d in dirs]
     names = [m.get("preset") or d.name for d, (m, _) in zip(dirs, loaded, strict=True)]
-    study = {str(r["model"]): r for r in STUDY_TABLE}
     models = list(dict.fromkeys(m for _, met in loaded for m in met.index))
-    metrics = (("rmse_mgdl", "RMSE [mg/dL, 95 % CI]", "rmse"), ("mard_pct", "MARD [%]", None),
-               ("clarke_a_pct", "Clarke A [%]", None))
-    # metric-major: each metric's presets in adjacent columns, so they read at a glance
-    head1 = "<th rowspan=2>Model</th>" + "".join(
-        f"<th colspan={len(names)}>{_esc(h)}</th>" for _, h, _ in metrics
-    ) + f"<th rowspan=2>Δ RMSE {_esc(names[1])} − {_esc(names[0])} [mg/dL]</th>" \
-        "<th rowspan=2>study RMSE [mg/dL]</th>"
-    head2 = "".join(f"<th>{_esc(n)}</th>" for _ in metrics for n in names)
-    rows = []
-    label = {m: MODEL_LABELS.get(m, m) for m in models}
-    for _, met in loaded:
-        if "label" in met.columns:
-            label.update({m: str(v) for m, v in met["label"].items() if isinstance(v, str)})
-    for model in models:
-        cells = [f"<td>{_esc(label[model])}</td>"]
-        for col, _, ci in metrics:
-            for _, met in loaded:
-                if model in met.index and col in met.columns:
-                    r = met.loc[model]
-                    txt = _num(r.get(col))
-                    if ci and _num(r.get(f"{ci}_ci_low")) != "–":
-                        txt += f" [{_num(r.get(f'{ci}_ci_low'))}, {_num(r.get(f'{ci}_ci_high'))}]"
-                    cells.append(f"<td>{txt}</td>")
-                else:
-                    cells.append("<td>–</td>")
-        a, b = loaded[0][1], loaded[1][1]
-        diff = (float(b.loc[model, "rmse_mgdl"]) - float(a.loc[model, "rmse_mgdl"])
-                if model in a.index and model in b.index else float("nan"))
-        cells.append(f"<td>{_num(diff, 1, True)}</td>")
-        cells.append(f'<td class="study">{_num(study.get(model, {}).get("rmse_mgdl"))}</td>')
-        rows.append("<tr>" + "".join(cells) + "</tr>")
-    head = f"{head1}</tr><tr>{head2}"
+    label = _model_labels(models, loaded)
     parts = [
         '<h2 id="presets">Presets compared</h2>',
         f"<p>The same benchmark on {len(names)} presets: "
@@ -187,27 +151,97 @@ def presets_section(dirs: list[Path]) -> str:
         "metrics of every preset next to each other (each metric's presets in adjacent "
         "columns), and the performance-comparison figure draws all presets on shared "
         "axes.</p>",
-        '<div class="scroll"><table id="presets-table"><thead><tr>'
-        f"{head}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>",
+        _comparison_table(names, loaded, models, label),
         "<h3>What separates the presets</h3>",
         _separation(names, loaded, label),
+        _ablations_side_by_side(dirs, names),
+        *_preset_details(dirs[1:], names[1:]),
     ]
+    return "\n".join(p for p in parts if p)
+
+
+#: Columns of the comparison table: (metrics column, heading, stem of its CI columns).
+_COMPARED: Final = (("rmse_mgdl", "RMSE [mg/dL, 95 % CI]", "rmse"),
+                    ("mard_pct", "MARD [%]", None), ("clarke_a_pct", "Clarke A [%]", None))
+
+
+def _model_labels(models: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]]
+                  ) -> dict[str, str]:
+    """Display label of each model: the study's, else a run's ``label`` column, else its name."""
+    from ..evaluation.reference import MODEL_LABELS
+
+    label = {m: MODEL_LABELS.get(m, m) for m in models}
+    for _, met in loaded:
+        if "label" in met.columns:
+            label.update({m: str(v) for m, v in met["label"].items() if isinstance(v, str)})
+    return label
+
+
+def _comparison_table(names: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]],
+                      models: list[str], label: dict[str, str]) -> str:
+    """The key metrics of every preset, metric-major (each metric's presets side by side)."""
+    from ..evaluation.reference import STUDY_TABLE
+
+    study = {str(r["model"]): r for r in STUDY_TABLE}
+    head1 = "<th rowspan=2>Model</th>" + "".join(
+        f"<th colspan={len(names)}>{_esc(h)}</th>" for _, h, _ in _COMPARED
+    ) + f"<th rowspan=2>Δ RMSE {_esc(names[1])} − {_esc(names[0])} [mg/dL]</th>" \
+        "<th rowspan=2>study RMSE [mg/dL]</th>"
+    head2 = "".join(f"<th>{_esc(n)}</th>" for _ in _COMPARED for n in names)
+    rows = []
+    for model in models:
+        cells = [f"<td>{_esc(label[model])}</td>"]
+        for col, _, ci in _COMPARED:
+            cells += [_metric_cell(met, model, col, ci) for _, met in loaded]
+        a, b = loaded[0][1], loaded[1][1]
+        diff = (float(b.loc[model, "rmse_mgdl"]) - float(a.loc[model, "rmse_mgdl"])
+                if model in a.index and model in b.index else float("nan"))
+        cells.append(f"<td>{_num(diff, 1, True)}</td>")
+        cells.append(f'<td class="study">{_num(study.get(model, {}).get("rmse_mgdl"))}</td>')
+        rows.append("<tr>" + "".join(cells) + "</tr>")
+    head = f"{head1}</tr><tr>{head2}"
+    return ('<div class="scroll"><table id="presets-table"><thead><tr>'
+            f"{head}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
+
+
+def _metric_cell(met: pd.DataFrame, model: str, col: str, ci: str | None) -> str:
+    """One preset's value of ``col`` for ``model``, with its CI when ``ci`` names one."""
+    if model not in met.index or col not in met.columns:
+        return "<td>–</td>"
+    r = met.loc[model]
+    txt = _num(r.get(col))
+    if ci and _num(r.get(f"{ci}_ci_low")) != "–":
+        txt += f" [{_num(r.get(f'{ci}_ci_low'))}, {_num(r.get(f'{ci}_ci_high'))}]"
+    return f"<td>{txt}</td>"
+
+
+def _ablations_side_by_side(dirs: list[Path], names: list[str]) -> str:
+    """Each preset's ablation table next to the others ("" when no run has one)."""
     ablations = [(n, ablation_section(d, f"Physics ablation on {n}"))
                  for d, n in zip(dirs, names, strict=True)]
     ablations = [(n, a) for n, a in ablations if a]
-    if ablations:
-        parts.append('<h3>Physics ablation, presets side by side</h3><div class="side">'
-                     + "".join(f"<div>{a}</div>" for _, a in ablations) + "</div>")
-    for d, n in zip(dirs[1:], names[1:], strict=True):
+    if not ablations:
+        return ""
+    return ('<h3>Physics ablation, presets side by side</h3><div class="side">'
+            + "".join(f"<div>{a}</div>" for _, a in ablations) + "</div>")
+
+
+def _preset_details(dirs: list[Path], names: list[str]) -> list[str]:
+    """A collapsed block per preset with its reproduced table and significance statements."""
+    from .figures import load_results
+    from .html import _reproduced_table, markdown_to_html
+
+    out = []
+    for d, n in zip(dirs, names, strict=True):
         res = load_results(d)
         inner = [_reproduced_table(res)]
         if res.table_md:
             inner.append(markdown_to_html(strip_ablation(res.table_md), skip_tables=True,
                                           skip_h1=True))
-        parts.append(f'<details id="preset-{_esc(n)}"><summary>Full reproduced table and '
-                     f"significance statements on <code>{_esc(n)}</code></summary>"
-                     + "\n".join(inner) + "</details>")
-    return "\n".join(p for p in parts if p)
+        out.append(f'<details id="preset-{_esc(n)}"><summary>Full reproduced table and '
+                   f"significance statements on <code>{_esc(n)}</code></summary>"
+                   + "\n".join(inner) + "</details>")
+    return out
 
 
 def _separation(

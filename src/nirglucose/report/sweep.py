@@ -215,11 +215,24 @@ def sweep_section(sweep_dir: str | Path) -> str:
         ``sweep_dir`` is not a sweep directory.
     """
     res = load_sweep(sweep_dir)
-    m = res.meta
+    key = _numeric_key(res)
+    parts = ['<section id="sweep">', *_intro(res.meta)]
+    if key is not None:
+        parts += _crossing(res.summary, key)
+    if "rmse_mgdl_mean" in res.summary:
+        parts.append(_summary_table(res.summary, res.meta, key))
+    parts += _effects_tables(res.effects)
+    for f in sweep_figures(res):
+        parts.append(_figure_html(f))
+    parts.append("</section>")
+    return "\n".join(parts) + "\n"
+
+
+def _intro(m: dict[str, Any]) -> list[str]:
+    """The heading, what was swept on what, and the shared overrides if any."""
     layout = (f"{m.get('protocol')} ({m.get('n_splits')} folds × {m.get('repeats')} repeats)"
               if m.get("protocol") == "grouped-cv" else str(m.get("protocol")))
     parts = [
-        '<section id="sweep">',
         f"<h2>Sweep: {_esc(m.get('study'))}</h2>",
         f"<p>{len(m.get('scenarios', []))} scenarios × {len(m.get('seeds', []))} seeds × "
         f"{len(m.get('models', []))} models ({', '.join(_label(x) for x in m.get('models', []))})"
@@ -232,34 +245,43 @@ def sweep_section(sweep_dir: str | Path) -> str:
         sets = ", ".join(f"<code>{_esc(k)}={_esc(v)}</code>"
                          for k, v in m["base_overrides"].items())
         parts.append(f"<p>Shared overrides: {sets}.</p>")
-    key = _numeric_key(res)
-    s = res.summary
-    if key is not None:
-        cross = threshold_crossing(s, key, "mard_pct", MARD_LIMIT_PCT)
-        rows = [[_label(r["model"]),
-                 _num(r["crossing"], 2) if r["status"] == "crosses" else _esc(r["status"])]
-                for _, r in cross.iterrows()]
-        parts.append(f"<h3>Where MARD crosses {MARD_LIMIT_PCT:g} %</h3>")
-        parts.append(_table(["model", f"{_esc(key)} at the crossing"], rows, "sweep-crossing"))
-    if "rmse_mgdl_mean" in s:
-        label_cols = [c for c in m.get("label_columns", []) if c in s]
-        head = ["scenario", "model", "RMSE mg/dL [95 % CI]", "MARD % [95 % CI]",
-                "Clarke A %"]
-        if "rmse_vs_oracle_mean" in s and s["rmse_vs_oracle_mean"].notna().any():
-            head.append("RMSE / oracle")
-        rows = []
-        for _, r in s.iterrows():
-            name = (", ".join(f"{c}={r[c]}" for c in label_cols) if key is not None
-                    else r["scenario"])
-            row = [_esc(name), _label(r["model"]), _ci(r, "rmse_mgdl"), _ci(r, "mard_pct"),
-                   _num(r.get("clarke_a_pct_mean"))]
-            if len(head) == 6:
-                row.append(_num(r.get("rmse_vs_oracle_mean"), 2))
-            rows.append(row)
-        parts.append("<details><summary>RMSE and MARD per scenario and model "
-                     f"({len(rows)} rows)</summary>"
-                     + _table(head, rows, "sweep-summary") + "</details>")
-    e = res.effects
+    return parts
+
+
+def _crossing(s: pd.DataFrame, key: str) -> list[str]:
+    """Where each model's MARD crosses :data:`MARD_LIMIT_PCT` along the numeric ``key``."""
+    cross = threshold_crossing(s, key, "mard_pct", MARD_LIMIT_PCT)
+    rows = [[_label(r["model"]),
+             _num(r["crossing"], 2) if r["status"] == "crosses" else _esc(r["status"])]
+            for _, r in cross.iterrows()]
+    return [f"<h3>Where MARD crosses {MARD_LIMIT_PCT:g} %</h3>",
+            _table(["model", f"{_esc(key)} at the crossing"], rows, "sweep-crossing")]
+
+
+def _summary_table(s: pd.DataFrame, m: dict[str, Any], key: str | None) -> str:
+    """RMSE and MARD per scenario and model, collapsed."""
+    label_cols = [c for c in m.get("label_columns", []) if c in s]
+    head = ["scenario", "model", "RMSE mg/dL [95 % CI]", "MARD % [95 % CI]",
+            "Clarke A %"]
+    if "rmse_vs_oracle_mean" in s and s["rmse_vs_oracle_mean"].notna().any():
+        head.append("RMSE / oracle")
+    rows = []
+    for _, r in s.iterrows():
+        name = (", ".join(f"{c}={r[c]}" for c in label_cols) if key is not None
+                else r["scenario"])
+        row = [_esc(name), _label(r["model"]), _ci(r, "rmse_mgdl"), _ci(r, "mard_pct"),
+               _num(r.get("clarke_a_pct_mean"))]
+        if len(head) == 6:
+            row.append(_num(r.get("rmse_vs_oracle_mean"), 2))
+        rows.append(row)
+    return ("<details><summary>RMSE and MARD per scenario and model "
+            f"({len(rows)} rows)</summary>"
+            + _table(head, rows, "sweep-summary") + "</details>")
+
+
+def _effects_tables(e: pd.DataFrame | None) -> list[str]:
+    """The noise-source ablation table and the domain-shift table, where the sweep has them."""
+    parts: list[str] = []
     if e is not None and "source" in e and len(e):
         parts.append("<h3>Which noise source costs most</h3>")
         rows = [[_label(r["model"]), _esc(r["source"]),
@@ -277,7 +299,4 @@ def sweep_section(sweep_dir: str | Path) -> str:
                 for _, r in e.iterrows()]
         parts.append(_table(["model", "shift", "train", "shifted test", "RMSE in domain",
                              "RMSE shifted", "ΔRMSE [95 % CI]"], rows, "sweep-shift"))
-    for f in sweep_figures(res):
-        parts.append(_figure_html(f))
-    parts.append("</section>")
-    return "\n".join(parts) + "\n"
+    return parts

@@ -1,0 +1,459 @@
+"""What each results figure shows, computed from the metrics and predictions.
+
+Correlations, zone percentages, Bland–Altman limits and their confidence intervals,
+regression lines, normalised scores, Pareto fronts and the tables of the trade-off,
+importance, forest and performance figures, with :mod:`nirglucose.metrics` and numpy;
+plain numbers for :mod:`nirglucose.plots`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any, Final
+
+import numpy as np
+import pandas as pd
+
+__all__ = [
+    "PHYSICS_DEPTH", "REFERENCE_ROWS", "PHYSICS_DEPTH_LABELS", "RADAR_AXES",
+    "RADAR_COST_DECADES", "model_order", "scored_column", "first_repeat", "pooled",
+    "channel_correlations", "error_grid_inputs", "bland_altman_inputs", "linearity_inputs",
+    "radar_scores", "pareto_front", "combined_cost_index", "efficiency_table",
+    "is_ablation_row", "competitors", "reference_values", "physics_depth_table",
+    "importance_matrix", "forest_table", "performance_table",
+]
+
+#: Physics depth of each registered model: how much of the forward model it uses, as
+#: an ordinal level (figure 9). A presentation choice, documented here.
+PHYSICS_DEPTH: Final[dict[str, int]] = {
+    "sdnn": 0,
+    "pls": 0,
+    "gp": 0,
+    "gbr": 0,
+    "original-pinn": 1,
+    "optimized-pinn": 1,
+    "selective-rte-pinn": 2,
+    "rte-pinn": 3,
+    "ebl": 4,
+    "oracle": 5,
+}
+#: Rows that are references, not competitors: drawn as horizontal lines in figures 9-10
+#: and left out of the radar and the Pareto fronts (the oracle is a bound, the training
+#: mean is no skill).
+REFERENCE_ROWS: Final = ("oracle", "mean")
+
+#: Tick labels of the physics-depth levels.
+PHYSICS_DEPTH_LABELS: Final[dict[int, str]] = {
+    0: "none\n(data-driven)",
+    1: "Beer–Lambert\nloss term",
+    2: "RTE loss\n(2 λ)",
+    3: "RTE loss\n(all λ)",
+    4: "Beer–Lambert\nfeatures",
+}
+
+#: Axes of the radar chart: (label, metrics column, higher is better, log scale).
+RADAR_AXES: Final[tuple[tuple[str, str, bool, bool], ...]] = (
+    ("RMSE", "rmse_mgdl", False, False),
+    ("MARD", "mard_pct", False, False),
+    ("Clarke A", "clarke_a_pct", True, False),
+    ("±15 %", "within15_pct", True, False),
+    ("parameters", "n_parameters", False, True),
+    ("latency", "latency_single_ms", False, True),
+)
+
+
+def performance_table(metrics_by_preset: Mapping[str, pd.DataFrame],
+                      models: Sequence[str]) -> pd.DataFrame:
+    """Long table of the performance panel: one row per preset and model."""
+    cols = ("rmse_mgdl", "rmse_ci_low", "rmse_ci_high", "mard_pct", "n_parameters",
+            "latency_single_ms")
+    rows = []
+    for preset, met in metrics_by_preset.items():
+        m = met.drop_duplicates("model").set_index("model")
+        for model in models:
+            if model in m.index:
+                rows.append({"preset": preset, "model": model,
+                             **{c: m.at[model, c] for c in cols if c in m.columns}})
+    return pd.DataFrame(rows)
+
+
+
+def model_order(models: Iterable[str]) -> list[str]:
+    """Models in display order: registered models in the study's order, then the rest.
+
+    Examples
+    --------
+    >>> model_order(["sdnn", "mine", "ebl"])
+    ['ebl', 'sdnn', 'mine']
+    """
+    from ...plots.style import MODEL_COLORS
+
+    names = list(dict.fromkeys(str(m) for m in models))
+    known = [m for m in MODEL_COLORS if m in names]
+    return known + [m for m in names if m not in MODEL_COLORS]
+
+
+def scored_column(predictions: pd.DataFrame) -> str:
+    """Prediction column the metrics were computed on (``scored_mgdl`` if present)."""
+    return "scored_mgdl" if "scored_mgdl" in predictions.columns else "predicted_mgdl"
+
+
+def first_repeat(predictions: pd.DataFrame, model: str) -> pd.DataFrame:
+    """One model's out-of-fold predictions of the first repeat (each snapshot once)."""
+    p = predictions[predictions["model"] == model]
+    if "repeat" in p.columns and len(p):
+        p = p[p["repeat"] == p["repeat"].min()]
+    return p
+
+
+def pooled(predictions: pd.DataFrame, model: str) -> pd.DataFrame:
+    """One model's out-of-fold predictions of every repeat, pooled.
+
+    Each repeat predicts every snapshot once, so the zone shares of the pooled points
+    equal the table's (per-repeat shares averaged over repeats, all repeats the same size).
+    """
+    return predictions[predictions["model"] == model]
+
+
+def _finite_pairs(p: pd.DataFrame, col: str) -> tuple[np.ndarray, np.ndarray, int]:
+    ref = p["reference_mgdl"].to_numpy(float)
+    pred = p[col].to_numpy(float)
+    ok = np.isfinite(ref) & np.isfinite(pred) & (ref > 0)
+    return ref[ok], pred[ok], int(np.count_nonzero(~ok))
+
+
+def channel_correlations(glucose_mgdl: np.ndarray, adc: Mapping[float, np.ndarray]
+                         ) -> dict[float, float]:
+    """Pearson r between glucose and ln(ADC code) of each channel.
+
+    Examples
+    --------
+    >>> g = np.array([80.0, 120.0, 160.0]); a = {850.0: np.array([100, 90, 80])}
+    >>> round(channel_correlations(g, a)[850.0], 3)
+    -0.999
+    """
+    out = {}
+    for wl, codes in adc.items():
+        x = np.log(np.asarray(codes, dtype=float))
+        ok = np.isfinite(x) & np.isfinite(glucose_mgdl)
+        if ok.sum() > 2 and np.ptp(x[ok]) > 0 and np.ptp(glucose_mgdl[ok]) > 0:
+            out[wl] = float(np.corrcoef(glucose_mgdl[ok], x[ok])[0, 1])
+        else:
+            out[wl] = float("nan")
+    return out
+
+
+def error_grid_inputs(predictions: pd.DataFrame, models: Sequence[str], *, kind: str = "clarke",
+                      diabetes_type: int = 1, measurement_ids: Iterable[Any] | None = None
+                      ) -> tuple[dict[str, dict[str, Any]], int]:
+    """Points and zone percentages of the Clarke or Parkes grid of each model.
+
+    Uses every repeat's predictions pooled (:func:`pooled`) and the scored predictions (negative
+    ones are placed at 0 mg/dL by the benchmark, as the grids require; if only raw
+    predictions exist, negatives are placed at 0 here and counted).
+
+    ``measurement_ids`` keeps only those snapshots (e.g. the type-2 ones for the
+    type-2 Parkes grid).
+
+    Returns
+    -------
+    grids : dict
+        Model -> ``{"reference", "predicted", "zone_pct"}``.
+    n_clipped : int
+        Raw predictions below 0 placed at 0 here.
+    """
+    from ...metrics import clarke_zones, parkes_zones, zone_percentages
+
+    col = scored_column(predictions)
+    grids: dict[str, dict[str, Any]] = {}
+    clipped = 0
+    keep = None if measurement_ids is None else set(measurement_ids)
+    for m in models:
+        p = pooled(predictions, m)
+        if keep is not None:
+            p = p[p["measurement_id"].isin(keep)]
+        ref, pred, _ = _finite_pairs(p, col)
+        if ref.size == 0:
+            continue
+        neg = pred < 0
+        clipped += int(neg.sum())
+        pred = np.where(neg, 0.0, pred)
+        zones = (clarke_zones(ref, pred) if kind == "clarke"
+                 else parkes_zones(ref, pred, diabetes_type=diabetes_type))
+        grids[m] = {"reference": ref, "predicted": pred, "zone_pct": zone_percentages(zones)}
+    return grids, clipped
+
+
+def _t_quantile(level: float, dof: int) -> float:
+    from scipy.stats import t
+
+    return float(t.ppf(0.5 + level / 2.0, dof))
+
+
+def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
+                        level: float = 0.95) -> dict[str, dict[str, Any]]:
+    """Bland–Altman points, bias, limits of agreement and their confidence intervals.
+
+    The intervals are the approximate ones of Bland & Altman (1986): standard error
+    ``s / sqrt(n)`` for the bias and ``s sqrt(3 / n)`` for each limit, with a t quantile
+    on ``n - 1`` degrees of freedom. Pairs from the same subject are treated as
+    independent, so the intervals are somewhat narrow.
+
+    References
+    ----------
+    .. [1] Bland JM, Altman DG. Statistical methods for assessing agreement between two
+       methods of clinical measurement. Lancet 327(8476):307-310, 1986.
+       doi:10.1016/S0140-6736(86)90837-8
+    """
+    from ...metrics import bland_altman
+
+    col = scored_column(predictions)
+    out: dict[str, dict[str, Any]] = {}
+    for m in models:
+        ref, pred, _ = _finite_pairs(pooled(predictions, m), col)
+        n = ref.size
+        if n < 3:
+            continue
+        bias, low, high = bland_altman(ref, pred)
+        s = (high - bias) / 1.96
+        tq = _t_quantile(level, n - 1)
+        se_b, se_l = s / math.sqrt(n), s * math.sqrt(3.0 / n)
+        out[m] = {
+            "mean_mgdl": 0.5 * (ref + pred),
+            "difference_mgdl": pred - ref,
+            "bias": bias, "loa_low": low, "loa_high": high,
+            "bias_ci": (bias - tq * se_b, bias + tq * se_b),
+            "loa_low_ci": (low - tq * se_l, low + tq * se_l),
+            "loa_high_ci": (high - tq * se_l, high + tq * se_l),
+        }
+    return out
+
+
+def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
+                     level: float = 0.95) -> dict[str, dict[str, Any]]:
+    """Least-squares line of predicted on reference glucose, its slope CI and R².
+
+    When the predictions carry ``lower90_mgdl``/``upper90_mgdl`` (the benchmark's
+    prediction intervals), each panel also gets ``lower`` and ``upper``.
+    """
+    col = scored_column(predictions)
+    out: dict[str, dict[str, Any]] = {}
+    for m in models:
+        ref, pred, _ = _finite_pairs(pooled(predictions, m), col)
+        n = ref.size
+        if n < 3 or np.ptp(ref) == 0:
+            continue
+        slope, intercept = np.polyfit(ref, pred, 1)
+        resid = pred - (intercept + slope * ref)
+        sxx = float(np.sum((ref - ref.mean()) ** 2))
+        se = math.sqrt(float(resid @ resid) / (n - 2) / sxx)
+        tq = _t_quantile(level, n - 2)
+        sst = float(np.sum((pred - pred.mean()) ** 2))
+        r2 = 1.0 - float(resid @ resid) / sst if sst > 0 else float("nan")
+        out[m] = {"reference": ref, "predicted": pred, "slope": float(slope),
+                  "intercept": float(intercept), "r_squared": r2,
+                  "slope_ci": (float(slope - tq * se), float(slope + tq * se))}
+        p = pooled(predictions, m)
+        if {"lower90_mgdl", "upper90_mgdl"} <= set(p.columns):
+            r_all = p["reference_mgdl"].to_numpy(float)
+            lo = p["lower90_mgdl"].to_numpy(float)
+            hi = p["upper90_mgdl"].to_numpy(float)
+            ok = (np.isfinite(r_all) & np.isfinite(p[col].to_numpy(float)) & (r_all > 0)
+                  & np.isfinite(lo) & np.isfinite(hi))
+            if ok.sum() == n:  # the same rows as the points
+                out[m].update(lower=lo[ok], upper=hi[ok])
+    return out
+
+
+def _metric(metrics: pd.DataFrame, models: Sequence[str], col: str) -> np.ndarray:
+    if col not in metrics.columns:
+        return np.full(len(models), np.nan)
+    s = metrics.drop_duplicates("model").set_index("model")[col]
+    return pd.to_numeric(s.reindex(list(models)), errors="coerce").to_numpy(float)
+
+
+#: Decades of parameters or latency above the smallest model's that score 0 on the radar.
+RADAR_COST_DECADES: Final = 6.0
+
+
+def radar_scores(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Scores in [0, 1] per model and radar axis, 1 = best of these models.
+
+    Accuracy axes are ratios to the best model (``best / x`` for RMSE and MARD,
+    ``x / best`` for Clarke A and ±15 %), so that close models look close. Cost axes
+    (parameters, latency) lose ``1 / RADAR_COST_DECADES`` per decade above the
+    cheapest model: ``1 - log10(x / best) / 6``, floored at 0 (parameter counts below 1
+    and latencies below 1 µs count as 1 and 1 µs). A missing value is NaN.
+
+    Examples
+    --------
+    >>> m = pd.DataFrame({"model": ["a", "b"], "rmse_mgdl": [10.0, 20.0],
+    ...                   "n_parameters": [100, 100_000]})
+    >>> s = radar_scores(m, ["a", "b"])
+    >>> s["RMSE"].tolist(), s["parameters"].tolist()
+    ([1.0, 0.5], [1.0, 0.5])
+    """
+    cols = {}
+    for label, col, higher, log in RADAR_AXES:
+        v = _metric(metrics, models, col)
+        floor = 1.0 if col == "n_parameters" else 1e-3  # 0 parameters scores as 1
+        ok = np.isfinite(v) & (v > 0 if not (log or higher) else v >= 0)
+        score = np.full(v.shape, np.nan)
+        if ok.any():
+            if log:
+                x = np.log10(np.maximum(v[ok], floor))
+                score[ok] = np.clip(1.0 - (x - x.min()) / RADAR_COST_DECADES, 0.0, 1.0)
+            elif higher:
+                best = v[ok].max()
+                score[ok] = v[ok] / best if best > 0 else 1.0
+            else:
+                score[ok] = v[ok].min() / v[ok]
+        cols[label] = score
+    return pd.DataFrame(cols, index=pd.Index(list(models), name="model"))
+
+
+def pareto_front(cost: Sequence[float], rmse: Sequence[float]) -> np.ndarray:
+    """Mask of points no other point dominates (both lower-or-equal, one strictly lower).
+
+    Examples
+    --------
+    >>> pareto_front([1, 2, 3, 4], [10, 5, 7, 4]).tolist()
+    [True, True, False, True]
+    """
+    c = np.asarray(cost, dtype=float)
+    r = np.asarray(rmse, dtype=float)
+    ok = np.isfinite(c) & np.isfinite(r)
+    le = (c[:, None] <= c[None, :]) & (r[:, None] <= r[None, :])
+    lt = (c[:, None] < c[None, :]) | (r[:, None] < r[None, :])
+    dominated = (le & lt & ok[:, None]).any(axis=0)
+    return ok & ~dominated
+
+
+def combined_cost_index(n_parameters: Sequence[float], latency_ms: Sequence[float]
+                        ) -> np.ndarray:
+    """Mean of the min–max normalised log10 parameter count and log10 latency.
+
+    0 is the smallest and fastest model of the set, 1 the largest and slowest (counts
+    below 1 parameter and latencies below 1 µs are taken as 1 and 1 µs).
+
+    Examples
+    --------
+    >>> combined_cost_index([10, 1000], [0.01, 1.0]).tolist()
+    [0.0, 1.0]
+    """
+    parts = []
+    for v, floor in ((n_parameters, 1.0), (latency_ms, 1e-3)):
+        x = np.log10(np.maximum(np.asarray(v, dtype=float), floor))
+        finite = x[np.isfinite(x)]
+        if finite.size and np.ptp(finite) > 0:
+            parts.append((x - finite.min()) / np.ptp(finite))
+        else:
+            parts.append(np.where(np.isfinite(x), 0.0, np.nan))
+    return np.nanmean(np.vstack(parts), axis=0) if parts else np.array([])
+
+
+def efficiency_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Inputs of figure 10: costs, the combined index and the three Pareto fronts.
+
+    Only competitors (:func:`competitors`); the references are drawn as lines.
+    """
+    models = competitors(models)
+    t = pd.DataFrame({
+        "model": list(models),
+        "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
+        "n_parameters": _metric(metrics, models, "n_parameters"),
+        "latency_single_ms": _metric(metrics, models, "latency_single_ms"),
+    })
+    t["combined_index"] = combined_cost_index(t["n_parameters"], t["latency_single_ms"])
+    for col, front, log in (("n_parameters", "front_parameters", True),
+                            ("latency_single_ms", "front_latency", True),
+                            ("combined_index", "front_combined", False)):
+        cost = t[col].to_numpy(float)
+        if log:  # a log axis cannot show zero cost: the front is among what is drawn
+            cost = np.where(cost > 0, cost, np.nan)
+        t[front] = pareto_front(cost, t["rmse_mgdl"])
+    return t
+
+
+def is_ablation_row(model: str) -> bool:
+    """Whether ``model`` is an ablation row (``<pinn>/no-physics``), shown in its own table."""
+    return "/" in str(model)
+
+
+def competitors(models: Iterable[str]) -> list[str]:
+    """Models that compete: neither a reference row (:data:`REFERENCE_ROWS`) nor an ablation."""
+    return [m for m in models if m not in REFERENCE_ROWS and not is_ablation_row(m)]
+
+
+def reference_values(metrics: pd.DataFrame, models: Sequence[str]) -> dict[str, float]:
+    """RMSE of the reference rows present (oracle bound, no-skill mean). [mg/dL]"""
+    refs = [m for m in REFERENCE_ROWS if m in models]
+    return {m: float(v) for m, v in zip(refs, _metric(metrics, refs, "rmse_mgdl"), strict=True)
+            if np.isfinite(v)}
+
+
+def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str]) -> tuple[pd.DataFrame,
+                                                                                list[str]]:
+    """Inputs of figure 9 and the models left out (no known physics depth).
+
+    Reference rows (:data:`REFERENCE_ROWS`) and ablation rows are not competitors and
+    are neither drawn as bubbles nor listed as left out.
+    """
+    models = competitors(models)
+    known = [m for m in models if m in PHYSICS_DEPTH]
+    t = pd.DataFrame({
+        "model": known,
+        "physics_depth": [PHYSICS_DEPTH[m] for m in known],
+        "rmse_mgdl": _metric(metrics, known, "rmse_mgdl"),
+        "n_parameters": _metric(metrics, known, "n_parameters"),
+    })
+    t = t[np.isfinite(t["rmse_mgdl"]) & np.isfinite(t["n_parameters"])].reset_index(drop=True)
+    t["on_front"] = pareto_front(t["n_parameters"], t["rmse_mgdl"])
+    # spread models sharing a level
+    t["x_offset"] = 0.0
+    for _, idx in t.groupby("physics_depth").groups.items():
+        k = len(idx)
+        if k > 1:
+            t.loc[idx, "x_offset"] = np.linspace(-0.3, 0.3, k)
+    left_out = [m for m in models if m not in set(t["model"])]
+    return t, left_out
+
+
+def importance_matrix(importance: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+    """Models × wavelengths matrix of the mean RMSE increase (rows in display order).
+
+    Ablation rows (``<pinn>/no-physics``) are left out; they have their own table.
+    """
+    mat = importance.pivot_table(index="model", columns="wavelength_nm",
+                                 values="rmse_increase_mgdl", aggfunc="mean")
+    rows = [m for m in models if m in mat.index] + [m for m in mat.index if m not in models
+                                                     and not is_ablation_row(m)]
+    return mat.reindex(rows).sort_index(axis=1)
+
+
+def _study_rows() -> dict[str, dict[str, Any]]:
+    from ...evaluation.reference import STUDY_TABLE
+
+    return {str(r["model"]): dict(r) for r in STUDY_TABLE}
+
+
+def forest_table(metrics: pd.DataFrame, models: Sequence[str], *,
+                 with_study: bool = True) -> pd.DataFrame:
+    """Inputs of the forest plot: RMSE, its interval, and the study's RMSE where it has one.
+
+    ``with_study=False`` (a user's data, measured on another device) leaves the study's
+    values out (all NaN).
+    """
+    study = _study_rows() if with_study else {}
+    return pd.DataFrame({
+        "model": list(models),
+        "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
+        "rmse_ci_low": _metric(metrics, models, "rmse_ci_low"),
+        "rmse_ci_high": _metric(metrics, models, "rmse_ci_high"),
+        "study_rmse_mgdl": [float(study[m]["rmse_mgdl"]) if m in study else np.nan
+                            for m in models],
+    })
+
+
+# --------------------------------------------------------------------------- data figures

@@ -1,0 +1,529 @@
+"""The report's figures section by section: numbering, captions and drawing.
+
+:func:`render_figures` runs each section builder in page order; a builder computes its
+figures' inputs (:mod:`.inputs`, :mod:`.descriptive`), writes their captions and hands
+a drawing function to :meth:`_Page.add`, which numbers, draws and saves the figure.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+import pandas as pd
+
+from ...exceptions import DataError
+from .descriptive import (
+    ARCHITECTURE_MODELS,
+    NOISE_LAYER,
+    _adc_by_wavelength,
+    ebl_feature_table,
+    environment_panels,
+    feature_categories,
+    fitted_architectures,
+    physiology_panels,
+    pipeline_columns,
+)
+from .inputs import (
+    PHYSICS_DEPTH_LABELS,
+    REFERENCE_ROWS,
+    bland_altman_inputs,
+    channel_correlations,
+    competitors,
+    efficiency_table,
+    error_grid_inputs,
+    forest_table,
+    importance_matrix,
+    is_ablation_row,
+    linearity_inputs,
+    model_order,
+    performance_table,
+    physics_depth_table,
+    pooled,
+    radar_scores,
+    reference_values,
+)
+from .results import RenderedFigure, Results
+
+__all__ = ["render_figures"]
+
+logger = logging.getLogger(__package__)  # the package's name, as before the split
+
+
+@dataclass
+class _Page:
+    """What every section builder of :func:`render_figures` reads, and the figures so far.
+
+    ``add`` numbers every figure in page order (so the contents and the captions
+    agree), draws the wanted ones and keeps them in :attr:`rendered`.
+    """
+
+    results: Results
+    out_dir: Path | None
+    formats: Sequence[str]
+    wanted: set[str] | None
+    compare: Mapping[str, pd.DataFrame] | None
+    rendered: list[RenderedFigure] = field(default_factory=list)
+    count: int = 0
+
+    @property
+    def models(self) -> list[str]:
+        return self.results.models
+
+    @property
+    def preds(self) -> pd.DataFrame:
+        return self.results.predictions
+
+    @property
+    def pred_models(self) -> list[str]:
+        have = set(self.preds["model"])
+        return [m for m in self.models if m in have and not is_ablation_row(m)]
+
+    @property
+    def user_data(self) -> bool:
+        """A user's measurements: no simulation configuration and no preset recorded."""
+        return self.results.config is None and not self.results.meta.get("preset")
+
+    @property
+    def rep_note(self) -> str:
+        p = self.preds
+        n_rep = int(p["repeat"].nunique()) if "repeat" in p.columns else 1
+        return (f"every out-of-fold prediction of all {n_rep} repeats pooled, so the zone "
+                f"shares equal the table's" if n_rep > 1 else "every out-of-fold prediction")
+
+    def wants(self, *keys: str) -> bool:
+        """Whether any of ``keys`` is to be drawn."""
+        return self.wanted is None or bool(self.wanted & set(keys))
+
+    def add(self, key: str, title: str, caption: str, build: Callable[[], Any] | None,
+            note: str | None = None) -> None:
+        """Number the next figure; draw it (``build``) if it is wanted."""
+        from ...plots.style import figure_bytes, save_figure
+
+        self.count += 1
+        number = str(self.count)
+        if not self.wants(key):
+            return
+        out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
+        fig = None
+        if build is not None:
+            try:
+                fig = build()
+            except (ValueError, KeyError, TypeError, IndexError) as exc:
+                logger.exception("figure %s could not be drawn", number)
+                out.note = f"Figure {number} could not be drawn: {exc}"
+        if fig is not None:
+            out.png = figure_bytes(fig, "png")
+            if self.out_dir is not None:
+                out.files = save_figure(fig, self.out_dir / f"fig{number}_{key}", self.formats)
+            else:
+                fig.clear()
+        self.rendered.append(out)
+
+
+def _section_data(page: _Page) -> None:
+    """Figures 1a-1c: glucose and the NIR signal, environment, physiology."""
+    from ...plots import data
+
+    ds = page.results.dataset
+    if ds is None:
+        for key, title in (("data", "Glucose and NIR signal"), ("environment", "Environment"),
+                           ("physiology", "Physiology")):
+            page.add(key, title, "Characteristics of the simulated data.", None,
+                     note="No dataset.parquet in the results directory: figure not drawn.")
+        return
+    what = "measured" if page.user_data else "simulated"
+    frame = ds.frame
+    adc = _adc_by_wavelength(frame, [float(w) for w in ds.wavelengths_nm])
+    g = frame["glucose_mgdl"].to_numpy(float)
+    corr = channel_correlations(g, adc)
+    corr_txt = ", ".join(f"{w:g} nm r = {r:+.2f}" for w, r in corr.items())
+    by_status = ("by diabetes status (left)" if "diabetes_status" in frame
+                 else "(left; the diabetes status is not recorded)")
+    page.add("data", "Glucose and NIR signal",
+             f"Reference glucose of the {len(frame)} {what} snapshots {by_status} and the "
+             f"log ADC code of each LED channel against glucose, with the Pearson "
+             f"correlation ({corr_txt}).",
+             lambda: data.figure_data_characteristics(
+                 g, frame["diabetes_status"].astype(str).to_numpy()
+                 if "diabetes_status" in frame else np.full(len(frame), "unknown"),
+                 {w: np.log(v) for w, v in adc.items()}, corr))
+    env = environment_panels(frame)
+    if env:  # a user's data may record no ambient conditions: promise no panels
+        page.add("environment", "Environment",
+                 f"Distributions of the ambient conditions of the {what} snapshots "
+                 "(temperature, humidity, pressure, illuminance and light source, where "
+                 "recorded).",
+                 lambda: data.figure_distributions(env, ncols=5))
+    phys = physiology_panels(frame)
+    if phys:
+        page.add("physiology", "Physiology",
+                 "Distributions of the measured physiological vector the models see"
+                 + (" (its humidity and pressure entries are shown with the environment)."
+                    if env else "."),
+                 lambda: data.figure_distributions(phys, ncols=5))
+
+
+def _section_pipeline(page: _Page) -> None:
+    """Figure 2: the simulator's layers."""
+    from ...plots import pipeline
+    from ...plots.style import plot_style
+
+    cfg = page.results.config
+    if page.user_data:
+        return  # measured, not simulated: there is no simulator pipeline to draw
+    if cfg is None:
+        page.add("pipeline", "Data-generation pipeline", "The simulator's layers.", None,
+                 note="No resolved configuration in the results: diagram not drawn.")
+        return
+    n_off = sum(1 for s in NOISE_LAYER if cfg.noise_factor(s) == 0)
+    page.add("pipeline", "Data-generation pipeline",
+             f"The simulator's layers for this run, left to right in the order applied, with "
+             f"the '{cfg.optics.model}' forward model and {len(NOISE_LAYER) - n_off} of "
+             f"{len(NOISE_LAYER)} noise sources on (✓ on, with its factor when not ×1; "
+             f"✗ off).",
+             lambda: _figure_pipeline(pipeline, cfg, plot_style))
+
+
+def _section_architecture(page: _Page) -> None:
+    """The model architectures, from models fitted for one epoch."""
+    from ...plots import architecture
+
+    ds = page.results.dataset
+    models = page.models
+    arch_models = [m for m in ARCHITECTURE_MODELS if m in models] or list(ARCHITECTURE_MODELS)
+    archs: dict[str, Any] = {}
+    arch_err: str | None = "No dataset.parquet in the results: diagram not drawn."
+    if ds is not None and page.wants("architecture", "features"):
+        try:
+            archs = fitted_architectures(ds, page.results.meta.get("preset"), arch_models)
+            arch_err = None
+        except (ImportError, ValueError, RuntimeError) as exc:
+            archs, arch_err = {}, f"Models could not be built on this dataset: {exc}"
+    page.add("architecture", "Model architectures",
+             "One block diagram per model family, inputs at the top and glucose at the "
+             "bottom; the layer widths (a→b→c: the Linear layers of each block) and parameter "
+             "counts are read from each model built with "
+             + ("the default parameters" if page.user_data else "this preset's tuned "
+                "parameters")
+             + " and fitted for one epoch on this run's dataset, so they are the sizes that "
+             "ran.",
+             (lambda: architecture.figure_architectures(archs)) if archs else None,
+             note=arch_err)
+
+
+def _section_features(page: _Page) -> None:
+    """The Enhanced Beer–Lambert feature engineering."""
+    from ...plots import architecture
+
+    ds = page.results.dataset
+    feat: dict[str, list[str]] = {}
+    feat_src: dict[str, str] = {}
+    n_ch = n_phys = 0
+    if ds is not None and page.wants("features"):
+        try:
+            table, n_ch, n_phys = ebl_feature_table(ds, page.results.meta.get("preset"))
+            feat, feat_src = feature_categories(table)
+        except (ImportError, ValueError) as exc:
+            logger.warning("feature table not built: %s", exc)
+    page.add("features", "Feature engineering",
+             f"How the Enhanced Beer–Lambert model turns the {n_ch} raw LED intensities and "
+             f"the {n_phys}-entry physiological vector into its "
+             f"{sum(len(v) for v in feat.values())} features, by category (count and first "
+             "names; the full list is features.feature_table).",
+             (lambda: architecture.figure_feature_engineering(
+                 n_ch, n_phys, feat, feat_src)) if feat else None,
+             note=None if feat else "No dataset.parquet in the results: diagram not drawn.")
+
+
+def _diabetes_status(page: _Page) -> pd.Series | None:
+    """Diabetes status by measurement id, when both the dataset and predictions have ids."""
+    ds = page.results.dataset
+    if ds is None or "diabetes_status" not in ds.frame or "measurement_id" not in ds.frame \
+            or "measurement_id" not in page.preds.columns:
+        return None
+    return ds.frame.set_index("measurement_id")["diabetes_status"].astype(str)
+
+
+def _section_grids(page: _Page) -> None:
+    """Figures 3-4: the Clarke and Parkes error grids."""
+    from ...plots import grids
+
+    preds, pred_models, rep_note = page.preds, page.pred_models, page.rep_note
+    n_first = len(pooled(preds, pred_models[0])) if pred_models else 0
+    cg, clipped = error_grid_inputs(preds, pred_models, kind="clarke")
+    clip_txt = f" ({clipped} negative predictions placed at 0 mg/dL)" if clipped else ""
+    page.add("clarke", "Clarke error grids",
+             f"Clarke error grid of each model ({rep_note}, n = {n_first} per model)"
+             f"{clip_txt}, with the share of points in each zone in the legend.",
+             lambda: grids.figure_error_grids(cg, kind="clarke") if cg else None,
+             note=None if cg else "No predictions: figure not drawn.")
+    status = _diabetes_status(page)
+    if status is None:
+        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=1)
+        page.add("parkes", "Parkes error grids",
+                 f"Parkes (consensus) error grid for type 1 diabetes of each model "
+                 f"({rep_note}); the diabetes status of each snapshot is not recorded here, "
+                 f"so the type-1 grid is applied to all.",
+                 lambda: grids.figure_error_grids(pg, kind="parkes") if pg else None,
+                 note=None if pg else "No predictions: figure not drawn.")
+        return
+    t2, other = status.index[status == "type2"], status.index[status != "type2"]
+    for dtype, ids, who in ((1, other, "type-1, prediabetes and normal"), (2, t2, "type-2")):
+        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=dtype,
+                                  measurement_ids=ids)
+        page.add(f"parkes_type{dtype}", f"Parkes error grids, type {dtype}",
+                 f"Parkes (consensus) error grid for type {dtype} diabetes, applied to the "
+                 f"{len(ids)} {who} snapshots only ({rep_note.split(',')[0]}), with the "
+                 f"share of points in each zone in the legend. The table's Parkes A column "
+                 f"uses the type-1 grid for every snapshot.",
+                 (lambda pg=pg, dtype=dtype: grids.figure_error_grids(
+                     pg, kind="parkes", diabetes_type=dtype)) if pg else None,
+                 note=None if pg else f"No {who} snapshots: figure not drawn.")
+
+
+def _section_agreement(page: _Page) -> None:
+    """Figures 5-6: Bland–Altman and linearity."""
+    from ...plots import agreement
+
+    preds, rep_note = page.preds, page.rep_note
+    ba = bland_altman_inputs(preds, page.pred_models)
+    page.add("bland_altman", "Bland–Altman",
+             f"Prediction minus reference against their mean for each model ({rep_note}), on "
+             f"one y range for all panels, with the bias (solid) and 95 % limits of agreement "
+             f"(dashed), their values and 95 % confidence intervals (shaded) under each title "
+             f"(Bland & Altman 1986).",
+             lambda: agreement.figure_bland_altman(ba) if ba else None,
+             note=None if ba else "Too few predictions: figure not drawn.")
+    lin = linearity_inputs(preds, page.pred_models)
+    page.add("linearity", "Linearity",
+             f"Predicted against reference glucose for each model ({rep_note}), with the "
+             f"unity line and the least-squares line (slope with its 95 % CI, intercept, R²)"
+             + ("; vertical bars: each prediction's 90 % interval, with the share that covers "
+                "the reference." if {"lower90_mgdl", "upper90_mgdl"} <= set(preds.columns)
+                else "."),
+             lambda: agreement.figure_linearity(lin) if lin else None,
+             note=None if lin else "Too few predictions: figure not drawn.")
+
+
+def _section_training(page: _Page) -> None:
+    """Figure 7: training dynamics of the networks."""
+    from ...plots import training
+
+    histories = page.results.histories
+    if histories is None:
+        page.add("training", "Training dynamics", "Training and validation loss per epoch.",
+                 None, note="No histories.json in the results directory: figure not drawn.")
+        return
+    hist = {m: histories[m] for m in model_order(histories) if not is_ablation_row(m)}
+    has_val = any("val_loss" in h and h["val_loss"].notna().any() for h in hist.values())
+    caption = ((f"Training (solid){' and validation (dashed)' if has_val else ''} loss per "
+                "epoch of each network, thick the total and thin each term of the "
+                "physics-informed ones (a term equal to another curve is named in that "
+                "curve's legend entry rather than drawn under it). Losses are mean squared "
+                "errors of glucose standardised on the training rows, so 1 is the training "
+                "mean's loss; physics terms are in their own squared residual units. "
+                + ("" if has_val else "These fits used no validation split, so there are no "
+                   "validation curves. ")
+                + "The physics-ablation refits are left out: their physics weight is 0, so "
+                "their total is their MSE.") if hist else
+               "No networks in this run, so there are no training curves to show.")
+    page.add("training", "Training dynamics", caption,
+             lambda: training.figure_training_dynamics(hist),
+             note=None if hist else "No networks in this run.")
+
+
+def _reference_text(refs: Mapping[str, float]) -> str:
+    """Caption sentence naming the reference rows drawn as horizontal lines."""
+    if not refs:
+        return ""
+    names = [("oracle (a bound, not a competitor)" if r == "oracle" else
+              "training mean (no skill)") for r in refs]
+    return (" The " + " and ".join(names)
+            + (" are drawn as horizontal reference lines." if len(names) > 1 else
+               " is drawn as a horizontal reference line."))
+
+
+def _section_radar(page: _Page) -> None:
+    """Figure 8: normalised scores."""
+    from ...plots import tradeoffs
+
+    scores = radar_scores(page.results.metrics, competitors(page.models))
+    page.add("radar", "Normalised scores",
+             "One panel per model (its polygon in colour, the other models' outlines in grey "
+             "for comparison), with its mean score in the title: each model's RMSE, MARD, "
+             "Clarke zone A and share within ±15 % as a ratio to the best model shown "
+             "(1 = best), and its parameter count and latency scored 1 for the "
+             "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound, and "
+             "the training mean, no skill, are references rather than competitors and are "
+             "left out; so are the ablation rows).",
+             lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
+             note=None if len(scores) else "No model besides the oracle.")
+
+
+def _section_costs(page: _Page) -> None:
+    """Figures 9-10: accuracy against physics depth and against cost."""
+    from ...plots import tradeoffs
+    from ...plots.style import plot_style
+
+    metrics, models = page.results.metrics, page.models
+    depth, left_out = physics_depth_table(metrics, models)
+    refs = reference_values(metrics, models)
+    ref_txt = _reference_text(refs)
+    lo_txt = f" ({', '.join(left_out)} left out: no physics depth or metrics)" if left_out else ""
+    page.add("physics_depth", "Accuracy vs physics depth",
+             f"RMSE against how much of the forward model each method uses (the RMSE axis "
+             f"starts at 0), bubble area proportional to the trainable parameter count; a "
+             f"black ring marks the bubbles on the parameters–RMSE Pareto front."
+             f"{ref_txt}{lo_txt}",
+             lambda: _figure_one(lambda ax: tradeoffs.plot_physics_depth(
+                 depth, depth_labels=PHYSICS_DEPTH_LABELS, references=refs, ax=ax),
+                 (11.0, 5.2), plot_style)
+             if len(depth) else None,
+             note=None if len(depth) else "No model with a known physics depth.")
+    eff = efficiency_table(metrics, models)
+    page.add("efficiency", "Efficiency landscape",
+             "RMSE (axis from 0) against trainable parameters, single-sample latency and a "
+             "combined cost index (mean of the normalised log parameters and log latency); "
+             "Pareto-optimal models (no other model both cheaper and more accurate) have a "
+             f"black edge and are joined by a dashed line.{ref_txt}",
+             lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
+
+
+def _section_performance(page: _Page) -> None:
+    """The performance panel: the presets on shared axes."""
+    from ...plots import architecture
+
+    res = page.results
+    by_preset = dict(page.compare) if page.compare else {
+        str(res.meta.get("preset") or "this run"): res.metrics}
+    perf_models = [m for m in page.models if not is_ablation_row(m) and m not in REFERENCE_ROWS]
+    perf = performance_table(by_preset, perf_models)
+    page.add("performance", "Performance comparison",
+             "Error metrics (RMSE with its 95 % CI, MARD), trainable parameters and "
+             "single-sample latency side by side"
+             + (f", one bar per preset ({', '.join(by_preset)}) on shared axes"
+                if len(by_preset) > 1 else "")
+             + "; parameters and latency on log scales. Latency is the median single-sample "
+             "prediction time measured during each run, so it depends on that machine's load.",
+             (lambda: architecture.figure_performance_panel(perf)) if len(perf) else None,
+             note=None if len(perf) else "No competitor models in this run.")
+
+
+def _section_wavelengths(page: _Page) -> None:
+    """Figure 11: permutation importance of each LED channel."""
+    from ...plots import wavelengths as wl_plots
+    from ...plots.style import plot_style
+
+    imp = page.results.importance
+    if imp is None or not len(imp):
+        page.add("wavelengths", "Wavelength utilisation", "Permutation importance per channel.",
+                 None, note="No importance.csv in the results directory: figure not drawn.")
+        return
+    mat = importance_matrix(imp, [m for m in page.models if not is_ablation_row(m)])
+    page.add("wavelengths", "Wavelength utilisation",
+             "Permutation importance of each LED channel for each model: the rise in "
+             "held-out RMSE when that channel's values are shuffled, in mg/dL (the number in "
+             "each cell). Colour is relative within each row (the row's largest rise = 1), "
+             "so that models whose absolute rises differ by orders of magnitude can be read "
+             "alike. A negative value means shuffling that channel made the model slightly "
+             "better: the channel carries no usable information for it and the value is "
+             "noise of the permutation; a very large one (polynomial features) means the "
+             "model extrapolates when a channel leaves its training range.",
+             lambda: _figure_one(lambda ax: wl_plots.plot_wavelength_heatmap(mat, ax=ax),
+                                 (1.2 * mat.shape[1] + 4.2, 0.45 * mat.shape[0] + 1.6),
+                                 plot_style))
+
+
+def _section_forest(page: _Page) -> None:
+    """Figure 12: RMSE with its confidence interval, the study's values beside it."""
+    from ...plots import forest
+    from ...plots.style import plot_style
+
+    ft = forest_table(page.results.metrics, [m for m in page.models if not is_ablation_row(m)],
+                      with_study=not page.user_data)
+    page.add("forest", "RMSE with 95 % CI",
+             "Each model's RMSE with its 95 % cluster-bootstrap confidence interval"
+             + ("." if page.user_data else ", next to the value the study reported from its "
+                "single 48-snapshot test set (open diamonds)."),
+             lambda: _figure_one(lambda ax: forest.plot_rmse_forest(ft, ax=ax),
+                                 (7.0, 0.5 * len(ft) + 1.5), plot_style))
+
+
+#: The report's figures, section by section in page order (each builder adds its figures).
+_SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
+    _section_data, _section_pipeline, _section_architecture, _section_features,
+    _section_grids, _section_agreement, _section_training, _section_radar, _section_costs,
+    _section_performance, _section_wavelengths, _section_forest,
+)
+
+
+
+def render_figures(results: Results, figures_dir: str | Path | None = None,
+                   formats: Sequence[str] = ("png", "svg"), *,
+                   include: Iterable[str] | None = None,
+                   compare: Mapping[str, pd.DataFrame] | None = None) -> list[RenderedFigure]:
+    """Build every figure of the report from loaded results.
+
+    Parameters
+    ----------
+    results : Results
+        From :func:`load_results`.
+    figures_dir : str or path, optional
+        If given, also write each figure there as ``<number>_<key>.<fmt>``; the
+        directory is created if its parent exists.
+    formats : sequence of str
+        File formats written to ``figures_dir``. [-]
+    include : iterable of str, optional
+        Keys of the figures to render (``"clarke"``, ``"training"``, ...); all by default.
+    compare : mapping of str to pandas.DataFrame, optional
+        Metrics of each preset of a multi-preset run (the primary first): the
+        performance panel then shows every preset on shared axes.
+
+    Returns
+    -------
+    list of RenderedFigure
+        In page order; a figure whose inputs are missing has no PNG and a ``note``.
+    """
+    out_dir = None
+    if figures_dir is not None:
+        out_dir = Path(figures_dir)
+        if not out_dir.parent.exists():
+            raise DataError(f"figure directory's parent {str(out_dir.parent)!r} does not exist")
+        out_dir.mkdir(exist_ok=True)
+    page = _Page(results=results, out_dir=out_dir, formats=formats,
+                 wanted=None if include is None else set(include), compare=compare)
+    for section in _SECTIONS:
+        section(page)
+    return page.rendered
+
+
+def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style, polar: bool = False):
+    from matplotlib.figure import Figure
+
+    from ...plots.labels import place_labels
+
+    with plot_style():
+        fig = Figure(figsize=figsize, layout="constrained")
+        ax = fig.add_subplot(projection="polar" if polar else None)
+        draw(ax)
+        place_labels(fig)
+    return fig
+
+
+def _figure_pipeline(pipeline_mod, cfg, plot_style):
+    from matplotlib.figure import Figure
+
+    cols = pipeline_columns(cfg)
+    with plot_style():
+        fig = Figure(figsize=(12.0, pipeline_mod.pipeline_height_in(cols)),
+                     layout="constrained")
+        pipeline_mod.plot_pipeline(
+            cols, ax=fig.add_subplot(),
+            title=f"Simulator layers: preset '{cfg.preset}', global noise scale "
+                  f"×{cfg.noise_scale:g}")
+    return fig
