@@ -60,7 +60,7 @@ def test_simulate_csv_and_partitioned(tmp_path, capsys):
         (["--set", "environment.temperature_c=[30, 10]"], "low < high"),
         (["--set", "environment.humidity_pct=[10, 120]"], "humidity_pct"),
         (["--set", "physiology.skin_thickness_mm=[0.1, 4]"], "skin_thickness_mm"),
-        (["--set", "leds.wavelengths_nm=[600, 940, 1050, 1150]"], "outside"),
+        (["--set", "leds.wavelengths_nm=[600, 940, 1050, 1150]"], "out of range"),
     ],
 )
 def test_bad_input_exit_2_one_line(tmp_path, capsys, args, needle):

@@ -88,7 +88,7 @@ def test_interrupt_status_is_not_zero(cli, monkeypatch, workdir):
     def boom(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli_mod, "_print_summary", boom)
+    monkeypatch.setattr(cli_mod.data_commands, "_print_summary", boom)
     code, _, err = cli("simulate", "--out", "a.csv", "--subjects", 2)
     assert code == 130 and "interrupted" in err
 

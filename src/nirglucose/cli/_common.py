@@ -1,0 +1,198 @@
+"""What every command shares: option types, argument checks, one-line printing, tidying.
+
+Every check raises :class:`UserError` (exit status 2, one line; see :mod:`._main`).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..config import PRESETS
+from ..exceptions import NirGlucoseError
+from ._app import console, out_console
+
+#: Preset names for the --preset help texts.
+_PRESET_NAMES = ", ".join(PRESETS)
+#: Built-in sweep studies (kept in step with evaluation.sweep.STUDIES by a test).
+_STUDY_NAMES = "noise-scale, ablation, pmf-noise, cohort, device, data-size"
+
+
+class UserError(NirGlucoseError, ValueError):
+    """A problem with the command line itself (exit status 2)."""
+
+
+# --- options shared by several commands ----------------------------------------------------
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option("--set", help="Config override KEY=VALUE (dotted key), repeatable."),
+]
+#: --jobs of every command: the same default (the available cores) and meaning.
+JobsOption = Annotated[
+    int | None,
+    typer.Option(help="Worker processes (default: the available cores); any value gives "
+                 "the same result."),
+]
+#: --resamples of every command that reports bootstrap CIs.
+ResamplesOption = Annotated[int, typer.Option(help="Bootstrap resamples for each 95 % CI.")]
+DEFAULT_RESAMPLES = 2000
+#: --out of the commands that write a results directory (benchmark, sweep).
+OutDirOption = Annotated[
+    Path, typer.Option(help="Output directory (created if its parent exists).")
+]
+PerSubjectOption = Annotated[int, typer.Option(help="Measurements per subject.")]
+ProtocolOption = Annotated[str, typer.Option(help="grouped-cv or paper-split.")]
+FoldsOption = Annotated[int, typer.Option(help="Folds of grouped-cv.")]
+RepeatsOption = Annotated[int, typer.Option(help="Repeats of grouped-cv.")]
+
+
+# --- printing ------------------------------------------------------------------------------
+def _say(text: str, *, err: bool = True) -> None:
+    """Print one plain line (no markup, no highlighting) to stderr or stdout."""
+    (console if err else out_console).print(
+        text, markup=False, highlight=False, soft_wrap=True
+    )
+
+
+@contextmanager
+def _warnings_as_lines(extra: list[str] | None = None) -> Iterator[list[str]]:
+    """Collect the warnings of a block and print each distinct one as a ``warning:`` line.
+
+    Lines appended to the yielded list (e.g. a result's own warnings) are printed after
+    the caught ones, duplicates once.
+    """
+    more: list[str] = list(extra or [])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield more
+    msgs = [str(w.message) for w in caught] + more
+    for msg in dict.fromkeys(m.replace("\n", " ") for m in msgs):
+        _say(f"warning: {msg}")
+
+
+# --- checks --------------------------------------------------------------------------------
+def _parse_sets(values: list[str] | None) -> dict:
+    from ..config import parse_override
+
+    pairs = [parse_override(v) for v in (values or [])]
+    for key, _ in pairs:
+        if key == "preset":
+            raise UserError(
+                "--set preset=... would only relabel the data; choose the scenario with "
+                "--preset NAME"
+            )
+    return dict(pairs)
+
+
+def _check_out_file(out: Path, what: str = "--out") -> None:
+    """Refuse an output file path that names a directory or lies in no writable one."""
+    if out.is_dir():
+        raise UserError(f"{what} {str(out)!r} is a directory; give a file name")
+    parent = out.parent
+    if not parent.exists():
+        raise UserError(f"output directory {str(parent)!r} does not exist; create it first")
+    if not parent.is_dir():
+        raise UserError(f"{what} {str(out)!r}: {str(parent)!r} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise UserError(f"{what} {str(out)!r}: directory {str(parent)!r} is not writable")
+
+
+def _check_out_dir(out: Path) -> None:
+    """Refuse a results directory that is a file or whose parent does not exist."""
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {str(out)!r} exists and is not a directory")
+    if not out.exists() and not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+
+
+def _check_size(subjects: int, per_subject: int) -> None:
+    """Refuse a simulation that cannot fit in memory, before allocating anything."""
+    from ..resources import check_simulation_size
+
+    check_simulation_size(subjects, per_subject)
+
+
+def _check_jobs(jobs: int | None) -> None:
+    """Warn (one line) when more workers are asked for than there are cores."""
+    from ..evaluation.executors import available_cores
+
+    cores = available_cores()
+    if jobs is not None and jobs > cores:
+        _say(f"warning: --jobs {jobs} exceeds the {cores} available cores; "
+             "the run is not faster and uses more memory")
+
+
+def _positive(name: str, value: int) -> None:
+    if value < 1:
+        raise UserError(f"{name} must be a positive integer, got {value}")
+
+
+def _check_counts(*named: tuple[str, int]) -> None:
+    """:func:`_positive` for each ``(option, value)`` in turn."""
+    for name, value in named:
+        _positive(name, value)
+
+
+def _check_seed(seed: int) -> None:
+    if seed < 0:
+        raise UserError(f"--seed must be non-negative, got {seed}")
+
+
+def _jobs(jobs: int | None) -> int:
+    """``--jobs`` checked (positive; a warning beyond the cores), None as the cores."""
+    from ..evaluation.executors import available_cores
+
+    if jobs is None:
+        return available_cores()
+    _positive("--jobs", jobs)
+    _check_jobs(jobs)
+    return jobs
+
+
+def _check_calibration(k: int, per_subject: int | None) -> None:
+    if k not in (0, 1, 2):
+        raise UserError(f"--calibration must be 0, 1 or 2 readings per person, got {k}")
+    if k and per_subject is not None and per_subject <= k:
+        raise UserError(
+            f"--calibration {k} leaves no reading to score at --per-subject {per_subject}; "
+            f"use --per-subject {k + 2} or more"
+        )
+
+
+def _model_names(models: str | None) -> list[str] | None:
+    """``--models a,b`` as a list (None when not given); an empty list is refused."""
+    if models is None:
+        return None
+    names = [m.strip() for m in models.split(",") if m.strip()]
+    if not names:
+        raise UserError(f"--models {models!r} names no model")
+    return names
+
+
+def _tidy_out(command):
+    """On failure or interrupt, remove the empty ``OUT/.tasks`` (and ``OUT`` if this
+    command created it and left it empty); finished task files are kept."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        out = kwargs.get("out")
+        existed = out is None or Path(out).exists()
+        try:
+            return command(*args, **kwargs)
+        except BaseException:
+            if out is not None:
+                for d in (Path(out) / ".tasks", *(() if existed else (Path(out),))):
+                    try:
+                        d.rmdir()  # only when empty
+                    except OSError:
+                        pass
+            raise
+
+    return wrapper

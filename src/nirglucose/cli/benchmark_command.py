@@ -1,0 +1,208 @@
+"""The ``benchmark`` command: fit and score every model on subject-grouped splits."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from ._app import app, out_console
+from ._common import (
+    _PRESET_NAMES,
+    DEFAULT_RESAMPLES,
+    FoldsOption,
+    JobsOption,
+    OutDirOption,
+    PerSubjectOption,
+    ProtocolOption,
+    RepeatsOption,
+    ResamplesOption,
+    SetOption,
+    UserError,
+    _check_calibration,
+    _check_counts,
+    _check_out_dir,
+    _check_seed,
+    _check_size,
+    _jobs,
+    _model_names,
+    _parse_sets,
+    _say,
+    _tidy_out,
+    _warnings_as_lines,
+)
+
+
+@app.command()
+@_tidy_out
+def benchmark(
+    out: OutDirOption,
+    preset: Annotated[
+        str,
+        typer.Option(
+            help=f"Scenario preset to simulate: {_PRESET_NAMES}; several comma-separated "
+            "(paper,wearable) write OUT/<preset>/ each."
+        ),
+    ] = "paper",
+    data: Annotated[
+        Path | None, typer.Option(help="Benchmark a saved dataset (.parquet/.csv) instead.")
+    ] = None,
+    models: Annotated[
+        str | None, typer.Option(help="Comma-separated model names (default: all registered).")
+    ] = None,
+    protocol: ProtocolOption = "grouped-cv",
+    subjects: Annotated[int, typer.Option(help="Number of subjects to simulate.")] = 80,
+    per_subject: PerSubjectOption = 3,
+    folds: FoldsOption = 5,
+    repeats: RepeatsOption = 3,
+    seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
+    jobs: JobsOption = None,
+    resamples: ResamplesOption = DEFAULT_RESAMPLES,
+    references: Annotated[
+        bool, typer.Option(help="Add the reference rows (mean, gp, gbr) to --models.")
+    ] = True,
+    ablation: Annotated[
+        bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
+    ] = True,
+    calibration: Annotated[
+        int,
+        typer.Option(
+            help="Personal calibration: each test subject's first K readings (1 or 2) "
+            "calibrate them and only later readings are scored (calibration.csv); 0: none. "
+            "Needs --per-subject > K."
+        ),
+    ] = 0,
+    set_: SetOption = None,
+) -> None:
+    """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
+    _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
+                  ("--repeats", repeats), ("--resamples", resamples))
+    jobs = _jobs(jobs)
+    names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
+                                  models, out)
+    runs, overrides = _benchmark_runs(preset, data, set_, out)
+    for p, run_out in runs:
+        ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides)
+        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
+                       references, ablation, calibration)
+
+
+def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
+                          out) -> list[str] | None:
+    """The checks of ``benchmark`` after the counts, in order; the --models names."""
+    from ..evaluation.splits import check_protocol
+    from ..models.registry import get_model_class
+
+    _check_seed(seed)
+    check_protocol(protocol)
+    _check_calibration(calibration, None if data is not None else per_subject)
+    if data is None:
+        _check_size(subjects, per_subject)
+    names = _model_names(models)
+    for name in names or []:
+        get_model_class(name)  # unknown names raise with the valid ones
+    _check_out_dir(out)
+    return names
+
+
+def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out: Path):
+    """``([(preset or None for --data, output directory), ...], overrides)``.
+
+    Every preset is resolved first, so an unknown one fails before anything runs;
+    several presets write ``OUT/<preset>/`` each.
+    """
+    presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
+    if not presets:
+        raise UserError(f"--preset {preset!r} names no preset")
+    if len(presets) > 1 and data is not None:
+        raise UserError("--data benchmarks one dataset; give one --preset or none")
+    if data is not None:
+        if set_:
+            raise UserError("--set changes the simulation; it cannot apply to --data")
+        return [(None, out)], {}
+    from ..config import resolve_config
+
+    overrides = _parse_sets(set_)
+    for p in presets:
+        resolve_config(p, overrides)  # an unknown preset fails before anything runs
+    if len(presets) > 1:
+        out.mkdir(exist_ok=True)
+    return [(p, out / p if len(presets) > 1 else out) for p in presets], overrides
+
+
+def _benchmark_data(preset, data, subjects, per_subject, seed, overrides):
+    """The dataset of one run: the --data file (``preset`` None) or a simulated one."""
+    if preset is None:
+        from ..dataset import load_dataset
+
+        return load_dataset(data)
+    from ..api import simulate as _simulate
+
+    return _simulate(preset, subjects, per_subject, seed, overrides=overrides)
+
+
+def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
+                   references, ablation, calibration=0) -> None:
+    """Run the benchmark of one dataset, then print its table and summary lines."""
+    from ..evaluation.benchmark import run_benchmark
+
+    with _warnings_as_lines():
+        res = run_benchmark(
+            ds,
+            names,
+            protocol=protocol,
+            n_splits=folds,
+            repeats=repeats,
+            seed=seed,
+            out=out,
+            jobs=jobs,
+            progress=True,
+            n_boot=resamples,
+            references=references,
+            ablation=ablation,
+            calibration=calibration,
+        )
+    _print_benchmark(res, ds, out)
+
+
+def _print_benchmark(res, ds, out: Path) -> None:
+    """The metrics table, one line per calibration method, and where the results are."""
+    import numpy as np
+    from rich import box
+
+    table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
+                  box=box.SIMPLE_HEAD)
+    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "90% PI cover/width",
+                "params", "ms"):
+        table.add_column(col, justify="left" if col == "model" else "right", no_wrap=True)
+    for _, r in res.metrics.iterrows():
+        table.add_row(
+            escape(str(r["model"])),
+            f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
+            f"{r['mard_pct']:.1f}",
+            f"{r['clarke_a_pct']:.1f}",
+            (f"{r['coverage90_pct']:.0f}% / {r['width90_mgdl']:.0f}"
+             if np.isfinite(r["width90_mgdl"]) else "– (too few subjects)"),
+            f"{int(r['n_parameters']):,}",
+            f"{r['latency_single_ms']:.3f}",
+        )
+    # not a terminal (a log file, make): wide enough that no column is truncated
+    (out_console if out_console.is_terminal else Console(width=110)).print(table)
+    cal = res.calibration
+    for _, r in cal[cal["method"] != "none"].iterrows():
+        _say(
+            f"calibration ({r['k']} reading{'s' if r['k'] > 1 else ''}): {r['model']} "
+            f"{r['method']}: RMSE {r['rmse_mgdl']:.1f} mg/dL"
+            + (f", gain {r['gain_mgdl']:+.1f} vs {r['baseline']}" if r["baseline"] else ""),
+            err=False,
+        )
+    m = res.meta
+    _say(
+        f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "
+        f"{m['tasks_cached']} reused, {m['wall_time_s']:.0f} s)",
+        err=False,
+    )

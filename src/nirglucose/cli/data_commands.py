@@ -1,0 +1,123 @@
+"""Commands about the simulated data: ``simulate``, ``keys`` and ``models``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from ._app import app, out_console
+from ._common import (
+    _PRESET_NAMES,
+    JobsOption,
+    PerSubjectOption,
+    SetOption,
+    UserError,
+    _check_counts,
+    _check_out_file,
+    _check_seed,
+    _check_size,
+    _jobs,
+    _parse_sets,
+    _say,
+)
+
+
+@app.command()
+def simulate(
+    out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
+    preset: Annotated[
+        str, typer.Option(help=f"Scenario preset: {_PRESET_NAMES}.")
+    ] = "paper",
+    subjects: Annotated[int, typer.Option(help="Number of subjects.")] = 80,
+    per_subject: PerSubjectOption = 3,
+    seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
+    jobs: JobsOption = None,
+    set_: SetOption = None,
+) -> None:
+    """Generate a dataset and print a summary of it."""
+    from ..config import resolve_config
+    from ..dataset import Dataset
+
+    _check_counts(("--subjects", subjects), ("--per-subject", per_subject))
+    jobs = _jobs(jobs)
+    _check_seed(seed)
+    cfg = resolve_config(preset, _parse_sets(set_))
+    _check_simulate_out(out, subjects, per_subject)
+    if not out.suffix:
+        from ..simulate.partitioned import write_partitioned
+
+        n = write_partitioned(cfg, out, subjects, per_subject, seed, n_jobs=jobs)
+        _say(f"wrote {n} snapshots to {out}/ (partitioned Parquet)", err=False)
+        return
+    from ..simulate.simulator import simulate_frame
+
+    frame = simulate_frame(cfg, subjects, per_subject, seed, n_jobs=jobs)
+    ds = Dataset(frame, config=cfg, seed=seed)
+    ds.save(out)
+    _print_summary(ds)
+    _say(f"wrote {len(ds)} snapshots to {out}", err=False)
+
+
+def _check_simulate_out(out: Path, subjects: int, per_subject: int) -> None:
+    """``simulate --out``: a writable .parquet/.csv file (that fits in memory) or a directory."""
+    if out.suffix and out.suffix not in (".parquet", ".csv"):
+        raise UserError(f"--out {str(out)!r}: use a .parquet or .csv file, or a directory")
+    if out.suffix:
+        _check_out_file(out)
+        _check_size(subjects, per_subject)
+    elif out.exists() and not out.is_dir():
+        raise UserError(f"--out {str(out)!r} exists and is not a directory")
+    elif not out.parent.exists():
+        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+
+
+@app.command()
+def keys() -> None:
+    """List every config key accepted by --set: paper preset default, unit, range, meaning."""
+    from ..config import resolve_config, valid_keys
+    from ..config_keys import key_info, key_range
+
+    data = resolve_config("paper").model_dump(mode="json")
+    for key in valid_keys():
+        node = data
+        for part in key.split("."):
+            node = node[part]
+        info = key_info(key)
+        unit = f" [{info.unit}]" if info.unit else ""
+        desc = f"  # {info.description}" if info.description else ""
+        rng = f" ({key_range(key)})" if key_range(key) else ""
+        _say(f"{key} = {node}{unit}{rng}{desc}", err=False)
+
+
+@app.command("models")
+def list_models() -> None:
+    """List the registered model names, one line each."""
+    from ..models.registry import available_models, get_model_class
+
+    for name in available_models():
+        doc = (get_model_class(name).__doc__ or "").strip().splitlines()
+        _say(f"{name:<20} {doc[0] if doc else ''}".rstrip(), err=False)
+
+
+def _print_summary(ds) -> None:
+    import numpy as np
+
+    frame = ds.frame
+    table = Table(title=escape(f"{ds!r}"))
+    for col in ("column", "mean", "sd", "min", "max", "r(glucose, log ADC)"):
+        table.add_column(col, justify="right" if col != "column" else "left")
+    g = frame["glucose_mgdl"].to_numpy(float)
+    for c in ["glucose_mgdl"] + [c for c in frame.columns if c.startswith("adc_")]:
+        v = frame[c].to_numpy(float)
+        r = ""
+        if c.startswith("adc_") and not c.startswith("adc_ref") and np.std(v) > 0:
+            r = f"{np.corrcoef(g, np.log(v))[0, 1]:+.3f}"
+        table.add_row(
+            escape(c), f"{v.mean():.1f}", f"{v.std(ddof=1):.1f}", f"{v.min():.0f}",
+            f"{v.max():.0f}", r,
+        )
+    out_console.print(table)

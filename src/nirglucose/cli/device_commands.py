@@ -1,0 +1,235 @@
+"""Commands for a team's own device data: ``fit``, ``predict`` and ``export-c``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._app import app
+from ._common import UserError, _check_out_file, _say
+
+#: Fewest held-out subjects for a split-conformal 90 % interval: ceil(0.9 (n + 1)) <= n.
+_MIN_CALIBRATION_SUBJECTS = 9
+
+
+@app.command("fit")
+def fit_model(
+    model: Annotated[str, typer.Option(help="Registered model name, e.g. ebl, pls, sdnn.")],
+    data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv) with glucose_mgdl.")],
+    out: Annotated[Path, typer.Option(help="Model file to write (.json).")],
+    adc_bits: Annotated[
+        int | None,
+        typer.Option(help="The device's ADC resolution [bit] (default: the file's, else 12)."),
+    ] = None,
+    intervals: Annotated[
+        str,
+        typer.Option(
+            help="Prediction intervals: split (hold out --calibration-share of the subjects "
+            "to calibrate them; the model fits on the rest), none, or auto (split when "
+            "the held-out subjects are enough for a 90 % interval, else none)."
+        ),
+    ] = "auto",
+    calibration_share: Annotated[
+        float, typer.Option(help="Share of subjects held out to calibrate the intervals.")
+    ] = 0.2,
+    seed: Annotated[int, typer.Option(help="Seed of the draw of calibration subjects.")] = 0,
+) -> None:
+    """Fit a model on your own measurements (any LEDs, any ADC) and save it.
+
+    With intervals, a share of the subjects (never used for fitting) calibrates
+    subject-grouped split-conformal 90 % and 80 % intervals, saved with the model.
+    """
+    from ..models import make_model
+
+    _check_fit_args(out, intervals, calibration_share)
+    estimator = make_model(model)  # unknown names raise with the valid ones
+    ds = _load_device_data(model, data, adc_bits)
+    intervals, note = _choose_intervals(ds, intervals, calibration_share)
+    if intervals == "split":
+        n_fit, note = _fit_with_intervals(estimator, ds, calibration_share, seed)
+    else:
+        estimator.fit(ds)
+        n_fit = len(ds)
+    estimator.save(out)
+    device = estimator.schema_.describe() if hasattr(estimator, "schema_") else "simulated"
+    _say(f"fitted {model!r} on {n_fit} measurements ({device}){note}; wrote {out}", err=False)
+
+
+def _check_fit_args(out: Path, intervals: str, calibration_share: float) -> None:
+    if out.suffix != ".json":
+        raise UserError(f"--out {str(out)!r}: the model file must end in .json")
+    if intervals not in ("auto", "split", "none"):
+        raise UserError(f"--intervals must be auto, split or none, got {intervals!r}")
+    if not 0.0 < calibration_share < 1.0:
+        raise UserError(f"--calibration-share must lie in (0, 1), got {calibration_share}")
+    _check_out_file(out)
+
+
+def _load_device_data(model: str, data: Path, adc_bits: int | None):
+    """The measurements, with a declared ADC resolution; a device file for any model but
+    the oracle (``adc_<nm>`` columns, else :class:`~nirglucose.exceptions.DataError`)."""
+    from ..dataset import load_dataset
+
+    ds = load_dataset(data)
+    if adc_bits is not None:
+        ds.metadata["adc_bits"] = adc_bits  # the declared resolution, read by the schema
+    if model != "oracle":
+        from ..schema import DeviceSchema
+
+        DeviceSchema.infer(ds, adc_bits)
+    return ds
+
+
+def _choose_intervals(ds, intervals: str, share: float) -> tuple[str, str]:
+    """``auto`` resolved: ``split`` when enough subjects are held out, else ``none`` (noted)."""
+    if intervals != "auto":
+        return intervals, ""
+    n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else 0
+    n_cal = round(share * n_sub)
+    if _MIN_CALIBRATION_SUBJECTS <= n_cal < n_sub:
+        return "split", ""
+    return "none", (f"; no intervals ({n_sub} subjects: too few to hold out "
+                    f"{_MIN_CALIBRATION_SUBJECTS} to calibrate)")
+
+
+def _fit_with_intervals(estimator, ds, share: float, seed: int) -> tuple[int, str]:
+    """Fit on the subjects not held out, calibrate on the rest: ``(n fitted, note)``."""
+    from ..evaluation.conformal import calibration_subjects, split_conformal
+
+    if "subject_id" not in ds.frame:
+        raise UserError("--intervals split needs a subject_id column to hold out subjects")
+    split_conformal(estimator, ds, share=share, seed=seed)
+    cal = estimator.conformal_
+    n_fit = int((~calibration_subjects(ds.frame["subject_id"].to_numpy(), share, seed)).sum())
+    note = (
+        f"; 90 % interval ±{cal['half_width_mgdl']['90']:.1f} mg/dL from "
+        f"{cal['n_calibration_subjects']} held-out subjects"
+    )
+    return n_fit, note
+
+
+@app.command("predict")
+def predict_glucose(
+    model: Annotated[Path, typer.Option(help="Model file written by `nirglucose fit`.")],
+    data: Annotated[Path, typer.Option(help="Measurements (.parquet or .csv).")],
+    out: Annotated[Path, typer.Option(help="Predictions to write (.csv).")],
+    calibration: Annotated[
+        Path | None,
+        typer.Option(
+            help="A person's calibration readings (.csv/.parquet: subject_id, the device's "
+            "columns and the fingerstick glucose_mgdl): each subject's mean error on them "
+            "is added to their new predictions."
+        ),
+    ] = None,
+) -> None:
+    """Predict glucose for your own measurements; writes predicted_glucose_mgdl and flag.
+
+    ``glucose_lower_mgdl`` / ``glucose_upper_mgdl`` bound the 90 % prediction interval
+    when the model carries a calibration (empty otherwise). ``flag`` is ``LO`` / ``HI``
+    where the estimate lies below 20 / above 600 mg/dL, as a meter shows it (the number
+    itself is kept). With ``--calibration``, ``calibrated`` says which rows a person's
+    calibration readings corrected.
+    """
+    import numpy as np
+
+    from ..dataset import atomic_write, load_dataset
+    from ..models import load_model
+    from ..models._validate import check_predictions
+
+    if out.suffix != ".csv":
+        raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
+    _check_out_file(out)
+    estimator = load_model(model)
+    ds = load_dataset(data)
+    pred = np.asarray(check_predictions(estimator.predict(ds), model), dtype=float)
+    calibrated = None
+    if calibration is not None:
+        pred, calibrated = _calibrate(estimator, ds, pred, calibration)
+    table, has_intervals = _prediction_table(estimator, ds, pred, calibrated)
+    atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
+    _say(_prediction_summary(table, calibrated, has_intervals, out), err=False)
+
+
+def _calibrate(estimator, ds, pred, calibration: Path):
+    """Each subject's mean error on their calibration readings added to their predictions:
+    ``(predictions, which rows were corrected)``."""
+    from ..dataset import load_dataset
+    from ..evaluation.calibration import apply_offset
+    from ..models._validate import check_predictions
+
+    cal = load_dataset(calibration)
+    for name, frame in (("--calibration", cal.frame), ("--data", ds.frame)):
+        if "subject_id" not in frame.columns:
+            raise UserError(f"{name} needs a subject_id column to match people")
+    if "glucose_mgdl" not in cal.frame.columns:
+        raise UserError("--calibration needs the reference glucose_mgdl of each reading")
+    cal_pred = check_predictions(estimator.predict(cal), calibration)
+    return apply_offset(
+        pred,
+        ds.frame["subject_id"].to_numpy(),
+        cal_pred,
+        cal.frame["glucose_mgdl"].to_numpy(float),
+        cal.frame["subject_id"].to_numpy(),
+    )
+
+
+def _prediction_table(estimator, ds, pred, calibrated):
+    """The predictions file's rows and whether the model carried an interval calibration."""
+    import pandas as pd
+
+    from ..schema import meter_flags
+
+    ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
+    table = ds.frame[ids].reset_index(drop=True).copy()
+    table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
+    lower, upper, has_intervals = _interval_bounds(estimator, pred, calibrated)
+    table["glucose_lower_mgdl"] = lower
+    table["glucose_upper_mgdl"] = upper
+    table["flag"] = meter_flags(pred)
+    if calibrated is not None:
+        table["calibrated"] = calibrated
+    return table, has_intervals
+
+
+def _interval_bounds(estimator, pred, calibrated):
+    """The 90 % interval (NaN without a calibration; the offset-calibrated width on
+    calibrated rows where the model has one), lower bound clipped at 0: ``(lo, up, has)``."""
+    import numpy as np
+
+    from ..evaluation.conformal import calibration_of, interval
+
+    cal_doc = calibration_of(estimator)
+    if cal_doc is None:
+        return np.full(len(pred), np.nan), np.full(len(pred), np.nan), False
+    lower, upper = interval(estimator, pred, 0.9)
+    if calibrated is not None and (cal_doc.get("half_width_offset1_mgdl") or {}).get("90"):
+        lo_c, up_c = interval(estimator, pred, 0.9, offset_calibrated=True)
+        lower, upper = np.where(calibrated, lo_c, lower), np.where(calibrated, up_c, upper)
+    return np.maximum(lower, 0.0), upper, True
+
+
+def _prediction_summary(table, calibrated, has_intervals: bool, out: Path) -> str:
+    n_flag = int((table["flag"] != "").sum())
+    flagged = f" ({n_flag} outside 20-600 mg/dL, flagged LO/HI)" if n_flag else ""
+    cal_note = (
+        f"; {int(calibrated.sum())} calibrated by their person's readings"
+        if calibrated is not None
+        else ""
+    )
+    no_int = "" if has_intervals else "; the model carries no interval calibration"
+    return f"predicted {len(table)} measurements{flagged}{cal_note}{no_int}; wrote {out}"
+
+
+@app.command("export-c")
+def export_c_source(
+    model: Annotated[Path, typer.Option(help="Linear model file (ebl or pls) from `fit`.")],
+    out: Annotated[Path, typer.Option(help="Output directory for the .h and .c files.")],
+) -> None:
+    """Write C99 source + header of a linear model for a microcontroller."""
+    from ..export import export_c
+    from ..models import load_model
+
+    header, source = export_c(load_model(model), out)
+    _say(f"wrote {header} and {source}", err=False)

@@ -1,0 +1,61 @@
+"""The ``report`` command: one self-contained HTML file of a benchmark run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._app import app
+from ._common import UserError, _check_out_file, _say
+
+
+@app.command()
+def report(
+    results: Annotated[Path, typer.Argument(help="Results directory of `nirglucose benchmark`.")],
+    out: Annotated[
+        Path | None, typer.Option(help="HTML file to write (default: RESULTS/report.html).")
+    ] = None,
+    figures: Annotated[
+        Path | None, typer.Option(help="Also write every figure here as PNG and SVG.")
+    ] = None,
+    sweep: Annotated[
+        list[Path] | None,
+        typer.Option(help="A `nirglucose sweep` output directory to add (repeatable)."),
+    ] = None,
+) -> None:
+    """Write the figures and tables of a benchmark run as one self-contained HTML file."""
+    from ..report import build_report
+
+    _check_results_dir(results)
+    if out is not None:
+        _check_out_file(out)
+    for d in sweep or []:
+        if not (d / "sweep.csv").exists():
+            raise UserError(f"--sweep {str(d)!r} holds no sweep.csv; run `nirglucose sweep` first")
+    path = build_report(results, out if out is not None else results / "report.html",
+                        figures_dir=figures, sweep_dirs=sweep or [])
+    _say(f"wrote {path}", err=False)
+
+
+def _check_results_dir(results: Path) -> None:
+    """Name the real problem with a `report` RESULTS argument."""
+    if not results.exists():
+        raise UserError(
+            f"results directory {str(results)!r} does not exist; give the --out directory "
+            "of `nirglucose benchmark`"
+        )
+    if not results.is_dir():
+        raise UserError(
+            f"{str(results)!r} is a file, not a results directory; give the --out "
+            "directory of `nirglucose benchmark`"
+        )
+    from ..report.presets import preset_dirs
+
+    has_run = any((results / f).is_file() for f in ("meta.json", "metrics.csv", "metrics.json"))
+    if not has_run and not preset_dirs(results):  # a run, or one run per preset
+        raise UserError(
+            f"{str(results)!r} holds no meta.json or metrics; it is not the output of "
+            "`nirglucose benchmark` (run it first)"
+        )

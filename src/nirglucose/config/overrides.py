@@ -1,0 +1,188 @@
+"""Dotted ``--set`` overrides: valid keys, parsing, applying, and resolving a scenario."""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from ..exceptions import ConfigError, unknown_name
+from .leds import LED, LEGACY_LED_KEYS, _merge_legacy_leds
+from .presets import PRESETS
+from .scenario import ScenarioConfig
+
+
+def valid_keys(model: type[BaseModel] = ScenarioConfig, prefix: str = "") -> list[str]:
+    """Every dotted key accepted by :func:`apply_overrides`."""
+    keys = []
+    for name, field in model.model_fields.items():
+        ann = field.annotation
+        if not prefix and name == "preset":  # a label set by the preset, not a setting
+            continue
+        if isinstance(ann, type) and issubclass(ann, BaseModel):
+            keys.extend(valid_keys(ann, f"{prefix}{name}."))
+        else:
+            keys.append(f"{prefix}{name}")
+    return keys
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """Parse ``"key=value"`` from the command line; the value is read as JSON if it can be.
+
+    Examples
+    --------
+    >>> parse_override("hardware.adc_bits=14")
+    ('hardware.adc_bits', 14)
+    >>> parse_override("environment.temperature_c=[5, 35]")
+    ('environment.temperature_c', [5, 35])
+    """
+    if "=" not in text:
+        raise ConfigError(f"override {text!r} must look like key=value, e.g. hardware.adc_bits=14")
+    key, raw = text.split("=", 1)
+    key, raw = key.strip(), raw.strip()
+    if not key:
+        raise ConfigError(f"override {text!r} has an empty key")
+    try:
+        value = json.loads(raw)
+    except json.JSONDecodeError:
+        lowered = raw.lower()
+        value = {"true": True, "false": False}.get(lowered, raw)
+    return key, value
+
+
+#: ``leds.emitters.<i>.<field>``: one value of one LED.
+_PER_LED_KEY = re.compile(r"leds\.emitters\.(\d+)\.(\w+)")
+
+
+def is_valid_key(dotted: str) -> bool:
+    """Whether :func:`apply_overrides` accepts a dotted key.
+
+    Besides :func:`valid_keys`: ``leds`` (the whole LED set, a list of records), one
+    LED's value ``leds.emitters.<i>.<field>`` and the former per-LED list keys
+    (:data:`LEGACY_LED_KEYS`).
+
+    Examples
+    --------
+    >>> is_valid_key("leds.emitters.3.power_mw"), is_valid_key("leds.emitters.0.colour")
+    (True, False)
+    """
+    if dotted in valid_keys() or dotted == "leds" or dotted in LEGACY_LED_KEYS:
+        return True
+    m = _PER_LED_KEY.fullmatch(dotted)
+    return bool(m) and m.group(2) in LED.model_fields
+
+
+def _plain(value: Any) -> Any:
+    """A value with models dumped and tuples as lists (LED records given as :class:`LED`)."""
+    if isinstance(value, BaseModel):
+        return value.model_dump(mode="json")
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _set_per_led(out: dict[str, Any], dotted: str, value: Any) -> None:
+    m = _PER_LED_KEY.fullmatch(dotted)
+    assert m is not None
+    emitters = out["leds"]["emitters"]
+    i = int(m.group(1))
+    if i >= len(emitters):
+        raise ConfigError(
+            f"{dotted}: the scenario has {len(emitters)} LEDs (indices 0-{len(emitters) - 1})"
+        )
+    emitters[i][m.group(2)] = value
+
+
+def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    """Return a copy of a config dict with dotted overrides set; unknown keys raise.
+
+    Whole values are set first (``leds`` is ``leds.emitters``), then the former per-LED
+    lists (:data:`LEGACY_LED_KEYS`) are merged into the LED records, then single LED
+    values (``leds.emitters.<i>.<field>``).
+    """
+    out = json.loads(json.dumps(data))
+    keys = set(valid_keys())
+    legacy: dict[str, Any] = {}
+    per_led: dict[str, Any] = {}
+    for dotted, value in overrides.items():
+        if dotted == "leds" and isinstance(value, list | tuple):
+            dotted = "leds.emitters"
+        if dotted in LEGACY_LED_KEYS:
+            legacy[dotted] = value
+            continue
+        if dotted not in keys:
+            if is_valid_key(dotted):
+                per_led[dotted] = value
+                continue
+            from ..config_keys import suggest_keys
+
+            close = suggest_keys(dotted, keys)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise ConfigError(
+                f"unknown config key {dotted!r}{hint} (run `nirglucose keys` for the valid keys)"
+            )
+        node = out
+        parts = dotted.split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = _plain(value)
+    if legacy:
+        out["leds"]["emitters"] = _merge_legacy_leds(out["leds"]["emitters"], legacy)
+    for dotted, value in per_led.items():
+        _set_per_led(out, dotted, value)
+    return out
+
+
+#: pydantic error types of a number outside its ``ge/gt/le/lt`` bounds.
+_RANGE_ERRORS = ("greater_than", "greater_than_equal", "less_than", "less_than_equal")
+
+
+def resolve_config(
+    preset: str | ScenarioConfig = "paper", overrides: dict[str, Any] | None = None
+) -> ScenarioConfig:
+    """Build the scenario of a preset with dotted overrides, validated.
+
+    Parameters
+    ----------
+    preset : str or ScenarioConfig
+        A name of :data:`PRESETS`, or a config to start from.
+    overrides : dict, optional
+        Dotted keys (``"hardware.adc_bits"``) to values.
+
+    Raises
+    ------
+    ConfigError
+        Unknown preset or key, or a value outside its valid range.
+
+    Examples
+    --------
+    >>> resolve_config("paper", {"hardware.adc_bits": 14}).hardware.adc_bits
+    14
+    """
+    if isinstance(preset, ScenarioConfig):
+        base = preset.model_dump(mode="json")
+        all_overrides = dict(overrides or {})
+    else:
+        if preset not in PRESETS:
+            raise ConfigError(unknown_name("preset", preset, PRESETS))
+        base = ScenarioConfig(preset=preset).model_dump(mode="json")
+        all_overrides = {**PRESETS[preset], **(overrides or {})}
+    data = apply_overrides(base, all_overrides)
+    try:
+        return ScenarioConfig.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = ".".join(str(p) for p in err["loc"]) or "config"
+        from ..config_keys import out_of_range_message, unit_of
+
+        if err["type"] in _RANGE_ERRORS:
+            msg = out_of_range_message(loc, err.get("input"))
+            if msg is not None:
+                raise ConfigError(msg) from None
+        unit = unit_of(loc)
+        raise ConfigError(
+            f"invalid value for {loc}: {err['msg']}{f' [{unit}]' if unit else ''} "
+            f"(got {err.get('input')!r})"
+        ) from None
