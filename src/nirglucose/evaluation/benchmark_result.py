@@ -250,7 +250,6 @@ def _write_csv(path: Path, frame: pd.DataFrame) -> None:
     atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False))
 
 
-
 # --------------------------------------------------------------------------- table.md
 def _fmt(v: Any, digits: int = 1) -> str:
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
@@ -268,45 +267,59 @@ def _fmt_ms(v: Any) -> str:
 
 
 def _table_markdown(res: BenchmarkResult) -> str:
-    study = {row["model"]: row for row in STUDY_TABLE}
+    """``table.md``: the metrics beside the study's Table 1 on a simulated preset; on a
+    user's own data (no preset) the same metrics without the study's columns."""
     m = res.meta
+    user = m.get("preset") is None
     layout = (
         "one 60/20/20 split by subject"
         if m["protocol"] == "paper-split"
         else f"grouped {m['n_splits']}-fold CV × {m['repeats']} repeats"
     )
+    source = "your data" if user else f"preset `{m['preset']}`"
+    study_note = "" if user else " Study: one 60/20/20 split by subject, test n = 48."
     lines = [
-        "# Benchmark against the reference study (Table 1)",
+        "# Benchmark on your data" if user else "# Benchmark against the reference study (Table 1)",
         "",
         f"Ours: {layout} (protocol `{m['protocol']}`, seed {m['seed']}), "
-        f"{m['n_subjects']} subjects, {m['n_snapshots']} snapshots, preset "
-        f"`{m['preset']}`, dataset {m['dataset_hash']}; 95 % CIs from a cluster bootstrap "
-        f"over subjects ({m['n_boot']:,} resamples). Study: one 60/20/20 split by subject, "
-        f"test n = 48. Inference: our median single-sample `predict` time.",
+        f"{m['n_subjects']} subjects, {m['n_snapshots']} snapshots, {source}, "
+        f"dataset {m['dataset_hash']}; 95 % CIs from a cluster bootstrap "
+        f"over subjects ({m['n_boot']:,} resamples).{study_note} Inference: our median "
+        "single-sample `predict` time.",
         "",
-        "| Model | RMSE mg/dL | study | MARD % | study | Clarke A % | study | ±15 % | study "
-        "| Params | study | Inference ms | study | RMSE / oracle |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        *_table_rows(res, study=None if user else {r["model"]: r for r in STUDY_TABLE}),
+        "",
     ]
+    lines.extend(_significance_lines(res))
+    lines.extend(_ablation_lines(res))
+    return "\n".join(lines) + "\n"
+
+
+def _table_rows(res: BenchmarkResult, study: dict | None) -> list[str]:
+    """The metrics table's header and one row per model (study columns when given)."""
+    cols = ["RMSE mg/dL", "MARD %", "Clarke A %", "±15 %", "Params", "Inference ms"]
+    head = [c for name in cols for c in ((name, "study") if study is not None else (name,))]
+    head.append("RMSE / oracle")
+    lines = ["| Model | " + " | ".join(head) + " |", "|---" * (len(head) + 1) + "|"]
     for _, r in res.metrics.iterrows():
-        s = study.get(r["model"], {})
+        s = (study or {}).get(r["model"], {})
 
         def ci(stem, col, r=r):
             return f"{_fmt(r[col])} [{_fmt(r[stem + '_ci_low'])}, {_fmt(r[stem + '_ci_high'])}]"
 
+        cells = [
+            (ci("rmse", "rmse_mgdl"), _fmt(s.get("rmse_mgdl"))),
+            (ci("mard", "mard_pct"), _fmt(s.get("mard_pct"))),
+            (ci("clarke_a", "clarke_a_pct"), _fmt(s.get("clarke_a_pct"))),
+            (ci("within15", "within15_pct"), _fmt(s.get("within15_pct"))),
+            (_fmt(int(r["n_parameters"])), _fmt(s.get("n_parameters"))),
+            (_fmt_ms(r["latency_single_ms"]), _fmt_ms(s.get("latency_single_ms", np.nan))),
+        ]
+        flat = [c for pair in cells for c in (pair if study is not None else pair[:1])]
         lines.append(
-            f"| {r['label']} | {ci('rmse', 'rmse_mgdl')} | {_fmt(s.get('rmse_mgdl'))} "
-            f"| {ci('mard', 'mard_pct')} | {_fmt(s.get('mard_pct'))} "
-            f"| {ci('clarke_a', 'clarke_a_pct')} | {_fmt(s.get('clarke_a_pct'))} "
-            f"| {ci('within15', 'within15_pct')} | {_fmt(s.get('within15_pct'))} "
-            f"| {_fmt(int(r['n_parameters']))} | {_fmt(s.get('n_parameters'))} "
-            f"| {_fmt_ms(r['latency_single_ms'])} | {_fmt_ms(s.get('latency_single_ms', np.nan))} "
-            f"| {_fmt(r['rmse_vs_oracle'], 2)} |"
+            f"| {r['label']} | " + " | ".join(flat) + f" | {_fmt(r['rmse_vs_oracle'], 2)} |"
         )
-    lines.append("")
-    lines.extend(_significance_lines(res))
-    lines.extend(_ablation_lines(res))
-    return "\n".join(lines) + "\n"
+    return lines
 
 
 def _ablation_lines(res: BenchmarkResult) -> list[str]:
