@@ -56,10 +56,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "report/figures.py:load_results": "report owner's",
     "report/presets.py:presets_section": "report owner's",
     "report/sweep.py:sweep_section": "report owner's",
-    "simulate/hardware.py:apply_hardware": "the hardware chain in order; simulator's",
-    "simulate/physiology.py:sample_state": "the subject state in order; simulator's",
-    "simulate/simulator.py:_band_detected_fraction": "simulator's",
-    "simulate/simulator.py:simulate_block": "simulator's",
 }
 
 
