@@ -44,8 +44,6 @@ ALLOWED_LONG_FUNCTIONS = {
     "cli.py:sweep": "CLI command: options and printing; CLI owner",
     "cli.py:fit_model": "CLI command; CLI owner",
     "cli.py:predict_glucose": "CLI command; CLI owner",
-    "evaluation/calibration.py:personal_calibration": "calibration protocol; its owner's",
-    "evaluation/stats.py:compare_models": "paired tests in one pass; split is a follow-up",
     "models/_json_io.py:JsonModelMixin.load": "the one model-file reader; integrator's",
     "models/_torch_base.py:TorchRegressor.fit": "torch trainer; integrator's",
     "models/_torch_base.py:TorchRegressor._train": "torch trainer; integrator's",
