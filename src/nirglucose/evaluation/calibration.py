@@ -182,8 +182,42 @@ def personal_calibration(
     if k == 0:
         return pd.DataFrame(columns=list(CALIBRATION_COLUMNS))
     frame = dataset.frame.reset_index(drop=True)
+    indep = _independent_predictions(frame, splits, k)
+    rows = [_offset_predictions(name, p, k) for name, p in predictions.groupby("model", sort=False)]
+    allp = pd.concat([*rows, *indep], ignore_index=True)
+    if not len(allp):
+        raise DataError(
+            f"no test subject has more than {k} readings: personal calibration needs "
+            "per_subject > k (use per_subject >= 3)"
+        )
+    allp = allp[np.isfinite(allp["calibrated_mgdl"])]
+    stats = _rmse_draws(allp, n_boot, seed)
+    n_reps = len(np.unique(allp["repeat"]))
+    return pd.DataFrame(_summary_rows(stats, k, n_reps))[list(CALIBRATION_COLUMNS)]
+
+
+def _later_readings(model: str, method: str, later: dict, calibrated_mgdl) -> pd.DataFrame:
+    """One method's calibrated predictions of the later readings (``later`` columns)."""
+    return pd.DataFrame(
+        {
+            "model": model,
+            "method": method,
+            "subject_id": later["subject_id"],
+            "measurement_id": later["measurement_id"],
+            "repeat": later["repeat"],
+            "reference_mgdl": later["reference_mgdl"],
+            "calibrated_mgdl": np.asarray(calibrated_mgdl, float),
+        }
+    )
+
+
+def _independent_predictions(frame: pd.DataFrame, splits, k: int) -> list[pd.DataFrame]:
+    """Carry-forward and difference-ridge on each split's test part's later readings.
+
+    These do not depend on any benchmarked model; the difference ridge is fitted on the
+    split's training part.
+    """
     mid = frame["measurement_id"].to_numpy() if "measurement_id" in frame else np.arange(len(frame))
-    # model-independent predictions per (repeat, fold) on the test part's later readings
     indep = []
     for split in splits:
         test = frame.iloc[split.test].reset_index(drop=True)
@@ -194,56 +228,44 @@ def personal_calibration(
         yc = pd.Series(y[cal]).groupby(sid[cal]).mean()
         carry = pd.Series(sid).map(yc).to_numpy(float)
         ridge = _difference_ridge(train, test, k)
+        later = {
+            "subject_id": sid[~cal],
+            "measurement_id": mid[split.test][~cal],
+            "repeat": split.repeat,
+            "reference_mgdl": y[~cal],
+        }
         for method, pred in (("carry-forward", carry), ("difference-ridge", ridge)):
-            indep.append(
-                pd.DataFrame(
-                    {
-                        "model": method,
-                        "method": method,
-                        "subject_id": sid[~cal],
-                        "measurement_id": mid[split.test][~cal],
-                        "repeat": split.repeat,
-                        "reference_mgdl": y[~cal],
-                        "calibrated_mgdl": pred[~cal],
-                    }
-                )
-            )
-    rows = []
-    for name, p in predictions.groupby("model", sort=False):
-        parts = []
-        for _, g in p.groupby(["repeat", "fold"], sort=False):
-            g = g.reset_index(drop=True)
-            cal = calibration_mask(g, k)
-            fixed, _ = apply_offset(
-                g["scored_mgdl"].to_numpy(),
-                g["subject_id"].to_numpy(),
-                g.loc[cal, "scored_mgdl"].to_numpy(),
-                g.loc[cal, "reference_mgdl"].to_numpy(),
-                g.loc[cal, "subject_id"].to_numpy(),
-            )
-            later = g.loc[~cal]
-            for method, vals in (("none", later["scored_mgdl"]), ("offset", fixed[~cal])):
-                parts.append(
-                    pd.DataFrame(
-                        {
-                            "model": name,
-                            "method": method,
-                            "subject_id": later["subject_id"].to_numpy(),
-                            "measurement_id": later["measurement_id"].to_numpy(),
-                            "repeat": later["repeat"].to_numpy(),
-                            "reference_mgdl": later["reference_mgdl"].to_numpy(),
-                            "calibrated_mgdl": np.asarray(vals, float),
-                        }
-                    )
-                )
-        rows.append(pd.concat(parts, ignore_index=True))
-    allp = pd.concat([*rows, *indep], ignore_index=True)
-    if not len(allp):
-        raise DataError(
-            f"no test subject has more than {k} readings: personal calibration needs "
-            "per_subject > k (use per_subject >= 3)"
+            indep.append(_later_readings(method, method, later, pred[~cal]))
+    return indep
+
+
+def _offset_predictions(name: str, predictions: pd.DataFrame, k: int) -> pd.DataFrame:
+    """One model's later readings, uncalibrated (``none``) and ``offset``, per fold."""
+    parts = []
+    for _, g in predictions.groupby(["repeat", "fold"], sort=False):
+        g = g.reset_index(drop=True)
+        cal = calibration_mask(g, k)
+        fixed, _ = apply_offset(
+            g["scored_mgdl"].to_numpy(),
+            g["subject_id"].to_numpy(),
+            g.loc[cal, "scored_mgdl"].to_numpy(),
+            g.loc[cal, "reference_mgdl"].to_numpy(),
+            g.loc[cal, "subject_id"].to_numpy(),
         )
-    allp = allp[np.isfinite(allp["calibrated_mgdl"])]
+        later_g = g.loc[~cal]
+        later = {c: later_g[c].to_numpy() for c in
+                 ("subject_id", "measurement_id", "repeat", "reference_mgdl")}
+        for method, vals in (("none", later_g["scored_mgdl"]), ("offset", fixed[~cal])):
+            parts.append(_later_readings(name, method, later, vals))
+    return pd.concat(parts, ignore_index=True)
+
+
+def _rmse_draws(allp: pd.DataFrame, n_boot: int, seed: int) -> dict:
+    """(model, method) -> (sq, cnt, RMSE, bootstrap RMSEs) over resampled subjects.
+
+    ``sq`` and ``cnt`` are (repeats, subjects) sums of squared errors and counts; the
+    same subject resamples serve every (model, method), so gains are paired.
+    """
     subjects = np.unique(allp["subject_id"])
     reps = np.unique(allp["repeat"])
     s_pos = {s: i for i, s in enumerate(subjects)}
@@ -251,21 +273,25 @@ def personal_calibration(
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), _BOOT_STREAM]))
     draws = rng.integers(0, len(subjects), size=(n_boot, len(subjects)))
     ident = np.arange(len(subjects))[None, :]
-
-    def tables(g):
+    stats = {}
+    for (name, method), g in allp.groupby(["model", "method"], sort=False):
         sq = np.zeros((len(reps), len(subjects)))
         cnt = np.zeros_like(sq)
         si = g["subject_id"].map(s_pos).to_numpy()
         ri = g["repeat"].map(r_pos).to_numpy()
         np.add.at(sq, (ri, si), (g["reference_mgdl"] - g["calibrated_mgdl"]).to_numpy() ** 2)
         np.add.at(cnt, (ri, si), 1.0)
-        return sq, np.where(cnt > 0, cnt, np.nan)
-
-    stats = {}
-    for (name, method), g in allp.groupby(["model", "method"], sort=False):
-        sq, cnt = tables(g)
-        sq, cnt = np.nan_to_num(sq), np.nan_to_num(cnt)
+        sq = np.nan_to_num(sq)
         stats[(name, method)] = (sq, cnt, _rmse_boot(sq, cnt, ident)[0], _rmse_boot(sq, cnt, draws))
+    return stats
+
+
+def _summary_rows(stats: dict, k: int, n_reps: int) -> list[dict]:
+    """One :data:`CALIBRATION_COLUMNS` row per (model, method), with its paired gain.
+
+    The baseline is the model's own ``none``; carry-forward and difference-ridge are
+    compared with EBL's ``none`` where EBL was benchmarked.
+    """
     base_for_indep = "ebl" if ("ebl", "none") in stats else None
     out = []
     for (name, method), (_sq, cnt, point, boot) in stats.items():
@@ -294,7 +320,7 @@ def personal_calibration(
                 "gain_mgdl": float(gain),
                 "gain_ci_low": float(glo),
                 "gain_ci_high": float(ghi),
-                "n_scored": int(cnt.sum() / max(len(reps), 1)),
+                "n_scored": int(cnt.sum() / max(n_reps, 1)),
             }
         )
-    return pd.DataFrame(out)[list(CALIBRATION_COLUMNS)]
+    return out

@@ -369,6 +369,29 @@ def compare_models(
         ``ci_high``, ``p_value`` (bootstrap), ``p_holm``, ``p_wilcoxon``,
         ``p_wilcoxon_holm``, ``significant`` (``p_holm < alpha``).
     """
+    models, sums = _model_sums(predictions, pred_col)
+    ones = np.ones((1, len(sums[models[0]].subjects)))
+    point = {m: float(metric_draws(sums[m], ones)["rmse_mgdl"][0]) for m in models}
+    if pairs is None:
+        pairs = _pairs_against_reference(models, point, reference, exclude_from_best)
+    cols = list(PAIRED_COLUMNS)
+    if not pairs:
+        return pd.DataFrame(columns=cols)
+    w = bootstrap_weights(len(sums[models[0]].subjects), n_boot, seed)
+    draws = {m: metric_draws(sums[m], w)["rmse_mgdl"] for m in {x for p in pairs for x in p}}
+    out = pd.DataFrame([_paired_row(m, ref, point, draws, sums, alpha) for m, ref in pairs])
+    out["p_holm"] = holm(out["p_value"].to_numpy())
+    out["p_wilcoxon_holm"] = holm(out["p_wilcoxon"].to_numpy())
+    out["significant"] = out["p_holm"] < alpha
+    return out[cols]
+
+
+def _model_sums(predictions: pd.DataFrame, pred_col: str):
+    """The models in order of appearance and each one's per-subject sums.
+
+    Raises :class:`DataError` on missing columns or models scored on other subjects
+    (a paired comparison needs the same subjects).
+    """
     needed = {"model", "subject_id", "reference_mgdl", pred_col}
     missing = needed - set(predictions.columns)
     if missing:
@@ -384,41 +407,33 @@ def compare_models(
     for name in models[1:]:
         if not np.array_equal(sums[name].subjects, subjects):
             raise DataError(f"model {name!r} was scored on other subjects than {models[0]!r}")
-    ones = np.ones((1, len(subjects)))
-    point = {m: float(metric_draws(sums[m], ones)["rmse_mgdl"][0]) for m in models}
-    if pairs is None:
-        if reference is None:
-            candidates = [m for m in models if m not in exclude_from_best] or models
-            reference = min(candidates, key=lambda m: point[m])
-        elif reference not in sums:
-            raise ConfigError(f"reference model {reference!r} not among {models}")
-        pairs = [(m, reference) for m in models if m != reference]
-    cols = list(PAIRED_COLUMNS)
-    if not pairs:
-        return pd.DataFrame(columns=cols)
-    w = bootstrap_weights(len(subjects), n_boot, seed)
-    draws = {m: metric_draws(sums[m], w)["rmse_mgdl"] for m in {x for p in pairs for x in p}}
-    rows = []
-    for m, ref in pairs:
-        diff = point[m] - point[ref]
-        d = draws[m] - draws[ref]
-        lo, hi = np.quantile(d, [alpha / 2.0, 1.0 - alpha / 2.0])
-        extreme = np.count_nonzero(np.abs(d - diff) >= abs(diff) - 1e-12)
-        rows.append(
-            {
-                "model": m,
-                "reference_model": ref,
-                "rmse_mgdl": point[m],
-                "reference_rmse_mgdl": point[ref],
-                "rmse_diff_mgdl": diff,
-                "ci_low": float(lo),
-                "ci_high": float(hi),
-                "p_value": (1.0 + extreme) / (len(d) + 1.0),
-                "p_wilcoxon": _wilcoxon(_per_subject_rmse(sums[m]), _per_subject_rmse(sums[ref])),
-            }
-        )
-    out = pd.DataFrame(rows)
-    out["p_holm"] = holm(out["p_value"].to_numpy())
-    out["p_wilcoxon_holm"] = holm(out["p_wilcoxon"].to_numpy())
-    out["significant"] = out["p_holm"] < alpha
-    return out[cols]
+    return models, sums
+
+
+def _pairs_against_reference(models, point: dict, reference, exclude_from_best):
+    """Every model against ``reference`` (by default the best not excluded)."""
+    if reference is None:
+        candidates = [m for m in models if m not in exclude_from_best] or models
+        reference = min(candidates, key=lambda m: point[m])
+    elif reference not in {str(m) for m in models}:  # the keys of the sums
+        raise ConfigError(f"reference model {reference!r} not among {models}")
+    return [(m, reference) for m in models if m != reference]
+
+
+def _paired_row(m: str, ref: str, point: dict, draws: dict, sums: dict, alpha: float) -> dict:
+    """One comparison: RMSE difference, its percentile CI, bootstrap and Wilcoxon p."""
+    diff = point[m] - point[ref]
+    d = draws[m] - draws[ref]
+    lo, hi = np.quantile(d, [alpha / 2.0, 1.0 - alpha / 2.0])
+    extreme = np.count_nonzero(np.abs(d - diff) >= abs(diff) - 1e-12)
+    return {
+        "model": m,
+        "reference_model": ref,
+        "rmse_mgdl": point[m],
+        "reference_rmse_mgdl": point[ref],
+        "rmse_diff_mgdl": diff,
+        "ci_low": float(lo),
+        "ci_high": float(hi),
+        "p_value": (1.0 + extreme) / (len(d) + 1.0),
+        "p_wilcoxon": _wilcoxon(_per_subject_rmse(sums[m]), _per_subject_rmse(sums[ref])),
+    }

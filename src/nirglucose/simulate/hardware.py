@@ -293,57 +293,26 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         noise-free analog voltage, ``detected_power_w`` (n, n_led).
     """
     hw = cfg.hardware
-    n, n_led = detected_fraction_led.shape
-    n_sub = int(subject_index.max()) + 1 if n else 0
+    n_sub = int(subject_index.max()) + 1 if len(subject_index) else 0
     p0 = np.asarray(cfg.leds.power_mw)[None, :] * 1e-3
     resp = np.asarray(cfg.leds.responsivity_a_per_w)[None, :]
     p_led, p_cal = _led_powers(cfg, p0, temps, n_sub, streams)
     inl = cfg.noise_factor("adc_inl") * hw.adc_inl_lsb
 
-    # Measurement: LED power, optics, photocurrent.
+    # Measurement: LED power, optics, photocurrent, front end, conversion.
     detected_power_w = p_led * detected_fraction_led
-    i_sig = resp * detected_power_w
-    i25 = hw.dark_current_25c_na * 1e-9
-    dark_now = dark_current_a(i25, temps["board_c"], hw.dark_current_per_c)[:, None]
-    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index], hw.dark_current_per_c)[
-        :, None
-    ]
-    i_dark_residual = cfg.noise_factor("dark_current") * (dark_now - dark_cal)
-    i_amb = cfg.noise_factor("ambient_light") * temps["ambient_a"][:, None]
-    amb_residual = (
-        i_amb
-        * (1.0 - hw.ambient_rejection)
-        * temps["ambient_flicker"][:, None]
-        * streams("ambient_light").normal(size=(n, n_led))
+    dark_now, i_dark_residual = _dark_currents_a(cfg, temps, subject_index)
+    voltage = _measurement_voltage_v(
+        cfg, resp * detected_power_w, dark_now, i_dark_residual, temps, streams
     )
-    shot, johnson = _front_end_noise_a(
-        cfg, i_sig + dark_now + i_amb, temps["board_c"], ("shot", "johnson"), streams
-    )
-    voltage = (i_sig + i_dark_residual + amb_residual + shot + johnson) * hw.tia_gain_ohm
     offset = _offset_lsb(cfg, temps["board_c"])
     adc = adc_convert(voltage, hw.adc_vref_v, hw.adc_bits, inl, offset)
 
-    # Reference at start-up, once per subject: the same LED through a neutral
-    # attenuator, no tissue; ``*_cal_*`` temperatures and ages are per subject.
-    i_ref = resp * p_cal * hw.reference_transmission
-    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"], hw.dark_current_per_c)[:, None]
-    shot_ref, johnson_ref = _front_end_noise_a(
-        cfg, i_ref + dark_cal_sub, temps["board_cal_c"], ("shot.cal", "johnson.cal"), streams
-    )
-    v_ref = (i_ref + shot_ref + johnson_ref) * hw.tia_gain_ohm
-    offset_ref = _offset_lsb(cfg, temps["board_cal_c"])
-    adc_ref = adc_convert(v_ref, hw.adc_vref_v, hw.adc_bits, inl, offset_ref)[subject_index]
+    adc_ref = _reference_codes(cfg, resp * p_cal, temps, inl, streams)[subject_index]
     if cfg.device.monitor_photodiode:
-        # A monitor photodiode reads the same LED pulse through the reference path's
-        # attenuation: the LED power of this reading (drift, ageing, flicker included),
-        # with the monitor's own dark-current residual, shot and Johnson noise and its
-        # own conversion (quantisation, INL, offset at this board temperature).
-        i_mon = resp * p_led * hw.reference_transmission
-        shot_mon, johnson_mon = _front_end_noise_a(
-            cfg, i_mon + dark_now, temps["board_c"], ("monitor.shot", "monitor.johnson"), streams
+        adc_ref = _monitor_codes(
+            cfg, resp * p_led, (dark_now, i_dark_residual), offset, inl, temps, streams
         )
-        v_mon = (i_mon + i_dark_residual + shot_mon + johnson_mon) * hw.tia_gain_ohm
-        adc_ref = adc_convert(v_mon, hw.adc_vref_v, hw.adc_bits, inl, offset)
     signal_v = resp * (p0 * detected_fraction_led) * hw.tia_gain_ohm
     return {
         "adc": adc,
@@ -352,6 +321,79 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         "voltage_v": voltage,
         "detected_power_w": detected_power_w,
     }
+
+
+def _dark_currents_a(cfg, temps: dict, subject_index):
+    """Dark current of each reading, and its residual after the start-up cancellation.
+
+    The offset-cancellation current nulls the dark current at the subject's start-up
+    board temperature; what remains is the change since then (Hamamatsu [1]_). [A]
+    """
+    hw = cfg.hardware
+    i25 = hw.dark_current_25c_na * 1e-9
+    dark_now = dark_current_a(i25, temps["board_c"], hw.dark_current_per_c)[:, None]
+    dark_cal = dark_current_a(i25, temps["board_cal_c"][subject_index], hw.dark_current_per_c)[
+        :, None
+    ]
+    return dark_now, cfg.noise_factor("dark_current") * (dark_now - dark_cal)
+
+
+def _measurement_voltage_v(cfg, i_sig, dark_now, i_dark_residual, temps: dict, streams):
+    """TIA output of each reading: signal, dark residual, ambient residual and noise. [V]
+
+    The LED-off reading removes the ambient photocurrent except its flicker between the
+    two readings; the ambient current still adds shot noise (Horowitz & Hill [2]_).
+    """
+    hw = cfg.hardware
+    i_amb = cfg.noise_factor("ambient_light") * temps["ambient_a"][:, None]
+    amb_residual = (
+        i_amb
+        * (1.0 - hw.ambient_rejection)
+        * temps["ambient_flicker"][:, None]
+        * streams("ambient_light").normal(size=i_sig.shape)
+    )
+    shot, johnson = _front_end_noise_a(
+        cfg, i_sig + dark_now + i_amb, temps["board_c"], ("shot", "johnson"), streams
+    )
+    return (i_sig + i_dark_residual + amb_residual + shot + johnson) * hw.tia_gain_ohm
+
+
+def _reference_codes(cfg, i_ref_signal_a, temps: dict, inl: float, streams) -> np.ndarray:
+    """ADC codes of each subject's start-up reference, (n_sub, n_led).
+
+    The same LED through a neutral attenuator of known transmission, no tissue; the
+    ``*_cal_*`` temperatures are per subject. Its own shot and Johnson noise
+    (Horowitz & Hill [2]_) and conversion at the start-up board temperature.
+    """
+    hw = cfg.hardware
+    i_ref = i_ref_signal_a * hw.reference_transmission
+    i25 = hw.dark_current_25c_na * 1e-9
+    dark_cal_sub = dark_current_a(i25, temps["board_cal_c"], hw.dark_current_per_c)[:, None]
+    shot_ref, johnson_ref = _front_end_noise_a(
+        cfg, i_ref + dark_cal_sub, temps["board_cal_c"], ("shot.cal", "johnson.cal"), streams
+    )
+    v_ref = (i_ref + shot_ref + johnson_ref) * hw.tia_gain_ohm
+    offset_ref = _offset_lsb(cfg, temps["board_cal_c"])
+    return adc_convert(v_ref, hw.adc_vref_v, hw.adc_bits, inl, offset_ref)
+
+
+def _monitor_codes(cfg, i_led_signal_a, dark, offset, inl: float, temps: dict, streams):
+    """ADC codes of a monitor photodiode at each reading, (n, n_led).
+
+    It reads the same LED pulse through the reference path's attenuation: the LED power
+    of this reading (drift, ageing, flicker included), with the monitor's own
+    dark-current residual, shot and Johnson noise (Horowitz & Hill [2]_) and its own
+    conversion (quantisation, INL, offset at this board temperature). ``dark`` is
+    (dark current now, its residual) of :func:`_dark_currents_a`, in A.
+    """
+    hw = cfg.hardware
+    dark_now, i_dark_residual = dark
+    i_mon = i_led_signal_a * hw.reference_transmission
+    shot_mon, johnson_mon = _front_end_noise_a(
+        cfg, i_mon + dark_now, temps["board_c"], ("monitor.shot", "monitor.johnson"), streams
+    )
+    v_mon = (i_mon + i_dark_residual + shot_mon + johnson_mon) * hw.tia_gain_ohm
+    return adc_convert(v_mon, hw.adc_vref_v, hw.adc_bits, inl, offset)
 
 
 def _led_powers(cfg, p0, temps: dict, n_sub: int, streams):

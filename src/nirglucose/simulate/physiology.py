@@ -179,14 +179,52 @@ def sample_state(
     n_rows: int,
     streams: RandomStreams,
 ) -> dict:
-    """Draw the per-measurement state, given repeated traits, environment and glucose."""
+    """Draw the per-measurement state, given repeated traits, environment and glucose.
+
+    The ``physiology.state`` stream is drawn in a fixed order (hydration, systolic BP,
+    heart rate, respiration, skin temperature, saturation, blood volume), then the
+    ``pulsation`` stream; the helpers below keep that order.
+    """
     p = cfg.physiology
     v = p.variation_scale
     rng = streams("physiology.state")
-    stress = glucose["true_stress"]
+    hydration = _hydration_pct(p, v, traits, rng, n_rows)
+    sbp, hr, rr = _vitals(p, v, traits, glucose["true_stress"], rng, n_rows)
+    skin_temp = skin_temperature_c(
+        env["true_ambient_temperature_c"],
+        p.skin_temp_c_neutral,
+        p.skin_temp_per_ambient,
+        p.skin_temp_ambient_ref_c,
+    ) + v * p.skin_temp_c_sd_state * rng.normal(size=n_rows)
+    saturation = np.clip(
+        p.saturation_mean + v * p.saturation_sd * rng.normal(size=n_rows), *p.saturation_limits
+    )
+    blood = _blood_fraction(cfg, traits, env, skin_temp, sbp, rng, streams, n_rows)
+    return {
+        "true_hydration_pct": 100.0 + hydration,
+        "true_water_fraction": p.water_fraction_nominal * (1.0 + hydration / 100.0),
+        "true_systolic_bp_mmhg": sbp,
+        "true_heart_rate_bpm": hr,
+        "true_resp_rate_bpm": rr,
+        "true_skin_temp_c": skin_temp,
+        "true_saturation": saturation,
+        "true_blood_fraction": np.clip(blood, *p.blood_fraction_limits),
+    }
+
+
+def _hydration_pct(p, v: float, traits: dict, rng, n_rows: int) -> np.ndarray:
+    """Hydration offset from nominal, squashed smoothly inside +/- its limit. [%]"""
     lim = p.hydration_pct_limit
     hydration = traits["_hydration_base"] + v * p.hydration_pct_sd_state * rng.normal(size=n_rows)
-    hydration = lim * np.tanh(hydration / lim)  # stays inside +/- limit, smoothly
+    return lim * np.tanh(hydration / lim)  # stays inside +/- limit, smoothly
+
+
+def _vitals(p, v: float, traits: dict, stress, rng, n_rows: int):
+    """Systolic BP [mmHg], heart rate [1/min] and respiration rate [1/min] per reading.
+
+    Each is the subject's base plus a per-reading variation; stress raises BP and heart
+    rate. Drawn in this order from ``rng``.
+    """
     sbp = np.clip(
         traits["_sbp_base"]
         + v * p.systolic_bp_mmhg_sd_state * rng.normal(size=n_rows)
@@ -203,15 +241,18 @@ def sample_state(
         traits["_rr_base"] + v * p.resp_rate_bpm_sd_state * rng.normal(size=n_rows),
         *p.resp_rate_bpm,
     )
-    skin_temp = skin_temperature_c(
-        env["true_ambient_temperature_c"],
-        p.skin_temp_c_neutral,
-        p.skin_temp_per_ambient,
-        p.skin_temp_ambient_ref_c,
-    ) + v * p.skin_temp_c_sd_state * rng.normal(size=n_rows)
-    saturation = np.clip(
-        p.saturation_mean + v * p.saturation_sd * rng.normal(size=n_rows), *p.saturation_limits
-    )
+    return sbp, hr, rr
+
+
+def _blood_fraction(cfg, traits: dict, env: dict, skin_temp, sbp, rng, streams, n_rows: int):
+    """Dermal blood volume fraction of each reading, before its limits. [-]
+
+    Log-normal around the subject's base, raised by skin temperature (vasodilation),
+    systolic pressure and ambient pressure, and modulated by the cardiac and
+    respiratory pulsation (``pulsation`` stream).
+    """
+    p = cfg.physiology
+    v = p.variation_scale
     log_blood = (
         traits["_log_blood_base"]
         + v * p.blood_fraction_log_sd_state * rng.normal(size=n_rows)
@@ -225,17 +266,7 @@ def sample_state(
     modulation = 1.0 + pulse * (
         p.pulse_depth * np.sin(phase[0]) + p.resp_depth * np.sin(phase[1])
     )
-    blood = np.exp(log_blood) * modulation
-    return {
-        "true_hydration_pct": 100.0 + hydration,
-        "true_water_fraction": p.water_fraction_nominal * (1.0 + hydration / 100.0),
-        "true_systolic_bp_mmhg": sbp,
-        "true_heart_rate_bpm": hr,
-        "true_resp_rate_bpm": rr,
-        "true_skin_temp_c": skin_temp,
-        "true_saturation": saturation,
-        "true_blood_fraction": np.clip(blood, *p.blood_fraction_limits),
-    }
+    return np.exp(log_blood) * modulation
 
 
 def apply_physiology(cfg, traits_rows, env, glucose, n_rows, streams) -> dict:

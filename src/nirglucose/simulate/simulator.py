@@ -101,57 +101,71 @@ _OPTICS_SLICE_ROWS = 4096
 
 
 def _band_detected_fraction(cfg, tables, state, melanin, thickness_mm, shift_nm) -> np.ndarray:
-    """Detected fraction per LED, integrated over each emission band, (n, n_led)."""
+    """Detected fraction per LED, integrated over each emission band, (n, n_led).
+
+    By ``optics.model``: the compiled Beer–Lambert pass (the default), the compiled
+    layer optics with the RTE table, or any other forward model slice by slice.
+    """
     n = len(melanin)
     n_led = len(cfg.leds.wavelengths_nm)
     shift = np.broadcast_to(np.asarray(shift_nm, dtype=float), (n, n_led))
-    if cfg.optics.model == "beer-lambert":  # the default: one compiled pass
-        from ..optics.kernels.band_kernel import band_detected_fraction
+    if cfg.optics.model == "beer-lambert":
+        return _band_beer_lambert(cfg, tables, state, melanin, thickness_mm, shift)
+    if cfg.optics.model == "rte-lut":
+        return _band_rte_lut(cfg, tables, state, melanin, thickness_mm, shift)
+    return _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift)
 
-        return band_detected_fraction(
-            tables.spectra,
-            state,
-            shift_nm=shift,
-            melanin_fraction=melanin,
-            skin_thickness_cm=thickness_mm / 10.0,
-            epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
-            separation_cm=cfg.optics.source_detector_mm / 10.0,
-            geometry_factor=tables.geometry,
-            water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
-            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
-        )
-    if cfg.optics.model == "rte-lut":  # layer optics compiled, then the table kernel
-        from ..optics.kernels.band_kernel import band_detected_fraction_lut
 
-        return band_detected_fraction_lut(
-            tables.spectra,
-            state,
-            shift_nm=shift,
-            melanin_fraction=melanin,
-            skin_thickness_cm=thickness_mm / 10.0,
-            node_lut=tables.lut,
-            detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
-            water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
-            scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
-        )
+def _band_beer_lambert(cfg, tables, state, melanin, thickness_mm, shift) -> np.ndarray:
+    """The default optics in one compiled pass over rows, LEDs and band points."""
+    from ..optics.kernels.band_kernel import band_detected_fraction
+
+    return band_detected_fraction(
+        tables.spectra,
+        state,
+        shift_nm=shift,
+        melanin_fraction=melanin,
+        skin_thickness_cm=thickness_mm / 10.0,
+        epidermis_thickness_cm=cfg.optics.epidermis_thickness_mm / 10.0,
+        separation_cm=cfg.optics.source_detector_mm / 10.0,
+        geometry_factor=tables.geometry,
+        water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+        scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
+    )
+
+
+def _band_rte_lut(cfg, tables, state, melanin, thickness_mm, shift) -> np.ndarray:
+    """Layer optics compiled, then the RTE table kernel."""
+    from ..optics.kernels.band_kernel import band_detected_fraction_lut
+
+    return band_detected_fraction_lut(
+        tables.spectra,
+        state,
+        shift_nm=shift,
+        melanin_fraction=melanin,
+        skin_thickness_cm=thickness_mm / 10.0,
+        node_lut=tables.lut,
+        detector_area_cm2=cfg.optics.detector_area_mm2 / 100.0,
+        water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
+        scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
+    )
+
+
+_STATE_FIELDS = ("blood_fraction", "saturation", "water_fraction", "subcutis_fat_fraction",
+                 "glucose_mm")
+
+
+def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.ndarray:
+    """Any forward model of :mod:`~nirglucose.optics.forward`, :data:`_OPTICS_SLICE_ROWS`
+    rows at a time, the band integral as one matrix product per slice."""
+    n, n_led = shift.shape
     out = np.empty((n, n_led))
     # band integral as one matrix product: (rows, n_led * n_pts) @ (n_led * n_pts, n_led)
     w = tables.spectra.weights
     band_weights = (np.eye(n_led)[:, :, None] * w[None]).reshape(n_led, -1).T
     for lo in range(0, n, _OPTICS_SLICE_ROWS):
         sl = slice(lo, min(lo + _OPTICS_SLICE_ROWS, n))
-        part = tissue.TissueState(
-            *(
-                np.asarray(getattr(state, f))[sl]
-                for f in (
-                    "blood_fraction",
-                    "saturation",
-                    "water_fraction",
-                    "subcutis_fat_fraction",
-                    "glucose_mm",
-                )
-            )
-        )
+        part = tissue.TissueState(*(np.asarray(getattr(state, f))[sl] for f in _STATE_FIELDS))
         optics = tissue.tissue_optics(
             tables.spectra,
             part,
@@ -234,6 +248,31 @@ def simulate_block(
         cfg, env["true_ambient_temperature_c"], phys["true_skin_temp_c"], first, streams
     )
     temps.update(hardware.led_ages_h(cfg, rep, n_sub, streams))
+    shift_nm, fraction = _optics_layer(cfg, tables, glucose, phys, probe, temps)
+    temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, env)
+    hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
+    if cfg.device.ppg_perfusion_spo2:
+        pmf.update(
+            measurement.measure_ppg(
+                cfg, probe["true_blood_fraction_detected"], phys["true_saturation"], streams
+            )
+        )
+    ids = {
+        "subject_id": (first_subject + rep).astype(np.int64),
+        "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
+    }
+    truth = {**phys, **env, **probe, **_hidden(glucose, temps, fraction, shift_nm, hwout)}
+    return _columns(cfg, ids, glucose, hwout, pmf, env, truth), streams.n_variates
+
+
+def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: dict):
+    """The optics layer: LED peak shifts [nm] and the coupled detected fraction [-].
+
+    The LED peaks shift with junction temperature (``led_c``); the tissue under the
+    probe (its detected blood, the subject's saturation, water and fat, the glucose
+    scaled by ``glucose.signal_gain``) is seen through each shifted band, and the
+    probe's coupling scales the result, (n, n_led).
+    """
     shift_nm = cfg.noise_factor("led_wavelength_shift") * hardware.led_peak_shift_nm(
         temps["led_c"], cfg.hardware.led_wavelength_shift_nm_per_c
     )
@@ -255,20 +294,7 @@ def simulate_block(
         )
         * probe["true_coupling"][:, None]
     )
-    temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, env)
-    hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
-    if cfg.device.ppg_perfusion_spo2:
-        pmf.update(
-            measurement.measure_ppg(
-                cfg, probe["true_blood_fraction_detected"], phys["true_saturation"], streams
-            )
-        )
-    ids = {
-        "subject_id": (first_subject + rep).astype(np.int64),
-        "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
-    }
-    truth = {**phys, **env, **probe, **_hidden(glucose, temps, fraction, shift_nm, hwout)}
-    return _columns(cfg, ids, glucose, hwout, pmf, env, truth), streams.n_variates
+    return shift_nm, fraction
 
 
 def _hidden(glucose: dict, temps: dict, fraction, shift_nm, hwout: dict) -> dict:
