@@ -29,13 +29,13 @@ _MAX_MODULE_LINES = 800
 _MAX_FUNCTION_LINES = 60
 _REASON = "on purpose"
 
-#: Modules over 800 lines today, owned elsewhere or not yet split: path -> reason.
-ALLOWED_LONG_MODULES = {
-}
+#: Modules over 800 lines, path -> reason; empty: every module complies. An entry
+#: must go once its module is split (the test says so).
+ALLOWED_LONG_MODULES: dict[str, str] = {}
 
-#: Functions over 60 code lines without the reason in their docstring: qualname -> reason.
-ALLOWED_LONG_FUNCTIONS = {
-}
+#: Functions over 60 code lines without the reason in their docstring, qualname ->
+#: reason; empty: every function is short or says why it is not.
+ALLOWED_LONG_FUNCTIONS: dict[str, str] = {}
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:
