@@ -63,7 +63,7 @@ def test_parse_vary_rejects(text):
     ({"noise_scale": ["a", 1]}, "not a number"),
     ({"noise_scale": [True]}, "not a number"),
     ({"noise_scale": []}, "non-empty"),
-    ({"noise_scale": [-1.0]}, "greater than or equal"),
+    ({"noise_scale": [-1.0]}, "out of range: must be between 0 and 100"),
     ({"noise.shot.enabled": [1]}, "true/false"),
     ({}, "nothing to vary"),
 ])
