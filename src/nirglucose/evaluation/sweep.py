@@ -97,6 +97,7 @@ from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks
 from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark
+from .benchmark_result import _clean
 from .calibration import check_k
 from .executors import resolve_backend, run_unordered
 from .progress import TaskProgress
@@ -462,23 +463,11 @@ class SweepResult:
                 atomic_write(out / name, lambda tmp, f=frame: f.to_csv(tmp, index=False))
             else:
                 (out / name).unlink(missing_ok=True)
-        text = json.dumps(_json_clean(self.meta), indent=2) + "\n"
+        text = json.dumps(_clean(self.meta), indent=2) + "\n"
         atomic_write(
             out / "sweep_meta.json", lambda tmp: Path(tmp).write_text(text, encoding="utf-8")
         )
         return out
-
-
-def _json_clean(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _json_clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_clean(v) for v in obj]
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, float | np.floating):
-        return float(obj) if math.isfinite(obj) else None
-    return obj
 
 
 def load_sweep(sweep_dir: str | Path) -> SweepResult:

@@ -26,11 +26,11 @@ import numpy as np
 
 from ..dataset import atomic_write
 from ..exceptions import DataError
-from ._validate import check_array
+from ._validate import MODEL_FORMAT, check_array, read_model_document
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "JsonModelMixin"]
 
-FORMAT = "nirglucose-model"
+FORMAT = MODEL_FORMAT
 FORMAT_VERSION = 1
 
 
@@ -150,24 +150,7 @@ class JsonModelMixin:
 
 def _read_document(path: Path, name: str) -> dict[str, Any]:
     """The checked JSON document of a saved ``name`` model (DataError otherwise)."""
-    if not path.is_file():
-        raise DataError(f"no such model file {str(path)!r}")
-    try:
-        doc = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        raise DataError(f"{str(path)!r} is not a nirglucose model file (format is not {FORMAT!r})")
-    if doc.get("format_version") != FORMAT_VERSION:
-        raise DataError(
-            f"{str(path)!r} has format_version {doc.get('format_version')!r}; this "
-            f"nirglucose reads version {FORMAT_VERSION}"
-        )
-    if doc.get("model") != name:
-        raise DataError(
-            f"{str(path)!r} holds a {doc.get('model')!r} model, not {name!r}; load it "
-            "with nirglucose.models.load_model"
-        )
+    doc = read_model_document(path, model=name, version=FORMAT_VERSION)
     if not isinstance(doc.get("params"), dict) or not isinstance(doc.get("state"), dict):
         raise DataError(f"{str(path)!r} lacks the 'params' and 'state' objects")
     return doc

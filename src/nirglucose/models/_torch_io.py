@@ -17,7 +17,7 @@ import torch
 from ..dataset import atomic_write
 from ..exceptions import DataError
 from ..schema import DeviceSchema
-from ._validate import check_torch_doc, check_weights
+from ._validate import MODEL_FORMAT, check_torch_doc, check_weights, read_model_document
 
 __all__ = ["FORMAT_VERSION", "TorchIOMixin", "WHITENING_KEY"]
 
@@ -68,10 +68,10 @@ class TorchIOMixin:
         tensors = {
             k: v.detach().to("cpu").contiguous() for k, v in self.module_.state_dict().items()
         }
-        meta = {"format": "nirglucose-model", "model": self.registry_name}
+        meta = {"format": MODEL_FORMAT, "model": self.registry_name}
         atomic_write(weights, lambda tmp: save_file(tensors, tmp, metadata=meta))
         doc = {
-            "format": "nirglucose-model",
+            "format": MODEL_FORMAT,
             "format_version": FORMAT_VERSION,
             "model": self.registry_name,
             "nirglucose_version": __version__,
@@ -172,23 +172,7 @@ class TorchIOMixin:
 
 def _read_document(cls: type, path: Path) -> dict[str, Any]:
     """The checked JSON document of a saved ``cls`` model at ``path`` (DataError)."""
-    if not path.exists():
-        raise DataError(f"no such model file {str(path)!r}")
-    try:
-        doc = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
-    if not isinstance(doc, dict) or doc.get("format") != "nirglucose-model":
-        raise DataError(f"{str(path)!r} is not a nirglucose model file")
-    if doc.get("model") != cls.registry_name:
-        raise DataError(
-            f"{str(path)!r} holds a {doc.get('model')!r} model, not {cls.registry_name!r}"
-        )
-    if doc.get("format_version") != FORMAT_VERSION:
-        raise DataError(
-            f"{str(path)!r} has format_version {doc.get('format_version')!r}; "
-            f"this nirglucose reads {FORMAT_VERSION}"
-        )
+    doc = read_model_document(path, model=cls.registry_name, version=FORMAT_VERSION)
     required = ("params", "scaler", "physics", "history", "weights_file")
     missing = [k for k in required if k not in doc]
     if missing:

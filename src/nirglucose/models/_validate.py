@@ -8,6 +8,7 @@ naming the file, the entry and what is wrong. They never execute anything.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -144,3 +145,41 @@ def check_predictions(pred: Any, path: str | Path) -> np.ndarray:
             f"{MAX_ABS_PREDICTION_MGDL:.0e} mg/dL; the model file is corrupt, refit it"
         )
     return arr
+
+
+#: The ``format`` of every saved model document.
+MODEL_FORMAT = "nirglucose-model"
+
+
+def read_model_document(
+    path: Path, *, model: str | None = None, version: int | None = None
+) -> dict[str, Any]:
+    """The JSON document of a saved model, checked; the one reader of model files.
+
+    Refuses (one-line :class:`~nirglucose.exceptions.DataError`) a missing file, text
+    that is not JSON, a document without ``format: "nirglucose-model"`` and a
+    ``model`` name, and, when given, another ``model``'s file or another
+    ``format_version``. Never executes anything from the file.
+    """
+    if not path.is_file():
+        raise DataError(f"no such model file {str(path)!r}")
+    try:
+        doc = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
+    if not isinstance(doc, dict) or doc.get("format") != MODEL_FORMAT or "model" not in doc:
+        raise DataError(
+            f"{str(path)!r} is not a nirglucose model file (no 'format': {MODEL_FORMAT!r} "
+            "and 'model' keys)"
+        )
+    if model is not None and doc["model"] != model:
+        raise DataError(
+            f"{str(path)!r} holds a {doc['model']!r} model, not {model!r}; load it with "
+            "nirglucose.models.load_model"
+        )
+    if version is not None and doc.get("format_version") != version:
+        raise DataError(
+            f"{str(path)!r} has format_version {doc.get('format_version')!r}; this "
+            f"nirglucose reads version {version}"
+        )
+    return doc

@@ -8,11 +8,10 @@ network is asked for).
 from __future__ import annotations
 
 import importlib
-import json
 from pathlib import Path
 from typing import Any
 
-from ..exceptions import ConfigError, DataError, unknown_name
+from ..exceptions import ConfigError, unknown_name
 
 __all__ = [
     "register",
@@ -115,13 +114,7 @@ def load_model(path: str | Path):
     Never executes code from the file: JSON, plus safetensors / ``weights_only`` torch
     weights for networks.
     """
-    path = Path(path)
-    if not path.exists():
-        raise DataError(f"no such model file {str(path)!r}")
-    try:
-        doc = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
-    if not isinstance(doc, dict) or doc.get("format") != "nirglucose-model" or "model" not in doc:
-        raise DataError(f"{str(path)!r} is not a nirglucose model file (no 'format'/'model' keys)")
+    from ._validate import read_model_document
+
+    doc = read_model_document(Path(path))
     return get_model_class(doc["model"]).load(path)
