@@ -63,3 +63,29 @@ def test_overlap_check_can_fail():
     ax.text(0.5, 0.5, "Original PINN")
     ax.text(0.52, 0.5, "Optimized PINN")
     assert overlapping_texts(fig) == [("Original PINN", "Optimized PINN")]
+
+
+def test_labels_keep_off_reference_lines_and_their_texts():
+    # Points just under a horizontal reference line with its value printed at the
+    # right edge (the no-skill line of Figs 14-15): no label may cross either.
+    from matplotlib.figure import Figure
+    from matplotlib.text import Text
+
+    from nirglucose.plots.labels import _renderer, label_points, place_labels
+
+    fig = Figure(figsize=(4, 3))
+    ax = fig.add_subplot()
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 60)
+    line = ax.axhline(56.5, ls="--")
+    note = ax.text(9.9, 57, "No skill (training mean): 56.5", ha="right", va="bottom")
+    xs = [1.0, 3.0, 5.0, 7.0, 9.0]
+    label_points(ax, xs, [54.0] * 5, [f"model {i}" for i in range(5)])
+    place_labels(fig)
+    renderer = _renderer(fig)
+    fixed = [line.get_window_extent(renderer), Text.get_window_extent(note, renderer)]
+    for t in ax.texts:
+        if t is note:
+            continue
+        box = Text.get_window_extent(t, renderer)
+        assert not any(box.overlaps(f) for f in fixed), t.get_text()

@@ -4,7 +4,8 @@
 settles the figure's layout, then places each label greedily at the nearest free spot
 around its point: candidate offsets on rings of growing radius, the first whose
 window extent (matplotlib's ``Text.get_window_extent``) clears the labels already
-placed, every marker of the Axes and the Axes' edges. A label set away from its point
+placed, the Axes' other texts and horizontal/vertical reference lines, every marker of
+the Axes and the Axes' edges. A label set away from its point
 gets a thin leader line. The layout is frozen afterwards so the places stay valid.
 """
 
@@ -80,6 +81,20 @@ def _outside(a: Bbox, frame: Bbox) -> float:
     return a.width * a.height - inner
 
 
+def _fixed_obstacles(ax: Axes, renderer) -> list[Bbox]:
+    """What a label must not cover besides other labels and the markers: the texts
+    already in ``ax`` (e.g. a reference line's value) and its horizontal or vertical
+    lines (``axhline``/``axvline`` references; a line through several points is data and
+    its bounding box would block too much)."""
+    boxes = [Text.get_window_extent(t, renderer).padded(PAD_PX)
+             for t in ax.texts if t.get_visible() and t.get_text().strip()]
+    for line in ax.lines:
+        x, y = (np.asarray(v, dtype=float) for v in line.get_data())
+        if line.get_visible() and len(x) >= 2 and (np.ptp(x) == 0 or np.ptp(y) == 0):
+            boxes.append(line.get_window_extent(renderer).padded(PAD_PX))
+    return boxes
+
+
 def place_labels(fig: Figure) -> None:
     """Place every recorded label of ``fig`` (see the module docstring); freeze the layout."""
     axes = [ax for ax in fig.axes if getattr(ax, _PENDING, None)]
@@ -96,7 +111,7 @@ def place_labels(fig: Figure) -> None:
         markers = [Bbox.from_extents(px - p["r"] * px_per_pt, py - p["r"] * px_per_pt,
                                      px + p["r"] * px_per_pt, py + p["r"] * px_per_pt)
                    for (px, py), p in zip(pts, pending, strict=True)]
-        placed: list[Bbox] = []
+        placed: list[Bbox] = _fixed_obstacles(ax, renderer)
         # most crowded points first: they have the fewest free spots
         dist = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
         order = np.argsort(np.sort(dist, axis=1)[:, 1] if len(pts) > 1 else np.zeros(1))
