@@ -1,4 +1,4 @@
-"""Peak memory of the in-memory simulation per snapshot (sets cli.SIM_BYTES_PER_SNAPSHOT).
+"""Peak memory of the in-memory simulation per snapshot (sets resources.SIM_BYTES_PER_SNAPSHOT).
 
 Runs ``simulate_frame`` on the paper preset in a fresh process for two sizes and
 prints the slope of peak RSS (ru_maxrss) against the number of snapshots, so the
