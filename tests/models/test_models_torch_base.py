@@ -27,10 +27,10 @@ from nirglucose.models._torch_base import (
     NUMPY_ROWS,
     WHITENING_KEY,
     TorchRegressor,
-    _start_at_mean,
     nir_pmf_features,
     zca_whitening,
 )
+from nirglucose.models._training import start_at_mean
 from nirglucose.models.networks import (
     OptimizedPINNNet,
     OriginalPINNNet,
@@ -142,7 +142,7 @@ def test_untrained_network_predicts_the_training_mean(small, cls):
     # The glucose output layer starts at zero: epoch 0 is the no-skill predictor.
     m = cls(max_epochs=1, lr=1e-3, whiten_inputs=False, random_state=0)
     m.fit(small)
-    module = m._wrap_inputs(_start_at_mean(m.build_module()), None)
+    module = m._wrap_inputs(start_at_mean(m.build_module()), None)
     m.module_ = module.eval()
     m._build_fast_path()
     y_mean = small.frame.glucose_mgdl.mean()
@@ -206,12 +206,12 @@ def test_refit_on_all_rows_for_the_selected_epochs(small):
 
 
 def test_smoothed_selection_ignores_a_lucky_epoch():
-    from nirglucose.models._torch_base import _smoothed_argmin
+    from nirglucose.models._training import smoothed_argmin
 
     curve = [1.0, 0.5, 0.9, 0.8, 0.7, 0.6, 0.6, 0.65, 0.7, 0.8, 0.9]
     assert int(np.argmin(curve)) + 1 == 2  # the raw minimum is a lucky epoch
-    assert _smoothed_argmin(curve, 5) == 7
-    assert _smoothed_argmin([3.0, 2.0, 1.0], 1) == 3
+    assert smoothed_argmin(curve, 5) == 7
+    assert smoothed_argmin([3.0, 2.0, 1.0], 1) == 3
 
 
 @pytest.mark.parametrize("schedule", ["plateau", "cosine", "none"])

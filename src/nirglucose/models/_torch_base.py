@@ -88,7 +88,7 @@ from ._constructor import (
     keyword_init,
 )
 from ._torch_io import FORMAT_VERSION, WHITENING_KEY, TorchIOMixin
-from ._torch_predict import _PREDICT_CHUNK, NUMPY_ROWS, TorchPredictMixin
+from ._torch_predict import NUMPY_ROWS, PREDICT_CHUNK, TorchPredictMixin
 from ._training import (
     LR_SCHEDULES,
     SMOOTHING_EPOCHS,
@@ -102,9 +102,6 @@ from ._training import (
 from ._whitening import scale_of as _scale_of
 from ._whitening import zca_whitening
 from .networks import count_parameters
-
-# Names the tests and older imports use.
-_smoothed_argmin, _start_at_mean = smoothed_argmin, start_at_mean
 
 __all__ = [
     "TorchRegressor",
@@ -634,7 +631,7 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
         self.module_.eval()
         sums: dict[str, torch.Tensor] = {}
         n = 0
-        for size, batch in batches(tensors, _PREDICT_CHUNK // 8):
+        for size, batch in batches(tensors, PREDICT_CHUNK // 8):
             for k, v in self.validation_step(batch).items():
                 sums[k] = sums.get(k, 0.0) + v * size
             n += size

@@ -20,7 +20,6 @@ __all__ = ["NUMPY_ROWS", "PREDICT_CHUNK", "TorchPredictMixin"]
 PREDICT_CHUNK = 65536
 #: Batches up to this many rows are predicted through the NumPy closure.
 NUMPY_ROWS = 8
-_PREDICT_CHUNK = PREDICT_CHUNK
 
 
 class TorchPredictMixin:
@@ -66,8 +65,8 @@ class TorchPredictMixin:
             nir_t, pmf_t = torch.from_numpy(nir), torch.from_numpy(pmf)
             self.module_.eval()
             with torch.inference_mode():
-                for start in range(0, len(Xa), _PREDICT_CHUNK):
-                    stop = start + _PREDICT_CHUNK
+                for start in range(0, len(Xa), PREDICT_CHUNK):
+                    stop = start + PREDICT_CHUNK
                     g = self._glucose(self.module_(nir_t[start:stop], pmf_t[start:stop]))
                     out[start:stop] = g.numpy()
         return out * self.scaler_["y_scale"] + self.scaler_["y_mean"]
