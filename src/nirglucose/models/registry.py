@@ -8,6 +8,7 @@ network is asked for).
 from __future__ import annotations
 
 import importlib
+import inspect
 from pathlib import Path
 from typing import Any
 
@@ -100,7 +101,7 @@ def is_network(name: str) -> bool:
 def is_pinn(name: str) -> bool:
     """Whether ``name`` is a physics-informed network: a network with a physics weight
     ``lambda_phys`` (0 switches its physics term off, e.g. for the ablation)."""
-    return is_network(name) and "lambda_phys" in get_model_class(name)._get_param_names()
+    return is_network(name) and "lambda_phys" in inspect.signature(get_model_class(name)).parameters
 
 
 def make_model(name: str, **params: Any):

@@ -28,6 +28,7 @@ from functools import lru_cache
 from importlib import resources
 
 from ..exceptions import ConfigError, unknown_name
+from .registry import available_models, is_network, is_pinn
 
 __all__ = [
     "tuned_params",
@@ -102,8 +103,6 @@ def search_space(name: str) -> dict[str, tuple]:
     ConfigError
         If ``name`` has no search space (``gp``, ``mean``, ``oracle``).
     """
-    from .registry import is_network, is_pinn
-
     if is_network(name):
         space = dict(_NETWORK_SPACE)
         if is_pinn(name):
@@ -159,7 +158,6 @@ def tuned_params(name: str, preset: str) -> dict:
         in the tuning file.
     """
     from ..config import PRESETS
-    from .registry import available_models
 
     names = available_models()
     if name not in names:
