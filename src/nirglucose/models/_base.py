@@ -23,6 +23,7 @@ from ..dataset import Dataset, measured_columns
 from ..exceptions import DataError
 from ..schema import (
     DeviceSchema,
+    _first_rows,
     as_raw_input,
     check_fit_size,
     check_reference_glucose,
@@ -47,7 +48,13 @@ N_MEASURED = len(MEASURED_COLUMNS)
 
 def target_of(est, y, n: int) -> np.ndarray:
     """``y`` as a finite float64 (n,) array (a column vector warns, as scikit-learn does)."""
-    y = check_array(y, ensure_2d=False, dtype=np.float64, input_name="y", estimator=est)
+    try:
+        y = check_array(y, ensure_2d=False, dtype=np.float64, input_name="y", estimator=est)
+    except ValueError as exc:  # NaN, infinite or non-numeric reference glucose
+        values = pd.to_numeric(pd.Series(np.ravel(np.asarray(y, dtype=object))), errors="coerce")
+        bad = ~np.isfinite(values.to_numpy(dtype=float))
+        where = f" at {_first_rows(bad)}" if bad.any() else ""
+        raise DataError(f"{exc} (reference glucose, glucose_mgdl{where})") from None
     if y.ndim == 2 and y.shape[1] == 1:
         y = column_or_1d(y, warn=True)
     if y.ndim != 1 or len(y) != n:

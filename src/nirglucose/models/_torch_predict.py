@@ -13,6 +13,7 @@ import numpy as np
 import torch
 
 from ..exceptions import DataError
+from ._base import predict_input
 
 __all__ = ["NUMPY_ROWS", "PREDICT_CHUNK", "TorchPredictMixin"]
 
@@ -52,7 +53,7 @@ class TorchPredictMixin:
             (n,) glucose. [mg/dL]
         """
         self._check_fitted()
-        Xa, _, _ = self._measurements(X)
+        Xa = predict_input(self, X)  # the measured columns only; a glucose column is not read
         fast = self.__dict__.get("_fast")
         if len(Xa) <= NUMPY_ROWS and fast is not None and fast["fn"] is not None:
             x = np.concatenate(self._nir_pmf(Xa), axis=1)

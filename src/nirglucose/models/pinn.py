@@ -47,6 +47,7 @@ from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..optics.diffusion import farrell_reflectance
+from ._base import predict_input
 from ._torch_base import TorchRegressor
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
@@ -494,7 +495,7 @@ class _RTEPINNBase(TorchRegressor):
     def predict_optics(self, X: Any) -> tuple[np.ndarray, np.ndarray]:
         """The optical-property heads: ``(mua, musp)``, each (n, k). [1/cm]"""
         self._check_fitted()
-        Xa, _, _ = self._measurements(X)
+        Xa = predict_input(self, X)
         t = self._tensors({k: v for k, v in self._transform(Xa).items() if k != "absorbance"})
         with torch.inference_mode():
             _, mua, musp = self.module_(t["nir"], t["pmf"])
