@@ -118,3 +118,18 @@ def test_network_does_not_collapse_to_the_mean(quiet_split, name):
     spread = float(np.std(pred) / np.std(y_te))
     assert spread > 0.5, f"{name}: prediction spread {spread:.2f} of the targets'"
     assert rmse < 0.75 * no_skill, f"{name}: RMSE {rmse:.1f} vs no-skill {no_skill:.1f} mg/dL"
+
+
+def test_linear_lookups_do_not_import_torch():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from nirglucose.models import tuned_params\n"
+        "from nirglucose.models.registry import is_network, is_pinn\n"
+        "tuned_params('ebl', 'paper'); assert not is_network('pls') and not is_pinn('ebl')\n"
+        "assert 'torch' not in sys.modules, 'torch imported'\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-1500:]

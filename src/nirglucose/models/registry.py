@@ -92,10 +92,12 @@ def get_model_class(name: str) -> type:
 
 def is_network(name: str) -> bool:
     """Whether ``name`` is a torch network (trained by the shared loop, tuned on the
-    shared training grid)."""
-    from ._torch_base import TorchRegressor
-
-    return issubclass(get_model_class(name), TorchRegressor)
+    shared training grid). Reads the class hierarchy by name, so asking about a
+    linear model does not import torch."""
+    return any(
+        c.__name__ == "TorchRegressor" and c.__module__ == "nirglucose.models._torch_base"
+        for c in get_model_class(name).__mro__
+    )
 
 
 def is_pinn(name: str) -> bool:

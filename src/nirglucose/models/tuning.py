@@ -28,7 +28,7 @@ from functools import lru_cache
 from importlib import resources
 
 from ..exceptions import ConfigError, unknown_name
-from .registry import available_models, is_network, is_pinn
+from .registry import get_model_class, is_network, is_pinn
 
 __all__ = [
     "tuned_params",
@@ -159,9 +159,7 @@ def tuned_params(name: str, preset: str) -> dict:
     """
     from ..config import PRESETS
 
-    names = available_models()
-    if name not in names:
-        raise ConfigError(unknown_name("model", name, names))
+    get_model_class(name)  # an unknown name raises ConfigError (and no other model loads)
     params = _document().get("params", {})
     if preset not in params and preset not in PRESETS:
         raise ConfigError(unknown_name("preset", preset, sorted(set(PRESETS) | set(params))))
