@@ -226,3 +226,24 @@ def test_gp_tunes_itself_and_untuned_families_get_defaults(lab, monkeypatch):
     # the GP's hyper-parameters move away from their starting point in fit
     gp = GPReference(random_state=0).fit(lab[0])
     assert not np.allclose(gp.length_scales_, 10.0)
+
+
+@pytest.mark.parametrize("name", ["gp", "gbr"])
+def test_large_inputs_are_predicted_in_blocks(monkeypatch, name):
+    # Bounded memory: the GP's (rows x training rows) kernel and the trees' (rows x
+    # trees) node indices are built per block; the predictions do not depend on it.
+    import nirglucose.models.reference as reference
+
+    ds = ng.simulate("paper", 20, 3, seed=0)
+    m = make_model(name).fit(ds)
+    whole = m.predict(ds)
+    monkeypatch.setattr(reference, "PREDICT_ROWS", 7)
+    blocks = []
+    real = reference._by_chunks
+
+    def spy(fn, U):
+        return real(lambda u: blocks.append(len(u)) or fn(u), U)
+
+    monkeypatch.setattr(reference, "_by_chunks", spy)
+    np.testing.assert_allclose(m.predict(ds), whole, rtol=1e-9)  # BLAS blocking
+    assert blocks == [7] * (len(ds) // 7) + [len(ds) % 7]

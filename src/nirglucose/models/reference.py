@@ -39,6 +39,19 @@ from .registry import register
 __all__ = ["MeanReference", "GPReference", "GBRReference"]
 
 
+#: Rows per block of prediction: the GP's kernel rows and the trees' node indices are
+#: (rows x training rows) and (rows x trees) arrays, so a large input is taken in
+#: blocks of bounded memory (about 8192 x 1000 x 8 B = 66 MB for the GP).
+PREDICT_ROWS = 8192
+
+
+def _by_chunks(fn, U: np.ndarray) -> np.ndarray:
+    """``fn`` applied to blocks of :data:`PREDICT_ROWS` rows of ``U``, concatenated."""
+    if len(U) <= PREDICT_ROWS:
+        return fn(U)
+    return np.concatenate([fn(U[i : i + PREDICT_ROWS]) for i in range(0, len(U), PREDICT_ROWS)])
+
+
 class _ReferenceBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
     """Input reading, fitted checks and the saved device, shared by the reference learners.
 
@@ -282,12 +295,15 @@ class GPReference(_ReferenceBase):
     def predict(self, X) -> np.ndarray:
         """Posterior mean of glucose for each row. [mg/dL]"""
         self._require_fitted()
-        U = self._predict_inputs(X)
-        Z = (U - self.x_mean_) / self.x_scale_ / self.length_scales_
+        Z = (self._predict_inputs(X) - self.x_mean_) / self.x_scale_ / self.length_scales_
         T = self.X_train_ / self.length_scales_
-        d2 = (Z * Z).sum(1)[:, None] + (T * T).sum(1)[None, :] - 2.0 * Z @ T.T
-        K = self.signal_variance_ * np.exp(-0.5 * np.maximum(d2, 0.0))
-        return (K @ self.alpha_) * self.y_std_ + self.y_mean_
+        t2 = (T * T).sum(1)[None, :]
+
+        def chunk(z: np.ndarray) -> np.ndarray:
+            d2 = (z * z).sum(1)[:, None] + t2 - 2.0 * z @ T.T
+            return self.signal_variance_ * np.exp(-0.5 * np.maximum(d2, 0.0)) @ self.alpha_
+
+        return _by_chunks(chunk, Z) * self.y_std_ + self.y_mean_
 
     @property
     def n_parameters(self) -> int:
@@ -473,13 +489,17 @@ class GBRReference(_ReferenceBase):
         # scikit-learn's trees compare float32 inputs with float64 thresholds
         Uf = U.astype(np.float32).astype(np.float64)
         tix = np.arange(self.value_.shape[0])
-        node = np.zeros((len(U), len(tix)), dtype=np.intp)
-        for _ in range(self.depth_):
-            left = self._left[tix, node]
-            x = np.take_along_axis(Uf, self._feature[tix, node], axis=1)
-            nxt = np.where(x <= self.threshold_[tix, node], left, self._right[tix, node])
-            node = np.where(left < 0, node, nxt)
-        return self.init_ + self.value_[tix, node].sum(axis=1)
+
+        def chunk(u: np.ndarray) -> np.ndarray:
+            node = np.zeros((len(u), len(tix)), dtype=np.intp)
+            for _ in range(self.depth_):
+                left = self._left[tix, node]
+                x = np.take_along_axis(u, self._feature[tix, node], axis=1)
+                nxt = np.where(x <= self.threshold_[tix, node], left, self._right[tix, node])
+                node = np.where(left < 0, node, nxt)
+            return self.value_[tix, node].sum(axis=1)
+
+        return self.init_ + _by_chunks(chunk, Uf)
 
     @property
     def n_parameters(self) -> int:
