@@ -53,7 +53,7 @@ def fit_standardized_cv(inputs, n, y, folds, solve) -> StandardizedFit:
     folds : numpy.ndarray or None
         Inner fold of each row, or None for no CV.
     solve : callable
-        ``solve(R, xy, n_train)`` -> (p, h) standardised coefficients, one column per
+        ``solve(R, xy)`` -> (p, h) standardised coefficients, one column per
         hyperparameter value.
 
     Each fold is standardised exactly by its own training rows, computed from sums over
@@ -80,7 +80,7 @@ def fit_standardized_cv(inputs, n, y, folds, solve) -> StandardizedFit:
                 R, xy, mu, sd, ybar = _standardize_stats(
                     G - Zv @ Zv.T, zy - Zv @ yv, zs - Zv.sum(axis=1), ys - yv.sum(), n - (b - a)
                 )
-                coef = solve(R, xy, n - (b - a))
+                coef = solve(R, xy)
                 pred = coef.T @ ((Zv - mu[:, None]) / sd[:, None]) + ybar
                 sse = sse + ((pred - yv) ** 2).sum(axis=1)
             mse = sse / n

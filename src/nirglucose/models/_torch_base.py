@@ -517,8 +517,6 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
         self._validate_params()
         self.__dict__.pop("_fast", None)  # a previous fit's snapshot
         Xa, y, groups = self._measurements(X, y, require_target=True, fit=True)
-        if len(Xa) < 2:
-            raise DataError(f"fitting needs at least 2 samples, got {len(Xa)}")
         rs = check_random_state(self.random_state)
         split_seed, init_seed, shuffle_seed = (int(s) for s in rs.randint(0, 2**31 - 1, size=3))
         (Xt, yt), (Xv, yv) = self._train_val_rows(Xa, y, groups, X_val, y_val, split_seed)

@@ -133,18 +133,15 @@ class TorchPredictMixin:
         s = self.scaler_
         self.module_.eval()
         numpy_forward = getattr(self.module_, "numpy_forward", None)
+        mu = np.concatenate((s["nir_mean"], s["pmf_mean"])).astype(np.float64)
         self._fast = {
             "fn": numpy_forward() if callable(numpy_forward) else None,
-            "x": np.zeros((1, len(self._fast_mu())), dtype=np.float32),
-            "mu": np.concatenate((s["nir_mean"], s["pmf_mean"])).astype(np.float64),
+            "x": np.zeros((1, len(mu)), dtype=np.float32),
+            "mu": mu,
             "inv_scale": 1.0 / np.concatenate((s["nir_scale"], s["pmf_scale"])).astype(np.float64),
             "y_mean": float(s["y_mean"]),
             "y_scale": float(s["y_scale"]),
         }
-
-    def _fast_mu(self) -> np.ndarray:
-        s = self.scaler_
-        return np.concatenate((s["nir_mean"], s["pmf_mean"]))
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()

@@ -40,7 +40,6 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.model_selection import GroupKFold, KFold
 from threadpoolctl import threadpool_limits
 
-from ..dataset import PMF_COLUMNS
 from ..exceptions import ConfigError, DataError
 from ..features import (
     compute_features,
@@ -53,13 +52,11 @@ from ._ebl_folded import FoldedKernel, fold_ebl, folded_predict_one, predict_one
 from ._linear_solvers import fit_standardized_cv, pls1_coefs, ridge_coefs
 from .registry import register
 
-__all__ = ["EnhancedBeerLambert", "PLSBaseline", "DEFAULT_ALPHAS", "PLS_INPUT_NAMES"]
+__all__ = ["EnhancedBeerLambert", "PLSBaseline", "DEFAULT_ALPHAS"]
 
 #: Ridge penalties tried by the inner CV (sum-of-squares scale, as scikit-learn's Ridge).
 DEFAULT_ALPHAS = tuple(float(a) for a in np.logspace(-6, 6, 25))
 #: Inputs of the PLS baseline: the 4 log absorbances and the 12 measured PMF entries.
-PLS_INPUT_NAMES = ("A_850", "A_940", "A_1050", "A_1150", *PMF_COLUMNS)
-_N_CH = 4
 
 
 def _group_kfold_ids(groups: np.ndarray, n_splits: int) -> np.ndarray:
@@ -253,7 +250,7 @@ class EnhancedBeerLambert(_LinearBase):
             len(Xa),
             y,
             folds,
-            lambda R, xy, n_tr: ridge_coefs(R, xy, alphas),
+            lambda R, xy: ridge_coefs(R, xy, alphas),
         )
         if fit.mse is not None:
             mse = fit.mse
@@ -382,8 +379,9 @@ class PLSBaseline(_LinearBase):
     x_mean_ : numpy.ndarray
         (16,) training means of the inputs (the C export centres with them).
     coef_ : numpy.ndarray
-        (16,) coefficients on :data:`PLS_INPUT_NAMES` (log10 absorbances, PMF in column
-        units). [mg/dL per unit]
+        Coefficients on :attr:`input_names_` (log10 absorbances, then the
+        physiological columns in their units; 16 at the study's device).
+        [mg/dL per unit]
     intercept_ : float
         [mg/dL]
 
@@ -453,7 +451,7 @@ class PLSBaseline(_LinearBase):
             n,
             y,
             folds,
-            lambda R, xy, n_tr: pls1_coefs(R, xy, k_max),
+            lambda R, xy: pls1_coefs(R, xy, k_max),
         )
         if fit.mse is not None:
             mse = fit.mse
