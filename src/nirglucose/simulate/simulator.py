@@ -43,8 +43,6 @@ NOMINAL = {
 class _Tables:
     spectra: tissue.BandSpectra
     geometry: np.ndarray
-    ambient: tuple[np.ndarray, np.ndarray, np.ndarray]
-    light_names: tuple[str, ...]
     lut: object = None  # the rte-lut model's table, specialised to the band nodes
 
 
@@ -77,8 +75,6 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
         cfg.optics.detector_area_mm2 / 100.0,
         cfg.optics.tissue_refractive_index,
     )
-    names = tuple(environment.LIGHT_SOURCES)
-    table = np.array([environment.LIGHT_SOURCES[k] for k in names])
     lut = None
     if cfg.optics.model == "rte-lut":
         from ..optics import lut as lut_mod
@@ -92,7 +88,7 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
             ),
             optics["musp_subcutis"][0] / optics["musp_dermis"][0],
         )
-    return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names, lut)
+    return _Tables(spectra, geometry, lut)
 
 
 #: Rows per optics slice: the (rows, n_led, n_points) temporaries then fit in the
