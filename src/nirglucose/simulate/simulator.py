@@ -257,8 +257,9 @@ def simulate_block(
         "subject_id": (first_subject + rep).astype(np.int64),
         "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
     }
-    truth = {**phys, **env, **probe, **_hidden(glucose, temps, fraction, shift_nm, hwout)}
-    return _columns(cfg, ids, glucose, hwout, pmf, env, truth), streams.n_variates
+    truth = {**phys, **env, **probe, **_hidden(glucose, temps)}
+    cols = _columns(cfg, ids, glucose, hwout, pmf, env, truth, fraction, shift_nm)
+    return cols, streams.n_variates
 
 
 def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: dict):
@@ -293,22 +294,26 @@ def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: di
     return shift_nm, fraction
 
 
-def _hidden(glucose: dict, temps: dict, fraction, shift_nm, hwout: dict) -> dict:
-    """The ``true_*`` columns of the glucose and hardware layers (per LED by wavelength)."""
-    out = {
+def _hidden(glucose: dict, temps: dict) -> dict:
+    """The scalar ``true_*`` columns of the glucose and hardware layers."""
+    return {
         "true_led_temperature_c": temps["led_c"].mean(axis=1),
         "true_board_temperature_c": temps["board_c"],
         "true_hours_since_meal": glucose["true_hours_since_meal"],
         "true_stress": glucose["true_stress"],
         "true_hour_of_day": glucose["true_hour_of_day"],
-        "_fraction": fraction,
-        "_shift_nm": np.broadcast_to(shift_nm, fraction.shape),
     }
-    return out
 
 
-def _columns(cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, truth: dict):
-    """The dataset's columns in their fixed order: ids, target, codes, PMF, truths (sorted)."""
+def _columns(
+    cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, truth: dict,
+    fraction: np.ndarray, shift_nm: np.ndarray,
+):
+    """The dataset's columns in their fixed order: ids, target, codes, PMF, truths (sorted).
+
+    ``fraction`` and ``shift_nm`` (the optics layer's detected fraction and LED peak
+    shifts, (n, n_led)) become per-LED ``true_*`` columns beside ``hwout``'s voltages.
+    """
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     cols: dict[str, np.ndarray] = {
         **ids,
@@ -321,7 +326,7 @@ def _columns(cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, t
         cols[f"adc_ref_{w}"] = hwout["adc_ref"][:, i]
     cols.update(pmf)
     cols["ambient_lux"] = env["true_ambient_lux"]
-    fraction, shift = truth.pop("_fraction"), truth.pop("_shift_nm")
+    shift = np.broadcast_to(shift_nm, fraction.shape)
     for i, w in enumerate(wl):
         truth[f"true_detected_fraction_{w}"] = fraction[:, i]
         truth[f"true_led_shift_nm_{w}"] = shift[:, i]
