@@ -31,14 +31,6 @@ __all__ = [
     "scenario_band_spectra",
 ]
 
-#: The default reference skin (``optics.reference_tissue``) as a dict, for callers
-#: without a scenario (the PINN regulariser). [fractions, mM, mm]
-NOMINAL = {
-    **ReferenceTissue().model_dump(exclude={"glucose_mgdl"}),
-    "glucose_mm": ReferenceTissue().glucose_mm,
-}
-
-
 @dataclass(frozen=True)
 class _Tables:
     spectra: tissue.BandSpectra
@@ -185,9 +177,8 @@ def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.
     return out
 
 
-def nominal_tissue(n: int, reference: ReferenceTissue | None = None) -> tissue.TissueState:
+def nominal_tissue(n: int, ref: ReferenceTissue) -> tissue.TissueState:
     """The reference tissue composition (``optics.reference_tissue``) repeated ``n`` times."""
-    ref = ReferenceTissue() if reference is None else reference
     return tissue.TissueState(
         *(
             np.full(n, v)
