@@ -171,6 +171,16 @@ def test_config_recorded_in_the_former_layout_still_loads():
     assert ScenarioConfig.model_validate(data) == resolve_config("wearable", {"leds": THREE})
 
 
+def test_config_recorded_with_a_dropped_key_still_loads():
+    # hardware.calibration_temperature_sd_c was read nowhere: recorded configs keep loading,
+    # but it is no longer a key anyone can set
+    data = resolve_config("wearable").model_dump(mode="json")
+    data["hardware"]["calibration_temperature_sd_c"] = 2.0
+    assert ScenarioConfig.model_validate(data) == resolve_config("wearable")
+    with pytest.raises(ConfigError, match="unknown config key"):
+        resolve_config("paper", {"hardware.calibration_temperature_sd_c": 2.0})
+
+
 def test_one_led_value_is_a_key():
     cfg = resolve_config("paper", {"leds.emitters.3.power_mw": 8.0})
     assert cfg.leds.power_mw == (2.0, 2.0, 2.7, 8.0)

@@ -127,6 +127,18 @@ def test_nominal_optics_are_plausible_skin_values():
     assert np.all(np.diff(musp) < 0)  # power law falls with wavelength
 
 
+def test_rte_pinn_nominal_optics_follow_the_reference_tissue():
+    # the RTE PINN's nominal skin is the scenario's optics.reference_tissue, not the default
+    base = resolve_config("paper")
+    moved = resolve_config("paper", {"optics.reference_tissue.blood_fraction": 0.06,
+                                     "optics.reference_tissue.skin_thickness_mm": 3.0})
+    wl = base.leds.wavelengths_nm
+    p0 = RTEPINN()._physics_from(base, "test", None, wl)
+    p1 = RTEPINN()._physics_from(moved, "test", None, wl)
+    assert np.all(np.array(p1["nominal_mua_per_cm"]) > np.array(p0["nominal_mua_per_cm"]))
+    assert not np.allclose(p1["nominal_musp_per_cm"], p0["nominal_musp_per_cm"])
+
+
 # ----------------------------------------------------------------- registry and API
 
 

@@ -132,10 +132,3 @@ class ContactConfig(_Model):
         "), a share of full scale: the mean of Beta(2, 2), so the cohort's mean blanching and "
         "compression are unchanged. [-]",
     )
-
-    @field_validator("pressure_beta")
-    @classmethod
-    def _positive(cls, v: tuple[float, float]) -> tuple[float, float]:
-        if min(v) <= 0:
-            raise ValueError(f"contact.pressure_beta needs positive shapes, got {v}")
-        return v

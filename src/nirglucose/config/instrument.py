@@ -210,13 +210,6 @@ class HardwareConfig(_Model):
         le=1,
         description="Fraction of ambient photocurrent removed by the LED-off subtraction. [-]",
     )
-    calibration_temperature_sd_c: float = Field(
-        0.0,
-        ge=0,
-        le=10,
-        description="Extra SD of the device temperature at start-up. At most 10 degC (an "
-        "assumption). [degC]",
-    )
 
 
 class MeasurementConfig(_Model):

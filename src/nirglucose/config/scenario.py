@@ -16,6 +16,10 @@ from .leds import DEFAULT_LEDS, LEDConfig, _merge_legacy_leds
 from .noise import NOISE_SOURCES, NoiseConfig, NoiseSource
 from .subject import GlucoseConfig, PhysiologyConfig
 
+#: ``hardware`` keys of recorded configs that no longer exist: read nowhere when they
+#: did, so a config recorded with them loads without them and simulates the same data.
+_REMOVED_HARDWARE_KEYS = ("calibration_temperature_sd_c",)
+
 
 class ScenarioConfig(_Model):
     """A complete, resolved simulation scenario."""
@@ -39,10 +43,15 @@ class ScenarioConfig(_Model):
     @model_validator(mode="before")
     @classmethod
     def _former_layout(cls, data: Any) -> Any:
-        # configs recorded before issue 22 kept per-LED values in four parallel lists
         if not isinstance(data, dict):
             return data
-        leds, hw = data.get("leds"), data.get("hardware")
+        hw = data.get("hardware")
+        if isinstance(hw, dict) and any(k in hw for k in _REMOVED_HARDWARE_KEYS):
+            # recorded before these keys were dropped; they never changed the data
+            hw = {k: v for k, v in hw.items() if k not in _REMOVED_HARDWARE_KEYS}
+            data = {**data, "hardware": hw}
+        # configs recorded before issue 22 kept per-LED values in four parallel lists
+        leds = data.get("leds")
         old = {}
         if isinstance(leds, dict):
             old.update({f"leds.{k}": leds[k] for k in ("wavelengths_nm", "fwhm_nm") if k in leds})

@@ -330,10 +330,10 @@ class OptimizedPINN(_BeerLambertPINN):
 def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
     """Nominal-skin absorption and reduced scattering at each LED, as the simulator sees it.
 
-    The simulator's nominal tissue (blood 2 %, SO2 0.7, water 0.65, 1.8 mm skin over
-    fat), dermis and subcutis mixed by the path share at the probe's separation, and
-    averaged over each LED's emission band. Scattering follows the Jacques (2013)
-    power laws for skin and fat [4]_.
+    The scenario's reference skin (``optics.reference_tissue``, where the simulator
+    fixes its geometry factor), dermis and subcutis mixed by the path share at the
+    probe's separation, and averaged over each LED's emission band. Scattering follows
+    the Jacques (2013) power laws for skin and fat [4]_.
 
     Parameters
     ----------
@@ -346,18 +346,19 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
         (n_led,) each. [1/cm]
     """
     from ..optics import forward, tissue
-    from ..simulate.simulator import NOMINAL, nominal_tissue, scenario_band_spectra
+    from ..simulate.simulator import nominal_tissue, scenario_band_spectra
 
+    ref = cfg.optics.reference_tissue
     spectra = scenario_band_spectra(cfg)
     optics = tissue.tissue_optics(
         spectra,
-        nominal_tissue(1),
+        nominal_tissue(1, ref),
         water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,
         scattering_rel_per_mm=cfg.glucose.scattering_rel_per_mm,
     )
     mua, musp, _ = forward.mixed_optics(
         optics,
-        np.array([NOMINAL["skin_thickness_mm"] / 10.0]),
+        np.array([ref.skin_thickness_mm / 10.0]),
         cfg.optics.source_detector_mm / 10.0,
     )
     w = spectra.weights

@@ -57,7 +57,7 @@ __all__ = [
 ]
 
 
-def board_temperature_c(ambient_c, skin_c, skin_weight: float = 0.5) -> np.ndarray:
+def board_temperature_c(ambient_c, skin_c, skin_weight: float) -> np.ndarray:
     """Board temperature between air and skin, (1 - w) T_ambient + w T_skin. [degC]
 
     The board sits between the air and the skin it is strapped to; halfway
@@ -65,7 +65,7 @@ def board_temperature_c(ambient_c, skin_c, skin_weight: float = 0.5) -> np.ndarr
 
     Examples
     --------
-    >>> float(board_temperature_c(20.0, 34.0))
+    >>> float(board_temperature_c(20.0, 34.0, 0.5))
     27.0
     """
     return (1.0 - skin_weight) * np.asarray(ambient_c) + skin_weight * np.asarray(skin_c)

@@ -33,10 +33,6 @@ _TRUTH = {
     "pressure_mbar": "true_pressure_mbar",
 }
 
-#: Bounds that keep a measured value physically meaningful, tighter than the display
-#: ranges of :data:`~nirglucose.constants.PHYSIOLOGICAL_RANGES`. [column unit]
-_FLOORS = {"melanin_fraction": 0.0, "skin_thickness_mm": 0.1, "bmi_kgm2": 10.0}
-
 
 def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams) -> dict:
     """Return the measured physiological vector (:data:`PMF_COLUMNS`) from the truth.
@@ -54,8 +50,6 @@ def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams)
     draws = rng.normal(size=(len(_TRUTH), n))
     for i, (col, true_col) in enumerate(_TRUTH.items()):
         value = truth[true_col] + f * getattr(m, col) * draws[i]
-        if col in _FLOORS:
-            value = np.maximum(value, _FLOORS[col])
         # An instrument reports within its display range (PHYSIOLOGICAL_RANGES); only
         # errors scaled far beyond the instruments' (noise_scale >> 1) reach its ends.
         lo, hi, _ = PHYSIOLOGICAL_RANGES[col]

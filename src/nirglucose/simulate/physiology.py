@@ -65,19 +65,19 @@ def melanin_fraction_from_fitzpatrick(fitzpatrick_type: np.ndarray, u: np.ndarra
 
 def subcutis_fat_fraction(
     bmi_kgm2: np.ndarray,
-    fat_min: float = 0.7,
-    fat_rise: float = 0.2,
-    bmi_range_kgm2: tuple[float, float] = (18.0, 40.0),
+    fat_min: float,
+    fat_rise: float,
+    bmi_range_kgm2: tuple[float, float],
 ) -> np.ndarray:
     """Fat volume fraction of the subcutis, rising linearly with BMI.
 
     f = fat_min + fat_rise clip((BMI - BMI_lo) / (BMI_hi - BMI_lo), 0, 1): 0.7 at BMI 18
-    to 0.9 at BMI 40 by default. SOURCES.md layer table gives 0.7-0.9; the linear rise
-    with BMI is an assumption (``physiology.subcutis_fat_*``).
+    to 0.9 at BMI 40 with the scenario defaults. SOURCES.md layer table gives 0.7-0.9;
+    the linear rise with BMI is an assumption (``physiology.subcutis_fat_*``).
 
     Examples
     --------
-    >>> round(float(subcutis_fat_fraction(29.0)), 12)
+    >>> round(float(subcutis_fat_fraction(29.0, 0.7, 0.2, (18.0, 40.0))), 12)
     0.8
     """
     lo, hi = bmi_range_kgm2
@@ -86,19 +86,19 @@ def subcutis_fat_fraction(
 
 def skin_temperature_c(
     ambient_c: np.ndarray,
-    neutral_c: float = 33.0,
-    per_ambient: float = 0.3,
-    ambient_ref_c: float = 25.0,
+    neutral_c: float,
+    per_ambient: float,
+    ambient_ref_c: float,
 ) -> np.ndarray:
     """Mean skin temperature under a probe at a given ambient temperature.
 
-    T_skin = T_neutral + k (T_ambient - T_ref): 33 + 0.3 (T_ambient - 25) degC by
-    default (thermoneutral skin about 33 degC; the coupling k is an assumption,
+    T_skin = T_neutral + k (T_ambient - T_ref): 33 + 0.3 (T_ambient - 25) degC with the
+    scenario defaults (thermoneutral skin about 33 degC; the coupling k is an assumption,
     ``physiology.skin_temp_*``). [degC]
 
     Examples
     --------
-    >>> float(skin_temperature_c(35.0))
+    >>> float(skin_temperature_c(35.0, 33.0, 0.3, 25.0))
     36.0
     """
     return neutral_c + per_ambient * (np.asarray(ambient_c) - ambient_ref_c)

@@ -31,20 +31,10 @@ __all__ = [
     "scenario_band_spectra",
 ]
 
-#: The default reference skin (``optics.reference_tissue``) as a dict, for callers
-#: without a scenario (the PINN regulariser). [fractions, mM, mm]
-NOMINAL = {
-    **ReferenceTissue().model_dump(exclude={"glucose_mgdl"}),
-    "glucose_mm": ReferenceTissue().glucose_mm,
-}
-
-
 @dataclass(frozen=True)
 class _Tables:
     spectra: tissue.BandSpectra
     geometry: np.ndarray
-    ambient: tuple[np.ndarray, np.ndarray, np.ndarray]
-    light_names: tuple[str, ...]
     lut: object = None  # the rte-lut model's table, specialised to the band nodes
 
 
@@ -77,8 +67,6 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
         cfg.optics.detector_area_mm2 / 100.0,
         cfg.optics.tissue_refractive_index,
     )
-    names = tuple(environment.LIGHT_SOURCES)
-    table = np.array([environment.LIGHT_SOURCES[k] for k in names])
     lut = None
     if cfg.optics.model == "rte-lut":
         from ..optics import lut as lut_mod
@@ -92,7 +80,7 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
             ),
             optics["musp_subcutis"][0] / optics["musp_dermis"][0],
         )
-    return _Tables(spectra, geometry, (table[:, 0], table[:, 1], table[:, 2]), names, lut)
+    return _Tables(spectra, geometry, lut)
 
 
 #: Rows per optics slice: the (rows, n_led, n_points) temporaries then fit in the
@@ -189,9 +177,8 @@ def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.
     return out
 
 
-def nominal_tissue(n: int, reference: ReferenceTissue | None = None) -> tissue.TissueState:
+def nominal_tissue(n: int, ref: ReferenceTissue) -> tissue.TissueState:
     """The reference tissue composition (``optics.reference_tissue``) repeated ``n`` times."""
-    ref = ReferenceTissue() if reference is None else reference
     return tissue.TissueState(
         *(
             np.full(n, v)
@@ -261,8 +248,9 @@ def simulate_block(
         "subject_id": (first_subject + rep).astype(np.int64),
         "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
     }
-    truth = {**phys, **env, **probe, **_hidden(glucose, temps, fraction, shift_nm, hwout)}
-    return _columns(cfg, ids, glucose, hwout, pmf, env, truth), streams.n_variates
+    truth = {**phys, **env, **probe, **_hidden(glucose, temps)}
+    cols = _columns(cfg, ids, glucose, hwout, pmf, env, truth, fraction, shift_nm)
+    return cols, streams.n_variates
 
 
 def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: dict):
@@ -297,22 +285,26 @@ def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: di
     return shift_nm, fraction
 
 
-def _hidden(glucose: dict, temps: dict, fraction, shift_nm, hwout: dict) -> dict:
-    """The ``true_*`` columns of the glucose and hardware layers (per LED by wavelength)."""
-    out = {
+def _hidden(glucose: dict, temps: dict) -> dict:
+    """The scalar ``true_*`` columns of the glucose and hardware layers."""
+    return {
         "true_led_temperature_c": temps["led_c"].mean(axis=1),
         "true_board_temperature_c": temps["board_c"],
         "true_hours_since_meal": glucose["true_hours_since_meal"],
         "true_stress": glucose["true_stress"],
         "true_hour_of_day": glucose["true_hour_of_day"],
-        "_fraction": fraction,
-        "_shift_nm": np.broadcast_to(shift_nm, fraction.shape),
     }
-    return out
 
 
-def _columns(cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, truth: dict):
-    """The dataset's columns in their fixed order: ids, target, codes, PMF, truths (sorted)."""
+def _columns(
+    cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, truth: dict,
+    fraction: np.ndarray, shift_nm: np.ndarray,
+):
+    """The dataset's columns in their fixed order: ids, target, codes, PMF, truths (sorted).
+
+    ``fraction`` and ``shift_nm`` (the optics layer's detected fraction and LED peak
+    shifts, (n, n_led)) become per-LED ``true_*`` columns beside ``hwout``'s voltages.
+    """
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     cols: dict[str, np.ndarray] = {
         **ids,
@@ -325,7 +317,7 @@ def _columns(cfg, ids: dict, glucose: dict, hwout: dict, pmf: dict, env: dict, t
         cols[f"adc_ref_{w}"] = hwout["adc_ref"][:, i]
     cols.update(pmf)
     cols["ambient_lux"] = env["true_ambient_lux"]
-    fraction, shift = truth.pop("_fraction"), truth.pop("_shift_nm")
+    shift = np.broadcast_to(shift_nm, fraction.shape)
     for i, w in enumerate(wl):
         truth[f"true_detected_fraction_{w}"] = fraction[:, i]
         truth[f"true_led_shift_nm_{w}"] = shift[:, i]
