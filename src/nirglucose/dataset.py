@@ -23,7 +23,6 @@ from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -47,7 +46,6 @@ __all__ = [
     "adc_columns",
     "ref_columns",
     "measured_columns",
-    "validate_measurements",
     "atomic_write",
     "SUFFIXES",
     "KNOWN_PHYSIOLOGY",
@@ -181,85 +179,6 @@ def atomic_write(path: str | os.PathLike, write) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
-
-
-def _first_rows(mask: np.ndarray, limit: int = 5) -> str:
-    rows = np.flatnonzero(mask)
-    shown = ", ".join(str(int(r)) for r in rows[:limit])
-    more = f" and {len(rows) - limit} more" if len(rows) > limit else ""
-    return f"rows {shown}{more}"
-
-
-def validate_measurements(
-    frame: pd.DataFrame,
-    *,
-    wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM,
-    require_target: bool = False,
-    adc_bits: int = 12,
-) -> pd.DataFrame:
-    """Check a frame of measurements and return its measured columns as float64.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        Measurements (a user's own, or a simulated dataset).
-    wavelengths_nm : iterable of float
-        LED wavelengths whose ``adc_*`` / ``adc_ref_*`` columns are required. [nm]
-    require_target : bool
-        Also require a valid ``glucose_mgdl`` column (for fitting).
-    adc_bits : int
-        ADC resolution; codes must lie in [1, 2^bits - 1] (a zero code has no
-        absorbance). [bit]
-
-    Returns
-    -------
-    pandas.DataFrame
-        The measured columns (and ``glucose_mgdl`` when required), float64.
-
-    Raises
-    ------
-    DataError
-        Missing columns, non-numeric cells, NaN or infinite values, ADC codes out of
-        range, non-positive glucose; the message lists the offending columns and rows.
-    """
-    if not isinstance(frame, pd.DataFrame):
-        raise DataError(f"expected a pandas DataFrame, got {type(frame).__name__}")
-    cols = measured_columns(wavelengths_nm) + (["glucose_mgdl"] if require_target else [])
-    missing = [c for c in cols if c not in frame.columns]
-    if missing:
-        raise DataError(
-            f"missing columns {missing}; required: {cols} (see README, 'Your own measurements')"
-        )
-    if len(frame) == 0:
-        raise DataError("no rows: the data holds no measurements")
-    out = {}
-    for c in cols:
-        numeric = pd.to_numeric(frame[c], errors="coerce")
-        bad = numeric.isna().to_numpy() & frame[c].notna().to_numpy()
-        if bad.any():
-            raise DataError(f"column {c!r} has non-numeric cells at {_first_rows(bad)}")
-        values = numeric.to_numpy(dtype=float)
-        bad = ~np.isfinite(values)
-        if bad.any():
-            raise DataError(f"column {c!r} has NaN or infinite values at {_first_rows(bad)}")
-        out[c] = values
-    full = 2**adc_bits - 1
-    for c in adc_columns(wavelengths_nm) + ref_columns(wavelengths_nm):
-        bad = (out[c] < 1) | (out[c] > full)
-        if bad.any():
-            top = float(out[c].max())
-            why = (f"; codes up to {top:.0f} need a {int(np.ceil(np.log2(top + 1)))}-bit ADC, "
-                   f"this expects {adc_bits}-bit" if top > full else "")
-            raise DataError(
-                f"column {c!r} has ADC codes outside 1-{full} at {_first_rows(bad)}{why}"
-            )
-    if require_target:
-        bad = out["glucose_mgdl"] <= 0
-        if bad.any():
-            raise DataError(
-                f"column 'glucose_mgdl' must be positive [mg/dL]; see {_first_rows(bad)}"
-            )
-    return pd.DataFrame(out, index=frame.index)
 
 
 class Dataset:

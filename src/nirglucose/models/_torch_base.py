@@ -71,13 +71,13 @@ import numpy as np
 import pandas as pd
 import torch
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
 from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit
 from sklearn.utils import check_random_state
 from torch import nn
 
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError, NotFittedError
+from ..exceptions import ConfigError, DataError
+from ..fitted import require_fitted
 from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
 from ._constructor import (
@@ -118,11 +118,6 @@ __all__ = [
 ]
 
 logger = logging.getLogger(__name__)
-
-
-class _UnfittedError(NotFittedError, _SklearnNotFittedError):
-    """nirglucose's :class:`~nirglucose.exceptions.NotFittedError`, also recognised by
-    scikit-learn tools as theirs (it subclasses both)."""
 
 
 def nir_pmf_features(
@@ -381,10 +376,7 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
         return physics if physics is not None else self._default_physics()
 
     def _check_fitted(self) -> None:
-        if getattr(self, "module_", None) is None:
-            raise _UnfittedError(
-                f"this {type(self).__name__} is not fitted yet; call fit(...) first"
-            )
+        require_fitted(self, "module_")
 
     @staticmethod
     def _glucose(out: Any) -> torch.Tensor:
