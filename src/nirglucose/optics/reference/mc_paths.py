@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
-from .photon_engine import Packets, Stack, run_photons
+from .photon_engine import Packets, Stack, check_range, run_photons
 
 __all__ = ["DetectedPaths", "mc_detected_paths", "reweight_detected"]
 
@@ -85,6 +85,20 @@ def _layers(name: str, v: ArrayLike, n: int) -> NDArray[np.float64]:
     if a.ndim != 1 or a.size not in (1, n):
         raise ConfigError(f"{name} must be a scalar or have one value per layer ({n})")
     return np.broadcast_to(a, (n,)).copy()
+
+
+def _ring(ring_cm: object) -> tuple[float, float]:
+    """Inner and outer radius of the detector ring, or a one-line ConfigError. [cm]"""
+    try:
+        ring = np.asarray(ring_cm, dtype=float)
+    except (TypeError, ValueError):
+        ring = np.full(1, np.nan)
+    if ring.shape != (2,):
+        raise ConfigError(f"ring_cm = {ring_cm!r} must be two radii (inner, outer) [cm]")
+    r_in, r_out = float(ring[0]), float(ring[1])
+    if not (0.0 <= r_in < r_out and np.isfinite(r_out)):
+        raise ConfigError(f"ring_cm = {ring_cm!r} needs 0 <= inner < outer < inf [cm]")
+    return r_in, r_out
 
 
 def mc_detected_paths(
@@ -135,7 +149,8 @@ def mc_detected_paths(
     Raises
     ------
     ConfigError
-        If an input is out of range.
+        If an input is out of range (the roulette settings and ``n_photons`` are checked
+        by the engine, :func:`~nirglucose.optics.reference.photon_engine.check_run`).
 
     Notes
     -----
@@ -160,6 +175,9 @@ def mc_detected_paths(
     2
     """
     mua0 = np.atleast_1d(np.asarray(mua_ref_per_cm, dtype=float))
+    if mua0.ndim != 1 or mua0.size == 0:
+        raise ConfigError("mua_ref_per_cm must be a scalar or a 1-D sequence with one value "
+                          "per layer")
     n_layers = mua0.size
     mus = _layers("mus_per_cm", mus_per_cm, n_layers)
     gg = _layers("g", g, n_layers)
@@ -177,13 +195,10 @@ def mc_detected_paths(
         if not (ok and np.all(np.isfinite(v))):
             raise ConfigError(f"{name} = {v.tolist()!r} is out of range; valid range is "
                               f"{rng_text} [{unit}]")
-    r_in, r_out = (float(v) for v in ring_cm)
-    if not 0.0 <= r_in < r_out:
-        raise ConfigError(f"ring_cm = {ring_cm!r} needs 0 <= inner < outer [cm]")
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    if not float(n_tissue) / float(n_ambient) > 0:
-        raise ConfigError("refractive indices must be positive [-]")
+    r_in, r_out = _ring(ring_cm)
+    for name, v in (("n_tissue", n_tissue), ("n_ambient", n_ambient)):
+        check_range(name, np.atleast_1d(float(v)), "-", 0.0, np.inf, low_open=True,
+                    high_open=True)
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
     stack = Stack.from_layers(mua0, mus, gg, np.append(thick, np.inf),

@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.exceptions import ConfigError
 
-from .photon_engine import Packets, Stack, run_photons
+from .photon_engine import Packets, Stack, check_range, check_run, run_photons
 
 __all__ = ["MCResult", "mc_layers", "mc_slab"]
 
@@ -112,30 +112,6 @@ def _as_layers(name: str, v: ArrayLike, n_layers: int) -> NDArray[np.float64]:
     if a.ndim != 1 or a.size not in (1, n_layers):
         raise ConfigError(f"{name} must be a scalar or have one value per layer ({n_layers})")
     return np.broadcast_to(a, (n_layers,)).copy()
-
-
-def _check(
-    name: str,
-    v: NDArray[np.float64],
-    unit: str,
-    low: float,
-    high: float,
-    *,
-    low_open: bool = False,
-    high_open: bool = False,
-    finite: bool = True,
-) -> None:
-    ok = ~np.isnan(v)
-    if finite:
-        ok &= np.isfinite(v)
-    ok &= (v > low) if low_open else (v >= low)
-    ok &= (v < high) if high_open else (v <= high)
-    if not np.all(ok):
-        bad = v[~ok].flat[0]
-        lb, hb = ("(" if low_open else "["), (")" if high_open else "]")
-        raise ConfigError(
-            f"{name} = {bad!r} is out of range; valid range is {lb}{low:g}, {high:g}{hb} [{unit}]"
-        )
 
 
 def mc_layers(
@@ -227,11 +203,7 @@ def mc_layers(
     """
     stack, edges = _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers,
                                     n_ambient, rho_edges_cm)
-    for name, v in (("weight_threshold", weight_threshold), ("roulette_chance", roulette_chance)):
-        _check(name, np.atleast_1d(float(v)), "-", 0.0, 1.0, low_open=True, high_open=True)
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    n_photons = int(n_photons)
+    n_photons = check_run(n_photons, weight_threshold, roulette_chance)  # sizes the tally
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     tally = _LayerTally(n_photons, stack.n_layers, edges)
     run_photons(stack, tally, n_photons, gen, absorption="discrete",
@@ -252,13 +224,13 @@ def _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers, n_ambien
     gl = _as_layers("g", g, nl)
     d = _as_layers("thickness_cm", thickness_cm, nl)
     nidx = _as_layers("n_layers", n_layers, nl)
-    _check("mua_per_cm", mua, "1/cm", 0.0, np.inf)
-    _check("mus_per_cm", mus, "1/cm", 0.0, np.inf)
-    _check("g", gl, "-", -1.0, 1.0, low_open=True, high_open=True)
-    _check("thickness_cm", d[:-1], "cm", 0.0, np.inf, low_open=True)
-    _check("thickness_cm", d[-1:], "cm", 0.0, np.inf, low_open=True, finite=False)
-    _check("n_layers", nidx, "-", 0.0, np.inf, low_open=True)
-    _check("n_ambient", np.atleast_1d(float(n_ambient)), "-", 0.0, np.inf, low_open=True)
+    check_range("mua_per_cm", mua, "1/cm", 0.0, np.inf)
+    check_range("mus_per_cm", mus, "1/cm", 0.0, np.inf)
+    check_range("g", gl, "-", -1.0, 1.0, low_open=True, high_open=True)
+    check_range("thickness_cm", d[:-1], "cm", 0.0, np.inf, low_open=True)
+    check_range("thickness_cm", d[-1:], "cm", 0.0, np.inf, low_open=True, finite=False)
+    check_range("n_layers", nidx, "-", 0.0, np.inf, low_open=True)
+    check_range("n_ambient", np.atleast_1d(float(n_ambient)), "-", 0.0, np.inf, low_open=True)
     if np.isinf(d[-1]) and mua[-1] <= 0.0:
         raise ConfigError(
             f"mua_per_cm = {mua[-1]!r} of the semi-infinite last layer is out of range; "
