@@ -222,7 +222,10 @@ def fresnel(
 
 def hg_cos(g: NDArray[np.float64], xi: NDArray[np.float64]) -> NDArray[np.float64]:
     """Sample cos(theta) from the Henyey-Greenstein phase function (Wang et al. 1995, Eq. 3.28)."""
-    iso = np.abs(g) < 1e-6  # isotropic below this |g| (MCML's own cut-off)
+    # this code's guard, not MCML's (MCML tests g == 0 exactly): as g -> 0 the
+    # quotient (1 + g^2 - tmp^2)/(2g) loses its precision, so below this |g| the
+    # isotropic cos(theta) = 2 xi - 1 is used, the limit of the formula
+    iso = np.abs(g) < 1e-6
     gs = np.where(iso, 0.5, g)
     tmp = (1.0 - gs * gs) / (1.0 - gs + 2.0 * gs * xi)
     mu = (1.0 + gs * gs - tmp * tmp) / (2.0 * gs)
