@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from ...exceptions import ConfigError
 from .. import layers
+from .._inputs import as_generator
 from ..kernels import mc_white
 from ..lut.build import _mc_run_kwargs
 from ..lut.grid import (
@@ -44,7 +45,7 @@ def random_lut_points(lut: SkinLUT, n_points: int, *, rng: np.random.Generator |
     ``skin_transport_thickness`` (so one Monte Carlo run solves a group: see
     :func:`lut_errors`); every other coordinate is drawn per point.
     """
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    gen = as_generator(rng)
     shared = ("musp_ratio", "skin_transport_thickness")
     if groups is not None and not 1 <= int(groups) <= n_points:
         raise ConfigError(f"groups = {groups!r} is out of range; valid range is "

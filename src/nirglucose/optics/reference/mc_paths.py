@@ -41,11 +41,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
-from .photon_engine import Packets, Stack, check_range, run_photons
+from .._inputs import as_generator
+from .photon_engine import N_BATCHES, Packets, Stack, as_layers, check_range, run_photons
 
 __all__ = ["DetectedPaths", "mc_detected_paths", "reweight_detected"]
 
-_N_BATCHES = 20
 _MAX_STEPS = 2_000_000
 
 
@@ -78,13 +78,6 @@ class DetectedPaths:
     ring_area_cm2: float
     mua_ref_per_cm: NDArray[np.float64] = field(repr=False)
     diffuse_reflectance: float
-
-
-def _layers(name: str, v: ArrayLike, n: int) -> NDArray[np.float64]:
-    a = np.atleast_1d(np.asarray(v, dtype=float))
-    if a.ndim != 1 or a.size not in (1, n):
-        raise ConfigError(f"{name} must be a scalar or have one value per layer ({n})")
-    return np.broadcast_to(a, (n,)).copy()
 
 
 def _ring(ring_cm: object) -> tuple[float, float]:
@@ -179,8 +172,8 @@ def mc_detected_paths(
         raise ConfigError("mua_ref_per_cm must be a scalar or a 1-D sequence with one value "
                           "per layer")
     n_layers = mua0.size
-    mus = _layers("mus_per_cm", mus_per_cm, n_layers)
-    gg = _layers("g", g, n_layers)
+    mus = as_layers("mus_per_cm", mus_per_cm, n_layers)
+    gg = as_layers("g", g, n_layers)
     thick = np.atleast_1d(np.asarray(thickness_cm, dtype=float))
     if thick.size != n_layers - 1:
         raise ConfigError(f"thickness_cm needs {n_layers - 1} values (the last layer is "
@@ -199,7 +192,7 @@ def mc_detected_paths(
     for name, v in (("n_tissue", n_tissue), ("n_ambient", n_ambient)):
         check_range(name, np.atleast_1d(float(v)), "-", 0.0, np.inf, low_open=True,
                     high_open=True)
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    gen = as_generator(rng)
 
     stack = Stack.from_layers(mua0, mus, gg, np.append(thick, np.inf),
                               np.full(n_layers, float(n_tissue)), float(n_ambient))
@@ -240,7 +233,7 @@ class _RingTally:
         if np.any(inside):
             self.det_w.append(esc[inside])
             self.det_p.append(pk.path[ot[inside]].copy())
-            self.det_b.append(pk.pid[ot[inside]] % _N_BATCHES)
+            self.det_b.append(pk.pid[ot[inside]] % N_BATCHES)
 
 
 def reweight_detected(
@@ -285,8 +278,8 @@ def reweight_detected(
     ww = result.weight * np.exp(-(result.pathlength_cm @ delta))
     total = float(ww.sum())
     norm = result.n_photons * result.ring_area_cm2
-    per_batch = np.bincount(result.batch, weights=ww, minlength=_N_BATCHES)
-    per_batch = per_batch / (norm / _N_BATCHES)
-    se = float(per_batch.std(ddof=1) / np.sqrt(_N_BATCHES))
+    per_batch = np.bincount(result.batch, weights=ww, minlength=N_BATCHES)
+    per_batch = per_batch / (norm / N_BATCHES)
+    se = float(per_batch.std(ddof=1) / np.sqrt(N_BATCHES))
     paths = (ww @ result.pathlength_cm) / total if total > 0 else np.full(mua.size, np.nan)
     return total / norm, se, paths

@@ -36,11 +36,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.exceptions import ConfigError
 
-from .photon_engine import Packets, Stack, check_range, check_run, run_photons
+from .._inputs import as_generator
+from .photon_engine import (
+    N_BATCHES,
+    Packets,
+    Stack,
+    as_layers,
+    check_range,
+    check_run,
+    run_photons,
+)
 
 __all__ = ["MCResult", "mc_layers", "mc_slab"]
 
-_N_BATCHES = 20
 _MAX_STEPS = 1_000_000
 
 
@@ -105,13 +113,6 @@ class MCResult:
     def total_reflectance_se(self) -> float:
         """Standard error of ``total_reflectance`` (that of the diffuse part). [-]"""
         return self.diffuse_reflectance_se
-
-
-def _as_layers(name: str, v: ArrayLike, n_layers: int) -> NDArray[np.float64]:
-    a = np.atleast_1d(np.asarray(v, dtype=np.float64))
-    if a.ndim != 1 or a.size not in (1, n_layers):
-        raise ConfigError(f"{name} must be a scalar or have one value per layer ({n_layers})")
-    return np.broadcast_to(a, (n_layers,)).copy()
 
 
 def mc_layers(
@@ -204,7 +205,7 @@ def mc_layers(
     stack, edges = _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers,
                                     n_ambient, rho_edges_cm)
     n_photons = check_run(n_photons, weight_threshold, roulette_chance)  # sizes the tally
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    gen = as_generator(rng)
     tally = _LayerTally(n_photons, stack.n_layers, edges)
     run_photons(stack, tally, n_photons, gen, absorption="discrete",
                 weight_threshold=weight_threshold, roulette_chance=roulette_chance,
@@ -219,11 +220,11 @@ def _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers, n_ambien
     if mua0.ndim != 1 or mua0.size == 0:
         raise ConfigError("mua_per_cm must be a scalar or a 1-D sequence with one value per layer")
     nl = mua0.size
-    mua = _as_layers("mua_per_cm", mua0, nl)
-    mus = _as_layers("mus_per_cm", mus_per_cm, nl)
-    gl = _as_layers("g", g, nl)
-    d = _as_layers("thickness_cm", thickness_cm, nl)
-    nidx = _as_layers("n_layers", n_layers, nl)
+    mua = as_layers("mua_per_cm", mua0, nl)
+    mus = as_layers("mus_per_cm", mus_per_cm, nl)
+    gl = as_layers("g", g, nl)
+    d = as_layers("thickness_cm", thickness_cm, nl)
+    nidx = as_layers("n_layers", n_layers, nl)
     check_range("mua_per_cm", mua, "1/cm", 0.0, np.inf)
     check_range("mus_per_cm", mus, "1/cm", 0.0, np.inf)
     check_range("g", gl, "-", -1.0, 1.0, low_open=True, high_open=True)
@@ -257,7 +258,7 @@ class _LayerTally:
         self.absorbed_w = np.zeros(n_layers)
         self.path_w = np.zeros(n_layers)  # sum over reflected weight of w * path in layer
         if edges is not None:
-            self.r_rho = np.zeros((_N_BATCHES, edges.size - 1))
+            self.r_rho = np.zeros((N_BATCHES, edges.size - 1))
             self.lw_rho = np.zeros(edges.size - 1)
 
     def absorbed(self, layer, weight) -> None:
@@ -275,7 +276,7 @@ class _LayerTally:
             rr = np.hypot(pk.x[ot], pk.y[ot])
             k = np.searchsorted(self.edges, rr, side="right") - 1
             inb = (k >= 0) & (k < nb)
-            np.add.at(self.r_rho, (pk.pid[ot[inb]] % _N_BATCHES, k[inb]), esc[top][inb])
+            np.add.at(self.r_rho, (pk.pid[ot[inb]] % N_BATCHES, k[inb]), esc[top][inb])
             self.lw_rho += np.bincount(
                 k[inb], weights=esc[top][inb] * pk.path[ot[inb]].sum(axis=1), minlength=nb
             )
@@ -289,9 +290,9 @@ class _LayerTally:
         rho_c = r_prof = r_prof_se = l_rho = None
         if edges is not None:
             area = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-            per_batch = self.r_rho / (n_photons / _N_BATCHES) / area
+            per_batch = self.r_rho / (n_photons / N_BATCHES) / area
             r_prof = self.r_rho.sum(axis=0) / n_photons / area
-            r_prof_se = per_batch.std(axis=0, ddof=1) / np.sqrt(_N_BATCHES)
+            r_prof_se = per_batch.std(axis=0, ddof=1) / np.sqrt(N_BATCHES)
             with np.errstate(invalid="ignore", divide="ignore"):
                 l_rho = self.lw_rho / self.r_rho.sum(axis=0)
             rho_c = 0.5 * (edges[1:] + edges[:-1])

@@ -51,20 +51,32 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
 from .._inputs import check_n_photons
 
-__all__ = ["ABSORPTION_MODELS", "Packets", "Stack", "Tally", "check_range", "check_run",
-           "fresnel", "hg_cos", "run_photons"]
+__all__ = ["ABSORPTION_MODELS", "N_BATCHES", "Packets", "Stack", "Tally", "as_layers",
+           "check_range", "check_run", "fresnel", "hg_cos", "run_photons"]
 
 #: Absorption models of :func:`run_photons` (module docstring).
 ABSORPTION_MODELS = ("discrete", "continuous")
 
+#: Interleaved batches of photons (photon index modulo this) from which the front ends'
+#: standard errors of binned tallies are estimated. [-]
+N_BATCHES = 20
+
 #: A direction this close to the z axis is treated as vertical in the scattering
 #: rotation (MCML's own cut-off, Wang et al. 1995, Eq. 3.25). [-]
 _VERTICAL_COS = 1.0 - 1e-12
+
+
+def as_layers(name: str, v: ArrayLike, n_layers: int) -> NDArray[np.float64]:
+    """``v`` as one float per layer, (n_layers,): a scalar is repeated; else ConfigError."""
+    a = np.atleast_1d(np.asarray(v, dtype=np.float64))
+    if a.ndim != 1 or a.size not in (1, n_layers):
+        raise ConfigError(f"{name} must be a scalar or have one value per layer ({n_layers})")
+    return np.broadcast_to(a, (n_layers,)).copy()
 
 
 def check_range(
