@@ -242,6 +242,12 @@ def _resolve_grid(grid: str | dict) -> dict:
     return grid
 
 
+def _grid_name(grid: str | dict) -> str | None:
+    """The first name in :data:`LUT_GRIDS` of a grid with the same axes, or None."""
+    axes = _resolve_grid(grid)
+    return next((k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == axes), None)
+
+
 def _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient) -> dict:
     geo = {
         "rho_cm": float(separation_cm),

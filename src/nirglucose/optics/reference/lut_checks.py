@@ -23,9 +23,9 @@ from ..kernels import mc_white
 from ..lut.build import _mc_run_kwargs
 from ..lut.grid import (
     LUT_AXES,
-    LUT_GRIDS,
     LUT_MC_SETTINGS,
     SkinLUT,
+    _grid_name,
     _inverse,
     _mc_photons,
     _resolve_grid,
@@ -121,8 +121,7 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
             geo["rho_cm"], epidermis_thickness_cm=geo["epidermis_thickness_cm"],
             n_tissue=geo["n_tissue"], n_ambient=geo["n_ambient"], **p)
         return refl, np.zeros_like(refl), paths
-    named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == grid]
-    photons = _mc_photons(named[0] if named else grid, n_photons)
+    photons = _mc_photons(_grid_name(grid) or grid, n_photons)
     p = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in points.items()}
     musp = p["musp_dermis_per_cm"]
     q = p["musp_subcutis_per_cm"] / musp
