@@ -63,13 +63,14 @@ def _mc_hashes() -> dict:
 
 def _lut_hashes(default_diffusion: bool) -> dict:
     from nirglucose.optics import lut as L
+    from nirglucose.optics.reference import lut_checks as LV
 
     out = {}
     rng = np.random.default_rng(11)
     for solver in ("diffusion", "monte-carlo"):
         t = L.build_lut(0.3, 0.008, grid="tiny", solver=solver)
         out[f"tiny_{solver}_values"] = _h(t.values, *[t.axis_nodes(k) for k in L.LUT_AXES])
-        pts = L.random_lut_points(t, 50, rng=rng)
+        pts = LV.random_lut_points(t, 50, rng=rng)
         r, paths = L.interpolate_lut(t, **pts, pathlengths=True)
         out[f"tiny_{solver}_interpolate"] = _h(r, paths)
         nl = L.node_lut(t, pts["musp_subcutis_per_cm"] / pts["musp_dermis_per_cm"])

@@ -1,7 +1,7 @@
 """The rte-lut table against independent Monte Carlo references precise enough to judge 1 %.
 
-One direct Monte Carlo solve (``nirglucose.optics.lut.direct_solve``) is not precise
-enough to tell a table error of 1 % from 1.5 % at one point: solves of the same point
+One direct Monte Carlo solve (``nirglucose.optics.reference.lut_checks.direct_solve``) is
+not precise enough to tell a table error of 1 % from 1.5 % at one point: solves of the same point
 with different random numbers scatter more than their reported standard errors say,
 because the re-weighting by the epidermal absorption makes the weights' distribution
 skewed at high melanin. So each reference here is the mean of solves with two or more

@@ -178,6 +178,22 @@ def test_cache_dir_env(monkeypatch, tmp_path):
     assert L.cache_dir() == tmp_path / "xdg" / "nirglucose"
 
 
+@pytest.mark.parametrize("value", ["abc", "0", "-2", "1.5"])
+def test_mc_threads_env_that_is_no_count_is_one_config_error(monkeypatch, value):
+    # was a bare ValueError traceback ("abc") or silently one thread ("0", "-2")
+    monkeypatch.setenv("NIRGLUCOSE_MC_THREADS", value)
+    with pytest.raises(ConfigError, match=r"NIRGLUCOSE_MC_THREADS = .* expected an integer "
+                                          r"in \[1, inf\)"):
+        LC.mc_threads_from_env()
+
+
+def test_mc_threads_env_read_when_set(monkeypatch):
+    monkeypatch.setenv("NIRGLUCOSE_MC_THREADS", "3")
+    assert LC.mc_threads_from_env() == 3
+    monkeypatch.delenv("NIRGLUCOSE_MC_THREADS")
+    assert LC.mc_threads_from_env() is None
+
+
 def _sim_optics(n=64, seed=0, n_led=4, n_pts=3):
     cfg = ng.resolve_config("paper", {"leds.band_points": n_pts})
     spectra = tissue.band_spectra(cfg.leds.wavelengths_nm, cfg.leds.fwhm_nm, n_pts)

@@ -79,6 +79,32 @@ def test_bad_inputs_raise(kw, match):
         mc_detected_paths(**args)
 
 
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"roulette_chance": 2.0},
+         r"roulette_chance = 2\.0 is out of range; valid range is \(0, 1\)"),
+        ({"roulette_chance": 0.0}, r"roulette_chance = 0\.0 is out of range"),
+        ({"weight_threshold": 1.5}, r"weight_threshold = 1\.5 is out of range"),
+        ({"n_ambient": 0.0}, r"n_ambient = 0\.0 is out of range; valid range is \(0, inf\)"),
+        ({"n_tissue": -1.4, "n_ambient": -1.0}, r"n_tissue = -1\.4 is out of range"),
+        ({"n_tissue": np.inf}, r"n_tissue = inf is out of range"),
+        ({"ring_cm": 0.2}, r"ring_cm = 0\.2 must be two radii"),
+        ({"ring_cm": (0.1, 0.2, 0.3)}, r"ring_cm = \(0\.1, 0\.2, 0\.3\) must be two radii"),
+        ({"ring_cm": (0.1, np.inf)}, "ring_cm"),
+        ({"mua_ref_per_cm": [[1.0, 1.0]]}, "mua_ref_per_cm must be a scalar or a 1-D"),
+    ],
+)
+def test_bad_inputs_the_engine_or_the_ring_once_let_through_raise_one_config_error(kw, match):
+    # each of these once ran biased, warned, or died with ZeroDivisionError, TypeError,
+    # ValueError (unpacking, or an ambiguous truth value) instead of a ConfigError
+    args = dict(mua_ref_per_cm=[1.0, 1.0], mus_per_cm=[100.0, 100.0], g=0.8,
+                thickness_cm=[0.05], ring_cm=(0.1, 0.2), n_photons=10, rng=0)
+    args.update(kw)
+    with pytest.raises(ConfigError, match=match):
+        mc_detected_paths(**args)
+
+
 @pytest.mark.slow
 def test_three_layer_model_against_monte_carlo():
     # skin: epidermis 80 um, dermis to 1.58 mm (mus' 20 /cm), fat below (mus' 14 /cm),

@@ -75,3 +75,31 @@ def test_continuous_absorption_never_calls_absorbed_and_matches_the_ring_front_e
 def test_unknown_absorption_model_is_one_config_error():
     with pytest.raises(ConfigError, match="absorption = 'analog' is unknown"):
         _run(_Totals(), absorption="analog")
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"roulette_chance": 1.5}, r"roulette_chance = 1\.5 is out of range"),
+        ({"roulette_chance": 0.0}, r"roulette_chance = 0\.0 is out of range"),
+        ({"weight_threshold": 1.0}, r"weight_threshold = 1\.0 is out of range"),
+        ({"weight_threshold": "abc"}, r"weight_threshold = 'abc' is not a number"),
+        ({"n_photons": 0}, r"n_photons = 0 is invalid"),
+        ({"n_photons": 2.0}, r"n_photons = 2\.0 is invalid"),
+    ],
+)
+def test_the_engine_checks_its_run_settings(kw, match):
+    # the checks live in the engine, so every front end (and a caller's own tally) has them
+    args = dict(n_photons=10, absorption="discrete", weight_threshold=1e-4,
+                roulette_chance=0.1, max_steps=1000) | kw
+    with pytest.raises(ConfigError, match=match):
+        run_photons(_stack(), _Totals(), args.pop("n_photons"), np.random.default_rng(0), **args)
+
+
+@pytest.mark.parametrize("n", [0.0, -1.4, np.nan, np.inf])
+def test_the_engine_refuses_a_stack_with_a_bad_refractive_index(n):
+    stack = Stack.from_layers([1.0], [10.0], [0.5], [0.1], [1.4], 1.0)
+    bad = Stack(**{**stack.__dict__, "n_ext": np.array([1.0, n, 1.0])})
+    with pytest.raises(ConfigError, match="refractive index = .* is out of range"):
+        run_photons(bad, _Totals(), 10, np.random.default_rng(0), absorption="discrete",
+                    weight_threshold=1e-4, roulette_chance=0.1, max_steps=1000)

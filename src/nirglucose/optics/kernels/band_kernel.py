@@ -291,14 +291,13 @@ def band_detected_fraction_lut(
         mua_d, mua_s, mua_e, musp_d, musp_s,
     )
     t_cm = vec(skin_thickness_cm, (n,))
-    ln_t = np.log(t_cm)
-    out = _table_reflectance(node_lut, (n_led, n_pts, n), t_cm, ln_t,
+    out = _table_reflectance(node_lut, (n_led, n_pts, n), t_cm,
                              mua_d, mua_s, mua_e, musp_d, musp_s)
     weights = np.asarray(spectra.weights) * float(detector_area_cm2)
     return (weights.reshape(k, 1) * out.reshape(k, n)).reshape(n_led, n_pts, n).sum(axis=1).T
 
 
-def _table_reflectance(node_lut, shape, t_cm, ln_t, mua_d, mua_s, mua_e, musp_d, musp_s):
+def _table_reflectance(node_lut, shape, t_cm, mua_d, mua_s, mua_e, musp_d, musp_s):
     """R(rho) of every (node, row) from the node table, node-major, (n_led * n_pts * n,).
 
     Outside the table the NumPy reference path names the axis and raises ConfigError.
@@ -307,6 +306,7 @@ def _table_reflectance(node_lut, shape, t_cm, ln_t, mua_d, mua_s, mua_e, musp_d,
     from .lut_kernel import node_reflectance
 
     n_led, n_pts, n = shape
+    ln_t = np.log(t_cm)  # once per call: every node's kernel call reads the same rows
     k = n_led * n_pts
     out = np.empty(n * k)
     # node by node: each call reads one node's table (a few MB, cache-resident), where

@@ -91,6 +91,7 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
+from .._inputs import check_n_photons
 
 __all__ = [
     "SKIN_ANISOTROPY",
@@ -388,8 +389,7 @@ def _checked_run_args(skin_transport_thickness, musp_ratio, depths, radius_band,
     for name, v, ok, valid in checks:
         if not ok:
             raise ConfigError(f"{name} = {v!r} is out of range; valid range is {valid} [-]")
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
+    check_n_photons(n_photons)
     if isinstance(first_photon, bool) or not isinstance(first_photon, int | np.integer) \
             or first_photon < 0:
         raise ConfigError(f"first_photon = {first_photon!r} is invalid; expected an integer "

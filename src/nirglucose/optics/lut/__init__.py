@@ -71,8 +71,8 @@ the cache key), :mod:`.build` (:func:`build_lut`: solve, refine, smooth, centre)
 environment variables the optics read), :mod:`.interpolate` (:func:`interpolate_lut`,
 :func:`node_lut`, :func:`interpolate_node_lut`, :func:`reflectance_from_tissue_optics`).
 The checks against direct solves (``random_lut_points``, ``direct_solve``,
-``lut_errors``) are validation references: :mod:`nirglucose.optics.reference.lut_checks`
-(still reachable here by name, imported on first use).
+``lut_errors``) are validation references: import them from
+:mod:`nirglucose.optics.reference.lut_checks`.
 
 References
 ----------
@@ -113,18 +113,6 @@ from .interpolate import (
     reflectance_from_tissue_optics,
 )
 
-#: Validation references, imported on first use (they live in optics.reference).
-_CHECKS = ("random_lut_points", "direct_solve", "lut_errors")
-
-
-def __getattr__(name: str):
-    if name in _CHECKS:
-        from ..reference import lut_checks
-
-        return getattr(lut_checks, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 __all__ = [
     "LUT_AXES",
     "LUT_GRIDS",
@@ -142,5 +130,4 @@ __all__ = [
     "LUT_MC_PHOTONS",
     "LUT_MC_SETTINGS",
     "LUT_SOLVERS",
-    *_CHECKS,
 ]

@@ -20,6 +20,7 @@ from ...exceptions import ConfigError
 from .. import layers
 from ..kernels import mc_white
 from .grid import (
+    _CHANNELS,
     _MIN_SKIN_OVER_EPIDERMIS,
     _PATH_FLOOR_CM,
     _SCATTERING,
@@ -404,7 +405,7 @@ def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int,
     band = ((rho - half) * float(musp.min()), (rho + half) * float(musp.max()))
     run_kw = _mc_run_kwargs(grid, geo, photons)
     shape = tuple(a.size for a in ax.values())
-    values = np.empty(shape + (4,))
+    values = np.empty(shape + (len(_CHANNELS),))
     worst_se = 0.0
     for iq, q in enumerate(ax["musp_ratio"]):
         for it, tau in enumerate(ax["skin_transport_thickness"]):

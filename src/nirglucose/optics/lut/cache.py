@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...exceptions import ConfigError
 from .build import build_lut
 from .grid import SkinLUT, _mc_photons, _resolve_grid, lut_key
 
@@ -166,6 +167,20 @@ def mc_threads_from_env() -> int | None:
 
     Read here so that the optics read environment variables in one module; used by
     :func:`nirglucose.optics.kernels.mc_white.white_mc_run` when it is given no ``n_threads``.
+
+    Raises
+    ------
+    ConfigError
+        If the variable is set but is not an integer >= 1.
     """
     env = os.environ.get("NIRGLUCOSE_MC_THREADS")
-    return max(1, int(env)) if env else None
+    if not env:
+        return None
+    try:
+        n = int(env)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise ConfigError(f"NIRGLUCOSE_MC_THREADS = {env!r} is invalid; expected an integer "
+                          "in [1, inf) [-]")
+    return n

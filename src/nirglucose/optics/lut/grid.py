@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...exceptions import ConfigError
+from .._inputs import check_n_photons
 from ..kernels import mc_white
 
 __all__ = [
@@ -241,6 +242,12 @@ def _resolve_grid(grid: str | dict) -> dict:
     return grid
 
 
+def _grid_name(grid: str | dict) -> str | None:
+    """The first name in :data:`LUT_GRIDS` of a grid with the same axes, or None."""
+    axes = _resolve_grid(grid)
+    return next((k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == axes), None)
+
+
 def _geometry(separation_cm, epidermis_thickness_cm, n_tissue, n_ambient) -> dict:
     geo = {
         "rho_cm": float(separation_cm),
@@ -305,7 +312,4 @@ def _mc_photons(grid: str | dict, n_photons: int | None) -> int:
     if n_photons is None:
         name = grid if isinstance(grid, str) else "default"
         n_photons = LUT_MC_PHOTONS.get(name, LUT_MC_PHOTONS["default"])
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) \
-            or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    return int(n_photons)
+    return check_n_photons(n_photons)

@@ -25,7 +25,14 @@ from numpy.typing import ArrayLike, NDArray
 from ...exceptions import ConfigError
 from .. import layers
 from .cache import get_lut, load_or_build_lut
-from .grid import LUT_AXES, LUT_GRIDS, SkinLUT, _forward, _inverse, _resolve_grid
+from .grid import (
+    _CHANNELS,
+    LUT_AXES,
+    SkinLUT,
+    _forward,
+    _grid_name,
+    _inverse,
+)
 
 __all__ = [
     "interpolate_lut",
@@ -188,8 +195,8 @@ def interpolate_lut(
     mua_e, mua_d, musp_d, mua_s, musp_s, t_skin = (a.ravel() for a in arrays)
     inputs = [musp_d, musp_s / musp_d, mua_d, mua_s, mua_e, musp_d * t_skin]
     idx, frac = _cell_coords(list(lut.nodes), list(LUT_AXES), inputs)
-    n_ch = 4 if pathlengths else 1
-    flat = lut.values.reshape(-1, 4)[:, :n_ch]
+    n_ch = len(_CHANNELS) if pathlengths else 1
+    flat = lut.values.reshape(-1, len(_CHANNELS))[:, :n_ch]
     out = np.exp(_multilinear(flat, _strides(lut.shape), idx, frac).astype(np.float64))
     refl = out[:, 0].reshape(shape)
     paths = out[:, 1:].reshape(shape + (3,)) if pathlengths else None
@@ -275,8 +282,8 @@ def node_lut(lut: SkinLUT, musp_ratio: ArrayLike) -> NodeLUT:
 def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, ratio,
                           solver="monte-carlo"):
     grid = {k: tuple(v) for k, v in grid.items()}
-    named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == _resolve_grid(grid)]
-    lut = (get_lut(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=named[0],
+    named = _grid_name(grid)
+    lut = (get_lut(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=named,
                    solver=solver)
            if named else load_or_build_lut(rho_cm, epidermis_thickness_cm, n_tissue,
                                            n_ambient, grid=grid, solver=solver))

@@ -18,13 +18,14 @@ from numpy.typing import NDArray
 
 from ...exceptions import ConfigError
 from .. import layers
+from .._inputs import as_generator
 from ..kernels import mc_white
 from ..lut.build import _mc_run_kwargs
 from ..lut.grid import (
     LUT_AXES,
-    LUT_GRIDS,
     LUT_MC_SETTINGS,
     SkinLUT,
+    _grid_name,
     _inverse,
     _mc_photons,
     _resolve_grid,
@@ -44,7 +45,7 @@ def random_lut_points(lut: SkinLUT, n_points: int, *, rng: np.random.Generator |
     ``skin_transport_thickness`` (so one Monte Carlo run solves a group: see
     :func:`lut_errors`); every other coordinate is drawn per point.
     """
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    gen = as_generator(rng)
     shared = ("musp_ratio", "skin_transport_thickness")
     if groups is not None and not 1 <= int(groups) <= n_points:
         raise ConfigError(f"groups = {groups!r} is out of range; valid range is "
@@ -120,8 +121,7 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
             geo["rho_cm"], epidermis_thickness_cm=geo["epidermis_thickness_cm"],
             n_tissue=geo["n_tissue"], n_ambient=geo["n_ambient"], **p)
         return refl, np.zeros_like(refl), paths
-    named = [k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == grid]
-    photons = _mc_photons(named[0] if named else grid, n_photons)
+    photons = _mc_photons(_grid_name(grid) or grid, n_photons)
     p = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in points.items()}
     musp = p["musp_dermis_per_cm"]
     q = p["musp_subcutis_per_cm"] / musp

@@ -41,11 +41,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
-from .photon_engine import Packets, Stack, run_photons
+from .._inputs import as_generator
+from .photon_engine import N_BATCHES, Packets, Stack, as_layers, check_range, run_photons
 
 __all__ = ["DetectedPaths", "mc_detected_paths", "reweight_detected"]
 
-_N_BATCHES = 20
 _MAX_STEPS = 2_000_000
 
 
@@ -80,11 +80,18 @@ class DetectedPaths:
     diffuse_reflectance: float
 
 
-def _layers(name: str, v: ArrayLike, n: int) -> NDArray[np.float64]:
-    a = np.atleast_1d(np.asarray(v, dtype=float))
-    if a.ndim != 1 or a.size not in (1, n):
-        raise ConfigError(f"{name} must be a scalar or have one value per layer ({n})")
-    return np.broadcast_to(a, (n,)).copy()
+def _ring(ring_cm: object) -> tuple[float, float]:
+    """Inner and outer radius of the detector ring, or a one-line ConfigError. [cm]"""
+    try:
+        ring = np.asarray(ring_cm, dtype=float)
+    except (TypeError, ValueError):
+        ring = np.full(1, np.nan)
+    if ring.shape != (2,):
+        raise ConfigError(f"ring_cm = {ring_cm!r} must be two radii (inner, outer) [cm]")
+    r_in, r_out = float(ring[0]), float(ring[1])
+    if not (0.0 <= r_in < r_out and np.isfinite(r_out)):
+        raise ConfigError(f"ring_cm = {ring_cm!r} needs 0 <= inner < outer < inf [cm]")
+    return r_in, r_out
 
 
 def mc_detected_paths(
@@ -135,7 +142,8 @@ def mc_detected_paths(
     Raises
     ------
     ConfigError
-        If an input is out of range.
+        If an input is out of range (the roulette settings and ``n_photons`` are checked
+        by the engine, :func:`~nirglucose.optics.reference.photon_engine.check_run`).
 
     Notes
     -----
@@ -160,9 +168,12 @@ def mc_detected_paths(
     2
     """
     mua0 = np.atleast_1d(np.asarray(mua_ref_per_cm, dtype=float))
+    if mua0.ndim != 1 or mua0.size == 0:
+        raise ConfigError("mua_ref_per_cm must be a scalar or a 1-D sequence with one value "
+                          "per layer")
     n_layers = mua0.size
-    mus = _layers("mus_per_cm", mus_per_cm, n_layers)
-    gg = _layers("g", g, n_layers)
+    mus = as_layers("mus_per_cm", mus_per_cm, n_layers)
+    gg = as_layers("g", g, n_layers)
     thick = np.atleast_1d(np.asarray(thickness_cm, dtype=float))
     if thick.size != n_layers - 1:
         raise ConfigError(f"thickness_cm needs {n_layers - 1} values (the last layer is "
@@ -177,14 +188,11 @@ def mc_detected_paths(
         if not (ok and np.all(np.isfinite(v))):
             raise ConfigError(f"{name} = {v.tolist()!r} is out of range; valid range is "
                               f"{rng_text} [{unit}]")
-    r_in, r_out = (float(v) for v in ring_cm)
-    if not 0.0 <= r_in < r_out:
-        raise ConfigError(f"ring_cm = {ring_cm!r} needs 0 <= inner < outer [cm]")
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    if not float(n_tissue) / float(n_ambient) > 0:
-        raise ConfigError("refractive indices must be positive [-]")
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    r_in, r_out = _ring(ring_cm)
+    for name, v in (("n_tissue", n_tissue), ("n_ambient", n_ambient)):
+        check_range(name, np.atleast_1d(float(v)), "-", 0.0, np.inf, low_open=True,
+                    high_open=True)
+    gen = as_generator(rng)
 
     stack = Stack.from_layers(mua0, mus, gg, np.append(thick, np.inf),
                               np.full(n_layers, float(n_tissue)), float(n_ambient))
@@ -225,7 +233,7 @@ class _RingTally:
         if np.any(inside):
             self.det_w.append(esc[inside])
             self.det_p.append(pk.path[ot[inside]].copy())
-            self.det_b.append(pk.pid[ot[inside]] % _N_BATCHES)
+            self.det_b.append(pk.pid[ot[inside]] % N_BATCHES)
 
 
 def reweight_detected(
@@ -270,8 +278,8 @@ def reweight_detected(
     ww = result.weight * np.exp(-(result.pathlength_cm @ delta))
     total = float(ww.sum())
     norm = result.n_photons * result.ring_area_cm2
-    per_batch = np.bincount(result.batch, weights=ww, minlength=_N_BATCHES)
-    per_batch = per_batch / (norm / _N_BATCHES)
-    se = float(per_batch.std(ddof=1) / np.sqrt(_N_BATCHES))
+    per_batch = np.bincount(result.batch, weights=ww, minlength=N_BATCHES)
+    per_batch = per_batch / (norm / N_BATCHES)
+    se = float(per_batch.std(ddof=1) / np.sqrt(N_BATCHES))
     paths = (ww @ result.pathlength_cm) / total if total > 0 else np.full(mua.size, np.nan)
     return total / norm, se, paths

@@ -36,11 +36,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.exceptions import ConfigError
 
-from .photon_engine import Packets, Stack, run_photons
+from .._inputs import as_generator
+from .photon_engine import (
+    N_BATCHES,
+    Packets,
+    Stack,
+    as_layers,
+    check_range,
+    check_run,
+    run_photons,
+)
 
 __all__ = ["MCResult", "mc_layers", "mc_slab"]
 
-_N_BATCHES = 20
 _MAX_STEPS = 1_000_000
 
 
@@ -105,37 +113,6 @@ class MCResult:
     def total_reflectance_se(self) -> float:
         """Standard error of ``total_reflectance`` (that of the diffuse part). [-]"""
         return self.diffuse_reflectance_se
-
-
-def _as_layers(name: str, v: ArrayLike, n_layers: int) -> NDArray[np.float64]:
-    a = np.atleast_1d(np.asarray(v, dtype=np.float64))
-    if a.ndim != 1 or a.size not in (1, n_layers):
-        raise ConfigError(f"{name} must be a scalar or have one value per layer ({n_layers})")
-    return np.broadcast_to(a, (n_layers,)).copy()
-
-
-def _check(
-    name: str,
-    v: NDArray[np.float64],
-    unit: str,
-    low: float,
-    high: float,
-    *,
-    low_open: bool = False,
-    high_open: bool = False,
-    finite: bool = True,
-) -> None:
-    ok = ~np.isnan(v)
-    if finite:
-        ok &= np.isfinite(v)
-    ok &= (v > low) if low_open else (v >= low)
-    ok &= (v < high) if high_open else (v <= high)
-    if not np.all(ok):
-        bad = v[~ok].flat[0]
-        lb, hb = ("(" if low_open else "["), (")" if high_open else "]")
-        raise ConfigError(
-            f"{name} = {bad!r} is out of range; valid range is {lb}{low:g}, {high:g}{hb} [{unit}]"
-        )
 
 
 def mc_layers(
@@ -227,12 +204,8 @@ def mc_layers(
     """
     stack, edges = _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers,
                                     n_ambient, rho_edges_cm)
-    for name, v in (("weight_threshold", weight_threshold), ("roulette_chance", roulette_chance)):
-        _check(name, np.atleast_1d(float(v)), "-", 0.0, 1.0, low_open=True, high_open=True)
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int | np.integer) or n_photons < 1:
-        raise ConfigError(f"n_photons = {n_photons!r} is invalid; expected an integer >= 1 [-]")
-    n_photons = int(n_photons)
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    n_photons = check_run(n_photons, weight_threshold, roulette_chance)  # sizes the tally
+    gen = as_generator(rng)
     tally = _LayerTally(n_photons, stack.n_layers, edges)
     run_photons(stack, tally, n_photons, gen, absorption="discrete",
                 weight_threshold=weight_threshold, roulette_chance=roulette_chance,
@@ -247,18 +220,18 @@ def _validated_stack(mua_per_cm, mus_per_cm, g, thickness_cm, n_layers, n_ambien
     if mua0.ndim != 1 or mua0.size == 0:
         raise ConfigError("mua_per_cm must be a scalar or a 1-D sequence with one value per layer")
     nl = mua0.size
-    mua = _as_layers("mua_per_cm", mua0, nl)
-    mus = _as_layers("mus_per_cm", mus_per_cm, nl)
-    gl = _as_layers("g", g, nl)
-    d = _as_layers("thickness_cm", thickness_cm, nl)
-    nidx = _as_layers("n_layers", n_layers, nl)
-    _check("mua_per_cm", mua, "1/cm", 0.0, np.inf)
-    _check("mus_per_cm", mus, "1/cm", 0.0, np.inf)
-    _check("g", gl, "-", -1.0, 1.0, low_open=True, high_open=True)
-    _check("thickness_cm", d[:-1], "cm", 0.0, np.inf, low_open=True)
-    _check("thickness_cm", d[-1:], "cm", 0.0, np.inf, low_open=True, finite=False)
-    _check("n_layers", nidx, "-", 0.0, np.inf, low_open=True)
-    _check("n_ambient", np.atleast_1d(float(n_ambient)), "-", 0.0, np.inf, low_open=True)
+    mua = as_layers("mua_per_cm", mua0, nl)
+    mus = as_layers("mus_per_cm", mus_per_cm, nl)
+    gl = as_layers("g", g, nl)
+    d = as_layers("thickness_cm", thickness_cm, nl)
+    nidx = as_layers("n_layers", n_layers, nl)
+    check_range("mua_per_cm", mua, "1/cm", 0.0, np.inf)
+    check_range("mus_per_cm", mus, "1/cm", 0.0, np.inf)
+    check_range("g", gl, "-", -1.0, 1.0, low_open=True, high_open=True)
+    check_range("thickness_cm", d[:-1], "cm", 0.0, np.inf, low_open=True)
+    check_range("thickness_cm", d[-1:], "cm", 0.0, np.inf, low_open=True, finite=False)
+    check_range("n_layers", nidx, "-", 0.0, np.inf, low_open=True)
+    check_range("n_ambient", np.atleast_1d(float(n_ambient)), "-", 0.0, np.inf, low_open=True)
     if np.isinf(d[-1]) and mua[-1] <= 0.0:
         raise ConfigError(
             f"mua_per_cm = {mua[-1]!r} of the semi-infinite last layer is out of range; "
@@ -285,7 +258,7 @@ class _LayerTally:
         self.absorbed_w = np.zeros(n_layers)
         self.path_w = np.zeros(n_layers)  # sum over reflected weight of w * path in layer
         if edges is not None:
-            self.r_rho = np.zeros((_N_BATCHES, edges.size - 1))
+            self.r_rho = np.zeros((N_BATCHES, edges.size - 1))
             self.lw_rho = np.zeros(edges.size - 1)
 
     def absorbed(self, layer, weight) -> None:
@@ -303,7 +276,7 @@ class _LayerTally:
             rr = np.hypot(pk.x[ot], pk.y[ot])
             k = np.searchsorted(self.edges, rr, side="right") - 1
             inb = (k >= 0) & (k < nb)
-            np.add.at(self.r_rho, (pk.pid[ot[inb]] % _N_BATCHES, k[inb]), esc[top][inb])
+            np.add.at(self.r_rho, (pk.pid[ot[inb]] % N_BATCHES, k[inb]), esc[top][inb])
             self.lw_rho += np.bincount(
                 k[inb], weights=esc[top][inb] * pk.path[ot[inb]].sum(axis=1), minlength=nb
             )
@@ -317,9 +290,9 @@ class _LayerTally:
         rho_c = r_prof = r_prof_se = l_rho = None
         if edges is not None:
             area = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-            per_batch = self.r_rho / (n_photons / _N_BATCHES) / area
+            per_batch = self.r_rho / (n_photons / N_BATCHES) / area
             r_prof = self.r_rho.sum(axis=0) / n_photons / area
-            r_prof_se = per_batch.std(axis=0, ddof=1) / np.sqrt(_N_BATCHES)
+            r_prof_se = per_batch.std(axis=0, ddof=1) / np.sqrt(N_BATCHES)
             with np.errstate(invalid="ignore", divide="ignore"):
                 l_rho = self.lw_rho / self.r_rho.sum(axis=0)
             rho_c = 0.5 * (edges[1:] + edges[:-1])

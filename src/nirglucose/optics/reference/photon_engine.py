@@ -51,18 +51,79 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
+from .._inputs import check_n_photons
 
-__all__ = ["ABSORPTION_MODELS", "Packets", "Stack", "Tally", "fresnel", "hg_cos", "run_photons"]
+__all__ = ["ABSORPTION_MODELS", "N_BATCHES", "Packets", "Stack", "Tally", "as_layers",
+           "check_range", "check_run", "fresnel", "hg_cos", "run_photons"]
 
 #: Absorption models of :func:`run_photons` (module docstring).
 ABSORPTION_MODELS = ("discrete", "continuous")
 
+#: Interleaved batches of photons (photon index modulo this) from which the front ends'
+#: standard errors of binned tallies are estimated. [-]
+N_BATCHES = 20
+
 #: A direction this close to the z axis is treated as vertical in the scattering
 #: rotation (MCML's own cut-off, Wang et al. 1995, Eq. 3.25). [-]
 _VERTICAL_COS = 1.0 - 1e-12
+
+
+def as_layers(name: str, v: ArrayLike, n_layers: int) -> NDArray[np.float64]:
+    """``v`` as one float per layer, (n_layers,): a scalar is repeated; else ConfigError."""
+    a = np.atleast_1d(np.asarray(v, dtype=np.float64))
+    if a.ndim != 1 or a.size not in (1, n_layers):
+        raise ConfigError(f"{name} must be a scalar or have one value per layer ({n_layers})")
+    return np.broadcast_to(a, (n_layers,)).copy()
+
+
+def check_range(
+    name: str,
+    v: NDArray[np.float64],
+    unit: str,
+    low: float,
+    high: float,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+    finite: bool = True,
+) -> None:
+    """Raise a one-line ConfigError naming the first value of ``v`` outside the range.
+
+    ``nan`` is always out of range, and so is ``inf`` when ``finite``.
+    """
+    ok = ~np.isnan(v)
+    if finite:
+        ok &= np.isfinite(v)
+    ok &= (v > low) if low_open else (v >= low)
+    ok &= (v < high) if high_open else (v <= high)
+    if not np.all(ok):
+        bad = float(v[~ok].flat[0])  # not np.float64(...) in the message
+        lb, hb = ("(" if low_open else "["), (")" if high_open else "]")
+        raise ConfigError(
+            f"{name} = {bad!r} is out of range; valid range is {lb}{low:g}, {high:g}{hb} [{unit}]"
+        )
+
+
+def check_run(n_photons: int, weight_threshold: float, roulette_chance: float) -> int:
+    """The run settings of :func:`run_photons`, checked; returns ``n_photons`` as an int.
+
+    ``weight_threshold`` and ``roulette_chance`` must lie in (0, 1): a chance above 1
+    would make the roulette inflate weights (biased), 0 would divide by zero (Wang et
+    al. 1995, section 3.7). Front ends that size a tally by ``n_photons`` call this
+    before building it; :func:`run_photons` calls it again.
+    """
+    for name, v in (("weight_threshold", weight_threshold), ("roulette_chance", roulette_chance)):
+        try:
+            arr = np.atleast_1d(np.asarray(v, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise ConfigError(f"{name} = {v!r} is not a number [-]") from None
+        if arr.shape != (1,):
+            raise ConfigError(f"{name} = {v!r} must be a scalar [-]")
+        check_range(name, arr, "-", 0.0, 1.0, low_open=True, high_open=True)
+    return check_n_photons(n_photons)
 
 
 @dataclass(frozen=True)
@@ -173,7 +234,10 @@ def fresnel(
 
 def hg_cos(g: NDArray[np.float64], xi: NDArray[np.float64]) -> NDArray[np.float64]:
     """Sample cos(theta) from the Henyey-Greenstein phase function (Wang et al. 1995, Eq. 3.28)."""
-    iso = np.abs(g) < 1e-6  # isotropic below this |g| (MCML's own cut-off)
+    # this code's guard, not MCML's (MCML tests g == 0 exactly): as g -> 0 the
+    # quotient (1 + g^2 - tmp^2)/(2g) loses its precision, so below this |g| the
+    # isotropic cos(theta) = 2 xi - 1 is used, the limit of the formula
+    iso = np.abs(g) < 1e-6
     gs = np.where(iso, 0.5, g)
     tmp = (1.0 - gs * gs) / (1.0 - gs + 2.0 * gs * xi)
     mu = (1.0 + gs * gs - tmp * tmp) / (2.0 * gs)
@@ -286,7 +350,9 @@ def run_photons(
     Raises
     ------
     ConfigError
-        If ``absorption`` is not one of :data:`ABSORPTION_MODELS`.
+        If ``absorption`` is not one of :data:`ABSORPTION_MODELS`, ``n_photons`` is not
+        an integer >= 1, ``weight_threshold`` or ``roulette_chance`` is outside (0, 1)
+        (:func:`check_run`), or a refractive index of ``stack`` is not finite and > 0.
 
     Notes
     -----
@@ -303,6 +369,8 @@ def run_photons(
     """
     if absorption not in ABSORPTION_MODELS:
         raise ConfigError(f"absorption = {absorption!r} is unknown; valid: {ABSORPTION_MODELS}")
+    n_photons = check_run(n_photons, weight_threshold, roulette_chance)
+    check_range("refractive index", stack.n_ext, "-", 0.0, np.inf, low_open=True, high_open=True)
     continuous = absorption == "continuous"
     mua, mus = stack.mua_per_cm, stack.mus_per_cm
     mut = mua + mus
