@@ -494,18 +494,16 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
 
     dirs = preset_dirs(results_dir)
     primary = dirs[0] if dirs else Path(results_dir)
-    results = load_results(primary)
+    runs = [load_results(d) for d in dirs] if dirs else [load_results(primary)]
+    results = runs[0]
     compare = None
-    if len(dirs) > 1:  # every preset on the performance panel's shared axes
-        compare = {}
-        for d in dirs:
-            r = results if d == primary else load_results(d)
-            compare[str(r.meta.get("preset") or d.name)] = r.metrics
+    if len(runs) > 1:  # every preset on the performance panel's shared axes
+        compare = {str(r.meta.get("preset") or r.directory.name): r.metrics for r in runs}
     figures = render_figures(results, figures_dir, compare=compare)
     from .sweep import sweep_section
 
     # several presets: the ablations are shown side by side in the presets section
-    middle = [presets_section(dirs)] if len(dirs) > 1 else [ablation_section(primary)]
+    middle = [presets_section(runs)] if len(runs) > 1 else [ablation_section(primary)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle)
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
