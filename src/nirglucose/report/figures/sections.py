@@ -506,14 +506,14 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     return page.rendered
 
 
-def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style, polar: bool = False):
+def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style):
     from matplotlib.figure import Figure
 
     from ...plots.labels import place_labels
 
     with plot_style():
         fig = Figure(figsize=figsize, layout="constrained")
-        ax = fig.add_subplot(projection="polar" if polar else None)
+        ax = fig.add_subplot()
         draw(ax)
         place_labels(fig)
     return fig
