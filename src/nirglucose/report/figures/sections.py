@@ -87,8 +87,8 @@ class _Page:
 
     @property
     def user_data(self) -> bool:
-        """A user's measurements: no simulation configuration and no preset recorded."""
-        return self.results.config is None and not self.results.meta.get("preset")
+        """A user's measurements (:attr:`Results.user_data`)."""
+        return self.results.user_data
 
     @property
     def rep_note(self) -> str:
