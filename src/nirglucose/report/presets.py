@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Final
 import pandas as pd
 
 from ..exceptions import DataError
+from .html import _esc, _model_label
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -45,13 +46,9 @@ def preset_dirs(results_dir: str | Path) -> list[Path]:
     return sorted(subs, key=lambda s: s.name != PRIMARY_PRESET)
 
 
-def _esc(x: Any) -> str:
-    import html
-
-    return html.escape(str(x), quote=True)
-
-
 def _num(v: Any, digits: int = 1, sign: bool = False) -> str:
+    """A fixed-point number (``"–"`` when missing); unlike the page's ``html._num`` no
+    thousands separator and no latency rounding (p-values keep 3 decimals), and a sign."""
     try:
         f = float(v)
     except (TypeError, ValueError):
@@ -76,8 +73,6 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation")
     a = _read_ablation(Path(results_dir))
     if a is None or a.empty:
         return ""
-    from ..evaluation.reference import MODEL_LABELS
-
     rows = []
     for _, r in a.iterrows():
         if bool(r["significant"]):
@@ -85,7 +80,7 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation")
         else:
             verdict = "no significant difference"
         rows.append(
-            f"<tr><td>{_esc(MODEL_LABELS.get(r['model'], r['model']))}</td>"
+            f"<tr><td>{_esc(_model_label(r['model']))}</td>"
             f"<td>{_num(r['rmse_mgdl'])}</td><td>{_num(r['ablated_rmse_mgdl'])}</td>"
             f"<td>{_num(r['rmse_diff_mgdl'], 2, True)} [{_num(r['ci_low'], 2, True)}, "
             f"{_num(r['ci_high'], 2, True)}]</td><td>{_num(r['p_holm'], 3)}</td>"
@@ -175,10 +170,8 @@ _COMPARED: Final = (("rmse_mgdl", "RMSE [mg/dL, 95 % CI]", "rmse"),
 
 def _model_labels(models: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]]
                   ) -> dict[str, str]:
-    """Display label of each model: the study's, else a run's ``label`` column, else its name."""
-    from ..evaluation.reference import MODEL_LABELS
-
-    label = {m: MODEL_LABELS.get(m, m) for m in models}
+    """Display label of each model: a run's ``label`` column, else the study's, else its name."""
+    label = {m: _model_label(m) for m in models}
     for _, met in loaded:
         if "label" in met.columns:
             label.update({m: str(v) for m, v in met["label"].items() if isinstance(v, str)})
