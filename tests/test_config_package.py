@@ -23,4 +23,3 @@ def test_each_name_is_the_object_of_its_concept_module():
         mod = importlib.import_module(f"nirglucose.config.{module}")
         for name in names:
             assert getattr(config, name) is getattr(mod, name), (module, name)
-
