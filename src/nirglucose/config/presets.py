@@ -99,6 +99,7 @@ def device_capabilities(cfg: ScenarioConfig) -> tuple[str, ...]:
 
     Examples
     --------
+    >>> from nirglucose.config import resolve_config
     >>> device_capabilities(resolve_config("wearable"))
     ()
     """
