@@ -229,18 +229,16 @@ def numeric_leaves(
         from .config import ScenarioConfig
 
         model = ScenarioConfig
-    out: list[tuple[str, Bounds]] = []
+    return _leaves(model, [], prefix)
 
-    def walk(ann: Any, meta: list[Any], path: str) -> None:
-        ann, meta = _unwrap(ann, meta)
-        if _is_number(ann):
-            out.append((path, Bounds.from_metadata(meta)))
-            return
-        for part, sub, sub_meta in _children(ann):
-            walk(sub, sub_meta, f"{path}.{part}" if path else part)
 
-    walk(model, [], prefix)
-    return out
+def _leaves(ann: Any, meta: list[Any], path: str) -> list[tuple[str, Bounds]]:
+    """``(path, bounds)`` of every number under an annotation, depth first."""
+    ann, meta = _unwrap(ann, meta)
+    if _is_number(ann):
+        return [(path, Bounds.from_metadata(meta))]
+    return [leaf for part, sub, sub_meta in _children(ann)
+            for leaf in _leaves(sub, sub_meta, f"{path}.{part}" if path else part)]
 
 
 def _resolve(dotted: str) -> tuple[Any, list[Any], int] | None:
@@ -292,17 +290,7 @@ def key_range(dotted: str) -> str:
         return str(Bounds.from_metadata(meta))
     if isinstance(ann, type) and issubclass(ann, BaseModel):
         return ""
-    leaves: list[tuple[str, Bounds]] = []
-
-    def walk(a: Any, m: list[Any], path: str) -> None:
-        a, m = _unwrap(a, m)
-        if _is_number(a):
-            leaves.append((path, Bounds.from_metadata(m)))
-            return
-        for part, sub, sub_meta in _children(a):
-            walk(sub, sub_meta, f"{path}.{part}" if path else part)
-
-    walk(ann, meta, "")
+    leaves = _leaves(ann, meta, "")
     ranges = {str(b) for _, b in leaves}
     if len(ranges) <= 1:
         return next(iter(ranges), "")

@@ -162,12 +162,32 @@ def test_performance_panel_numbers_equal_the_benchmark_table(synthetic_results):
         "paper", "wearable"]
 
 
-def test_performance_panel_in_the_report_uses_the_run_s_metrics(synthetic_results):
+def test_performance_panel_in_the_report_uses_the_run_s_metrics(synthetic_results, monkeypatch):
+    from nirglucose.plots import architecture
     from nirglucose.report.figures import render_figures
 
+    drawn: dict[str, list] = {}
+
+    def spy(table):  # the report's own figure builder, read before the report clears it
+        out = figure_performance_panel(table)
+        drawn["labels"] = [t.get_text() for t in out.axes[0].get_yticklabels()]
+        drawn["widths"] = [[b.get_width() for b in ax.patches if b.get_height() > 0]
+                           for ax in out.axes]
+        return out
+
+    monkeypatch.setattr(architecture, "figure_performance_panel", spy)
     res = load_results(synthetic_results)
     (fig,) = render_figures(res, include=["performance"])
     assert fig.png and fig.key == "performance"
     table = performance_table({"paper": res.metrics}, ["ebl", "original-pinn"])
     want = res.metrics.set_index("model").loc[["ebl", "original-pinn"], "rmse_mgdl"]
     pd.testing.assert_series_equal(table.set_index("model")["rmse_mgdl"], want)
+    met = res.metrics.set_index("model")
+    by_label = {model_label(m): m for m in met.index}
+    models = [by_label[t] for t in drawn["labels"]]
+    assert {"ebl", "original-pinn"} <= set(models)
+    cols = ("rmse_mgdl", "mard_pct", "n_parameters", "latency_single_ms")
+    assert len(drawn["widths"]) == len(cols)
+    for widths, col in zip(drawn["widths"], cols, strict=True):
+        np.testing.assert_allclose(widths, [met.at[m, col] for m in models], rtol=1e-12,
+                                   err_msg=col)

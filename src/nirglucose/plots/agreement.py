@@ -34,6 +34,13 @@ def _xy(x: ArrayLike, y: ArrayLike, names: str) -> tuple[np.ndarray, np.ndarray]
 
 
 @styled
+def _ba_span(loa_low: float, loa_high: float, difference_mgdl: ArrayLike) -> float:
+    """Largest absolute limit of agreement or difference (1 with no differences). [mg/dL]"""
+    d = np.asarray(difference_mgdl, float)
+    return max(abs(float(loa_low)), abs(float(loa_high)),
+               float(np.nanmax(np.abs(d))) if d.size else 1.0)
+
+
 def plot_bland_altman(
     mean_mgdl: ArrayLike,
     difference_mgdl: ArrayLike,
@@ -102,8 +109,7 @@ def plot_bland_altman(
             ax.axhspan(ci[0], ci[1], color=color, alpha=0.15, lw=0)
             txt += f" [{ci[0]:+.0f}, {ci[1]:+.0f}]"
         parts.append((name, txt))
-    span = max(abs(loa_low), abs(loa_high), float(np.nanmax(np.abs(d))) if d.size else 1.0)
-    half = ylim_mgdl if ylim_mgdl is not None else 1.2 * span
+    half = ylim_mgdl if ylim_mgdl is not None else 1.2 * _ba_span(loa_low, loa_high, d)
     if np.isfinite(half) and half > 0:
         ax.set_ylim(-half, half)
     stats = (f"bias {parts[0][1]}\nLoA {parts[2][1]} / {parts[1][1]}")
@@ -246,8 +252,7 @@ def figure_bland_altman(panels: Mapping[str, Mapping[str, object]], *, ncols: in
     matplotlib.figure.Figure
     """
 
-    spans = [max(abs(float(p["loa_low"])), abs(float(p["loa_high"])),
-                 float(np.nanmax(np.abs(np.asarray(p["difference_mgdl"], float)))))
+    spans = [_ba_span(p["loa_low"], p["loa_high"], p["difference_mgdl"])
              for p in panels.values() if len(np.asarray(p["difference_mgdl"]))]
     half = 1.1 * max(spans) if spans else None
 

@@ -12,6 +12,7 @@ Scores, indices and Pareto fronts are computed by the report layer and passed in
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -89,6 +90,29 @@ def bubble_area(n_parameters: ArrayLike, max_parameters: float) -> np.ndarray:
 
 
 @styled
+def _radar_angles(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n`` spoke angles [rad], and the same closed (first repeated at the end)."""
+    angles = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return angles, np.append(angles, angles[:1])
+
+
+def _closed_radii(row: pd.Series) -> np.ndarray:
+    """One model's scores as a closed polygon's radii, NaN drawn at 0. [-]"""
+    r = np.nan_to_num(row.to_numpy(float), nan=0.0)
+    return np.append(r, r[:1])
+
+
+def _radar_frame(ax: Axes, angles: np.ndarray, names: list[str], *, pad: float,
+                 **label_kw: Any) -> None:
+    """Clockwise spokes from 12 o'clock, labelled ``names``, radius 0 to just over 1."""
+    ax.set_theta_offset(np.pi / 2.0)
+    ax.set_theta_direction(-1)
+    ax.set_xticks(angles)
+    ax.set_xticklabels(names, **label_kw)
+    ax.tick_params(axis="x", pad=pad)
+    ax.set_ylim(0.0, 1.05)
+
+
 def plot_radar(scores: pd.DataFrame, *, title: str | None = None, ax: Axes | None = None) -> Axes:
     """Radar (spider) chart of normalised scores, one polygon per model.
 
@@ -113,21 +137,14 @@ def plot_radar(scores: pd.DataFrame, *, title: str | None = None, ax: Axes | Non
         raise ValueError("plot_radar needs a polar Axes (projection='polar')")
     axes_names = [str(c) for c in scores.columns]
     n = len(axes_names)
-    angles = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    closed = np.append(angles, angles[:1])
+    angles, closed = _radar_angles(n)
     colors = model_colors(scores.index)
     for model, row in scores.iterrows():
-        r = np.nan_to_num(row.to_numpy(float), nan=0.0)
-        r = np.append(r, r[:1])
+        r = _closed_radii(row)
         ax.plot(closed, r, color=colors[model], lw=1.4, marker=model_marker(str(model)),
                 ms=4, label=model_label(str(model)))
         ax.fill(closed, r, color=colors[model], alpha=0.08)
-    ax.set_theta_offset(np.pi / 2.0)
-    ax.set_theta_direction(-1)
-    ax.set_xticks(angles)
-    ax.set_xticklabels(axes_names)
-    ax.tick_params(axis="x", pad=11)
-    ax.set_ylim(0.0, 1.05)
+    _radar_frame(ax, angles, axes_names, pad=11)
     ax.set_yticks([0.25, 0.5, 0.75, 1.0])
     ax.set_yticklabels(["0.25", "0.5", "0.75", "1"], fontsize=7, color=GREY)
     ax.set_rlabel_position(90.0 / max(n, 1))
@@ -161,12 +178,9 @@ def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
     ncols = max(1, min(ncols, len(models)))
     nrows = -(-len(models) // ncols)
     names = [str(c) for c in scores.columns]
-    n = len(names)
-    angles = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    closed = np.append(angles, angles[:1])
+    angles, closed = _radar_angles(len(names))
     colors = model_colors(scores.index)
-    radii = {m: np.append(r := np.nan_to_num(scores.loc[m].to_numpy(float), nan=0.0), r[:1])
-             for m in models}
+    radii = {m: _closed_radii(scores.loc[m]) for m in models}
     with plot_style():
         fig = Figure(figsize=(3.3 * ncols, 3.1 * nrows), layout="constrained")
         for i, model in enumerate(models):
@@ -177,12 +191,7 @@ def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
             ax.plot(closed, radii[model], color=colors[model], lw=1.8, zorder=3,
                     marker=model_marker(model), ms=3.5)
             ax.fill(closed, radii[model], color=colors[model], alpha=0.25, zorder=2)
-            ax.set_theta_offset(np.pi / 2.0)
-            ax.set_theta_direction(-1)
-            ax.set_xticks(angles)
-            ax.set_xticklabels(names, fontsize=7.5)
-            ax.tick_params(axis="x", pad=1)
-            ax.set_ylim(0.0, 1.05)
+            _radar_frame(ax, angles, names, pad=1, fontsize=7.5)
             ax.set_yticks([0.5, 1.0])
             ax.set_yticklabels([])
             mean = float(np.nanmean(scores.loc[model].to_numpy(float)))

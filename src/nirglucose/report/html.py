@@ -200,11 +200,6 @@ _INTERVAL_COLUMNS: tuple[tuple[str, str | None, str, int], ...] = (
 )
 
 
-def is_user_data(results: Results) -> bool:
-    """Whether the run is on a user's data (no simulation configuration recorded)."""
-    return results.config is None and not results.meta.get("preset")
-
-
 def _user_data_md(md: str) -> str:
     """The benchmark's table.md text for a user's data: no preset, no study protocol.
 
@@ -218,7 +213,7 @@ def _user_data_md(md: str) -> str:
 def _reproduced_table(results: Results) -> str:
     from ..evaluation.reference import STUDY_TABLE
 
-    with_study = not is_user_data(results)
+    with_study = not results.user_data
     study = {str(r["model"]): r for r in STUDY_TABLE} if with_study else {}
     m = results.metrics.drop_duplicates("model").set_index("model")
     base = list(_TABLE_COLUMNS)
@@ -271,7 +266,7 @@ def _significance(results: Results) -> str:
         from .presets import strip_ablation
 
         md = strip_ablation(results.table_md)
-        if is_user_data(results):
+        if results.user_data:
             md = _user_data_md(md)
         parts.append(markdown_to_html(md, skip_tables=True, skip_h1=True))
     c = results.comparisons
@@ -355,7 +350,7 @@ def _run_info(results: Results) -> str:
     else:
         out.append('<p class="note">' + (
             "Your data were measured, not simulated: there is no simulator configuration."
-            if is_user_data(results) else
+            if results.user_data else
             "The resolved configuration is not recorded in these results.") + "</p>")
     rest = {k: v for k, v in meta.items() if k != "config"}
     if rest:
@@ -421,7 +416,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         '<h2 id="table">Reproduced table</h2>',
         ("<p>This run's metrics with 95 % confidence intervals on your data. The study's "
          "Table 1 is left out: it was measured on other data. Latency: median "
-         "single-sample prediction time on this machine.</p>" if is_user_data(results) else
+         "single-sample prediction time on this machine.</p>" if results.user_data else
          "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
          "(single 60/20/20 split by subject, test n = 48; no intervals reported). "
          "Latency: median single-sample prediction time on this machine.</p>"),
@@ -494,18 +489,16 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
 
     dirs = preset_dirs(results_dir)
     primary = dirs[0] if dirs else Path(results_dir)
-    results = load_results(primary)
+    runs = [load_results(d) for d in dirs] if dirs else [load_results(primary)]
+    results = runs[0]
     compare = None
-    if len(dirs) > 1:  # every preset on the performance panel's shared axes
-        compare = {}
-        for d in dirs:
-            r = results if d == primary else load_results(d)
-            compare[str(r.meta.get("preset") or d.name)] = r.metrics
+    if len(runs) > 1:  # every preset on the performance panel's shared axes
+        compare = {str(r.meta.get("preset") or r.directory.name): r.metrics for r in runs}
     figures = render_figures(results, figures_dir, compare=compare)
     from .sweep import sweep_section
 
     # several presets: the ablations are shown side by side in the presets section
-    middle = [presets_section(dirs)] if len(dirs) > 1 else [ablation_section(primary)]
+    middle = [presets_section(runs)] if len(runs) > 1 else [ablation_section(primary)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle)
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))

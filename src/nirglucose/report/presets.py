@@ -12,12 +12,17 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 import pandas as pd
 
 from ..exceptions import DataError
+from .html import _esc, _model_label
+
+if TYPE_CHECKING:
+    from .figures import Results
 
 __all__ = ["preset_dirs", "ablation_section", "presets_section"]
 
@@ -41,13 +46,9 @@ def preset_dirs(results_dir: str | Path) -> list[Path]:
     return sorted(subs, key=lambda s: s.name != PRIMARY_PRESET)
 
 
-def _esc(x: Any) -> str:
-    import html
-
-    return html.escape(str(x), quote=True)
-
-
 def _num(v: Any, digits: int = 1, sign: bool = False) -> str:
+    """A fixed-point number (``"–"`` when missing); unlike the page's ``html._num`` no
+    thousands separator and no latency rounding (p-values keep 3 decimals), and a sign."""
     try:
         f = float(v)
     except (TypeError, ValueError):
@@ -72,8 +73,6 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation")
     a = _read_ablation(Path(results_dir))
     if a is None or a.empty:
         return ""
-    from ..evaluation.reference import MODEL_LABELS
-
     rows = []
     for _, r in a.iterrows():
         if bool(r["significant"]):
@@ -81,7 +80,7 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation")
         else:
             verdict = "no significant difference"
         rows.append(
-            f"<tr><td>{_esc(MODEL_LABELS.get(r['model'], r['model']))}</td>"
+            f"<tr><td>{_esc(_model_label(r['model']))}</td>"
             f"<td>{_num(r['rmse_mgdl'])}</td><td>{_num(r['ablated_rmse_mgdl'])}</td>"
             f"<td>{_num(r['rmse_diff_mgdl'], 2, True)} [{_num(r['ci_low'], 2, True)}, "
             f"{_num(r['ci_high'], 2, True)}]</td><td>{_num(r['p_holm'], 3)}</td>"
@@ -122,24 +121,28 @@ def _config_differences(a: dict[str, Any], b: dict[str, Any]) -> list[tuple[str,
     ]
 
 
-def _load(d: Path) -> tuple[dict[str, Any], pd.DataFrame]:
-    from .figures import load_results
-
-    res = load_results(d)
+def _meta_metrics(res: Results) -> tuple[dict[str, Any], pd.DataFrame]:
     return res.meta, res.metrics.drop_duplicates("model").set_index("model")
 
 
-def presets_section(dirs: list[Path]) -> str:
-    """HTML comparing the runs in ``dirs`` (the first is the primary, shown in full).
+def presets_section(runs: Sequence[Results]) -> str:
+    """HTML comparing the loaded ``runs`` (the first is the primary, shown in full).
+
+    Parameters
+    ----------
+    runs : sequence of Results
+        One loaded run per preset directory (:func:`nirglucose.report.figures.load_results`
+        of each of :func:`preset_dirs`), primary first; loaded once by the caller.
 
     Raises
     ------
     DataError
-        Fewer than two directories.
+        Fewer than two runs.
     """
-    if len(dirs) < 2:
+    if len(runs) < 2:
         raise DataError("a preset comparison needs at least two results directories")
-    loaded = [_load(d) for d in dirs]
+    dirs = [r.directory for r in runs]
+    loaded = [_meta_metrics(r) for r in runs]
     names = [m.get("preset") or d.name for d, (m, _) in zip(dirs, loaded, strict=True)]
     models = list(dict.fromkeys(m for _, met in loaded for m in met.index))
     label = _model_labels(models, loaded)
@@ -155,7 +158,7 @@ def presets_section(dirs: list[Path]) -> str:
         "<h3>What separates the presets</h3>",
         _separation(names, loaded, label),
         _ablations_side_by_side(dirs, names),
-        *_preset_details(dirs[1:], names[1:]),
+        *_preset_details(runs[1:], names[1:]),
     ]
     return "\n".join(p for p in parts if p)
 
@@ -167,10 +170,8 @@ _COMPARED: Final = (("rmse_mgdl", "RMSE [mg/dL, 95 % CI]", "rmse"),
 
 def _model_labels(models: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]]
                   ) -> dict[str, str]:
-    """Display label of each model: the study's, else a run's ``label`` column, else its name."""
-    from ..evaluation.reference import MODEL_LABELS
-
-    label = {m: MODEL_LABELS.get(m, m) for m in models}
+    """Display label of each model: a run's ``label`` column, else the study's, else its name."""
+    label = {m: _model_label(m) for m in models}
     for _, met in loaded:
         if "label" in met.columns:
             label.update({m: str(v) for m, v in met["label"].items() if isinstance(v, str)})
@@ -226,14 +227,12 @@ def _ablations_side_by_side(dirs: list[Path], names: list[str]) -> str:
             + "".join(f"<div>{a}</div>" for _, a in ablations) + "</div>")
 
 
-def _preset_details(dirs: list[Path], names: list[str]) -> list[str]:
+def _preset_details(runs: Sequence[Results], names: list[str]) -> list[str]:
     """A collapsed block per preset with its reproduced table and significance statements."""
-    from .figures import load_results
     from .html import _reproduced_table, markdown_to_html
 
     out = []
-    for d, n in zip(dirs, names, strict=True):
-        res = load_results(d)
+    for res, n in zip(runs, names, strict=True):
         inner = [_reproduced_table(res)]
         if res.table_md:
             inner.append(markdown_to_html(strip_ablation(res.table_md), skip_tables=True,

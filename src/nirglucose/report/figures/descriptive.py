@@ -61,13 +61,16 @@ def _module_blocks(module) -> list[tuple[str, str]]:
 
 
 def fitted_architectures(dataset, preset: str | None,
-                         models: Sequence[str] = ARCHITECTURE_MODELS
+                         models: Sequence[str] = ARCHITECTURE_MODELS, *,
+                         fitted: dict[str, Any] | None = None
                          ) -> dict[str, tuple[list[tuple[str, str]], int]]:
     """Layer sizes of each model family, read from models fitted for one epoch.
 
     Each model is built with the run's tuned parameters
     (:func:`nirglucose.models.tuned_params`) and fitted on ``dataset`` for one epoch
     (the sizes do not depend on training), so the diagram shows the widths that ran.
+    When ``fitted`` is given, each fitted model is also stored there by name (the
+    report reuses the EBL fit for :func:`ebl_feature_table`).
     """
     from ...models import make_model, tuned_params
 
@@ -77,6 +80,8 @@ def fitted_architectures(dataset, preset: str | None,
         if name != "ebl":
             params["max_epochs"] = 1
         m = make_model(name, **params).fit(dataset)
+        if fitted is not None:
+            fitted[name] = m
         schema = m.schema_
         n_a, n_p = len(schema.labels), len(schema.physiology)
         if name == "ebl":
@@ -93,8 +98,13 @@ def fitted_architectures(dataset, preset: str | None,
     return out
 
 
-def ebl_feature_table(dataset, preset: str | None) -> tuple[tuple, int, int]:
+def ebl_feature_table(dataset, preset: str | None, *, model: Any = None
+                      ) -> tuple[tuple, int, int]:
     """The Enhanced Beer–Lambert features of ``dataset``'s device, from a fitted model.
+
+    ``model``, when given, is an EBL model already fitted on ``dataset`` with the
+    preset's tuned parameters (as :func:`fitted_architectures` fits it); else one is
+    fitted here.
 
     Returns
     -------
@@ -104,7 +114,8 @@ def ebl_feature_table(dataset, preset: str | None) -> tuple[tuple, int, int]:
     """
     from ...models import make_model, tuned_params
 
-    m = make_model("ebl", **(tuned_params("ebl", preset) if preset else {})).fit(dataset)
+    m = model if model is not None else make_model(
+        "ebl", **(tuned_params("ebl", preset) if preset else {})).fit(dataset)
     return tuple(m.table_), len(m.schema_.labels), len(m.schema_.physiology)
 
 

@@ -116,11 +116,12 @@ def pooled(predictions: pd.DataFrame, model: str) -> pd.DataFrame:
     return predictions[predictions["model"] == model]
 
 
-def _finite_pairs(p: pd.DataFrame, col: str) -> tuple[np.ndarray, np.ndarray, int]:
+def _finite_pairs(p: pd.DataFrame, col: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Finite reference/prediction pairs with a positive reference, and the row mask kept."""
     ref = p["reference_mgdl"].to_numpy(float)
     pred = p[col].to_numpy(float)
     ok = np.isfinite(ref) & np.isfinite(pred) & (ref > 0)
-    return ref[ok], pred[ok], int(np.count_nonzero(~ok))
+    return ref[ok], pred[ok], ok
 
 
 def channel_correlations(glucose_mgdl: np.ndarray, adc: Mapping[float, np.ndarray]
@@ -240,7 +241,8 @@ def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
     col = scored_column(predictions)
     out: dict[str, dict[str, Any]] = {}
     for m in models:
-        ref, pred, _ = _finite_pairs(pooled(predictions, m), col)
+        p = pooled(predictions, m)
+        ref, pred, ok = _finite_pairs(p, col)
         n = ref.size
         if n < 3 or np.ptp(ref) == 0:
             continue
@@ -254,15 +256,11 @@ def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
         out[m] = {"reference": ref, "predicted": pred, "slope": float(slope),
                   "intercept": float(intercept), "r_squared": r2,
                   "slope_ci": (float(slope - tq * se), float(slope + tq * se))}
-        p = pooled(predictions, m)
         if {"lower90_mgdl", "upper90_mgdl"} <= set(p.columns):
-            r_all = p["reference_mgdl"].to_numpy(float)
-            lo = p["lower90_mgdl"].to_numpy(float)
-            hi = p["upper90_mgdl"].to_numpy(float)
-            ok = (np.isfinite(r_all) & np.isfinite(p[col].to_numpy(float)) & (r_all > 0)
-                  & np.isfinite(lo) & np.isfinite(hi))
-            if ok.sum() == n:  # the same rows as the points
-                out[m].update(lower=lo[ok], upper=hi[ok])
+            lo = p["lower90_mgdl"].to_numpy(float)[ok]  # the same rows as the points
+            hi = p["upper90_mgdl"].to_numpy(float)[ok]
+            if np.isfinite(lo).all() and np.isfinite(hi).all():
+                out[m].update(lower=lo, upper=hi)
     return out
 
 

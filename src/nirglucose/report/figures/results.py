@@ -86,6 +86,11 @@ class Results:
         return model_order(self.metrics["model"])
 
     @property
+    def user_data(self) -> bool:
+        """Whether the run is on a user's measurements: no configuration and no preset recorded."""
+        return self.config is None and not self.meta.get("preset")
+
+    @property
     def config(self):
         """The resolved scenario configuration (dataset's, else the metadata's), or None."""
         if self.dataset is not None and getattr(self.dataset, "config", None) is not None:

@@ -69,6 +69,8 @@ class _Page:
     compare: Mapping[str, pd.DataFrame] | None
     rendered: list[RenderedFigure] = field(default_factory=list)
     count: int = 0
+    #: Models fitted for the architecture figure, by name (the features figure reuses EBL).
+    fitted: dict[str, Any] = field(default_factory=dict)
 
     @property
     def models(self) -> list[str]:
@@ -85,8 +87,8 @@ class _Page:
 
     @property
     def user_data(self) -> bool:
-        """A user's measurements: no simulation configuration and no preset recorded."""
-        return self.results.config is None and not self.results.meta.get("preset")
+        """A user's measurements (:attr:`Results.user_data`)."""
+        return self.results.user_data
 
     @property
     def rep_note(self) -> str:
@@ -198,9 +200,10 @@ def _section_architecture(page: _Page) -> None:
     arch_models = [m for m in ARCHITECTURE_MODELS if m in models] or list(ARCHITECTURE_MODELS)
     archs: dict[str, Any] = {}
     arch_err: str | None = "No dataset.parquet in the results: diagram not drawn."
-    if ds is not None and page.wants("architecture", "features"):
+    if ds is not None and page.wants("architecture"):
         try:
-            archs = fitted_architectures(ds, page.results.meta.get("preset"), arch_models)
+            archs = fitted_architectures(ds, page.results.meta.get("preset"), arch_models,
+                                         fitted=page.fitted)
             arch_err = None
         except (ImportError, ValueError, RuntimeError) as exc:
             archs, arch_err = {}, f"Models could not be built on this dataset: {exc}"
@@ -226,7 +229,8 @@ def _section_features(page: _Page) -> None:
     n_ch = n_phys = 0
     if ds is not None and page.wants("features"):
         try:
-            table, n_ch, n_phys = ebl_feature_table(ds, page.results.meta.get("preset"))
+            table, n_ch, n_phys = ebl_feature_table(ds, page.results.meta.get("preset"),
+                                                    model=page.fitted.get("ebl"))
             feat, feat_src = feature_categories(table)
         except (ImportError, ValueError) as exc:
             logger.warning("feature table not built: %s", exc)
@@ -502,14 +506,14 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     return page.rendered
 
 
-def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style, polar: bool = False):
+def _figure_one(draw: Callable, figsize: tuple[float, float], plot_style):
     from matplotlib.figure import Figure
 
     from ...plots.labels import place_labels
 
     with plot_style():
         fig = Figure(figsize=figsize, layout="constrained")
-        ax = fig.add_subplot(projection="polar" if polar else None)
+        ax = fig.add_subplot()
         draw(ax)
         place_labels(fig)
     return fig
