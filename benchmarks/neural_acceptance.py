@@ -28,9 +28,11 @@ import torch
 
 import nirglucose as ng
 from nirglucose.evaluation import run_benchmark
+from nirglucose.models.registry import MODELS, is_network
 from nirglucose.models.tuning import TUNED_PRESETS
 
-NETWORKS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
+#: Every registered network (a new one is checked without editing this script).
+NETWORKS = tuple(name for name in MODELS if is_network(name))
 MODELS = ("mean", "ebl", *NETWORKS)
 
 

@@ -50,7 +50,6 @@ def accuracy(preset: str, seed: int, overrides: dict) -> dict:
 
     import nirglucose as ng
     from nirglucose.models import make_model, tuned_params
-    from nirglucose.models.tuning import TUNED_PRESETS
 
     ds = ng.simulate(preset, N_SUBJECTS, PER_SUBJECT, seed=seed, overrides=overrides)
     frame = ds.frame
@@ -60,7 +59,7 @@ def accuracy(preset: str, seed: int, overrides: dict) -> dict:
     for tr, te in GroupKFold(n_splits=N_SPLITS).split(frame, y, groups):
         train = ng.Dataset(frame.iloc[tr].reset_index(drop=True), config=ds.config)
         test = ng.Dataset(frame.iloc[te].reset_index(drop=True), config=ds.config)
-        ebl = make_model("ebl", **(tuned_params("ebl", preset) if preset in TUNED_PRESETS else {}))
+        ebl = make_model("ebl", **tuned_params("ebl", preset))  # {} for an untuned preset
         pred["ebl"][te] = ebl.fit(train).predict(test)
         pred["no_skill"][te] = y[tr].mean()
     return {k: float(np.sqrt(np.mean((p - y) ** 2))) for k, p in pred.items()}

@@ -102,6 +102,9 @@ def main() -> None:
     torch.set_num_threads(1)
     presets = [p for p in args.presets.split(",") if p]
     models = [m for m in args.models.split(",") if m]
+    unknown = [m for m in models if m not in FAMILIES]
+    if unknown:
+        ap.error(f"no search space for {unknown}; tuned families: {', '.join(FAMILIES)}")
     t_start = time.perf_counter()
     doc = json.loads(args.out.read_text()) if args.out.exists() else {}
     params = doc.get("params", {})
