@@ -157,12 +157,6 @@ def _one_thread_torch():
         torch.set_num_threads(saved)
 
 
-def _rows(dataset: Dataset, idx: Any) -> Dataset:
-    return Dataset(
-        dataset.frame.iloc[idx].reset_index(drop=True), config=dataset.config, seed=dataset.seed
-    )
-
-
 def _constructor_params(cls: type, spec: Mapping[str, Any]) -> tuple[dict[str, Any], int]:
     """The task's constructor arguments (``random_state`` seeded from the task) and seed."""
     params = dict(spec["params"])
@@ -183,10 +177,10 @@ def _run_task(
 ) -> dict[str, Any]:
     """Fit one model on one split and score it; the JSON-able task result."""
     params, task_seed = _constructor_params(cls, spec)
-    train, test = _rows(dataset, split.train), _rows(dataset, split.test)
+    train, test = dataset.rows(split.train), dataset.rows(split.test)
     fit_kwargs: dict[str, Any] = {}
     if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
-        val = _rows(dataset, split.val)
+        val = dataset.rows(split.val)
         fit_kwargs = {"X_val": val, "y_val": val.frame["glucose_mgdl"].to_numpy(float)}
     cpu0, wall0 = time.process_time(), time.perf_counter()
     with _one_thread_torch():
@@ -202,7 +196,7 @@ def _run_task(
             )
         val_pred = None
         if split.val is not None:  # calibrates the conformal intervals of paper-split
-            val_pred = np.asarray(model.predict(_rows(dataset, split.val)), dtype=float).ravel()
+            val_pred = np.asarray(model.predict(dataset.rows(split.val)), dtype=float).ravel()
         latency: dict[str, Any] = {}
         if spec["timed"]:
             form, data = timing_inputs(model, test)

@@ -146,10 +146,9 @@ def _frame_of(data) -> pd.DataFrame:
 def _subset(data, mask: np.ndarray):
     from ..dataset import Dataset
 
-    frame = _frame_of(data).loc[mask].reset_index(drop=True)
     if isinstance(data, Dataset):
-        return Dataset(frame, config=data.config, seed=data.seed, metadata=dict(data.metadata))
-    return frame
+        return data.rows(mask)
+    return _frame_of(data).loc[mask].reset_index(drop=True)
 
 
 def _first_reading_residuals(frame: pd.DataFrame, resid: np.ndarray) -> tuple:

@@ -294,12 +294,7 @@ def _filtered(ds: Dataset, filt: Mapping[str, Any] | None) -> Dataset:
     if not filt:
         return ds
     mask = ds.frame[filt["column"]].isin(filt["values"]).to_numpy()
-    return Dataset(
-        ds.frame.loc[mask].reset_index(drop=True),
-        config=ds.config,
-        seed=ds.seed,
-        metadata=ds.metadata,
-    )
+    return ds.rows(mask)
 
 
 def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
