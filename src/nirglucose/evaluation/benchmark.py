@@ -67,7 +67,7 @@ from .. import __version__
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
 from ..models.registry import available_models, get_model_class
-from . import tasks
+from . import executors, tasks
 from .benchmark_aggregate import aggregate
 from .benchmark_result import (
     ABLATION_COLUMNS,
@@ -222,8 +222,9 @@ def _run_task(
     }
 
 
-def _indexed_task(i: int, *args: Any) -> tuple[int, dict[str, Any]]:
-    return i, _run_task(*args)
+def _run_task_of(args: tuple[Any, ...]) -> dict[str, Any]:
+    """:func:`_run_task` of one argument tuple (what :func:`executors.run_unordered` maps)."""
+    return _run_task(*args)
 
 
 def _task_tag(spec: Mapping[str, Any]) -> str:
@@ -436,9 +437,9 @@ def _execute(
         else None
     )
 
-    def args(i):
-        t = by_key[pending[i]]
-        return t.cls, t.spec, dataset, t.split, opts["timing"]
+    items = [
+        (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
+    ]
 
     def done(spec, _result):
         if on_task is not None:
@@ -450,14 +451,7 @@ def _execute(
         with warnings.catch_warnings():
             # loky replaces a worker whose memory grew, and says so; results are unaffected
             warnings.filterwarnings("ignore", message="A worker stopped while some jobs")
-            if opts["jobs"] == 1 or len(pending) <= 1:
-                stream = (_indexed_task(i, *args(i)) for i in range(len(pending)))
-            else:
-                from joblib import Parallel, delayed
-
-                stream = Parallel(n_jobs=opts["jobs"], return_as="generator_unordered")(
-                    delayed(_indexed_task)(i, *args(i)) for i in range(len(pending))
-                )
+            stream = executors.run_unordered(_run_task_of, items, jobs=opts["jobs"])
             cache.collect(stream, pending, plan.specs(), _task_tag, on_done=done)
     finally:
         if bar is not None:
