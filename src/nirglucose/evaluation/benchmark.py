@@ -68,7 +68,7 @@ from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
 from ..models.registry import available_models, get_model_class
 from . import executors, tasks
-from .benchmark_aggregate import aggregate
+from .benchmark_aggregate import aggregate, fallback_mgdl
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
@@ -163,9 +163,15 @@ def _constructor_params(cls: type, spec: Mapping[str, Any]) -> tuple[dict[str, A
     # an ablated PINN draws the same seeds as its original: a paired comparison
     seed_name = spec.get("seed_model", spec["model"])
     task_seed = _task_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
+    return seeded_params(cls, params, task_seed), task_seed
+
+
+def seeded_params(cls: type, params: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """``params`` with ``random_state=seed`` added when ``cls`` takes one and none is given."""
+    params = dict(params)
     if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
-        params["random_state"] = task_seed
-    return params, task_seed
+        params["random_state"] = seed
+    return params
 
 
 def _run_task(
@@ -207,7 +213,7 @@ def _run_task(
     return {
         "predicted_mgdl": [float(v) for v in pred],
         "val_predicted_mgdl": None if val_pred is None else [float(v) for v in val_pred],
-        "fallback_mgdl": float(np.median(train.frame["glucose_mgdl"].to_numpy(float))),
+        "fallback_mgdl": fallback_mgdl(train),
         "n_parameters": int(getattr(model, "n_parameters", -1)),
         "fit_time_s": fit_time,
         "task_wall_s": time.perf_counter() - wall0,

@@ -76,7 +76,6 @@ Outputs (:meth:`SweepResult.save`)
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import time
@@ -96,7 +95,8 @@ from ..exceptions import ConfigError, DataError
 from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks
-from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark
+from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark, seeded_params
+from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _clean
 from .calibration import check_k
 from .executors import resolve_backend, run_unordered
@@ -337,22 +337,20 @@ def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> di
     cls = get_model_class(spec["model"])
     # the preset's tuned parameters (the benchmark's one hook), then the sweep's own
     params = {**_model_params(spec["model"], spec["preset"]), **spec["model_params"]}
-    if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
-        params["random_state"] = tasks.derived_seed(spec["seed"], f"model|{spec['model']}")
-    model = cls(**params).fit(train)
+    seed = tasks.derived_seed(spec["seed"], f"model|{spec['model']}")
+    model = cls(**seeded_params(cls, params, seed)).fit(train)
     raw = np.asarray(model.predict(test), dtype=float).ravel()
-    fallback = float(np.median(train.frame["glucose_mgdl"].to_numpy(float)))
-    scored = np.where(np.isfinite(raw), np.maximum(raw, 0.0), fallback)
+    y = scored(raw, fallback_mgdl(train))
     ref = test.frame["glucose_mgdl"].to_numpy(float)
-    point = summary(ref, scored)
+    point = summary(ref, y)
     ci = cluster_bootstrap_metrics(
-        ref, scored, test.frame["subject_id"].to_numpy(), n_boot=spec["n_boot"], seed=spec["seed"]
+        ref, y, test.frame["subject_id"].to_numpy(), n_boot=spec["n_boot"], seed=spec["seed"]
     )
     out = {**point, **{k: v for k, v in ci.items() if "_ci_" in k}}
     out.update(
         n_parameters=int(getattr(model, "n_parameters", -1)),
         n_predictions=len(ref),
-        n_invalid_predictions=int(np.count_nonzero(~np.isfinite(raw) | (raw < 0))),
+        n_invalid_predictions=count_invalid(raw),
         n_train=len(train),
     )
     return {k: out[k] for k in (*SWEEP_METRICS, "n_train") if k in out}
