@@ -65,7 +65,7 @@ import pandas as pd
 
 from .. import __version__
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError, DataError, check_positive_int
 from ..models.registry import available_models, get_model_class
 from . import executors, tasks
 from .benchmark_aggregate import aggregate, fallback_mgdl
@@ -238,17 +238,23 @@ def _task_tag(spec: Mapping[str, Any]) -> str:
 
 
 # --------------------------------------------------------------------------- plan
-def _resolve_models(models: Sequence[str] | str | None) -> list[str]:
-    valid = available_models()
+def resolve_models(models: Sequence[str] | str | None, default: Sequence[str]) -> list[str]:
+    """Registry names from a list or a comma-separated string, ``default`` when None.
+
+    Raises
+    ------
+    ConfigError
+        No models (none given, or ``default`` empty), or an unknown name.
+    """
     if models is None:
-        if not valid:
+        if not default:
             raise ConfigError("no models are registered")
-        return valid
+        models = default
     if isinstance(models, str):
         models = [m.strip() for m in models.split(",") if m.strip()]
     names = list(dict.fromkeys(models))
     if not names:
-        raise ConfigError(f"no models given; valid: {', '.join(valid)}")
+        raise ConfigError(f"no models given; valid: {', '.join(available_models())}")
     for name in names:
         get_model_class(name)  # raises ConfigError listing the valid names
     return names
@@ -278,12 +284,6 @@ def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str
             if is_pinn(n):
                 out[n + NO_PHYSICS] = (n, {"lambda_phys": 0.0})
     return out
-
-
-def _check_positive(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -382,7 +382,7 @@ def _plan(
     opts: dict[str, Any],
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
-    names = _resolve_models(models)
+    names = resolve_models(models, available_models())
     if opts["references"]:
         names += [m for m in REFERENCE_MODELS if m not in names]
     preset = getattr(dataset.config, "preset", None)
@@ -554,7 +554,7 @@ def _checked_options(opts: dict[str, Any]) -> dict[str, Any]:
     """The options of :func:`run_benchmark`, counts and protocol checked."""
     check_protocol(opts["protocol"])
     for name in ("n_splits", "repeats", "jobs", "n_boot"):
-        opts[name] = _check_positive(name, opts[name])
+        opts[name] = check_positive_int(name, opts[name])
     opts["calibration"] = check_k(opts["calibration"])
     opts["timing"] = dict(opts["timing"] or {})
     return opts

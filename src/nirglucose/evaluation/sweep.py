@@ -91,11 +91,17 @@ import pandas as pd
 from .. import __version__
 from ..config import resolve_config
 from ..dataset import Dataset, atomic_write
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError, DataError, check_positive_int
 from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks
-from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark, seeded_params
+from .benchmark import (
+    METRIC_COLUMNS,
+    _model_params,
+    resolve_models,
+    run_benchmark,
+    seeded_params,
+)
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _clean
 from .calibration import check_k
@@ -499,25 +505,6 @@ def _resolve_seeds(seeds: int | Sequence[int]) -> list[int]:
     return out
 
 
-def _check_positive(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
-
-
-def _resolve_models(models: Sequence[str] | str | None) -> list[str]:
-    if models is None:
-        models = list(DEFAULT_MODELS)
-    elif isinstance(models, str):
-        models = [m.strip() for m in models.split(",") if m.strip()]
-    models = list(dict.fromkeys(models))
-    if not models:
-        raise ConfigError("no models given")
-    for m in models:
-        get_model_class(m)
-    return models
-
-
 def _check_worker(spec: Mapping[str, Any], res: Mapping[str, Any]) -> None:
     """Refuse a result from another version; warn about one from other code."""
     if res.get("version") != spec["version"]:
@@ -744,10 +731,10 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    models = _resolve_models(models)
+    models = resolve_models(models, DEFAULT_MODELS)
     check_protocol(protocol)
     for name in ("n_splits", "repeats", "n_subjects", "per_subject", "n_boot"):
-        _check_positive(name, locals()[name])
+        check_positive_int(name, locals()[name])
     seed_list = _resolve_seeds(seeds)
     backend, n_workers = resolve_backend(jobs, scheduler)
     specs = plan_sweep(
