@@ -112,14 +112,6 @@ _IMPORTANCE_REPEATS = 3
 
 
 # --------------------------------------------------------------------------- tasks
-def _task_seed(seed: int, model: str, repeat: int, fold: int) -> int:
-    return tasks.derived_seed(seed, model, repeat, fold)
-
-
-def _jsonable_params(params: Mapping[str, Any]) -> dict[str, Any]:
-    return tasks.canonical(dict(params))
-
-
 def _history(model: Any) -> list[dict[str, Any]]:
     hist = getattr(model, "history_", None) or []
     out = []
@@ -162,7 +154,7 @@ def _constructor_params(cls: type, spec: Mapping[str, Any]) -> tuple[dict[str, A
     params = dict(spec["params"])
     # an ablated PINN draws the same seeds as its original: a paired comparison
     seed_name = spec.get("seed_model", spec["model"])
-    task_seed = _task_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
+    task_seed = tasks.derived_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
     return seeded_params(cls, params, task_seed), task_seed
 
 
@@ -401,7 +393,7 @@ def _plan(
         "protocol": protocol,
         "n_splits": n_eff,
         "seed": int(opts["seed"]),
-        "timing": _jsonable_params(opts["timing"]),
+        "timing": tasks.canonical(dict(opts["timing"])),
         "importance_repeats": int(opts["importance_repeats"]),
     }
     classes = {n: get_model_class(base_of[n]) for n in [*names, *aux]}
@@ -414,7 +406,7 @@ def _plan(
                     "code": tasks.external_code_digest(classes[name]),
                     "model": name,
                     "seed_model": base_of[name],
-                    "params": _jsonable_params(params.get(name, {})),
+                    "params": tasks.canonical(dict(params.get(name, {}))),
                     "repeat": split.repeat,
                     "fold": split.fold,
                     "timed": split.repeat == 0 and split.fold == 0,
@@ -487,7 +479,7 @@ def _meta(
         "config": None if dataset.config is None else json.loads(dataset.config.to_json()),
         "models": plan.names,
         "auxiliary_models": plan.aux,
-        "model_params": _jsonable_params({k: v for k, v in plan.model_params.items() if v}),
+        "model_params": tasks.canonical({k: v for k, v in plan.model_params.items() if v}),
         "references": [m for m in REFERENCE_MODELS if m in plan.names],
         "ablation": [n for n in plan.names if n.endswith(NO_PHYSICS)],
         "ablation_method": _METHODS["ablation_method"],

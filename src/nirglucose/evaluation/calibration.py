@@ -32,7 +32,6 @@ import pandas as pd
 from ..exceptions import ConfigError, DataError
 
 __all__ = [
-    "CALIBRATION_METHODS",
     "CALIBRATION_COLUMNS",
     "MAX_CALIBRATION_READINGS",
     "calibration_mask",
@@ -40,8 +39,6 @@ __all__ = [
     "personal_calibration",
 ]
 
-#: Methods of the protocol (see the module docstring).
-CALIBRATION_METHODS = ("none", "offset", "carry-forward", "difference-ridge")
 #: The protocol's calibration readings per person (the issue asks for k = 1 or 2).
 MAX_CALIBRATION_READINGS = 2
 #: Columns of ``calibration.csv``.

@@ -44,7 +44,6 @@ from ..exceptions import ConfigError, DataError
 __all__ = [
     "LEVELS",
     "DEFAULT_CALIBRATION_SHARE",
-    "CONFORMAL_KEY",
     "grouped_conformal_quantile",
     "calibration_subjects",
     "split_conformal",
@@ -61,8 +60,6 @@ LEVELS = (0.9, 0.8)
 #: Share of subjects held out to calibrate a split-conformal model (as the study's
 #: 20 % validation part, PAPER_FRACTIONS in splits.py).
 DEFAULT_CALIBRATION_SHARE = 0.2
-#: Key of the calibration in a saved model file.
-CONFORMAL_KEY = "conformal"
 
 _CAL_STREAM = 0xC0F0  # separates the calibration-subject draw from other uses of the seed
 

@@ -131,8 +131,6 @@ from .sweep_analysis import (
     threshold_crossing,
 )
 from .tasks import TASK_FORMAT, source_digest
-from .tasks import checksum as _checksum  # noqa: F401  (re-exported: tests import it)
-from .tasks import task_key as _task_key  # noqa: F401  (re-exported: tests import it)
 
 __all__ = [
     "STUDIES",
