@@ -90,7 +90,7 @@ import pandas as pd
 
 from .. import __version__
 from ..config import resolve_config
-from ..dataset import Dataset, atomic_write
+from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
 from ..metrics import summary
 from ..models.registry import get_model_class
@@ -103,7 +103,7 @@ from .benchmark import (
     seeded_params,
 )
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
-from .benchmark_result import _clean
+from .benchmark_result import _dumps, _write_csv, _write_text
 from .calibration import check_k
 from .executors import resolve_backend, run_unordered
 from .progress import TaskProgress
@@ -457,13 +457,10 @@ class SweepResult:
             ("effects.csv", self.effects),
         ):
             if frame is not None:
-                atomic_write(out / name, lambda tmp, f=frame: f.to_csv(tmp, index=False))
+                _write_csv(out / name, frame)
             else:
                 (out / name).unlink(missing_ok=True)
-        text = json.dumps(_clean(self.meta), indent=2) + "\n"
-        atomic_write(
-            out / "sweep_meta.json", lambda tmp: Path(tmp).write_text(text, encoding="utf-8")
-        )
+        _write_text(out / "sweep_meta.json", _dumps(self.meta))
         return out
 
 
