@@ -7,7 +7,7 @@ import json
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from cli_helpers import assert_one_line_error, listing
+from cli_helpers import SRC, assert_one_line_error, listing
 
 import nirglucose as ng
 from nirglucose.dataset import load_dataset
@@ -123,7 +123,6 @@ def test_api_refuses_huge_simulation_up_front():
     import resource
     import subprocess
     import sys
-    from pathlib import Path
 
     def cap():
         resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))
@@ -131,7 +130,6 @@ def test_api_refuses_huge_simulation_up_front():
     code = ("import nirglucose as ng\n"
             "try:\n    ng.simulate('paper', 10**12, 3)\n"
             "except ng.ConfigError as e:\n    print('refused:', e)\n")
-    src = str(Path(__file__).resolve().parents[2] / "src")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         preexec_fn=cap, timeout=120, env={"PYTHONPATH": src, "PATH": ""})
+                         preexec_fn=cap, timeout=120, env={"PYTHONPATH": SRC, "PATH": ""})
     assert res.stdout.startswith("refused:") and "GiB" in res.stdout, res.stderr[-500:]
