@@ -98,11 +98,10 @@ def test_valid_metadata_still_loads(workdir, small):
 
 @pytest.mark.parametrize("name", ["meta.json", "histories.json"])
 @pytest.mark.parametrize("doc", [[1, 2], "text", 3])
-def test_results_json_of_the_wrong_shape(cli, tmp_path, name, doc):
-    import sys
+def test_results_json_of_the_wrong_shape(cli, tmp_path, monkeypatch, name, doc):
     from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).parents[1] / "report"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[1] / "report"))
     from report_fixtures import write_synthetic_results
 
     d = tmp_path / "res"
