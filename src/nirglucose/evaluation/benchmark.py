@@ -85,7 +85,7 @@ from .benchmark_result import (
 from .calibration import check_k, personal_calibration
 from .conformal import LEVELS
 from .importance import permutation_importance
-from .progress import TaskProgress
+from .progress import task_hooks
 from .reference import STUDY_PROTOCOL
 from .splits import Split, check_protocol, effective_layout, make_splits
 from .stats import DEFAULT_N_BOOT
@@ -428,32 +428,19 @@ def _execute(
 ) -> None:
     """Run the pending tasks (serially or on ``jobs`` processes) into ``cache``."""
     by_key = {t.key: t for t in plan.tasks}
-    on_task = opts["on_task"]
-    bar = (
-        TaskProgress("benchmark", len(plan.tasks), len(cache.results), "cached")
-        if opts["progress"]
-        else None
-    )
-
     items = [
         (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
     ]
-
-    def done(spec, _result):
-        if on_task is not None:
-            on_task(spec, False)
-        if bar is not None:
-            bar.advance(f"{spec['model']} r{spec['repeat']} f{spec['fold']}")
-
-    try:
-        with warnings.catch_warnings():
-            # loky replaces a worker whose memory grew, and says so; results are unaffected
-            warnings.filterwarnings("ignore", message="A worker stopped while some jobs")
-            stream = executors.run_unordered(_run_task_of, items, jobs=opts["jobs"])
-            cache.collect(stream, pending, plan.specs(), _task_tag, on_done=done)
-    finally:
-        if bar is not None:
-            bar.close()
+    hooks = task_hooks(
+        "benchmark", len(plan.tasks), len(cache.results), "cached", show=opts["progress"],
+        describe=lambda spec: f"{spec['model']} r{spec['repeat']} f{spec['fold']}",
+        on_task=opts["on_task"],
+    )
+    with hooks as done, warnings.catch_warnings():
+        # loky replaces a worker whose memory grew, and says so; results are unaffected
+        warnings.filterwarnings("ignore", message="A worker stopped while some jobs")
+        stream = executors.run_unordered(_run_task_of, items, jobs=opts["jobs"])
+        cache.collect(stream, pending, plan.specs(), _task_tag, on_done=done)
 
 
 def _valid_result(spec: Mapping[str, Any], result: Any) -> bool:

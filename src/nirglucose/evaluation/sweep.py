@@ -106,7 +106,7 @@ from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
 from .calibration import check_k
 from .executors import resolve_backend, run_unordered
-from .progress import TaskProgress
+from .progress import task_hooks
 from .splits import check_protocol, effective_layout
 from .stats import cluster_bootstrap_metrics
 from .studies import (
@@ -528,15 +528,11 @@ def _execute(
     on_task: Callable[[dict[str, Any], bool], None] | None,
 ) -> None:
     """Run the pending tasks (here, on local processes or on Dask) into ``cache``."""
-    bar = TaskProgress("sweep", len(specs), len(cache.results), "reused") if progress else None
-
-    def done(spec, _res):
-        if on_task is not None:
-            on_task(spec, False)
-        if bar is not None:
-            bar.advance(f"{spec['model']} seed {spec['seed']}")
-
-    try:
+    hooks = task_hooks(
+        "sweep", len(specs), len(cache.results), "reused", show=progress,
+        describe=lambda spec: f"{spec['model']} seed {spec['seed']}", on_task=on_task,
+    )
+    with hooks as done:
         stream = run_unordered(
             run_sweep_task,
             [specs[k] for k in pending],
@@ -548,9 +544,6 @@ def _execute(
             cache.collect(stream, pending, specs, _task_tag, on_done=done, check=_check_worker)
         finally:
             stream.close()
-    finally:
-        if bar is not None:
-            bar.close()
 
 
 def _frame(
