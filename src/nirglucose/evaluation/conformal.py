@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import ConfigError, DataError
+from .stats import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
     "LEVELS",
@@ -362,14 +363,10 @@ def coverage_summary(
     rep = q["repeat"].to_numpy()
     subjects, s_idx = np.unique(sid, return_inverse=True)
     reps, r_idx = np.unique(rep, return_inverse=True)
-    hits = np.zeros((len(reps), len(subjects)))
-    cnt = np.zeros((len(reps), len(subjects)))
-    np.add.at(hits, (r_idx, s_idx), hit)
-    np.add.at(cnt, (r_idx, s_idx), 1.0)
+    hits, cnt = repeat_subject_cells(hit, r_idx, s_idx, (len(reps), len(subjects)))
     point = float(np.mean(hits.sum(1) / cnt.sum(1)))
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), _CAL_STREAM, 1]))
-    draws = rng.integers(0, len(subjects), size=(n_boot, len(subjects)))
-    boot = np.mean(hits[:, draws].sum(2) / cnt[:, draws].sum(2), axis=0)
+    draws = subject_draws(len(subjects), n_boot, (seed, _CAL_STREAM, 1))
+    boot = np.mean(resampled_ratios(hits, cnt, draws), axis=0)
     lo, hi = np.quantile(boot, [(1 - ci) / 2, (1 + ci) / 2])
     return {
         "coverage": 100 * point,
