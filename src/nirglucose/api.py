@@ -4,11 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from .config import ScenarioConfig, resolve_config
 from .dataset import Dataset
-from .exceptions import ConfigError
+from .exceptions import ConfigError, check_positive_int
 
 __all__ = ["simulate"]
 
@@ -56,8 +54,7 @@ def simulate(
     from .simulate.simulator import simulate_frame
 
     for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
-        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-            raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        check_positive_int(name, value)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
     check_simulation_size(n_subjects, per_subject)  # refuse up front, not by OOM (issue 20)

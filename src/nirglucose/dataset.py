@@ -217,6 +217,22 @@ class Dataset:
     def __len__(self) -> int:
         return len(self.frame)
 
+    def rows(self, idx: Any) -> Dataset:
+        """The rows at ``idx``, renumbered from 0, keeping config, seed and metadata.
+
+        Parameters
+        ----------
+        idx : array-like of int or bool
+            Row positions or a boolean mask over the rows.
+
+        Returns
+        -------
+        Dataset
+            A new dataset (the declared ``metadata["adc_bits"]`` travels with the rows).
+        """
+        frame = self.frame.iloc[idx].reset_index(drop=True)
+        return Dataset(frame, config=self.config, seed=self.seed, metadata=dict(self.metadata))
+
     def __repr__(self) -> str:
         preset = self.config.preset if self.config is not None else "user data"
         n_sub = self.frame["subject_id"].nunique() if "subject_id" in self.frame else "?"

@@ -8,9 +8,17 @@ working (the xarray / scikit-learn habit).
 from __future__ import annotations
 
 import difflib
+import numbers
 from collections.abc import Iterable
 
-__all__ = ["NirGlucoseError", "ConfigError", "DataError", "NotFittedError", "unknown_name"]
+__all__ = [
+    "NirGlucoseError",
+    "ConfigError",
+    "DataError",
+    "NotFittedError",
+    "unknown_name",
+    "check_positive_int",
+]
 
 
 class NirGlucoseError(Exception):
@@ -41,3 +49,21 @@ def unknown_name(kind: str, name: object, valid: Iterable[str]) -> str:
     close = difflib.get_close_matches(str(name), valid, n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ";"
     return f"unknown {kind} {name!r}{hint} valid: {', '.join(valid)}"
+
+
+def check_positive_int(name: str, value: object) -> int:
+    """``value`` as an ``int`` when it is a positive integer (not a bool).
+
+    Raises
+    ------
+    ConfigError
+        Anything else, naming ``name``.
+
+    Examples
+    --------
+    >>> check_positive_int("repeats", 3)
+    3
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import re
+import time
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import pytest
@@ -12,6 +14,27 @@ from nirglucose.cli import main
 
 #: A progress line on stderr (written when stderr is not a terminal).
 PROGRESS = re.compile(r"^(benchmark|sweep): \d+/\d+ tasks")
+#: This tree's package sources, for the PYTHONPATH of a subprocess.
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+
+def subprocess_env() -> dict[str, str]:
+    """This environment with :data:`SRC` first on PYTHONPATH and one BLAS/OpenMP thread."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = SRC + os.pathsep + env.get("PYTHONPATH", "")
+    env.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    return env
+
+
+def all_gone(procs: Iterable, alive: Callable[[object], bool], timeout_s: float = 5.0) -> bool:
+    """Whether no process of ``procs`` is ``alive`` within ``timeout_s``. [s]"""
+    procs = list(procs)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout_s:
+        if not any(alive(p) for p in procs):
+            return True
+        time.sleep(0.1)
+    return False
 
 
 def listing(root: Path) -> set[str]:

@@ -6,41 +6,30 @@ The kill test runs the real CLI (``sweep --scheduler local``) in a subprocess.
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
 pytest.importorskip("distributed")
 psutil = pytest.importorskip("psutil")
 
-from cli_helpers import PROGRESS  # noqa: E402
+from cli_helpers import PROGRESS, all_gone, subprocess_env  # noqa: E402
 
 from nirglucose.evaluation.executors import resolve_backend, run_unordered  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
 
-SRC = str(Path(__file__).resolve().parents[2] / "src")
-
 SWEEP = ["sweep", "--vary", "noise_scale=0.5,1,2,4", "--seeds", "3", "--models", "ebl,pls",
          "--subjects", "40", "--resamples", "20", "--no-figures"]
-
-
-def _env():
-    env = dict(os.environ)
-    env["PYTHONPATH"] = SRC + os.pathsep + env.get("PYTHONPATH", "")
-    env.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    return env
 
 
 def _cli(*args, **kwargs):
     return subprocess.Popen(
         [sys.executable, "-c", "import sys; from nirglucose.cli import main; sys.exit(main())",
-         *args], env=_env(), text=True, **kwargs)
+         *args], env=subprocess_env(), text=True, **kwargs)
 
 
 def _dask_workers(proc: psutil.Process) -> list[psutil.Process]:
@@ -53,15 +42,6 @@ def _alive(p: psutil.Process) -> bool:
         return p.is_running() and p.status() != psutil.STATUS_ZOMBIE
     except psutil.NoSuchProcess:
         return False
-
-
-def _gone(procs, timeout_s: float = 5.0) -> bool:
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout_s:
-        if not any(_alive(p) for p in procs):
-            return True
-        time.sleep(0.1)
-    return False
 
 
 def test_local_scheduler_is_a_dask_backend_of_jobs_workers():
@@ -86,7 +66,7 @@ def test_no_dask_worker_outlives_a_sigkilled_sweep(tmp_path):
     assert proc.poll() is None, "the sweep ended before the kill: make it longer"
     proc.kill()  # SIGKILL: no handler, no cleanup in the parent
     proc.wait(timeout=10)
-    survivors = [p for p in descendants if _alive(p)] if not _gone(descendants) else []
+    survivors = [p for p in descendants if _alive(p)] if not all_gone(descendants, _alive) else []
     for p in survivors:
         p.kill()
     assert survivors == [], "a Dask worker outlived its SIGKILLed parent"

@@ -7,7 +7,7 @@ import json
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from cli_helpers import assert_one_line_error, listing
+from cli_helpers import SRC, assert_one_line_error, listing
 
 import nirglucose as ng
 from nirglucose.dataset import load_dataset
@@ -98,11 +98,10 @@ def test_valid_metadata_still_loads(workdir, small):
 
 @pytest.mark.parametrize("name", ["meta.json", "histories.json"])
 @pytest.mark.parametrize("doc", [[1, 2], "text", 3])
-def test_results_json_of_the_wrong_shape(cli, tmp_path, name, doc):
-    import sys
+def test_results_json_of_the_wrong_shape(cli, tmp_path, monkeypatch, name, doc):
     from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).parents[1] / "report"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[1] / "report"))
     from report_fixtures import write_synthetic_results
 
     d = tmp_path / "res"
@@ -123,7 +122,6 @@ def test_api_refuses_huge_simulation_up_front():
     import resource
     import subprocess
     import sys
-    from pathlib import Path
 
     def cap():
         resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))
@@ -131,7 +129,6 @@ def test_api_refuses_huge_simulation_up_front():
     code = ("import nirglucose as ng\n"
             "try:\n    ng.simulate('paper', 10**12, 3)\n"
             "except ng.ConfigError as e:\n    print('refused:', e)\n")
-    src = str(Path(__file__).resolve().parents[2] / "src")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         preexec_fn=cap, timeout=120, env={"PYTHONPATH": src, "PATH": ""})
+                         preexec_fn=cap, timeout=120, env={"PYTHONPATH": SRC, "PATH": ""})
     assert res.stdout.startswith("refused:") and "GiB" in res.stdout, res.stderr[-500:]

@@ -5,7 +5,6 @@ The signal tests run the real console script in a subprocess, with short bounded
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import sys
@@ -14,20 +13,11 @@ import time
 from pathlib import Path
 
 import pytest
-from cli_helpers import PROGRESS
+from cli_helpers import PROGRESS, all_gone, subprocess_env
 
 import nirglucose.evaluation.benchmark as bench_mod
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="uses /proc")
-
-SRC = str(Path(__file__).resolve().parents[2] / "src")
-
-
-def _env():
-    env = dict(os.environ)
-    env["PYTHONPATH"] = SRC + os.pathsep + env.get("PYTHONPATH", "")
-    env.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    return env
 
 
 def _children(pid: int) -> list[int]:
@@ -66,15 +56,6 @@ def _wait_for_workers(proc, n: int, timeout_s: float = 60.0) -> list[int]:
     pytest.fail("no workers started")
 
 
-def _gone(pids, timeout_s: float = 5.0) -> bool:
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout_s:
-        if not any(_alive(p) for p in pids):
-            return True
-        time.sleep(0.1)
-    return False
-
-
 BENCH = ["benchmark", "--subjects", "30", "--models", "ebl,pls,sdnn", "--jobs", "2",
          "--resamples", "20"]
 
@@ -85,7 +66,7 @@ def test_signal_stops_benchmark_and_its_workers(tmp_path, sig, status, word):
     proc = subprocess.Popen(
         [sys.executable, "-c", "import sys; from nirglucose.cli import main; "
          "sys.exit(main())", *BENCH, "--out", str(tmp_path / "res")],
-        env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env=subprocess_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     workers = _wait_for_workers(proc, 2)
     time.sleep(1.0)
@@ -99,7 +80,7 @@ def test_signal_stops_benchmark_and_its_workers(tmp_path, sig, status, word):
     lines = [ln for ln in err.splitlines() if ln.strip() and not PROGRESS.match(ln)]
     assert len(lines) == 1 and lines[0].startswith(f"error: {word}"), err
     assert "Traceback" not in err
-    assert _gone(workers), "a worker outlived the run"
+    assert all_gone(workers, _alive), "a worker outlived the run"
 
 
 def test_workers_die_with_a_killed_parent(tmp_path):
@@ -115,12 +96,12 @@ def test_workers_die_with_a_killed_parent(tmp_path):
         if __name__ == "__main__":
             list(run_unordered(nap, [60, 60], jobs=2))
     """))
-    proc = subprocess.Popen([sys.executable, str(script)], env=_env(), cwd=tmp_path,
+    proc = subprocess.Popen([sys.executable, str(script)], env=subprocess_env(), cwd=tmp_path,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     workers = _wait_for_workers(proc, 2)
     proc.kill()  # SIGKILL: no handler, no cleanup in the parent
     proc.wait(timeout=10)
-    assert _gone(workers), "a worker outlived its SIGKILLed parent"
+    assert all_gone(workers, _alive), "a worker outlived its SIGKILLed parent"
 
 
 def test_ctrl_c_in_process_exits_130(cli, workdir, monkeypatch):

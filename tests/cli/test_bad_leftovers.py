@@ -28,7 +28,7 @@ def _failing(exc):
 @pytest.mark.parametrize("cmd", ["benchmark", "sweep"])
 def test_failed_run_leaves_nothing(cli, workdir, monkeypatch, cmd, exc, status):
     if cmd == "benchmark":
-        monkeypatch.setattr(bench_mod, "_indexed_task", _failing(exc))
+        monkeypatch.setattr(bench_mod, "_run_task_of", _failing(exc))
         args = BENCH
     else:
         monkeypatch.setattr(sweep_mod, "run_sweep_task", _failing(exc))
@@ -43,7 +43,7 @@ def test_failed_run_leaves_nothing(cli, workdir, monkeypatch, cmd, exc, status):
 def test_existing_out_kept_but_tasks_removed(cli, workdir, monkeypatch):
     (workdir / "res").mkdir()
     (workdir / "res" / "notes.txt").write_text("mine")
-    monkeypatch.setattr(bench_mod, "_indexed_task", _failing(DataError("a task failed")))
+    monkeypatch.setattr(bench_mod, "_run_task_of", _failing(DataError("a task failed")))
     code, _, err = cli(*BENCH)
     assert_one_line_error(code, err, contains=["a task failed"])
     assert listing(workdir) == {"res", "res/notes.txt"}

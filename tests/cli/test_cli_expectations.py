@@ -47,11 +47,6 @@ def test_presets_listed_in_help(cli, cmd):
     assert all(name in text for name in PRESETS), text
 
 
-def test_did_you_mean(cli, workdir):
-    code, _, err = cli("simulate", "--out", "a.csv", "--set", "hardware.adc_bit=14")
-    assert_one_line_error(code, err, contains=["did you mean hardware.adc_bits"])
-
-
 def test_jobs_above_cores_warns(cli, workdir, monkeypatch):
     monkeypatch.setattr(executors, "available_cores", lambda: 1)
     code, _, err = cli("simulate", "--out", "a.csv", "--subjects", 2, "--jobs", 2)
@@ -80,17 +75,6 @@ def test_progress_is_throttled(capsys):
     lines = buf.getvalue().splitlines()
     assert len(lines) <= MAX_LINES + 2
     assert lines[-2].startswith("sweep: 1000/1000 tasks") and "done after" in lines[-1]
-
-
-def test_interrupt_status_is_not_zero(cli, monkeypatch, workdir):
-    import nirglucose.cli as cli_mod
-
-    def boom(*a, **k):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(cli_mod.data_commands, "_print_summary", boom)
-    code, _, err = cli("simulate", "--out", "a.csv", "--subjects", 2)
-    assert code == 130 and "interrupted" in err
 
 
 @pytest.mark.parametrize(

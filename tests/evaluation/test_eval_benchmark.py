@@ -285,3 +285,14 @@ def test_bad_arguments_raise_config_error(data, kwargs, match):
     kwargs = {"models": ["test-ridge"], **kwargs}
     with pytest.raises(ConfigError, match=match):
         run_benchmark(data, **kwargs)
+
+
+def test_declared_adc_bits_reach_the_models_in_every_fold():
+    from device_data import simulate_device
+
+    ds = simulate_device(3, 14, n_subjects=6, per_subject=4)
+    user = ng.Dataset(ds.frame, metadata={"adc_bits": 14})  # a file with no scenario
+    res = run_benchmark(user, ["pls"], n_splits=3, repeats=1, **FAST)
+    assert len(res.predictions) == len(user)
+    part = user.rows(np.array([2, 5]))
+    assert part.metadata["adc_bits"] == 14 and part.frame.index.tolist() == [0, 1]

@@ -13,7 +13,6 @@ from nirglucose.config import NOISE_SOURCES
 from nirglucose.evaluation.executors import resolve_backend, run_unordered
 from nirglucose.evaluation.sweep import (
     SWEEP_METRICS,
-    _checksum,
     ablation_effects,
     grid_scenarios,
     load_sweep,
@@ -26,6 +25,7 @@ from nirglucose.evaluation.sweep import (
     summarize_sweep,
     threshold_crossing,
 )
+from nirglucose.evaluation.tasks import checksum, task_key
 from nirglucose.exceptions import ConfigError
 
 #: A tiny, fast sweep: 2 scenarios x 2 seeds x 1 linear model, one split per task.
@@ -95,20 +95,19 @@ def test_study_scenarios():
 
 def test_task_hash_covers_the_specification(monkeypatch):
     from nirglucose.evaluation import tasks
-    from nirglucose.evaluation.sweep import _task_key
 
     base = plan_sweep(grid_scenarios(VARY), seeds=[0], models=["pls"])
-    assert len({_task_key(s) for s in base}) == 2
+    assert len({task_key(s) for s in base}) == 2
     again = plan_sweep(grid_scenarios(VARY), seeds=[0], models=["pls"])
-    assert [_task_key(s) for s in base] == [_task_key(s) for s in again]
+    assert [task_key(s) for s in base] == [task_key(s) for s in again]
     for change in ({"seeds": [1]}, {"models": ["ebl"]}, {"n_splits": 3},
                    {"base_overrides": {"hardware.adc_bits": 14}}, {"n_boot": 7}):
         kw = {"seeds": [0], "models": ["pls"], **change}
         other = plan_sweep(grid_scenarios(VARY), **kw)
-        assert _task_key(other[0]) != _task_key(base[0]), change
+        assert task_key(other[0]) != task_key(base[0]), change
     monkeypatch.setattr(tasks, "source_digest", lambda: "edited code")
     edited = plan_sweep(grid_scenarios(VARY), seeds=[0], models=["pls"])
-    assert _task_key(edited[0]) != _task_key(base[0])
+    assert task_key(edited[0]) != task_key(base[0])
 
 
 # --------------------------------------------------------------------------- execution
@@ -181,7 +180,7 @@ def test_corrupt_task_file_is_recomputed(tmp_path, serial, damage):
     assert res.meta["tasks_computed"] == 1 and res.meta["tasks_corrupt"] == 1
     pd.testing.assert_frame_equal(res.frame[METRICS], ref.frame[METRICS])
     doc = json.loads(victim.read_text())  # rewritten whole
-    assert doc["checksum"] == _checksum(doc["result"])
+    assert doc["checksum"] == checksum(doc["result"])
 
 
 def test_shift_task_splits_by_measured_column():

@@ -55,7 +55,7 @@ def test_an_edited_package_invalidates_benchmark_and_sweep_tasks(data, tmp_path,
         assert spec["format"] == tasks.TASK_FORMAT and "source_sha256" in spec
 
 
-def test_one_key_rule_for_both(data):
+def test_one_key_rule_for_both():
     spec = tasks.stamp({"model": "pls", "seed": 0})
     assert spec["source_sha256"] == tasks.source_digest()
     assert tasks.task_key(spec) == tasks.task_key(dict(reversed(spec.items())))

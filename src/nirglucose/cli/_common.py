@@ -16,13 +16,16 @@ from typing import Annotated
 import typer
 
 from ..config import PRESETS
+from ..evaluation.calibration import MAX_CALIBRATION_READINGS
+from ..evaluation.stats import DEFAULT_N_BOOT
+from ..evaluation.studies import STUDIES
 from ..exceptions import NirGlucoseError
 from ._app import console, out_console
 
 #: Preset names for the --preset help texts.
 _PRESET_NAMES = ", ".join(PRESETS)
-#: Built-in sweep studies (kept in step with evaluation.sweep.STUDIES by a test).
-_STUDY_NAMES = "noise-scale, ablation, pmf-noise, cohort, device, data-size"
+#: Built-in sweep studies for the --study help text.
+_STUDY_NAMES = ", ".join(STUDIES)
 
 
 class UserError(NirGlucoseError, ValueError):
@@ -42,7 +45,7 @@ JobsOption = Annotated[
 ]
 #: --resamples of every command that reports bootstrap CIs.
 ResamplesOption = Annotated[int, typer.Option(help="Bootstrap resamples for each 95 % CI.")]
-DEFAULT_RESAMPLES = 2000
+DEFAULT_RESAMPLES = DEFAULT_N_BOOT
 #: --out of the commands that write a results directory (benchmark, sweep).
 OutDirOption = Annotated[
     Path, typer.Option(help="Output directory (created if its parent exists).")
@@ -157,8 +160,11 @@ def _jobs(jobs: int | None) -> int:
 
 
 def _check_calibration(k: int, per_subject: int | None) -> None:
-    if k not in (0, 1, 2):
-        raise UserError(f"--calibration must be 0, 1 or 2 readings per person, got {k}")
+    if not 0 <= k <= MAX_CALIBRATION_READINGS:
+        raise UserError(
+            f"--calibration must be 0, 1 or {MAX_CALIBRATION_READINGS} readings per person, "
+            f"got {k}"
+        )
     if k and per_subject is not None and per_subject <= k:
         raise UserError(
             f"--calibration {k} leaves no reading to score at --per-subject {per_subject}; "

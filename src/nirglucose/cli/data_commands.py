@@ -17,6 +17,7 @@ from ._common import (
     SetOption,
     UserError,
     _check_counts,
+    _check_out_dir,
     _check_out_file,
     _check_seed,
     _check_size,
@@ -69,10 +70,8 @@ def _check_simulate_out(out: Path, subjects: int, per_subject: int) -> None:
     if out.suffix:
         _check_out_file(out)
         _check_size(subjects, per_subject)
-    elif out.exists() and not out.is_dir():
-        raise UserError(f"--out {str(out)!r} exists and is not a directory")
-    elif not out.parent.exists():
-        raise UserError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    else:
+        _check_out_dir(out)
 
 
 @app.command()

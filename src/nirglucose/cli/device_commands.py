@@ -96,13 +96,12 @@ def _choose_intervals(ds, intervals: str, share: float) -> tuple[str, str]:
 
 def _fit_with_intervals(estimator, ds, share: float, seed: int) -> tuple[int, str]:
     """Fit on the subjects not held out, calibrate on the rest: ``(n fitted, note)``."""
-    from ..evaluation.conformal import calibration_subjects, split_conformal
+    from ..evaluation.conformal import calibration_of, split_conformal
 
     if "subject_id" not in ds.frame:
         raise UserError("--intervals split needs a subject_id column to hold out subjects")
-    split_conformal(estimator, ds, share=share, seed=seed)
-    cal = estimator.conformal_
-    n_fit = int((~calibration_subjects(ds.frame["subject_id"].to_numpy(), share, seed)).sum())
+    cal = calibration_of(split_conformal(estimator, ds, share=share, seed=seed))
+    n_fit = len(ds) - cal["n_calibration_readings"]  # the rest of the rows were fitted
     note = (
         f"; 90 % interval ±{cal['half_width_mgdl']['90']:.1f} mg/dL from "
         f"{cal['n_calibration_subjects']} held-out subjects"

@@ -65,10 +65,10 @@ import pandas as pd
 
 from .. import __version__
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError, DataError, check_positive_int
 from ..models.registry import available_models, get_model_class
-from . import tasks
-from .benchmark_aggregate import aggregate
+from . import executors, tasks
+from .benchmark_aggregate import aggregate, fallback_mgdl
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
@@ -85,7 +85,7 @@ from .benchmark_result import (
 from .calibration import check_k, personal_calibration
 from .conformal import LEVELS
 from .importance import permutation_importance
-from .progress import TaskProgress
+from .progress import task_hooks
 from .reference import STUDY_PROTOCOL
 from .splits import Split, check_protocol, effective_layout, make_splits
 from .stats import DEFAULT_N_BOOT
@@ -112,14 +112,6 @@ _IMPORTANCE_REPEATS = 3
 
 
 # --------------------------------------------------------------------------- tasks
-def _task_seed(seed: int, model: str, repeat: int, fold: int) -> int:
-    return tasks.derived_seed(seed, model, repeat, fold)
-
-
-def _jsonable_params(params: Mapping[str, Any]) -> dict[str, Any]:
-    return tasks.canonical(dict(params))
-
-
 def _history(model: Any) -> list[dict[str, Any]]:
     hist = getattr(model, "history_", None) or []
     out = []
@@ -157,21 +149,21 @@ def _one_thread_torch():
         torch.set_num_threads(saved)
 
 
-def _rows(dataset: Dataset, idx: Any) -> Dataset:
-    return Dataset(
-        dataset.frame.iloc[idx].reset_index(drop=True), config=dataset.config, seed=dataset.seed
-    )
-
-
 def _constructor_params(cls: type, spec: Mapping[str, Any]) -> tuple[dict[str, Any], int]:
     """The task's constructor arguments (``random_state`` seeded from the task) and seed."""
     params = dict(spec["params"])
     # an ablated PINN draws the same seeds as its original: a paired comparison
     seed_name = spec.get("seed_model", spec["model"])
-    task_seed = _task_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
+    task_seed = tasks.derived_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
+    return seeded_params(cls, params, task_seed), task_seed
+
+
+def seeded_params(cls: type, params: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """``params`` with ``random_state=seed`` added when ``cls`` takes one and none is given."""
+    params = dict(params)
     if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
-        params["random_state"] = task_seed
-    return params, task_seed
+        params["random_state"] = seed
+    return params
 
 
 def _run_task(
@@ -183,10 +175,10 @@ def _run_task(
 ) -> dict[str, Any]:
     """Fit one model on one split and score it; the JSON-able task result."""
     params, task_seed = _constructor_params(cls, spec)
-    train, test = _rows(dataset, split.train), _rows(dataset, split.test)
+    train, test = dataset.rows(split.train), dataset.rows(split.test)
     fit_kwargs: dict[str, Any] = {}
     if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
-        val = _rows(dataset, split.val)
+        val = dataset.rows(split.val)
         fit_kwargs = {"X_val": val, "y_val": val.frame["glucose_mgdl"].to_numpy(float)}
     cpu0, wall0 = time.process_time(), time.perf_counter()
     with _one_thread_torch():
@@ -202,7 +194,7 @@ def _run_task(
             )
         val_pred = None
         if split.val is not None:  # calibrates the conformal intervals of paper-split
-            val_pred = np.asarray(model.predict(_rows(dataset, split.val)), dtype=float).ravel()
+            val_pred = np.asarray(model.predict(dataset.rows(split.val)), dtype=float).ravel()
         latency: dict[str, Any] = {}
         if spec["timed"]:
             form, data = timing_inputs(model, test)
@@ -213,7 +205,7 @@ def _run_task(
     return {
         "predicted_mgdl": [float(v) for v in pred],
         "val_predicted_mgdl": None if val_pred is None else [float(v) for v in val_pred],
-        "fallback_mgdl": float(np.median(train.frame["glucose_mgdl"].to_numpy(float))),
+        "fallback_mgdl": fallback_mgdl(train),
         "n_parameters": int(getattr(model, "n_parameters", -1)),
         "fit_time_s": fit_time,
         "task_wall_s": time.perf_counter() - wall0,
@@ -228,8 +220,9 @@ def _run_task(
     }
 
 
-def _indexed_task(i: int, *args: Any) -> tuple[int, dict[str, Any]]:
-    return i, _run_task(*args)
+def _run_task_of(args: tuple[Any, ...]) -> dict[str, Any]:
+    """:func:`_run_task` of one argument tuple (what :func:`executors.run_unordered` maps)."""
+    return _run_task(*args)
 
 
 def _task_tag(spec: Mapping[str, Any]) -> str:
@@ -237,17 +230,23 @@ def _task_tag(spec: Mapping[str, Any]) -> str:
 
 
 # --------------------------------------------------------------------------- plan
-def _resolve_models(models: Sequence[str] | str | None) -> list[str]:
-    valid = available_models()
+def resolve_models(models: Sequence[str] | str | None, default: Sequence[str]) -> list[str]:
+    """Registry names from a list or a comma-separated string, ``default`` when None.
+
+    Raises
+    ------
+    ConfigError
+        No models (none given, or ``default`` empty), or an unknown name.
+    """
     if models is None:
-        if not valid:
+        if not default:
             raise ConfigError("no models are registered")
-        return valid
+        models = default
     if isinstance(models, str):
         models = [m.strip() for m in models.split(",") if m.strip()]
     names = list(dict.fromkeys(models))
     if not names:
-        raise ConfigError(f"no models given; valid: {', '.join(valid)}")
+        raise ConfigError(f"no models given; valid: {', '.join(available_models())}")
     for name in names:
         get_model_class(name)  # raises ConfigError listing the valid names
     return names
@@ -277,12 +276,6 @@ def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str
             if is_pinn(n):
                 out[n + NO_PHYSICS] = (n, {"lambda_phys": 0.0})
     return out
-
-
-def _check_positive(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -381,7 +374,7 @@ def _plan(
     opts: dict[str, Any],
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
-    names = _resolve_models(models)
+    names = resolve_models(models, available_models())
     if opts["references"]:
         names += [m for m in REFERENCE_MODELS if m not in names]
     preset = getattr(dataset.config, "preset", None)
@@ -400,7 +393,7 @@ def _plan(
         "protocol": protocol,
         "n_splits": n_eff,
         "seed": int(opts["seed"]),
-        "timing": _jsonable_params(opts["timing"]),
+        "timing": tasks.canonical(dict(opts["timing"])),
         "importance_repeats": int(opts["importance_repeats"]),
     }
     classes = {n: get_model_class(base_of[n]) for n in [*names, *aux]}
@@ -413,7 +406,7 @@ def _plan(
                     "code": tasks.external_code_digest(classes[name]),
                     "model": name,
                     "seed_model": base_of[name],
-                    "params": _jsonable_params(params.get(name, {})),
+                    "params": tasks.canonical(dict(params.get(name, {}))),
                     "repeat": split.repeat,
                     "fold": split.fold,
                     "timed": split.repeat == 0 and split.fold == 0,
@@ -435,39 +428,19 @@ def _execute(
 ) -> None:
     """Run the pending tasks (serially or on ``jobs`` processes) into ``cache``."""
     by_key = {t.key: t for t in plan.tasks}
-    on_task = opts["on_task"]
-    bar = (
-        TaskProgress("benchmark", len(plan.tasks), len(cache.results), "cached")
-        if opts["progress"]
-        else None
+    items = [
+        (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
+    ]
+    hooks = task_hooks(
+        "benchmark", len(plan.tasks), len(cache.results), "cached", show=opts["progress"],
+        describe=lambda spec: f"{spec['model']} r{spec['repeat']} f{spec['fold']}",
+        on_task=opts["on_task"],
     )
-
-    def args(i):
-        t = by_key[pending[i]]
-        return t.cls, t.spec, dataset, t.split, opts["timing"]
-
-    def done(spec, _result):
-        if on_task is not None:
-            on_task(spec, False)
-        if bar is not None:
-            bar.advance(f"{spec['model']} r{spec['repeat']} f{spec['fold']}")
-
-    try:
-        with warnings.catch_warnings():
-            # loky replaces a worker whose memory grew, and says so; results are unaffected
-            warnings.filterwarnings("ignore", message="A worker stopped while some jobs")
-            if opts["jobs"] == 1 or len(pending) <= 1:
-                stream = (_indexed_task(i, *args(i)) for i in range(len(pending)))
-            else:
-                from joblib import Parallel, delayed
-
-                stream = Parallel(n_jobs=opts["jobs"], return_as="generator_unordered")(
-                    delayed(_indexed_task)(i, *args(i)) for i in range(len(pending))
-                )
-            cache.collect(stream, pending, plan.specs(), _task_tag, on_done=done)
-    finally:
-        if bar is not None:
-            bar.close()
+    with hooks as done, warnings.catch_warnings():
+        # loky replaces a worker whose memory grew, and says so; results are unaffected
+        warnings.filterwarnings("ignore", message="A worker stopped while some jobs")
+        stream = executors.run_unordered(_run_task_of, items, jobs=opts["jobs"])
+        cache.collect(stream, pending, plan.specs(), _task_tag, on_done=done)
 
 
 def _valid_result(spec: Mapping[str, Any], result: Any) -> bool:
@@ -493,7 +466,7 @@ def _meta(
         "config": None if dataset.config is None else json.loads(dataset.config.to_json()),
         "models": plan.names,
         "auxiliary_models": plan.aux,
-        "model_params": _jsonable_params({k: v for k, v in plan.model_params.items() if v}),
+        "model_params": tasks.canonical({k: v for k, v in plan.model_params.items() if v}),
         "references": [m for m in REFERENCE_MODELS if m in plan.names],
         "ablation": [n for n in plan.names if n.endswith(NO_PHYSICS)],
         "ablation_method": _METHODS["ablation_method"],
@@ -560,7 +533,7 @@ def _checked_options(opts: dict[str, Any]) -> dict[str, Any]:
     """The options of :func:`run_benchmark`, counts and protocol checked."""
     check_protocol(opts["protocol"])
     for name in ("n_splits", "repeats", "jobs", "n_boot"):
-        opts[name] = _check_positive(name, opts[name])
+        opts[name] = check_positive_int(name, opts[name])
     opts["calibration"] = check_k(opts["calibration"])
     opts["timing"] = dict(opts["timing"] or {})
     return opts

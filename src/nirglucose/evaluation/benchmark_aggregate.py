@@ -31,7 +31,7 @@ from .conformal import LEVELS, coverage_summary, out_of_fold_intervals
 from .reference import MODEL_LABELS, STUDY_ORDER
 from .stats import cluster_bootstrap_metrics, compare_models
 
-__all__ = ["aggregate"]
+__all__ = ["aggregate", "count_invalid", "fallback_mgdl", "scored"]
 
 
 def aggregate(
@@ -109,9 +109,19 @@ def _timed(runs: list[tuple[dict, dict]]) -> dict[str, Any]:
     return next(res for spec, res in runs if spec["timed"])
 
 
-def _scored(raw: np.ndarray, fallback: float) -> np.ndarray:
+def scored(raw: np.ndarray, fallback: float) -> np.ndarray:
     """Below 0 mg/dL scored as 0, non-finite as the fold's fallback."""
     return np.where(np.isfinite(raw), np.maximum(raw, 0.0), fallback)
+
+
+def fallback_mgdl(train: Any) -> float:
+    """The fold's fallback prediction: the median training glucose. [mg/dL]"""
+    return float(np.median(train.frame["glucose_mgdl"].to_numpy(float)))
+
+
+def count_invalid(raw: np.ndarray) -> int:
+    """Raw predictions that are non-finite or below 0 mg/dL (scored otherwise)."""
+    return int(np.count_nonzero(~np.isfinite(raw) | (raw < 0)))
 
 
 def _predictions(dataset: Any, runs: list, order_names: list[str]) -> pd.DataFrame:
@@ -134,7 +144,7 @@ def _predictions(dataset: Any, runs: list, order_names: list[str]) -> pd.DataFra
                     "fold": split.fold,
                     "reference_mgdl": yref[split.test],
                     "predicted_mgdl": raw,
-                    "scored_mgdl": _scored(raw, res["fallback_mgdl"]),
+                    "scored_mgdl": scored(raw, res["fallback_mgdl"]),
                 }
             )
         )
@@ -149,7 +159,7 @@ def _predictions(dataset: Any, runs: list, order_names: list[str]) -> pd.DataFra
                         "repeat": split.repeat,
                         "fold": split.fold,
                         "reference_mgdl": yref[split.val],
-                        "scored_mgdl": _scored(vraw, res["fallback_mgdl"]),
+                        "scored_mgdl": scored(vraw, res["fallback_mgdl"]),
                     }
                 )
             )
@@ -206,7 +216,7 @@ def _metric_row(
         "latency_input": t.get("latency_input", ""),
         "fit_time_s": float(np.mean([res["fit_time_s"] for _, res in runs])),
         "n_predictions": int(len(p)),
-        "n_invalid_predictions": int(np.count_nonzero(~np.isfinite(raw) | (raw < 0))),
+        "n_invalid_predictions": count_invalid(raw),
         "coverage90_pct": cov[0.9]["coverage"],
         "coverage90_ci_low": cov[0.9]["ci_low"],
         "coverage90_ci_high": cov[0.9]["ci_high"],

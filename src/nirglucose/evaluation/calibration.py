@@ -30,9 +30,9 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import ConfigError, DataError
+from .stats import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
-    "CALIBRATION_METHODS",
     "CALIBRATION_COLUMNS",
     "MAX_CALIBRATION_READINGS",
     "calibration_mask",
@@ -40,8 +40,6 @@ __all__ = [
     "personal_calibration",
 ]
 
-#: Methods of the protocol (see the module docstring).
-CALIBRATION_METHODS = ("none", "offset", "carry-forward", "difference-ridge")
 #: The protocol's calibration readings per person (the issue asks for k = 1 or 2).
 MAX_CALIBRATION_READINGS = 2
 #: Columns of ``calibration.csv``.
@@ -142,7 +140,7 @@ def _difference_ridge(train: pd.DataFrame, test: pd.DataFrame, k: int) -> np.nda
 
 def _rmse_boot(sq: np.ndarray, cnt: np.ndarray, draws: np.ndarray) -> np.ndarray:
     """Per-repeat RMSE averaged over repeats; sq/cnt (repeats, subjects); draws (B, n)."""
-    return np.mean(np.sqrt(sq[:, draws].sum(2) / cnt[:, draws].sum(2)), axis=0)
+    return np.mean(np.sqrt(resampled_ratios(sq, cnt, draws)), axis=0)
 
 
 def personal_calibration(
@@ -270,17 +268,14 @@ def _rmse_draws(allp: pd.DataFrame, n_boot: int, seed: int) -> dict:
     reps = np.unique(allp["repeat"])
     s_pos = {s: i for i, s in enumerate(subjects)}
     r_pos = {r: i for i, r in enumerate(reps)}
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), _BOOT_STREAM]))
-    draws = rng.integers(0, len(subjects), size=(n_boot, len(subjects)))
+    draws = subject_draws(len(subjects), n_boot, (seed, _BOOT_STREAM))
     ident = np.arange(len(subjects))[None, :]
     stats = {}
     for (name, method), g in allp.groupby(["model", "method"], sort=False):
-        sq = np.zeros((len(reps), len(subjects)))
-        cnt = np.zeros_like(sq)
         si = g["subject_id"].map(s_pos).to_numpy()
         ri = g["repeat"].map(r_pos).to_numpy()
-        np.add.at(sq, (ri, si), (g["reference_mgdl"] - g["calibrated_mgdl"]).to_numpy() ** 2)
-        np.add.at(cnt, (ri, si), 1.0)
+        err2 = (g["reference_mgdl"] - g["calibrated_mgdl"]).to_numpy() ** 2
+        sq, cnt = repeat_subject_cells(err2, ri, si, (len(reps), len(subjects)))
         sq = np.nan_to_num(sq)
         stats[(name, method)] = (sq, cnt, _rmse_boot(sq, cnt, ident)[0], _rmse_boot(sq, cnt, draws))
     return stats

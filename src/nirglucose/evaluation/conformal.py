@@ -40,11 +40,11 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import ConfigError, DataError
+from .stats import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
     "LEVELS",
     "DEFAULT_CALIBRATION_SHARE",
-    "CONFORMAL_KEY",
     "grouped_conformal_quantile",
     "calibration_subjects",
     "split_conformal",
@@ -61,8 +61,6 @@ LEVELS = (0.9, 0.8)
 #: Share of subjects held out to calibrate a split-conformal model (as the study's
 #: 20 % validation part, PAPER_FRACTIONS in splits.py).
 DEFAULT_CALIBRATION_SHARE = 0.2
-#: Key of the calibration in a saved model file.
-CONFORMAL_KEY = "conformal"
 
 _CAL_STREAM = 0xC0F0  # separates the calibration-subject draw from other uses of the seed
 
@@ -146,10 +144,9 @@ def _frame_of(data) -> pd.DataFrame:
 def _subset(data, mask: np.ndarray):
     from ..dataset import Dataset
 
-    frame = _frame_of(data).loc[mask].reset_index(drop=True)
     if isinstance(data, Dataset):
-        return Dataset(frame, config=data.config, seed=data.seed, metadata=dict(data.metadata))
-    return frame
+        return data.rows(mask)
+    return _frame_of(data).loc[mask].reset_index(drop=True)
 
 
 def _first_reading_residuals(frame: pd.DataFrame, resid: np.ndarray) -> tuple:
@@ -366,14 +363,10 @@ def coverage_summary(
     rep = q["repeat"].to_numpy()
     subjects, s_idx = np.unique(sid, return_inverse=True)
     reps, r_idx = np.unique(rep, return_inverse=True)
-    hits = np.zeros((len(reps), len(subjects)))
-    cnt = np.zeros((len(reps), len(subjects)))
-    np.add.at(hits, (r_idx, s_idx), hit)
-    np.add.at(cnt, (r_idx, s_idx), 1.0)
+    hits, cnt = repeat_subject_cells(hit, r_idx, s_idx, (len(reps), len(subjects)))
     point = float(np.mean(hits.sum(1) / cnt.sum(1)))
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), _CAL_STREAM, 1]))
-    draws = rng.integers(0, len(subjects), size=(n_boot, len(subjects)))
-    boot = np.mean(hits[:, draws].sum(2) / cnt[:, draws].sum(2), axis=0)
+    draws = subject_draws(len(subjects), n_boot, (seed, _CAL_STREAM, 1))
+    boot = np.mean(resampled_ratios(hits, cnt, draws), axis=0)
     lo, hi = np.quantile(boot, [(1 - ci) / 2, (1 + ci) / 2])
     return {
         "coverage": 100 * point,

@@ -9,8 +9,11 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from typing import Any
 
-__all__ = ["MAX_LINES", "TaskProgress"]
+__all__ = ["MAX_LINES", "TaskProgress", "task_hooks"]
 
 #: Most progress lines a run writes when standard error is not a terminal (besides
 #: its first and last). [-]
@@ -109,3 +112,42 @@ class TaskProgress:
             word = "done" if self.done >= self.total else "stopped"
             self._line(f"{self.done}/{self.total} tasks; {word} after "
                        f"{_clock(time.perf_counter() - self.t0)}")
+
+
+@contextmanager
+def task_hooks(
+    label: str,
+    total: int,
+    done: int,
+    done_word: str,
+    *,
+    show: bool,
+    describe: Callable[[Mapping[str, Any]], str],
+    on_task: Callable[[Mapping[str, Any], bool], None] | None,
+) -> Iterator[Callable[[Mapping[str, Any], Any], None]]:
+    """The ``on_done(spec, result)`` hook of a task runner: ``on_task`` and the progress.
+
+    Parameters
+    ----------
+    label, total, done, done_word
+        As :class:`TaskProgress`.
+    show : bool
+        Show a :class:`TaskProgress` (closed on leaving the block).
+    describe : callable
+        ``describe(spec)``: the finished task's text in the progress.
+    on_task : callable, optional
+        Called as ``on_task(spec, False)`` for every finished task.
+    """
+    bar = TaskProgress(label, total, done, done_word) if show else None
+
+    def finished(spec: Mapping[str, Any], _result: Any) -> None:
+        if on_task is not None:
+            on_task(spec, False)
+        if bar is not None:
+            bar.advance(describe(spec))
+
+    try:
+        yield finished
+    finally:
+        if bar is not None:
+            bar.close()

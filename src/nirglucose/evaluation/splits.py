@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, unknown_name
 
 __all__ = [
     "PROTOCOLS",
@@ -69,7 +69,7 @@ class Split:
 def check_protocol(protocol: str) -> str:
     """Return ``protocol`` if valid, else raise ConfigError listing the valid names."""
     if protocol not in PROTOCOLS:
-        raise ConfigError(f"unknown protocol {protocol!r}; valid: {', '.join(PROTOCOLS)}")
+        raise ConfigError(unknown_name("protocol", protocol, PROTOCOLS))
     return protocol
 
 

@@ -55,6 +55,9 @@ __all__ = [
     "SubjectSums",
     "subject_sums",
     "bootstrap_weights",
+    "repeat_subject_cells",
+    "subject_draws",
+    "resampled_ratios",
     "metric_draws",
     "cluster_bootstrap_metrics",
     "holm",
@@ -198,6 +201,38 @@ def bootstrap_weights(
     rng = np.random.default_rng(np.random.SeedSequence([0xB007, int(seed), int(n_subjects)]))
     p = np.full(n_subjects, 1.0 / n_subjects)
     return rng.multinomial(n_subjects, p, size=int(n_boot)).astype(float)
+
+
+def repeat_subject_cells(
+    values: ArrayLike, repeat_idx: ArrayLike, subject_idx: ArrayLike, shape: tuple[int, int]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Sums of ``values`` and row counts per (repeat, subject) cell, each of ``shape``."""
+    sums = np.zeros(shape)
+    counts = np.zeros(shape)
+    np.add.at(sums, (repeat_idx, subject_idx), values)
+    np.add.at(counts, (repeat_idx, subject_idx), 1.0)
+    return sums, counts
+
+
+def subject_draws(n_subjects: int, n_boot: int, entropy: Sequence[int]) -> NDArray[np.int64]:
+    """Subject indices of ``n_boot`` cluster resamples, (n_boot, n_subjects).
+
+    Seeded by ``SeedSequence(entropy)``; the same draws serve every model of a run, so
+    the differences between them are paired.
+    """
+    rng = np.random.default_rng(np.random.SeedSequence([int(e) for e in entropy]))
+    return rng.integers(0, n_subjects, size=(n_boot, n_subjects))
+
+
+def resampled_ratios(
+    sums: NDArray[np.float64], counts: NDArray[np.float64], draws: NDArray[np.int64]
+) -> NDArray[np.float64]:
+    """Per-repeat sum/count over the subjects of each resample, (repeats, n_boot).
+
+    ``sums`` and ``counts`` are (repeats, subjects) cells (:func:`repeat_subject_cells`);
+    a row of ``draws`` of ``arange(n_subjects)`` gives the point value.
+    """
+    return sums[:, draws].sum(2) / counts[:, draws].sum(2)
 
 
 def metric_draws(sums: SubjectSums, weights: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:

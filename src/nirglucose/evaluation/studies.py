@@ -388,12 +388,11 @@ def _data_size_scenarios(
         isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 2 for n in sizes
     ):
         raise ConfigError(f"data-size training sizes must be integers >= 2, got {sizes!r}")
+    if not presets:
+        raise ConfigError(f"no presets given for the data-size study; valid: {', '.join(PRESETS)}")
     bad = [p for p in presets if p not in PRESETS]
-    if not presets or bad:
-        raise ConfigError(
-            f"unknown preset(s) {bad or presets!r} for the data-size study; valid: "
-            f"{', '.join(PRESETS)}"
-        )
+    if bad:
+        raise ConfigError(f"data-size study: {unknown_name('preset', bad[0], PRESETS)}")
     return [
         Scenario(
             f"{p}:n={int(n)}",

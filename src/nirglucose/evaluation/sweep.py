@@ -76,7 +76,6 @@ Outputs (:meth:`SweepResult.save`)
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import time
@@ -91,16 +90,23 @@ import pandas as pd
 
 from .. import __version__
 from ..config import resolve_config
-from ..dataset import Dataset, atomic_write
-from ..exceptions import ConfigError, DataError
+from ..dataset import Dataset
+from ..exceptions import ConfigError, DataError, check_positive_int
 from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks
-from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark
-from .benchmark_result import _clean
+from .benchmark import (
+    METRIC_COLUMNS,
+    _model_params,
+    resolve_models,
+    run_benchmark,
+    seeded_params,
+)
+from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
+from .benchmark_result import _dumps, _write_csv, _write_text
 from .calibration import check_k
 from .executors import resolve_backend, run_unordered
-from .progress import TaskProgress
+from .progress import task_hooks
 from .splits import check_protocol, effective_layout
 from .stats import cluster_bootstrap_metrics
 from .studies import (
@@ -125,8 +131,6 @@ from .sweep_analysis import (
     threshold_crossing,
 )
 from .tasks import TASK_FORMAT, source_digest
-from .tasks import checksum as _checksum  # noqa: F401  (re-exported: tests import it)
-from .tasks import task_key as _task_key  # noqa: F401  (re-exported: tests import it)
 
 __all__ = [
     "STUDIES",
@@ -294,12 +298,7 @@ def _filtered(ds: Dataset, filt: Mapping[str, Any] | None) -> Dataset:
     if not filt:
         return ds
     mask = ds.frame[filt["column"]].isin(filt["values"]).to_numpy()
-    return Dataset(
-        ds.frame.loc[mask].reset_index(drop=True),
-        config=ds.config,
-        seed=ds.seed,
-        metadata=ds.metadata,
-    )
+    return ds.rows(mask)
 
 
 def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
@@ -342,22 +341,20 @@ def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> di
     cls = get_model_class(spec["model"])
     # the preset's tuned parameters (the benchmark's one hook), then the sweep's own
     params = {**_model_params(spec["model"], spec["preset"]), **spec["model_params"]}
-    if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
-        params["random_state"] = tasks.derived_seed(spec["seed"], f"model|{spec['model']}")
-    model = cls(**params).fit(train)
+    seed = tasks.derived_seed(spec["seed"], f"model|{spec['model']}")
+    model = cls(**seeded_params(cls, params, seed)).fit(train)
     raw = np.asarray(model.predict(test), dtype=float).ravel()
-    fallback = float(np.median(train.frame["glucose_mgdl"].to_numpy(float)))
-    scored = np.where(np.isfinite(raw), np.maximum(raw, 0.0), fallback)
+    y = scored(raw, fallback_mgdl(train))
     ref = test.frame["glucose_mgdl"].to_numpy(float)
-    point = summary(ref, scored)
+    point = summary(ref, y)
     ci = cluster_bootstrap_metrics(
-        ref, scored, test.frame["subject_id"].to_numpy(), n_boot=spec["n_boot"], seed=spec["seed"]
+        ref, y, test.frame["subject_id"].to_numpy(), n_boot=spec["n_boot"], seed=spec["seed"]
     )
     out = {**point, **{k: v for k, v in ci.items() if "_ci_" in k}}
     out.update(
         n_parameters=int(getattr(model, "n_parameters", -1)),
         n_predictions=len(ref),
-        n_invalid_predictions=int(np.count_nonzero(~np.isfinite(raw) | (raw < 0))),
+        n_invalid_predictions=count_invalid(raw),
         n_train=len(train),
     )
     return {k: out[k] for k in (*SWEEP_METRICS, "n_train") if k in out}
@@ -460,13 +457,10 @@ class SweepResult:
             ("effects.csv", self.effects),
         ):
             if frame is not None:
-                atomic_write(out / name, lambda tmp, f=frame: f.to_csv(tmp, index=False))
+                _write_csv(out / name, frame)
             else:
                 (out / name).unlink(missing_ok=True)
-        text = json.dumps(_clean(self.meta), indent=2) + "\n"
-        atomic_write(
-            out / "sweep_meta.json", lambda tmp: Path(tmp).write_text(text, encoding="utf-8")
-        )
+        _write_text(out / "sweep_meta.json", _dumps(self.meta))
         return out
 
 
@@ -506,25 +500,6 @@ def _resolve_seeds(seeds: int | Sequence[int]) -> list[int]:
     return out
 
 
-def _check_positive(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
-
-
-def _resolve_models(models: Sequence[str] | str | None) -> list[str]:
-    if models is None:
-        models = list(DEFAULT_MODELS)
-    elif isinstance(models, str):
-        models = [m.strip() for m in models.split(",") if m.strip()]
-    models = list(dict.fromkeys(models))
-    if not models:
-        raise ConfigError("no models given")
-    for m in models:
-        get_model_class(m)
-    return models
-
-
 def _check_worker(spec: Mapping[str, Any], res: Mapping[str, Any]) -> None:
     """Refuse a result from another version; warn about one from other code."""
     if res.get("version") != spec["version"]:
@@ -553,15 +528,11 @@ def _execute(
     on_task: Callable[[dict[str, Any], bool], None] | None,
 ) -> None:
     """Run the pending tasks (here, on local processes or on Dask) into ``cache``."""
-    bar = TaskProgress("sweep", len(specs), len(cache.results), "reused") if progress else None
-
-    def done(spec, _res):
-        if on_task is not None:
-            on_task(spec, False)
-        if bar is not None:
-            bar.advance(f"{spec['model']} seed {spec['seed']}")
-
-    try:
+    hooks = task_hooks(
+        "sweep", len(specs), len(cache.results), "reused", show=progress,
+        describe=lambda spec: f"{spec['model']} seed {spec['seed']}", on_task=on_task,
+    )
+    with hooks as done:
         stream = run_unordered(
             run_sweep_task,
             [specs[k] for k in pending],
@@ -573,9 +544,6 @@ def _execute(
             cache.collect(stream, pending, specs, _task_tag, on_done=done, check=_check_worker)
         finally:
             stream.close()
-    finally:
-        if bar is not None:
-            bar.close()
 
 
 def _frame(
@@ -751,10 +719,10 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    models = _resolve_models(models)
+    models = resolve_models(models, DEFAULT_MODELS)
     check_protocol(protocol)
     for name in ("n_splits", "repeats", "n_subjects", "per_subject", "n_boot"):
-        _check_positive(name, locals()[name])
+        check_positive_int(name, locals()[name])
     seed_list = _resolve_seeds(seeds)
     backend, n_workers = resolve_backend(jobs, scheduler)
     specs = plan_sweep(
