@@ -1,9 +1,13 @@
-"""The optics split of issue 22 changed no result: hashes against those recorded at main.
+"""Refactors change no optics result: hashes against those recorded at main.
 
 ``tests/optics/data/optics_hashes_main.json`` is the output of
-``benchmarks/optics_hashes.py --default-diffusion`` at main 2a4031c, before the photon
-engines were merged and ``lut.py`` was split. Floating-point bytes depend on the NumPy
-build, so the comparison is skipped under another NumPy version than the recording's.
+``benchmarks/optics_hashes.py --default-diffusion``, first at main 2a4031c (before the
+photon engines were merged and ``lut.py`` was split), re-recorded after issue 27 routed
+the optics' matrix products and elementary functions through :mod:`nirglucose.portable`
+(same bits under every OpenBLAS kernel and NumPy/numba instruction set; checked under
+``SkylakeX``, ``Haswell`` and NumPy/numba lowered to x86-64-v3). Floating-point bytes
+still depend on the NumPy build, so the comparison is skipped under another NumPy
+version than the recording's.
 """
 
 from __future__ import annotations

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import portable as pm
 from ..data import load_spectrum
 from ..exceptions import ConfigError
 
@@ -182,7 +183,7 @@ def melanosome_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     116
     """
     wl = _check_wavelength(wavelength_nm)
-    return 6.6e11 * wl**-3.33  # [4], power law fitted to melanosome data
+    return 6.6e11 * pm.power(wl, -3.33)  # [4], power law fitted to melanosome data
 
 
 def skin_baseline_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
@@ -202,7 +203,7 @@ def skin_baseline_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
         Baseline mua. [1/cm]
     """
     wl = _check_wavelength(wavelength_nm)
-    return 0.244 + 85.3 * np.exp(-(wl - 154.0) / 66.2)  # [4]
+    return 0.244 + 85.3 * pm.exp(-(wl - 154.0) / 66.2)  # [4]
 
 
 #: Glucose C-H overtone bands in the 700-1300 nm window: (centre nm, 1/e half-width nm,
@@ -238,5 +239,5 @@ def glucose_mua_per_cm_per_mm(
     wl = _check_wavelength(wavelength_nm)
     out = np.zeros_like(wl)
     for centre, width, rel in GLUCOSE_BANDS_NM:
-        out = out + rel * np.exp(-(((wl - centre) / width) ** 2))
+        out = out + rel * pm.exp(-(((wl - centre) / width) ** 2))
     return peak_per_cm_per_mm * out

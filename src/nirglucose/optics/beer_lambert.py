@@ -14,9 +14,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import portable as pm
+
 __all__ = ["mbll_transmittance", "absorbance", "LN10"]
 
-LN10 = float(np.log(10.0))
+LN10 = float(pm.log(10.0))
 
 
 def mbll_transmittance(
@@ -53,7 +55,7 @@ def mbll_transmittance(
     0.8607
     """
     mua = np.asarray(mua_per_cm, dtype=float)
-    return np.asarray(geometry_factor) * np.exp(-mua * np.asarray(dpf) * np.asarray(separation_cm))
+    return np.asarray(geometry_factor) * pm.exp(-mua * np.asarray(dpf) * np.asarray(separation_cm))
 
 
 def absorbance(intensity: ArrayLike, reference: ArrayLike) -> np.ndarray:
@@ -76,4 +78,4 @@ def absorbance(intensity: ArrayLike, reference: ArrayLike) -> np.ndarray:
     >>> float(absorbance(100.0, 1000.0))
     1.0
     """
-    return np.log10(np.asarray(reference, dtype=float) / np.asarray(intensity, dtype=float))
+    return pm.log10(np.asarray(reference, dtype=float) / np.asarray(intensity, dtype=float))

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from nirglucose import portable as pm
 from nirglucose.exceptions import ConfigError
 
 __all__ = [
@@ -80,6 +81,12 @@ def _as_arrays(*arrays: Any) -> tuple[ModuleType, tuple[Any, ...]]:
         for a in arrays
     )
     return xp, out
+
+
+def _exp(xp: ModuleType, x: Any) -> Any:
+    """``exp`` in the arrays' namespace; NumPy's through :mod:`nirglucose.portable` (the same
+    bits on every CPU), torch's as it is (autograd)."""
+    return pm.exp(x) if xp is np else xp.exp(x)
 
 
 def _host(x: Any) -> np.ndarray:
@@ -328,8 +335,8 @@ def farrell_reflectance(
     rho2 = rho * rho
     r1 = xp.sqrt(z0 * z0 + rho2)
     r2 = xp.sqrt(zi * zi + rho2)
-    term1 = z0 * (mu_eff + 1.0 / r1) * xp.exp(-mu_eff * r1) / (r1 * r1)
-    term2 = zi * (mu_eff + 1.0 / r2) * xp.exp(-mu_eff * r2) / (r2 * r2)
+    term1 = z0 * (mu_eff + 1.0 / r1) * _exp(xp, -mu_eff * r1) / (r1 * r1)
+    term2 = zi * (mu_eff + 1.0 / r2) * _exp(xp, -mu_eff * r2) / (r2 * r2)
     return albedo_p / (4.0 * np.pi) * (term1 + term2)
 
 

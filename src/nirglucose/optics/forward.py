@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import portable as pm
 from ..exceptions import ConfigError
 from . import skin
 from .diffusion import (
@@ -162,7 +163,7 @@ def _beer_lambert(
     np.sqrt(share, out=share)
     t_cm = np.asarray(skin_thickness_cm, dtype=float)
     share *= (-2.0 * np.sqrt(2.0 / rho)) * (t_cm.reshape(-1, 1) if t_cm.ndim else t_cm)
-    np.exp(share, out=share)
+    pm.exp(share, out=share)
     np.subtract(1.0, share, out=share)
     # mixed optics (mixed_optics)
     mua = mua_d - mua_s
@@ -189,7 +190,7 @@ def _beer_lambert(
     mel *= 4.0 * float(epidermis_thickness_cm)
     x2 += mel
     np.negative(x2, out=x2)
-    np.exp(x2, out=x2)
+    pm.exp(x2, out=x2)
     x2 *= np.ravel(geometry_factor)
     return x2.reshape(shape)
 
@@ -207,4 +208,4 @@ def geometry_factor(
     """
     r = farrell_reflectance(separation_cm, mua_per_cm, musp_per_cm, n_tissue) * detector_area_cm2
     dpf = differential_pathlength_factor(separation_cm, mua_per_cm, musp_per_cm)
-    return r / np.exp(-mua_per_cm * dpf * separation_cm)
+    return r / pm.exp(-mua_per_cm * dpf * separation_cm)

@@ -47,6 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import j0
 
+from .. import portable as pm
 from ..exceptions import ConfigError
 from . import skin, tissue
 from .diffusion import boundary_coefficient
@@ -236,7 +237,7 @@ def _hankel_rule(rho_cm: float, k_max: float) -> tuple[NDArray[np.float64], NDAr
 
 def _tanh_sech(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """tanh and sech of x >= 0, overflow-free."""
-    e = np.exp(-x)
+    e = pm.exp(-x)
     e2 = e * e
     return (1.0 - e2) / (1.0 + e2), 2.0 * e / (1.0 + e2)
 
@@ -258,7 +259,7 @@ def _surface_flux_hat(
     d = 1.0 / (3.0 * musp)  # [4], D = 1/(3 mus') (absorption-independent)
     z0 = 1.0 / musp[:, 0]  # source one transport mean free path deep
     seg = np.clip(np.minimum(zbot, z0[:, None]) - ztop, 0.0, None)
-    source = (1.0 - r_specular) * np.exp(-(mua * seg).sum(axis=1))  # ballistic leg
+    source = (1.0 - r_specular) * pm.exp(-(mua * seg).sum(axis=1))  # ballistic leg
     kk = (k * k)[None, :]
     # downward from the Robin boundary, Y = D phi'/phi = 1/(2A) at z = 0, to the source
     y = np.full((mua.shape[0], k.size), 1.0 / (2.0 * a_coef))
@@ -431,10 +432,10 @@ def layered_diffusion_reflectance(
             k, m.reshape(-1, n_layers), np.tile(musp[sl], rep), np.tile(ztop[sl], rep),
             np.tile(zbot[sl], rep), a_coef, r_sp,
         )
-        refl[:, sl] = (flux @ w).reshape(n_var, -1)
+        refl[:, sl] = pm.matmul(flux, w).reshape(n_var, -1)
     paths = None
     if pathlengths:
-        paths = (np.log(refl[0])[:, None] - np.log(refl[1:].T)) / _MUA_STEP_PER_CM
+        paths = (pm.log(refl[0])[:, None] - pm.log(refl[1:].T)) / _MUA_STEP_PER_CM
         paths = paths.reshape(batch + (n_layers,))
     refl = refl[0]
     return refl.reshape(batch), paths

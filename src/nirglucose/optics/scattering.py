@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import portable as pm
 from ..exceptions import ConfigError
 
 __all__ = ["SKIN_MUSP", "FAT_MUSP", "power_law_musp_per_cm", "glucose_scattering_factor"]
@@ -55,7 +56,7 @@ def power_law_musp_per_cm(
     wl = np.asarray(wavelength_nm, dtype=float)
     if np.any(wl <= 0):
         raise ConfigError("wavelength must be positive [nm]")
-    return a_per_cm * (wl / 500.0) ** (-b)  # [1], Eq. 2
+    return a_per_cm * pm.power(wl / 500.0, -b)  # [1], Eq. 2
 
 
 def glucose_scattering_factor(glucose_mm: ArrayLike, rel_per_mm: float) -> np.ndarray:
@@ -88,4 +89,4 @@ def glucose_scattering_factor(glucose_mm: ArrayLike, rel_per_mm: float) -> np.nd
     >>> round(float(glucose_scattering_factor(10.0, -1e-3)), 5)
     0.99005
     """
-    return np.exp(rel_per_mm * np.asarray(glucose_mm, dtype=float))
+    return pm.exp(rel_per_mm * np.asarray(glucose_mm, dtype=float))

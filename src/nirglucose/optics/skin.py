@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import portable as pm
+
 __all__ = [
     "epidermis_mua_per_cm",
     "epidermis_transmittance",
@@ -83,7 +85,7 @@ def epidermis_transmittance(mua_epi_per_cm: ArrayLike, thickness_cm: ArrayLike) 
     >>> round(float(epidermis_transmittance(10.0, 0.008)), 4)
     0.7261
     """
-    return np.exp(-4.0 * np.asarray(mua_epi_per_cm) * np.asarray(thickness_cm))
+    return pm.exp(-4.0 * np.asarray(mua_epi_per_cm) * np.asarray(thickness_cm))
 
 
 def mean_penetration_depth_cm(separation_cm: ArrayLike, mu_eff_per_cm: ArrayLike) -> np.ndarray:
@@ -132,4 +134,4 @@ def dermis_path_fraction(skin_thickness_cm: ArrayLike, depth_cm: ArrayLike) -> n
     >>> round(float(dermis_path_fraction(0.1, 0.1)), 4)
     0.6321
     """
-    return 1.0 - np.exp(-np.asarray(skin_thickness_cm) / np.asarray(depth_cm))
+    return 1.0 - pm.exp(-np.asarray(skin_thickness_cm) / np.asarray(depth_cm))

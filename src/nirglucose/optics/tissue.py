@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import portable as pm
 from . import absorption, scattering
 
 __all__ = ["BandSpectra", "band_spectra", "TissueState", "tissue_optics", "SUBCUTIS"]
@@ -85,7 +86,7 @@ def band_spectra(
     BandSpectra
     """
     centre = np.asarray(centre_nm, dtype=float)[:, None]
-    sigma = np.asarray(fwhm_nm, dtype=float)[:, None] / (2.0 * np.sqrt(2.0 * np.log(2.0)))
+    sigma = np.asarray(fwhm_nm, dtype=float)[:, None] / (2.0 * np.sqrt(2.0 * pm.log(2.0)))
     x, w = np.polynomial.hermite.hermgauss(n_points)
     nodes = centre + np.sqrt(2.0) * sigma * x[None, :]
     weights = np.broadcast_to(w / np.sqrt(np.pi), nodes.shape).copy()
@@ -244,8 +245,9 @@ def _mix(coef, table, derivative, shift, n: int = 0) -> np.ndarray:
         out += table
         return out
     if shift is None:
-        return coef @ table
-    both = coef @ np.concatenate([table, derivative], axis=1)  # one product, (n, 2 n_nodes)
+        return pm.matmul(coef, table)
+    # one product, (n, 2 n_nodes)
+    both = pm.matmul(coef, np.concatenate([table, derivative], axis=1))
     m = table.shape[1]
     out = both[:, m:] * shift
     out += both[:, :m]

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import portable as pm
 from ..config import ScenarioConfig
 from ._random import RandomStreams
 
@@ -77,7 +78,7 @@ def coupling_factor(
     >>> float(coupling_factor(0.0, 1.0, 0.03, 0.03, 1.0, 1.0))  # doctest: +ELLIPSIS
     0.970445...
     """
-    return np.exp(
+    return pm.exp(
         f_contact * coupling_sd * np.asarray(coupling_z) - f_humidity * humidity_loss * wetness
     )
 
@@ -90,7 +91,7 @@ def blanched_blood_fraction(blood_fraction, pressure, blanching: float, f_contac
     >>> round(float(blanched_blood_fraction(0.02, 1.0, 0.3, 1.0)), 5)
     0.01482
     """
-    return np.asarray(blood_fraction) * np.exp(-f_contact * blanching * np.asarray(pressure))
+    return np.asarray(blood_fraction) * pm.exp(-f_contact * blanching * np.asarray(pressure))
 
 
 def compressed_thickness_mm(thickness_mm, pressure, compression: float, f_contact: float):
@@ -101,7 +102,7 @@ def compressed_thickness_mm(thickness_mm, pressure, compression: float, f_contac
     >>> round(float(compressed_thickness_mm(1.8, 1.0, 0.1, 1.0)), 4)
     1.6287
     """
-    return np.asarray(thickness_mm) * np.exp(-f_contact * compression * np.asarray(pressure))
+    return np.asarray(thickness_mm) * pm.exp(-f_contact * compression * np.asarray(pressure))
 
 
 def apply_contact(

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from .. import portable as pm
 from ..config import EnvironmentConfig, ScenarioConfig
 from ._random import RandomStreams, truncated_normal
 
@@ -85,7 +86,7 @@ def ambient_photocurrent_a(
         * np.asarray(watts_per_m2_per_lux)
         * detector_area_m2
         * np.asarray(responsivity_a_per_w)
-        * 10.0 ** (-baffle_optical_density)
+        * pm.power(10.0, -baffle_optical_density)
     )
 
 
@@ -145,8 +146,8 @@ def sample_environment(
     pressure_mbar = truncated_normal(
         rng, session_p, cfg.pressure_within_sd_mbar, *cfg.pressure_mbar, size=n, group=rep
     )
-    log_lo, log_hi = np.log10(cfg.ambient_lux)
-    ambient_lux = 10.0 ** rng.uniform(log_lo, log_hi, size=n)
+    log_lo, log_hi = pm.log10(cfg.ambient_lux)
+    ambient_lux = pm.power(10.0, rng.uniform(log_lo, log_hi, size=n))
     names = list(cfg.light_source_probs)
     probs = np.array([cfg.light_source_probs[k] for k in names])
     source_idx = rng.choice(len(names), p=probs, size=n)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from .. import portable as pm
 from ..config import ScenarioConfig
 from ._random import RandomStreams
 
@@ -42,7 +43,7 @@ def meal_excursion(hours_since_meal: np.ndarray, peak_h: float) -> np.ndarray:
     1.0
     """
     x = np.asarray(hours_since_meal, dtype=float) / peak_h
-    return x * np.exp(1.0 - x)
+    return x * pm.exp(1.0 - x)
 
 
 def dawn_profile(hour_of_day: np.ndarray, peak_hour: float, width_h: float) -> np.ndarray:
@@ -56,7 +57,7 @@ def dawn_profile(hour_of_day: np.ndarray, peak_hour: float, width_h: float) -> n
     >>> float(dawn_profile(6.0, 6.0, 2.0))
     1.0
     """
-    return np.exp(-(((np.asarray(hour_of_day, dtype=float) - peak_hour) / width_h) ** 2))
+    return pm.exp(-(((np.asarray(hour_of_day, dtype=float) - peak_hour) / width_h) ** 2))
 
 
 def reflect_into_range(x: np.ndarray, low: float, high: float) -> np.ndarray:

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import portable as pm
 from ..constants import (
     BOLTZMANN_J_PER_K,
     DARK_CURRENT_DOUBLING_COEFF_PER_C,
@@ -187,7 +188,7 @@ def dark_current_a(
     2.7183
     """
     t = np.asarray(temperature_c, dtype=float) - 25.0
-    return np.asarray(i25_a) * np.exp(per_c * t)
+    return np.asarray(i25_a) * pm.exp(per_c * t)
 
 
 def shot_noise_sd_a(current_a, bandwidth_hz: float) -> np.ndarray:
@@ -224,7 +225,7 @@ def adc_inl_lsb(code, full_scale: int, inl_peak_lsb: float) -> np.ndarray:
     >>> float(adc_inl_lsb(2047.5, 4095, 2.0))
     2.0
     """
-    return inl_peak_lsb * np.sin(np.pi * np.asarray(code, dtype=float) / full_scale)
+    return inl_peak_lsb * pm.sin(np.pi * np.asarray(code, dtype=float) / full_scale)
 
 
 def adc_convert(voltage_v, vref_v: float, bits: int, inl_peak_lsb: float, offset_lsb) -> np.ndarray:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import portable as pm
 from ..config import ScenarioConfig
 from ..constants import PHYSIOLOGICAL_RANGES
 from ..dataset import PMF_COLUMNS, PPG_COLUMNS  # the data schema owns the column names
@@ -96,7 +97,7 @@ def measure_ppg(
     z = streams("ppg").normal(size=(2, len(blood_fraction)))
     d = cfg.device
     blood_pct = np.minimum(
-        100.0 * np.asarray(blood_fraction) * np.exp(f * d.blood_volume_error_rel * z[0]), 100.0
+        100.0 * np.asarray(blood_fraction) * pm.exp(f * d.blood_volume_error_rel * z[0]), 100.0
     )
     spo2_pct = np.clip(100.0 * np.asarray(saturation) + f * d.spo2_error_pct * z[1], 0.0, 100.0)
     return {"blood_volume_pct": blood_pct, "spo2_pct": spo2_pct}

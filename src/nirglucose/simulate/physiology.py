@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import portable as pm
 from ..config import ScenarioConfig
 from ..constants import FITZPATRICK_MELANIN_FRACTION_RANGES
 from ._random import RandomStreams, truncated_normal
@@ -150,7 +151,7 @@ def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
     rr = truncated_normal(
         rng, p.resp_rate_bpm_mean, v * p.resp_rate_bpm_sd, *p.resp_rate_bpm, size=n
     )
-    log_blood = np.log(p.blood_fraction_median) + v * p.blood_fraction_log_sd_subject * rng.normal(
+    log_blood = pm.log(p.blood_fraction_median) + v * p.blood_fraction_log_sd_subject * rng.normal(
         size=n
     )
     hydration = v * p.hydration_pct_sd_subject * rng.normal(size=n)
@@ -216,7 +217,7 @@ def _hydration_pct(p, v: float, traits: dict, rng, n_rows: int) -> np.ndarray:
     """Hydration offset from nominal, squashed smoothly inside +/- its limit. [%]"""
     lim = p.hydration_pct_limit
     hydration = traits["_hydration_base"] + v * p.hydration_pct_sd_state * rng.normal(size=n_rows)
-    return lim * np.tanh(hydration / lim)  # stays inside +/- limit, smoothly
+    return lim * pm.tanh(hydration / lim)  # stays inside +/- limit, smoothly
 
 
 def _vitals(p, v: float, traits: dict, stress, rng, n_rows: int):
@@ -264,9 +265,9 @@ def _blood_fraction(cfg, traits: dict, env: dict, skin_temp, sbp, rng, streams, 
     pulse = cfg.noise_factor("pulsation")
     phase = streams("pulsation").uniform(0.0, 2.0 * np.pi, size=(2, n_rows))
     modulation = 1.0 + pulse * (
-        p.pulse_depth * np.sin(phase[0]) + p.resp_depth * np.sin(phase[1])
+        p.pulse_depth * pm.sin(phase[0]) + p.resp_depth * pm.sin(phase[1])
     )
-    return np.exp(log_blood) * modulation
+    return pm.exp(log_blood) * modulation
 
 
 def apply_physiology(cfg, traits_rows, env, glucose, n_rows, streams) -> dict:

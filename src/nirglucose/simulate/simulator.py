@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .. import portable as pm
 from ..config import ReferenceTissue, ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import forward, tissue
@@ -145,12 +146,12 @@ _STATE_FIELDS = ("blood_fraction", "saturation", "water_fraction", "subcutis_fat
 
 def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.ndarray:
     """Any forward model of :mod:`~nirglucose.optics.forward`, :data:`_OPTICS_SLICE_ROWS`
-    rows at a time, the band integral as one matrix product per slice."""
+    rows at a time, the band integral as an ordered weighted sum per slice."""
     n, n_led = shift.shape
     out = np.empty((n, n_led))
-    # band integral as one matrix product: (rows, n_led * n_pts) @ (n_led * n_pts, n_led)
+    # band integral: sum over each LED's band nodes, in node order (no BLAS: the same
+    # bits on every CPU, see nirglucose.portable)
     w = tables.spectra.weights
-    band_weights = (np.eye(n_led)[:, :, None] * w[None]).reshape(n_led, -1).T
     for lo in range(0, n, _OPTICS_SLICE_ROWS):
         sl = slice(lo, min(lo + _OPTICS_SLICE_ROWS, n))
         part = tissue.TissueState(*(np.asarray(getattr(state, f))[sl] for f in _STATE_FIELDS))
@@ -173,7 +174,7 @@ def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.
             geometry_factor=tables.geometry,
             lut=tables.lut,
         )
-        out[sl] = nodes.reshape(nodes.shape[0], -1) @ band_weights
+        out[sl] = pm.dot_last(nodes.reshape(nodes.shape[0], n_led, -1), w)
     return out
 
 

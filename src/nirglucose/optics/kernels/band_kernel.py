@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ... import portable as pm
 from ...exceptions import ConfigError
 from ..tissue import SUBCUTIS, BandSpectra
 
@@ -306,7 +307,7 @@ def _table_reflectance(node_lut, shape, t_cm, mua_d, mua_s, mua_e, musp_d, musp_
     from .lut_kernel import node_reflectance
 
     n_led, n_pts, n = shape
-    ln_t = np.log(t_cm)  # once per call: every node's kernel call reads the same rows
+    ln_t = pm.log(t_cm)  # once per call: every node's kernel call reads the same rows
     k = n_led * n_pts
     out = np.empty(n * k)
     # node by node: each call reads one node's table (a few MB, cache-resident), where

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ... import portable as pm
 from ...exceptions import ConfigError
 from .._inputs import check_n_photons
 from ..kernels import mc_white
@@ -150,7 +151,7 @@ def _forward(kind: str, x: np.ndarray) -> np.ndarray:
     # a negative input becomes NaN here, which the range check then reports by axis name
     with np.errstate(invalid="ignore", divide="ignore"):
         if kind == "log":
-            return np.log(x)
+            return pm.log(x)
         if kind == "sqrt":
             return np.sqrt(x)
     return x
@@ -158,7 +159,7 @@ def _forward(kind: str, x: np.ndarray) -> np.ndarray:
 
 def _inverse(kind: str, u: np.ndarray) -> np.ndarray:
     if kind == "log":
-        return np.exp(u)
+        return pm.exp(u)
     if kind == "sqrt":
         return u * u
     return u

@@ -22,6 +22,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ... import portable as pm
 from ...exceptions import ConfigError
 from .. import layers
 from .cache import get_lut, load_or_build_lut
@@ -197,7 +198,7 @@ def interpolate_lut(
     idx, frac = _cell_coords(list(lut.nodes), list(LUT_AXES), inputs)
     n_ch = len(_CHANNELS) if pathlengths else 1
     flat = lut.values.reshape(-1, len(_CHANNELS))[:, :n_ch]
-    out = np.exp(_multilinear(flat, _strides(lut.shape), idx, frac).astype(np.float64))
+    out = pm.exp(_multilinear(flat, _strides(lut.shape), idx, frac).astype(np.float64))
     refl = out[:, 0].reshape(shape)
     paths = out[:, 1:].reshape(shape + (3,)) if pathlengths else None
     return refl, paths
@@ -372,7 +373,7 @@ def interpolate_node_lut(
         return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), full)).ravel()
 
     t = np.asarray(skin_thickness_cm, dtype=float)
-    ln_t = np.log(t.reshape(t.shape + (1,) * (len(full) - t.ndim)))  # one log per row
+    ln_t = pm.log(t.reshape(t.shape + (1,) * (len(full) - t.ndim)))  # one log per row
     out = np.empty(mua_d.size)
     bad = node_reflectance(
         *_node_kernel_args(nlut), flat(mua_d), flat(mua_subcutis_per_cm),
@@ -434,7 +435,7 @@ def _interpolate_node_lut_numpy(
                           [f.astype(np.float32) for f in frac])
     dq = q - np.repeat(nlut.musp_ratio.ravel(), n_rows)
     ln_r = out.real.astype(np.float64) + dq * out.imag
-    return np.exp(ln_r).reshape(tuple(full[i] for i in perm)).transpose(np.argsort(perm))
+    return pm.exp(ln_r).reshape(tuple(full[i] for i in perm)).transpose(np.argsort(perm))
 
 
 def reflectance_from_tissue_optics(

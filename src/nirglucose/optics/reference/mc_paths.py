@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ... import portable as pm
 from ...exceptions import ConfigError
 from .._inputs import as_generator
 from .photon_engine import N_BATCHES, Packets, Stack, as_layers, check_range, run_photons
@@ -275,11 +276,13 @@ def reweight_detected(
             f"mua_per_cm = {mua.tolist()!r} is below the run's reference absorption "
             f"{result.mua_ref_per_cm.tolist()!r}; valid range is [reference, inf) [1/cm]"
         )
-    ww = result.weight * np.exp(-(result.pathlength_cm @ delta))
+    ww = result.weight * pm.exp(-pm.matmul(result.pathlength_cm, delta))
     total = float(ww.sum())
     norm = result.n_photons * result.ring_area_cm2
     per_batch = np.bincount(result.batch, weights=ww, minlength=N_BATCHES)
     per_batch = per_batch / (norm / N_BATCHES)
     se = float(per_batch.std(ddof=1) / np.sqrt(N_BATCHES))
-    paths = (ww @ result.pathlength_cm) / total if total > 0 else np.full(mua.size, np.nan)
+    # sum over photons in NumPy's fixed order, not BLAS's (nirglucose.portable)
+    paths = ((ww[:, None] * result.pathlength_cm).sum(axis=0) / total if total > 0
+             else np.full(mua.size, np.nan))
     return total / norm, se, paths

@@ -53,6 +53,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ... import portable as pm
 from ...exceptions import ConfigError
 from .._inputs import check_n_photons
 
@@ -252,7 +253,7 @@ def _move(stack: Stack, pk: Packets, mu_free: NDArray[np.float64],
     """
     n, lay, uz = pk.pid.size, pk.lay, pk.uz
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = -np.log1p(-gen.random(n)) / mu_free[lay]  # inf in a clear layer
+        s = -pm.log1p(-gen.random(n)) / mu_free[lay]  # inf in a clear layer
         db = np.where(uz > 0, (stack.z_bot_cm[lay] - pk.z) / uz,
                       np.where(uz < 0, (stack.z_top_cm[lay] - pk.z) / uz, np.inf))
     hit = s >= db
@@ -262,7 +263,7 @@ def _move(stack: Stack, pk: Packets, mu_free: NDArray[np.float64],
     pk.z += step * uz
     pk.path[np.arange(n), lay] += step
     if continuous:
-        pk.w *= np.exp(-stack.mua_per_cm[lay] * step)  # [2]
+        pk.w *= pm.exp(-stack.mua_per_cm[lay] * step)  # [2]
     return hit
 
 
@@ -271,7 +272,7 @@ def _scatter(stack: Stack, pk: Packets, it: NDArray[np.intp], gen: np.random.Gen
     cos_t = hg_cos(stack.g[pk.lay[it]], gen.random(it.size))
     psi = 2.0 * np.pi * gen.random(it.size)
     sin_t = np.sqrt(1.0 - cos_t * cos_t)
-    cp, sp = np.cos(psi), np.sin(psi)
+    cp, sp = pm.cos(psi), pm.sin(psi)
     ux0, uy0, uz0 = pk.ux[it], pk.uy[it], pk.uz[it]
     vert = np.abs(uz0) > _VERTICAL_COS
     tmp = np.sqrt(np.where(vert, 1.0, 1.0 - uz0 * uz0))
