@@ -130,3 +130,11 @@ def test_saving_a_loaded_model_rewrites_the_same_bytes(name, other_process, tmp_
         (tmp_path / str(k)).mkdir()
         model.save(tmp_path / str(k) / "model.json")
         assert _files(tmp_path / str(k)) == original, f"{name}: write {k} differs"
+
+
+def test_negative_seed_is_one_line_exit_2(data, tmp_path, capsys):
+    code = main(["fit", "--model", "sdnn", "--data", str(data),
+                 "--out", str(tmp_path / "m.json"), "--seed", "-1"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.strip() == "error: --seed must be non-negative, got -1", err
+    assert not list(tmp_path.iterdir())
