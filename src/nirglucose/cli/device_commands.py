@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ._app import app
-from ._common import UserError, _check_out_file, _say
+from ._common import UserError, _check_out_file, _check_seed, _say
 
 #: Fewest held-out subjects for a split-conformal 90 % interval: ceil(0.9 (n + 1)) <= n.
 _MIN_CALIBRATION_SUBJECTS = 9
@@ -34,17 +34,27 @@ def fit_model(
     calibration_share: Annotated[
         float, typer.Option(help="Share of subjects held out to calibrate the intervals.")
     ] = 0.2,
-    seed: Annotated[int, typer.Option(help="Seed of the draw of calibration subjects.")] = 0,
+    seed: Annotated[
+        int,
+        typer.Option(
+            help="Seed of the model's fit (its random_state: initialisation, shuffling, "
+            "dropout, subsampling) and of the draw of calibration subjects."
+        ),
+    ] = 0,
 ) -> None:
     """Fit a model on your own measurements (any LEDs, any ADC) and save it.
 
     With intervals, a share of the subjects (never used for fitting) calibrates
     subject-grouped split-conformal 90 % and 80 % intervals, saved with the model.
+    The same data, options and --seed write byte-identical model files.
     """
-    from ..models import make_model
+    from ..evaluation.benchmark import seeded_params
+    from ..models.registry import get_model_class
 
+    _check_seed(seed)
     _check_fit_args(out, intervals, calibration_share)
-    estimator = make_model(model)  # unknown names raise with the valid ones
+    cls = get_model_class(model)  # unknown names raise with the valid ones
+    estimator = cls(**seeded_params(cls, {}, seed))  # random_state=seed where it has one
     ds = _load_device_data(model, data, adc_bits)
     intervals, note = _choose_intervals(ds, intervals, calibration_share)
     if intervals == "split":

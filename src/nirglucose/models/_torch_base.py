@@ -38,8 +38,11 @@ from it, inside :func:`torch.random.fork_rng` so the caller's global torch RNG i
 untouched). :func:`torch.use_deterministic_algorithms` is *not* switched on: in torch
 2.13 the first call imports ``torch._inductor`` (several seconds), and every CPU kernel
 these small networks use (linear, softplus, attention, Adam) is deterministic already,
-which the tests check (same seed, bit-identical weights). Results are reproducible for
-a given torch build and thread count.
+which the tests check (same seed, bit-identical weights). Fits on fewer than
+:data:`~nirglucose.models._training.SMALL_FIT_ROWS` rows run on one torch thread
+(:func:`~nirglucose.models._training.training_threads`): faster on such small tensors,
+and the same arithmetic whatever the machine's core count. Larger fits use the caller's
+thread count, and are reproducible for a given torch build and thread count.
 
 Save/load writes a JSON document plus a safetensors weight file beside it (both
 atomically); loading reads JSON and safetensors (or a ``weights_only`` torch file) and
@@ -98,6 +101,7 @@ from ._training import (
     smoothed_argmin,
     start_at_mean,
     step_scheduler,
+    training_threads,
 )
 from ._whitening import scale_of as _scale_of
 from ._whitening import zca_whitening
@@ -526,7 +530,7 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
         # training (RTE PINN at weight_decay=10: 2.8 -> 1.1 s per fit). Restored after.
         flushing = torch.set_flush_denormal(True)
         try:
-            with torch.random.fork_rng(devices=[]):
+            with training_threads(len(Xa)), torch.random.fork_rng(devices=[]):
                 self._select_and_refit(train, val, every, init_seed, shuffle_seed)
         finally:
             if flushing:

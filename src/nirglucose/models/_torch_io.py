@@ -53,8 +53,6 @@ class TorchIOMixin:
         Path
             ``path``.
         """
-        from safetensors.torch import save_file
-
         from .. import __version__
 
         self._check_fitted()
@@ -68,8 +66,8 @@ class TorchIOMixin:
         tensors = {
             k: v.detach().to("cpu").contiguous() for k, v in self.module_.state_dict().items()
         }
-        meta = {"format": MODEL_FORMAT, "model": self.registry_name}
-        atomic_write(weights, lambda tmp: save_file(tensors, tmp, metadata=meta))
+        blob = _safetensors_bytes(tensors, {"format": MODEL_FORMAT, "model": self.registry_name})
+        atomic_write(weights, lambda tmp: Path(tmp).write_bytes(blob))
         doc = {
             "format": MODEL_FORMAT,
             "format_version": FORMAT_VERSION,
@@ -168,6 +166,26 @@ class TorchIOMixin:
             {k: state[k].to(dtype=expected[k].dtype) for k in expected}, strict=True
         )
         return module.eval()
+
+
+def _safetensors_bytes(tensors: dict[str, torch.Tensor], metadata: dict[str, str]) -> bytes:
+    """A safetensors file of ``tensors``, its header in one fixed order.
+
+    safetensors writes ``__metadata__`` in the order of a Rust hash map, which is seeded
+    per process: the same tensors gave different bytes from one run to the next. The
+    header (8-byte little-endian length, JSON, space padding to a multiple of 8) is
+    rewritten with the metadata keys sorted; the tensor data and their offsets (relative
+    to the end of the header) are unchanged.
+    """
+    from safetensors.torch import save
+
+    blob = save(tensors, metadata=metadata)
+    n = int.from_bytes(blob[:8], "little")
+    header = json.loads(blob[8 : 8 + n])
+    meta = dict(sorted(header.pop("__metadata__", {}).items()))
+    text = json.dumps({"__metadata__": meta, **header}, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 8)
+    return len(text).to_bytes(8, "little") + text + blob[8 + n :]
 
 
 def _read_document(cls: type, path: Path) -> dict[str, Any]:
