@@ -33,6 +33,7 @@ MODELS = {
     "ebl": "nirglucose.models.linear",
     "pls": "nirglucose.models.linear",
     "oracle": "nirglucose.models.oracle",
+    "physics-inversion": "nirglucose.models.inversion",
     "original-pinn": "nirglucose.models.pinn",
     "optimized-pinn": "nirglucose.models.pinn",
     "rte-pinn": "nirglucose.models.pinn",
