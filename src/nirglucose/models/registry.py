@@ -34,6 +34,8 @@ MODELS = {
     "pls": "nirglucose.models.linear",
     "oracle": "nirglucose.models.oracle",
     "physics-inversion": "nirglucose.models.inversion",
+    "ebl+gp": "nirglucose.models.hybrid",
+    "physics-inversion+gp": "nirglucose.models.hybrid",
     "original-pinn": "nirglucose.models.pinn",
     "optimized-pinn": "nirglucose.models.pinn",
     "rte-pinn": "nirglucose.models.pinn",
