@@ -118,8 +118,11 @@ def _clip_physical(theta: np.ndarray) -> np.ndarray:
 def _residuals(fm, y, calib, root_w, mean, sd, z):
     """Whitened data residuals (n, k) and the model's log ratio, at whitened ``z``."""
     theta = mean + sd * z
-    m = fm.log_ratio(theta[:, 0], theta[:, 1:])
-    r = (y - calib[0] - calib[1] * m) @ root_w.T
+    # a trial state the optics cannot take (e.g. volume fractions summing past 1) gives
+    # non-finite residuals; the solver refuses such steps, so they need no warning
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        m = fm.log_ratio(theta[:, 0], theta[:, 1:])
+        r = (y - calib[0] - calib[1] * m) @ root_w.T
     return r, m
 
 
