@@ -18,7 +18,11 @@ FAST_NET = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
 FAST = {name: FAST_NET for name in NETWORKS} | {
     "gp": {"random_state": 0},
     "gbr": {"n_estimators": 20, "random_state": 0},
+    "physics-inversion": {"n_em": 3},
+    "ebl+gp": {"random_state": 0},
+    "physics-inversion+gp": {"cv": 0, "backbone_params": {"n_em": 3}, "random_state": 0},
 }
+PHYSICS = ("physics-inversion", "ebl+gp", "physics-inversion+gp")
 
 
 def _make(name):
@@ -33,7 +37,7 @@ def _package_models() -> list[str]:
 
 
 def test_every_registered_model_is_covered():
-    assert set(_package_models()) == {"ebl", "pls", "oracle", *NETWORKS, *REFERENCES}
+    assert set(_package_models()) == {"ebl", "pls", "oracle", *NETWORKS, *REFERENCES, *PHYSICS}
 
 
 @pytest.mark.parametrize("bits", [10, 12, 14, 16])

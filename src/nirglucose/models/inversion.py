@@ -1,0 +1,438 @@
+"""A forward-model estimator: per reading, the posterior mode of glucose and the nuisances.
+
+Where the oracle (:mod:`nirglucose.models.oracle`) inverts the forward model with the
+true tissue and probe state, this estimator knows the forward model but not the state.
+Per reading it estimates glucose *and* the nuisances the device does not measure --
+detected blood fraction, saturation, water and fat fractions, melanin, the skin
+thickness under the probe, the LEDs' thermal peak shift and the optical coupling
+(:data:`~nirglucose.models._inversion_solver.NUISANCES`) -- as the mode of
+
+    p(theta, g | y) ~ N(y; a + b m(g, theta), S) N(theta; mu(x), diag(s^2)) N(g; mu_g, s_g^2)
+
+with y = ln(adc / adc_ref) per LED, m the noise-free forward model
+(:class:`~nirglucose.models._inversion_solver.ForwardModel`, chosen by
+``forward_model``), x the reading's measured physiological columns, (a, b) a per-channel
+calibration and S the residual covariance. Everything is solved for all rows at once by
+Levenberg-Marquardt.
+
+What it learns from the training rows' measured columns and reference glucose (never
+a ``true_*`` column), by empirical Bayes [1]_ (an EM iteration with a Laplace posterior):
+
+* the prior means mu(x): a documented physical start from the measured columns
+  (:func:`prior_start`: PPG blood volume and SpO2 where measured, hydration -> water,
+  BMI -> fat, melanin, skin thickness, skin temperature -> LED temperature -> peak
+  shift, each through the scenario's own documented relation), plus a ridge correction
+  linear in the standardised physiology, refitted to the training rows' posterior modes
+  at their known glucose;
+* the prior widths s, from the spread of those modes plus their posterior variance;
+* the calibration (a, b) per channel and S, from the residuals at the modes;
+* the glucose prior: the training mean and variance.
+
+Everything the estimator knows about the device and optics comes from the scenario
+config (``Dataset.config``): LED bands, geometry, the chromophore tables and glucose's
+optical signal -- the "forward model" of the issue; the nuisance values do not.
+
+References
+----------
+.. [1] A. P. Dempster, N. M. Laird, D. B. Rubin, "Maximum likelihood from incomplete
+   data via the EM algorithm", J. R. Stat. Soc. B 39, 1-38 (1977).
+.. [2] C. M. Bishop, "Pattern Recognition and Machine Learning", Springer (2006), 4.4
+   (the Laplace approximation).
+"""
+
+from __future__ import annotations
+
+from numbers import Integral, Real
+
+import numpy as np
+import pandas as pd
+from sklearn.base import BaseEstimator, RegressorMixin
+
+from ..config import ScenarioConfig, resolve_config
+from ..constants import LED_REFERENCE_TEMPERATURE_C
+from ..dataset import Dataset
+from ..exceptions import ConfigError, DataError, unknown_name
+from ..optics.forward import FORWARD_MODELS
+from ..simulate.physiology import melanin_fraction_from_fitzpatrick, subcutis_fat_fraction
+from ._base import SchemaJsonMixin, fit_input, predict_input
+from ._checks import require_fitted
+from ._inversion_solver import NUISANCES, ForwardModel, map_estimate, posterior_variance
+from .registry import register
+
+__all__ = ["PhysicsInversion", "START_SD", "prior_start"]
+
+#: Prior standard deviation of each nuisance before the empirical-Bayes updates (an
+#: assumption: about a quarter of each one's population spread in SOURCES.md's layer
+#: table -- blood 1-5 %, saturation 0.6-0.8, water 0.6-0.7, fat 0.7-0.9, melanin
+#: 0.01-0.15, dermis 0.5-3 mm -- an LED shift of about 3 degC at 0.3 nm/degC, and a 3 %
+#: coupling). The fit replaces them by what the training rows support.
+START_SD = {
+    "log_blood_fraction": 0.5,
+    "saturation": 0.05,
+    "water_fraction": 0.03,
+    "subcutis_fat_fraction": 0.05,
+    "melanin_fraction": 0.02,
+    "skin_thickness_mm": 0.3,
+    "led_shift_nm": 1.0,
+    "log_coupling": 0.03,
+}
+#: Smallest prior width the updates may reach, as a share of :data:`START_SD` (keeps
+#: the whitened problem well conditioned). [-]
+_SD_FLOOR = 1e-3
+#: Ridge penalty of the prior-mean correction, on standardised physiology. [-]
+_PRIOR_RIDGE = 1.0
+#: Variance floor added to the residual covariance's diagonal (a 12-bit code's
+#: quantisation at mid-scale, (1/2048)^2 / 12, as the oracle). [-]
+_VAR_FLOOR = 2e-8
+_LN10 = np.log(10.0)
+#: Over-relaxation of the widths' EM update in log space (1: plain EM). [-]
+_OVERRELAX = 2.0
+
+
+def _column(schema, phys: np.ndarray, name: str):
+    """A measured physiological column, or None where the device does not record it."""
+    return phys[:, schema.physiology.index(name)] if name in schema.physiology else None
+
+
+def _led_shift_start_nm(cfg: ScenarioConfig, skin_c) -> np.ndarray | float:
+    """Expected LED peak shift from the skin temperature. [nm]
+
+    Ambient from the skin's documented response to it (``physiology.skin_temp_*``,
+    inverted), the junction ``hardware.led_self_heating_c`` above ambient, and the
+    datasheet coefficient ``hardware.led_wavelength_shift_nm_per_c`` about the 25 degC
+    reference (:func:`nirglucose.simulate.hardware.led_peak_shift_nm`), scaled by the
+    scenario's ``led_wavelength_shift`` switch.
+    """
+    p, hw = cfg.physiology, cfg.hardware
+    if skin_c is None:
+        ambient_c = p.skin_temp_ambient_ref_c
+    else:
+        ambient_c = p.skin_temp_ambient_ref_c + (skin_c - p.skin_temp_c_neutral) / max(
+            p.skin_temp_per_ambient, 1e-6
+        )
+    led_c = ambient_c + hw.led_self_heating_c
+    factor = cfg.noise_factor("led_wavelength_shift")
+    return factor * hw.led_wavelength_shift_nm_per_c * (led_c - LED_REFERENCE_TEMPERATURE_C)
+
+
+def prior_start(cfg: ScenarioConfig, schema, phys: np.ndarray) -> np.ndarray:
+    """The physical start of each nuisance's prior mean from the measured columns.
+
+    Each from the scenario's documented relations (:mod:`nirglucose.simulate.physiology`,
+    :mod:`nirglucose.simulate.measurement`) and population values where the device
+    does not measure it: PPG ``blood_volume_pct`` (else ``physiology.blood_fraction_median``)
+    and ``spo2_pct`` (else ``physiology.saturation_mean``); water =
+    ``physiology.water_fraction_nominal`` x hydration / 100; fat from BMI
+    (:func:`~nirglucose.simulate.physiology.subcutis_fat_fraction`); melanin as measured
+    (else the middle of the Fitzpatrick type's range); skin thickness as measured (else
+    ``physiology.skin_thickness_mm_mean``); LED shift from skin temperature; coupling 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, len(NUISANCES)) in the units of :data:`NUISANCES`.
+    """
+    p = cfg.physiology
+    n = len(phys)
+
+    def col(name, default):
+        v = _column(schema, phys, name)
+        return np.full(n, float(default)) if v is None else np.asarray(v, float)
+
+    blood = col("blood_volume_pct", 100.0 * p.blood_fraction_median) / 100.0
+    bmi = col("bmi_kgm2", p.bmi_kgm2_mean)
+    fitz = col("fitzpatrick_type", p.nominal_fitzpatrick_type)
+    melanin_default = melanin_fraction_from_fitzpatrick(np.clip(np.rint(fitz), 1, 6), 0.5)
+    melanin = _column(schema, phys, "melanin_fraction")
+    fat_args = (p.subcutis_fat_fraction_min, p.subcutis_fat_fraction_rise, p.subcutis_fat_bmi_kgm2)
+    out = np.column_stack(
+        [
+            np.log(np.maximum(blood, 1e-4)),
+            col("spo2_pct", 100.0 * p.saturation_mean) / 100.0,
+            p.water_fraction_nominal * col("hydration_pct", 100.0) / 100.0,
+            subcutis_fat_fraction(bmi, *fat_args),
+            melanin_default if melanin is None else melanin,
+            col("skin_thickness_mm", p.skin_thickness_mm_mean),
+            np.broadcast_to(_led_shift_start_nm(cfg, _column(schema, phys, "skin_temp_c")), n),
+            np.zeros(n),
+        ]
+    )
+    return out
+
+
+def _scenario(X, schema) -> ScenarioConfig:
+    """The scenario of a Dataset, else the ``paper`` preset when its LEDs are the device's."""
+    cfg = X.config if isinstance(X, Dataset) else None
+    if cfg is None:
+        cfg = resolve_config("paper")
+    leds = tuple(float(w) for w in cfg.leds.wavelengths_nm)
+    if leds != tuple(schema.wavelengths_nm):
+        raise DataError(
+            f"physics-inversion needs the device's optics: the data's LEDs {schema.labels} "
+            f"are not the scenario's {leds}; pass the Dataset (with its config)"
+        )
+    return cfg
+
+
+def _check_choice(name: str, value, valid) -> None:
+    if value not in valid:
+        raise ConfigError(unknown_name(name, value, valid))
+
+
+@register("physics-inversion")
+class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
+    """Forward-model inversion for glucose and the unmeasured nuisances (MAP).
+
+    See the module docstring for the model, what it learns and from what.
+
+    Parameters
+    ----------
+    forward_model : {'beer-lambert', 'diffusion', 'rte-lut'}
+        The forward model assumed (need not be the one that made the data).
+    prior_scale : float
+        Multiplies every nuisance's learned prior width at prediction (1: as learned;
+        larger trusts the measured columns less). [-]
+    n_em : int
+        Empirical-Bayes rounds in ``fit`` (0: the physical start and unit gains). [-]
+    max_iter : int
+        Levenberg-Marquardt iterations at most per solve. [-]
+
+    Attributes
+    ----------
+    schema_ : DeviceSchema
+        The fitted device.
+    config_ : ScenarioConfig
+        The scenario whose optics are assumed.
+    offset_, gain_ : numpy.ndarray
+        (k,) per-channel calibration a, b of ln(adc / adc_ref). [-]
+    noise_cov_ : numpy.ndarray
+        (k, k) residual covariance S. [-]
+    prior_coef_ : numpy.ndarray
+        (len(NUISANCES), 1 + m) correction of each prior mean, linear in the
+        standardised physiology. [nuisance units]
+    prior_sd_ : numpy.ndarray
+        (len(NUISANCES),) learned prior widths. [nuisance units]
+    x_mean_, x_scale_ : numpy.ndarray
+        (m,) standardisation of the physiology.
+    glucose_mean_, glucose_var_ : float
+        Prior of glucose: [mg/dL] and [(mg/dL)^2].
+
+    Examples
+    --------
+    >>> import nirglucose as ng
+    >>> ds = ng.simulate("paper", 20, 3, seed=0)
+    >>> PhysicsInversion().fit(ds).predict(ds).shape
+    (60,)
+    """
+
+    _STATE = {
+        "schema_": "json",
+        "config_": "json",
+        "offset_": (-1,),
+        "gain_": (-1,),
+        "noise_cov_": (-1, -1),
+        "prior_coef_": (len(NUISANCES), -1),
+        "prior_sd_": (len(NUISANCES),),
+        "x_mean_": (-1,),
+        "x_scale_": (-1,),
+        "glucose_mean_": None,
+        "glucose_var_": None,
+    }
+
+    def __init__(
+        self,
+        forward_model: str = "beer-lambert",
+        prior_scale: float = 1.0,
+        n_em: int = 30,
+        max_iter: int = 30,
+    ):
+        self.forward_model = forward_model
+        self.prior_scale = prior_scale
+        self.n_em = n_em
+        self.max_iter = max_iter
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _require_fitted(self) -> None:
+        require_fitted(self, "offset_")
+
+    def _check_params(self) -> None:
+        _check_choice("forward model", self.forward_model, FORWARD_MODELS)
+        ps = self.prior_scale
+        if isinstance(ps, bool) or not isinstance(ps, Real) or not (0 < ps < np.inf):
+            raise ConfigError(f"prior_scale must be a positive number, got {ps!r}")
+        for name, lo in (("n_em", 0), ("max_iter", 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, Integral) or v < lo:
+                raise ConfigError(f"{name} must be an integer >= {lo}, got {v!r}")
+
+    def _state_dict(self):
+        cfg = self.config_
+        self.__dict__["config_"] = cfg.model_dump(mode="json")
+        try:
+            return super()._state_dict()
+        finally:
+            self.__dict__["config_"] = cfg
+
+    def _restore(self) -> None:
+        self._restore_schema()
+        if isinstance(self.config_, dict):
+            try:
+                self.config_ = ScenarioConfig.model_validate(self.config_)
+            except ValueError as exc:
+                raise DataError(f"the saved model's scenario config is invalid: {exc}") from None
+        self.glucose_mean_ = float(self.glucose_mean_)
+        self.glucose_var_ = float(self.glucose_var_)
+        self.forward_ = ForwardModel(self.config_, self.forward_model)
+
+    def _design(self, phys: np.ndarray) -> np.ndarray:
+        """(n, 1 + m): a constant and the standardised physiology."""
+        return np.column_stack([np.ones(len(phys)), (phys - self.x_mean_) / self.x_scale_])
+
+    def _observed(self, Xa: np.ndarray):
+        """ln(adc / adc_ref) per LED (-ln 10 x absorbance) and the physiology."""
+        m = self.schema_.split(Xa)
+        return -_LN10 * m.absorbance, m.physiology
+
+    def _prior(self, phys: np.ndarray, glucose=None):
+        """(mean, sd), each (n, 1 + len(NUISANCES)): glucose first (its reference value
+        and any sd where given), then the nuisances."""
+        n = len(phys)
+        nuis = prior_start(self.config_, self.schema_, phys)
+        nuis += self._design(phys) @ self.prior_coef_.T
+        g = np.full(n, self.glucose_mean_) if glucose is None else glucose
+        mean = np.column_stack([g, nuis])
+        sd = np.concatenate([[np.sqrt(self.glucose_var_)], self.prior_sd_])
+        return mean, np.broadcast_to(sd, mean.shape).copy()
+
+    def _root_w(self) -> np.ndarray:
+        return np.linalg.cholesky(np.linalg.inv(self.noise_cov_)).T
+
+    # ------------------------------------------------------------------ fit
+
+    def fit(self, X, y=None, groups=None):
+        """Learn the calibration, noise, priors and glucose prior from training rows.
+
+        Parameters
+        ----------
+        X : Dataset or pandas.DataFrame
+            Readings of a device with ADC (and reference) codes and physiology; a
+            Dataset's config gives the optics (a frame is read with the ``paper``
+            preset's, which must have the same LEDs).
+        y : array_like, optional
+            Reference glucose; ``glucose_mgdl`` when omitted. [mg/dL]
+        groups : array_like, optional
+            Subject ids (checked by the fitting-size policy only).
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        self.schema_, Xa, y, _ = fit_input(self, X, y, groups)
+        if self.schema_.is_plain:
+            raise DataError(
+                "physics-inversion needs a device's ADC columns (adc_<nm>), not a plain array"
+            )
+        self.config_ = _scenario(X, self.schema_)
+        self.forward_ = ForwardModel(self.config_, self.forward_model)
+        obs, phys = self._observed(Xa)
+        self.x_mean_ = phys.mean(axis=0)
+        sc = phys.std(axis=0)
+        self.x_scale_ = np.where(sc > 0, sc, 1.0)
+        self.glucose_mean_ = float(y.mean())
+        self.glucose_var_ = float(max(y.var(ddof=1), 1.0))
+        self.prior_coef_ = np.zeros((len(NUISANCES), 1 + phys.shape[1]))
+        self.prior_sd_ = np.array([START_SD[n] for n in NUISANCES])
+        mean, _ = self._prior(phys, y)
+        self._calibrate(obs, self.forward_.log_ratio(y, mean[:, 1:]))
+        free = np.array([False] + [True] * len(NUISANCES))
+        for _ in range(int(self.n_em)):
+            self._em_round(obs, phys, y, free)
+        self._restore_schema()
+        return self
+
+    def _calibrate(self, obs: np.ndarray, model: np.ndarray, edf: float = 0.0) -> None:
+        """Per channel, least squares obs = a + b model; S from what remains, divided
+        by the share of the n k residual degrees of freedom the modes left free (``edf``
+        parameters fitted in all; Hastie et al. 2009, Eq. 7.5)."""
+        mc = model - model.mean(axis=0)
+        var = (mc**2).mean(axis=0)
+        cross = (mc * (obs - obs.mean(axis=0))).mean(axis=0)
+        b = np.where(var > 0, cross / np.where(var > 0, var, 1.0), 1.0)
+        a = obs.mean(axis=0) - b * model.mean(axis=0)
+        resid = obs - a - b * model
+        k = obs.shape[1]
+        cov = np.atleast_2d(np.cov(resid, rowvar=False)) if len(obs) > 1 else np.zeros((k, k))
+        self.offset_, self.gain_ = a, b
+        dof = obs.size / max(obs.size - edf - 2 * k, 0.1 * obs.size)
+        self.noise_cov_ = dof * cov + _VAR_FLOOR * np.eye(k)
+
+    def _em_round(self, obs, phys, y, free) -> None:
+        """One empirical-Bayes round at the known glucose: modes, then priors and
+        calibration refitted to them (Dempster et al. 1977, with the Laplace posterior)."""
+        mean, sd = self._prior(phys, y)
+        calib = (self.offset_, self.gain_)
+        root_w = self._root_w()
+        theta, m = map_estimate(
+            self.forward_, obs, calib, root_w, mean, sd, free=free, max_iter=self.max_iter
+        )
+        post, edf = posterior_variance(
+            self.forward_, obs, calib, root_w, mean, sd, theta, free=free
+        )
+        start = prior_start(self.config_, self.schema_, phys)
+        D = self._design(phys)
+        target = theta[:, 1:] - start
+        pen = _PRIOR_RIDGE * np.eye(D.shape[1])
+        pen[0, 0] = 0.0  # the intercept is not shrunk
+        coef = np.linalg.solve(D.T @ D + pen, D.T @ target)  # (1 + m, n_nuis)
+        resid = target - D @ coef
+        var = (resid**2).mean(axis=0) + post[:, 1:].mean(axis=0)
+        start_sd = np.array([START_SD[n] for n in NUISANCES])
+        self.prior_coef_ = coef.T
+        # never wider than the population's spread, never narrower than the floor
+        # over-relaxed in log sd (Salakhutdinov & Roweis 2003, ICML, "Adaptive
+        # overrelaxed bound optimization methods"): EM shrinks a width slowly where
+        # the data leave little to explain
+        log_sd = np.log(self.prior_sd_) + _OVERRELAX * (0.5 * np.log(var) - np.log(self.prior_sd_))
+        self.prior_sd_ = np.clip(np.exp(log_sd), _SD_FLOOR * start_sd, start_sd)
+        self._calibrate(obs, m, float(edf.sum()))
+
+    # ------------------------------------------------------------------ predict
+
+    def estimate_state(self, X) -> pd.DataFrame:
+        """Each reading's estimated glucose [mg/dL] and nuisances (:data:`NUISANCES`,
+        blood fraction and coupling as values, not logs), as a DataFrame."""
+        self._require_fitted()
+        self._check_params()
+        obs, phys = self._observed(predict_input(self, X))
+        mean, sd = self._prior(phys)
+        sd[:, 1:] *= float(self.prior_scale)
+        theta, _ = map_estimate(
+            self.forward_, obs, (self.offset_, self.gain_), self._root_w(), mean, sd,
+            free=np.ones(mean.shape[1], bool), max_iter=self.max_iter,
+        )
+        out = pd.DataFrame(theta[:, 1:], columns=list(NUISANCES))
+        out.insert(0, "glucose_mgdl", theta[:, 0])
+        out["blood_fraction"] = np.exp(out.pop("log_blood_fraction"))
+        out["coupling"] = np.exp(out.pop("log_coupling"))
+        return out
+
+    def predict(self, X) -> np.ndarray:
+        """Glucose of each reading: the posterior mode. [mg/dL]"""
+        return self.estimate_state(X)["glucose_mgdl"].to_numpy()
+
+    @property
+    def n_parameters(self) -> int:
+        """Numbers learned from the training rows: calibration, noise covariance, prior
+        corrections and widths, standardisation and the glucose prior."""
+        self._require_fitted()
+        k = len(self.offset_)
+        return 2 * k + k * (k + 1) // 2 + self.prior_coef_.size + self.prior_sd_.size + (
+            2 * self.x_mean_.size + 2
+        )
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.non_deterministic = False
+        return tags
