@@ -264,7 +264,8 @@ def _best_finding(run: RunData) -> Finding | None:
         for t in tied:
             vals.append(run.metric(t, "rmse_mgdl"))
             names.append(f"{label(t)} {{}}")
-        text += ("{} competitor(s) are not distinguishable from it (paired cluster bootstrap "
+        text += ("{} " + ("competitor is" if len(tied) == 1 else "competitors are")
+                 + " not distinguishable from it (paired cluster bootstrap "
                  "over subjects, Holm-adjusted p ≥ 0.05): " + ", ".join(names) + " mg/dL")
         if unadj:
             vals.append(Value(len(unadj), 0, (f"{p}/comparisons.csv:vs_best:ci_excludes_0",),
@@ -415,8 +416,23 @@ def _physics_findings(run: RunData) -> list[Finding]:
     if not verdicts:
         return []
     off = [v for v in verdicts if not v["tested"]]
-    out = []
     anchor = f"ablation-{p}"
+    tested = [v for v in verdicts if v["tested"]]
+    src = f"{p}/ablation.csv"
+    summary = (f"Does physics help on {p}? Of {{}} physics-informed networks, {{}} "
+               "had their physics tested against the same network without it")
+    vals = [Value(len(verdicts), 0, (f"{src}:rows",), op="count"),
+            Value(len(tested), 0, (f"{src}:tested",), op="count")]
+    if tested:
+        vals += [Value(sum(v["verdict"] == "physics helps" for v in tested), 0,
+                       (f"{src}:helps",), op="count"),
+                 Value(sum(v["verdict"] == "physics hurts" for v in tested), 0,
+                       (f"{src}:hurts",), op="count")]
+        summary += ("; it helps significantly in {} and hurts significantly in {} of them "
+                    "(Holm-adjusted)")
+    else:
+        summary += ": the question is not asked on this preset"
+    out = [Finding("physics", p, summary + ".", tuple(vals), anchor)]
     if off:
         names = ", ".join(label(v["model"]) for v in off)
         out.append(Finding("physics", p, (
@@ -435,9 +451,13 @@ def _physics_findings(run: RunData) -> list[Finding]:
                 Value(float(r["ci_high"]), 2, (f"{src}:ci_high",), sign=True),
                 Value(float(r["p_holm"]), 3, (f"{src}:p_holm",)))
         lam_txt = " (tuned λ = {})" if vals[0] is not None else ""
+        unadj = (v["verdict"] == "no significant difference"
+                 and (float(r["ci_low"]) > 0 or float(r["ci_high"]) < 0))
         out.append(Finding("physics", p, (
             f"Physics on {p}, {label(m)}{lam_txt}: with minus without physics Δ RMSE "
-            f"{{}} mg/dL [95 % CI {{}}, {{}}], Holm-adjusted p = {{}}: {v['verdict']}."),
+            f"{{}} mg/dL [95 % CI {{}}, {{}}], Holm-adjusted p = {{}}: {v['verdict']}"
+            + (" (the unadjusted CI excludes 0; the Holm adjustment over the PINNs does not "
+               "confirm it)" if unadj else "") + "."),
             tuple(x for x in vals if x is not None), anchor))
     return out
 

@@ -12,13 +12,21 @@ from __future__ import annotations
 
 import base64
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from ..evaluation.findings import Finding, RunData, Value, compute_findings, headline_table
-from .html import _esc
+from ..evaluation.findings import (
+    Finding,
+    RunData,
+    Value,
+    best_and_tied,
+    compute_findings,
+    headline_table,
+)
+from ..evaluation.subgroups import subgroup_findings
+from .html import _esc, preset_of
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -39,12 +47,6 @@ ANCHOR_NAMES = {
     "run-info": "provenance",
     "subgroups": "subgroups",
 }
-
-
-def preset_of(results: Results) -> str:
-    """The preset name of a run (its directory's name when none is recorded)."""
-    p = results.meta.get("preset")
-    return str(p) if p not in (None, "", "None") else results.directory.name or "run"
 
 
 def run_data(results: Results) -> RunData:
@@ -159,7 +161,8 @@ def _distance_html(dist: pd.DataFrame) -> str:
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
 
 
-def findings_section(runs: Sequence[Results], *, n_boot: int = 2000) -> str:
+def findings_section(runs: Sequence[Results], *, n_boot: int = 2000,
+                     subgroups: Mapping[str, pd.DataFrame] | None = None) -> str:
     """The findings section: sentences, the headline figure, the distances table.
 
     Parameters
@@ -168,6 +171,9 @@ def findings_section(runs: Sequence[Results], *, n_boot: int = 2000) -> str:
         One loaded run per preset, the primary first.
     n_boot : int
         Resamples of the paired comparisons with no skill. [-]
+    subgroups : mapping of str to pandas.DataFrame, optional
+        Each preset's subgroup errors (:func:`nirglucose.report.subgroups.subgroup_tables`):
+        a finding per grouping on the best model.
 
     Returns
     -------
@@ -176,6 +182,10 @@ def findings_section(runs: Sequence[Results], *, n_boot: int = 2000) -> str:
     """
     data = [run_data(r) for r in runs]
     findings, dist = compute_findings(data, n_boot=n_boot)
+    for run in data:
+        table = (subgroups or {}).get(run.preset)
+        if table is not None:
+            findings[-1:-1] = subgroup_findings(run.preset, best_and_tied(run)[0], table)
     if not findings:
         return ""
     items = "\n".join(finding_html(f) for f in findings)

@@ -66,6 +66,23 @@ pre { background: #f6f8fa; padding: .7rem; overflow-x: auto; font-size: 12px; }
 code { font-family: ui-monospace, "DejaVu Sans Mono", monospace; font-size: .92em; }
 details summary { cursor: pointer; color: var(--accent); }
 .sig { color: #D55E00; font-weight: 600; }
+section#findings ul.findings li { margin: .3rem 0; }
+span.v { border-bottom: 1px dotted var(--muted); }
+a.ev { font-size: .85em; white-space: nowrap; }
+td.untested { color: var(--muted); font-style: italic; text-align: center; }
+details.more { margin: -.4rem 0 1rem; }
+@media print {
+  @page { size: A4; margin: 10mm; }
+  body { max-width: none; padding: 0; font-size: 10px; }
+  details > * { display: block; }
+  details::details-content { content-visibility: visible; display: contents; }
+  .scroll { overflow: visible; }
+  table { font-size: 7px; width: 100%; }
+  th, td { white-space: normal; padding: .1rem .2rem; }
+  figure { break-inside: avoid; }
+  figure img { max-width: 100%; }
+  nav ul.figs { columns: 2; }
+}
 """
 
 # (metrics column, ci stem, study column, header, digits)
@@ -424,6 +441,9 @@ def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Seq
     items += [("table", "Reproduced table"), ("further", "Further metrics"),
               ("significance", "Significance")]
     items += [(a, t) for a, t in _MIDDLE_CONTENTS if have(middle, a)]
+    if not have(middle, "ablations"):  # one preset: its own ablation heading
+        items += [(m.group(1), "Physics ablation") for x in middle
+                  for m in re.finditer(r'<h3 id="(ablation-[^"]+)"', x)]
     items += [("run", "Configuration and provenance"), ("figures", "Figures")]
     items += [(m.group(1), html.unescape(m.group(2))) for x in extra
               for m in re.finditer(r'<h2 id="([^"]+)">([^<]+)</h2>', x)]
@@ -570,7 +590,11 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     # several presets: the ablations are shown side by side in the presets section
     middle = ([presets_section(runs)] if len(runs) > 1 else
               [ablation_section(primary, preset=preset_of(results))])
-    top = [] if results.user_data else [findings_section(runs)]
+    from .subgroups import subgroup_tables, subgroups_section
+
+    groups = subgroup_tables(runs)
+    middle.append(subgroups_section(runs, groups))
+    top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:])
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))

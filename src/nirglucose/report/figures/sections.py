@@ -192,6 +192,12 @@ def _section_pipeline(page: _Page) -> None:
         return
     page.add("pipeline", "Data-generation pipeline", _pipeline_caption(cfg),
              lambda: _figure_pipeline(pipeline, cfg, plot_style))
+    for peer in page.peers:  # every preset's device, not only the primary's
+        pcfg = peer.config
+        if pcfg is not None:
+            page.add(f"pipeline_{pcfg.preset}", f"Data-generation pipeline on {pcfg.preset}",
+                     _pipeline_caption(pcfg),
+                     lambda pcfg=pcfg: _figure_pipeline(pipeline, pcfg, plot_style))
 
 
 def _pipeline_caption(cfg) -> str:
