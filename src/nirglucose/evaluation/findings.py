@@ -502,7 +502,7 @@ def _claims_findings(run: RunData) -> list[Finding]:
                 Value(cl["n_pairs"], 0, (f"{src}:rows",), op="count"),
                 Value(cl["n_hold_sig"], 0, (f"{src}:study_holds&significant",), op="count")]
         text = (
-            f"On {p}, {{}} of the study's {{}} pairwise RMSE orderings of its six models hold, "
+            f"On {p}, {{}} of the study's {{}} pairwise RMSE orderings hold, "
             f"{{}} of them significantly (paired, Holm-adjusted)")
         rev = cl["reversed_sig"]
         if rev:

@@ -419,7 +419,7 @@ def _figure_html(f: RenderedFigure) -> str:
         return f'<figure id="{anchor}">{note}<figcaption>{cap}</figcaption></figure>'
     data = base64.b64encode(f.png).decode("ascii")
     return (f'<figure id="{anchor}"><img src="data:image/png;base64,{data}" '
-            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}">{note}'
+            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}. {_esc(f.caption)}">{note}'
             f"<figcaption>{cap}</figcaption></figure>")
 
 
