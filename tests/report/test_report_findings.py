@@ -240,3 +240,47 @@ def test_subgroup_tables(preset_report, by):
         i = text.index(f'id="subgroups-{preset}-{by}"')
         table = text[i:text.index("</table>", i)]
         assert re.search(r"<td>\d+\.\d \[\d+\.\d, \d+\.\d\]</td>", table)
+
+
+def test_bland_altman_limits_are_the_tables(preset_results):
+    """One definition: the figure's bias and limits are per repeat, averaged (as metrics)."""
+    from nirglucose.metrics import summary
+    from nirglucose.report.figures import bland_altman_inputs
+
+    p = pd.read_parquet(preset_results / "wearable" / "predictions.parquet")
+    ba = bland_altman_inputs(p, ["ebl", "sdnn"])
+    for m in ("ebl", "sdnn"):
+        per = [summary(g["reference_mgdl"], g["scored_mgdl"])
+               for _, g in p[p["model"] == m].groupby("repeat")]
+        for key, col in (("bias", "bias_mgdl"), ("loa_low", "loa_low_mgdl"),
+                         ("loa_high", "loa_high_mgdl")):
+            assert math.isclose(ba[m][key], sum(s[col] for s in per) / len(per),
+                                rel_tol=1e-12), (m, key)
+
+
+def test_latency_inside_timing_noise_ranks_nothing():
+    from nirglucose.report.figures import efficiency_table, radar_scores
+    from nirglucose.report.figures.inputs import latency_resolution
+
+    a = pd.DataFrame({"model": ["ebl", "pls", "sdnn"], "rmse_mgdl": [14.0, 20.0, 15.0],
+                      "n_parameters": [67, 19, 3809],
+                      "latency_single_ms": [0.12, 0.055, 0.07]})
+    b = a.assign(latency_single_ms=[0.044, 0.050, 0.066])  # the same models, another run
+    res = latency_resolution(a, [b])
+    assert not res["resolved"] and math.isclose(res["noise"], 0.12 / 0.044)
+    assert "latency" not in radar_scores(a, list(a["model"]), latency=False).columns
+    eff = efficiency_table(a, list(a["model"]), latency=False)
+    assert eff["front_latency"].tolist() == [True, False, False]  # only the most accurate
+    # a spread far beyond the noise is resolved
+    c = a.assign(latency_single_ms=[0.1, 10.0, 0.1])
+    assert latency_resolution(c, [c])["resolved"]
+
+
+def test_every_preset_gets_its_training_and_pipeline_figures(preset_report):
+    text = preset_report.read_text(encoding="utf-8")
+    for key in ("fig-training", "fig-training_wearable", "fig-pipeline",
+                "fig-pipeline_wearable"):
+        assert f'<figure id="{key}"><img' in text, key
+    i = text.index('<figure id="fig-training_wearable">')
+    cap = text[i:text.index("</figure>", i)]
+    assert "validation (dashed)" in cap and "no validation split" not in cap

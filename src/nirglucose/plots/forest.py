@@ -210,6 +210,8 @@ def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, f
                           mew=1.3, label=HEADLINE_STATUS["worse"]),
                    Line2D([], [], ls="--", color=GREY, label="no skill (training mean)"),
                    Line2D([], [], ls=":", color="black", label="oracle (true nuisances, a bound)")]
+        if not (table["status"] != "").any():  # no comparisons: no status to show
+            handles = handles[3:]
         fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=7.5,
                    frameon=False)
     return fig

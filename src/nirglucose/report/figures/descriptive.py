@@ -203,7 +203,7 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
         on, off = noise.setdefault(layer, ([], []))
         name = src.replace("_", " ")
         if state == "on":
-            on.append(f"{name} ({note})" if note else name)
+            on.append(f"{name} ({note})" if note else name)  # note: factor, compensation
         else:
             off.append(f"{name} ({note})")
 
