@@ -86,6 +86,25 @@ def finding_html(f: Finding) -> str:
             f'<a class="ev" href="#{_esc(f.anchor)}">→ {_esc(_anchor_name(f.anchor))}</a></li>')
 
 
+#: Heading of each topic of the findings, in reading order.
+TOPIC_TITLES = {
+    "best": "Best model", "distance": "Distance from no skill and from the oracle",
+    "physics": "Does physics help?", "claims": "The study's claims",
+    "presets": "What separates the presets", "range": "Glucose range",
+    "subgroups": "Subgroups", "subjects": "Sample size",
+}
+
+
+def _grouped(findings: Sequence[Finding]) -> str:
+    """The findings as one short list per topic, topics in :data:`TOPIC_TITLES` order."""
+    topics = [t for t in TOPIC_TITLES if any(f.topic == t for f in findings)]
+    topics += [t for t in dict.fromkeys(f.topic for f in findings) if t not in topics]
+    return "".join(
+        f'<h4>{_esc(TOPIC_TITLES.get(t, t))}</h4><ul class="findings">'
+        + "".join(finding_html(f) for f in findings if f.topic == t) + "</ul>"
+        for t in topics)
+
+
 def _headline_html(runs: Sequence[RunData]) -> str:
     from ..plots.forest import figure_headline
     from ..plots.style import figure_bytes
@@ -188,9 +207,9 @@ def findings_section(runs: Sequence[Results], *, n_boot: int = 2000,
             findings[-1:-1] = subgroup_findings(run.preset, best_and_tied(run)[0], table)
     if not findings:
         return ""
-    items = "\n".join(finding_html(f) for f in findings)
+    items = _grouped(findings)
     return ('<section id="findings"><h2>Findings</h2><p class="sub">Computed from this '
             "run's results files: every number links (hover) to the file, row and column "
             "it was read from, and every sentence to the figure or table behind it.</p>"
-            f'<ul class="findings">{items}</ul>{_headline_html(data)}{_distance_html(dist)}'
+            f"{items}{_headline_html(data)}{_distance_html(dist)}"
             "</section>")
