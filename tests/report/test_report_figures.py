@@ -168,8 +168,8 @@ def test_pipeline_noise_follows_the_device():
     n_on = sum(s == "on" for s, _ in states.values())
     cap = _pipeline_caption(resolve_config("paper"))
     assert f"{n_on} of {len(states)} noise sources act" in cap and n_on < len(states)
-    assert "exact (equal to the truth)" in cap and "device.physiology = exact" in cap
-    assert "measured (with the instruments' errors)" in _pipeline_caption(
+    assert "exact: it equals the truth" in cap and "device.physiology = exact" in cap
+    assert "measured: it carries the instruments' errors" in _pipeline_caption(
         resolve_config("wearable"))
 
 

@@ -205,8 +205,8 @@ def _pipeline_caption(cfg) -> str:
     states = noise_states(cfg)
     n = {k: sum(1 for s, _ in states.values() if s == k) for k in ("on", "neutralised", "off")}
     neut = [src.replace("_", " ") for src, (s, _) in states.items() if s == "neutralised"]
-    how = "exact (equal to the truth)" if cfg.device.physiology == "exact" else \
-        "measured (with the instruments' errors)"
+    how = "exact: it equals the truth" if cfg.device.physiology == "exact" else \
+        "measured: it carries the instruments' errors"
     return (f"The simulator's layers for preset '{cfg.preset}', left to right in the order "
             f"applied, with the '{cfg.optics.model}' forward model: {n['on']} of "
             f"{len(states)} noise sources act on the readings (✓, with their factor when not "
