@@ -378,7 +378,7 @@ def _training_figure(page: _Page, res: Results, key: str, title: str) -> None:
                 "physics terms are in their own squared residual units. "
                 + ("The validation curves are on the rows each fit held out for early "
                    "stopping (val_fraction of its training rows). " if has_val else
-                   "These fits used no validation split (tuned val_fraction = 0), so there "
+                   "These fits recorded no validation loss (no validation split), so there "
                    "are no validation curves. ")
                 + "The physics-ablation refits are left out: their physics weight is 0, so "
                 "their total is their MSE.") if hist else
