@@ -57,3 +57,42 @@ def test_forest_every_row_has_a_visible_marker():
         assert line.get_marker() in Line2D.filled_markers, (model, line.get_marker())
         assert line.get_markersize() >= 5, model
         assert line.get_markeredgecolor() != line.get_markerfacecolor(), model
+
+
+def _headline_table():
+    from nirglucose.evaluation.findings import headline_table  # noqa: F401 (the producer)
+
+    rows = []
+    for preset, vals in (("paper", {"gp": 4.0, "ebl": 13.6, "pls": 25.0}),
+                         ("wearable", {"gp": 48.7, "ebl": 45.5, "pls": 50.8})):
+        best = min(vals, key=vals.get)
+        for m, v in vals.items():
+            rows.append({"preset": preset, "model": m, "rmse_mgdl": v, "rmse_ci_low": v - 2,
+                         "rmse_ci_high": v + 2, "status": "best" if m == best else
+                         ("tied" if preset == "wearable" else "worse")})
+    return pd.DataFrame(rows), {"paper": {"mean": 56.5, "oracle": 0.8},
+                                "wearable": {"mean": 56.5, "oracle": 11.0}}
+
+
+def test_headline_one_panel_per_preset_with_reference_lines():
+    from nirglucose.plots.forest import figure_headline
+    from nirglucose.plots.style import model_color
+
+    table, refs = _headline_table()
+    fig = figure_headline(table, refs)
+    axes = [a for a in fig.axes if a.containers]
+    assert [a.get_title() for a in axes] == ["preset: paper", "preset: wearable"]
+    for ax, preset in zip(axes, ("paper", "wearable"), strict=True):
+        assert len(ax.containers) == 3  # one error bar per model
+        xs = sorted(line.get_xdata()[0] for line in ax.lines if line.get_linestyle() in
+                    ("--", ":"))
+        assert xs == sorted(refs[preset].values())  # no skill and oracle of this preset
+    # rows sorted by the first preset's RMSE, shared by both panels
+    assert [t.get_text() for t in axes[0].get_yticklabels()][0] == "Gaussian process (ARD)"
+    # colour per model as everywhere; open markers for the significantly worse
+    paper = axes[0]
+    for cont, model in zip(paper.containers, ["gp", "ebl", "pls"], strict=True):
+        line = cont.lines[0]
+        assert line.get_color() == model_color(model)
+        assert (line.get_markerfacecolor() == "white") == (model != "gp")
+    assert all(c.lines[0].get_markerfacecolor() != "white" for c in axes[1].containers)

@@ -21,3 +21,22 @@ def synthetic_report(synthetic_results, tmp_path_factory) -> Path:
 
     out = tmp_path_factory.mktemp("report")
     return build_report(synthetic_results, out / "report.html")
+
+
+@pytest.fixture(scope="session")
+def preset_results(tmp_path_factory) -> Path:
+    """A two-preset results directory (``paper`` with λ = 0, ``wearable`` with λ > 0)."""
+    from report_fixtures import write_preset_results
+
+    root = tmp_path_factory.mktemp("presets")
+    write_preset_results(root / "paper", "paper", lambda_phys=0.0, seed=0)
+    write_preset_results(root / "wearable", "wearable", lambda_phys=0.01, seed=1)
+    return root
+
+
+@pytest.fixture(scope="session")
+def preset_report(preset_results, tmp_path_factory) -> Path:
+    """The HTML report of :func:`preset_results`, built once per session."""
+    from nirglucose.report import build_report
+
+    return build_report(preset_results, tmp_path_factory.mktemp("preset-report") / "r.html")

@@ -20,7 +20,8 @@ from nirglucose.metrics import summary
 
 #: Models of the synthetic run: a linear one, a baseline, the bound, two networks.
 SYNTHETIC_MODELS = ("ebl", "pls", "oracle", "original-pinn", "sdnn")
-_NOISE_SD = {"ebl": 14.0, "pls": 20.0, "oracle": 5.0, "original-pinn": 16.0, "sdnn": 30.0}
+_NOISE_SD = {"ebl": 14.0, "pls": 20.0, "oracle": 5.0, "original-pinn": 16.0, "sdnn": 30.0,
+             "mean": 60.0, "original-pinn/no-physics": 18.0}
 _PARAMS = {"ebl": 56, "pls": 17, "oracle": 0, "original-pinn": 163_000, "sdnn": 3_713}
 _LATENCY = {"ebl": 0.02, "pls": 0.03, "oracle": 0.5, "original-pinn": 1.2, "sdnn": 0.4}
 _NETWORKS = ("original-pinn", "sdnn")
@@ -107,3 +108,73 @@ def write_synthetic_results(out: Path, *, models=SYNTHETIC_MODELS, networks=_NET
     imp.to_csv(out / "importance.csv", index=False)
     ds.save(out / "dataset.parquet")
     return out
+
+
+#: Models of the two-preset fixture: a linear model, the bound, no skill, a PINN and its
+#: ablation refit, a plain network.
+PRESET_TEST_MODELS = ("ebl", "oracle", "mean", "original-pinn", "original-pinn/no-physics",
+                      "sdnn")
+
+
+def write_preset_results(out: Path, preset: str, *, lambda_phys: float, seed: int = 0,
+                         n_subjects: int = 16, repeats: int = 2) -> Path:
+    """One preset's results directory as the benchmark writes it, statistics included.
+
+    Predictions are the reference plus noise; ``comparisons.csv`` and ``ablation.csv``
+    come from the package's own paired statistics
+    (:func:`nirglucose.evaluation.stats.compare_models`), ``meta.json`` records each
+    model's tuned parameters with the PINN's ``lambda_phys`` and the preset's
+    configuration. With ``lambda_phys == 0`` the ablation refit is the same fit (equal
+    predictions), as in the benchmark.
+    """
+    from nirglucose.evaluation.stats import compare_models
+
+    d = write_synthetic_results(out, models=PRESET_TEST_MODELS, networks=("original-pinn",),
+                                n_subjects=n_subjects, repeats=repeats, seed=seed)
+    preds = pd.read_parquet(d / "predictions.parquet")
+    if lambda_phys == 0:  # the same fit: the refit's predictions equal the model's
+        pinn = preds[preds["model"] == "original-pinn"]
+        preds.loc[preds["model"] == "original-pinn/no-physics", ["predicted_mgdl",
+                  "scored_mgdl"]] = pinn[["predicted_mgdl", "scored_mgdl"]].to_numpy()
+    preds.to_parquet(d / "predictions.parquet")
+    _rescore(d, preds)
+    vs_best = compare_models(preds, pred_col="scored_mgdl", n_boot=300, seed=seed)
+    vs_best.insert(0, "family", "vs_best")
+    study = compare_models(preds, pairs=[("original-pinn", "ebl"), ("sdnn", "ebl"),
+                                         ("sdnn", "original-pinn")],
+                           pred_col="scored_mgdl", n_boot=300, seed=seed)
+    study.insert(0, "family", "study_order")
+    study["study_holds"] = study["rmse_diff_mgdl"] > 0
+    pd.concat([vs_best, study], ignore_index=True).to_csv(d / "comparisons.csv", index=False)
+    abl = compare_models(preds, pairs=[("original-pinn", "original-pinn/no-physics")],
+                         pred_col="scored_mgdl", n_boot=300, seed=seed).rename(columns={
+                             "reference_model": "ablated_model",
+                             "reference_rmse_mgdl": "ablated_rmse_mgdl"})
+    abl["physics_helps"] = abl["rmse_diff_mgdl"] < 0
+    abl.drop(columns=["p_wilcoxon_holm"]).to_csv(d / "ablation.csv", index=False)
+    ds = ng.simulate(preset, n_subjects, 3, seed)
+    ds.save(d / "dataset.parquet")
+    meta = json.loads((d / "meta.json").read_text())
+    meta.update(preset=preset, config=json.loads(ds.config.to_json()),
+                model_params={"original-pinn": {"lambda_phys": lambda_phys},
+                              "original-pinn/no-physics": {"lambda_phys": 0.0}},
+                study_protocol={"n_test": 48, "per_subject": 3})
+    (d / "meta.json").write_text(json.dumps(meta))
+    return d
+
+
+def _rescore(d: Path, preds: pd.DataFrame) -> None:
+    """Rewrite metrics.csv/json from (edited) predictions, with the table's columns."""
+    metrics = pd.read_csv(d / "metrics.csv").set_index("model")
+    for m in metrics.index:
+        p = preds[preds["model"] == m]
+        s = summary(p["reference_mgdl"], p["scored_mgdl"])
+        for k, v in s.items():
+            if k in metrics.columns:
+                metrics.loc[m, k] = v
+    metrics["rmse_vs_oracle"] = metrics["rmse_mgdl"] / metrics.loc["oracle", "rmse_mgdl"]
+    metrics = metrics.reset_index()
+    metrics.to_csv(d / "metrics.csv", index=False)
+    doc = json.loads((d / "metrics.json").read_text())
+    doc["metrics"] = json.loads(metrics.to_json(orient="records"))
+    (d / "metrics.json").write_text(json.dumps(doc))

@@ -67,9 +67,80 @@ def test_every_image_loads_and_console_is_clean(driver, report, tmp_path):
         assert loaded and loaded > 0, img.get_attribute("alt")
     errors = [e for e in driver.get_log("browser") if e["level"] in ("SEVERE", "ERROR")]
     assert errors == []
-    assert driver.find_element(By.ID, "reproduced-table").is_displayed()
+    assert driver.find_element(By.ID, "reproduced-table-paper").is_displayed()
+    assert driver.find_element(By.ID, "findings").is_displayed()
     # no horizontal overflow: the page is no wider than the window (wide tables scroll
     # inside their own box)
     assert driver.execute_script(
         "return document.documentElement.scrollWidth <= window.innerWidth")
     assert driver.save_screenshot(str(tmp_path / "report.png"))
+
+
+#: The numbers of the findings that name one row and column of metrics.json, as the page
+#: holds them (read in the browser).
+_SPANS_JS = """
+return Array.from(document.querySelectorAll('#findings span.v')).map(s => ({
+  src: s.dataset.src, op: s.dataset.op, value: parseFloat(s.dataset.value),
+  digits: parseInt(s.dataset.digits), scale: parseFloat(s.dataset.scale),
+  text: s.textContent, visible: s.offsetWidth > 0}));
+"""
+
+
+def test_findings_numbers_equal_metrics_json(driver, preset_report, preset_results):
+    import json
+
+    driver.set_window_size(1400, 1000)
+    driver.get(preset_report.as_uri())
+    spans = driver.execute_script(_SPANS_JS)
+    assert spans and all(s["visible"] for s in spans)
+    checked = 0
+    for s in spans:
+        shown = s["value"] * s["scale"]
+        assert s["text"].lstrip("+") == (f"{shown:,.0f}" if s["digits"] == 0
+                                         else f"{shown:.{s['digits']}f}").lstrip("+"), s
+        preset, rest = s["src"].split("/", 1)
+        if s["op"] == "" and rest.startswith("metrics.json:"):
+            model, col = rest[len("metrics.json:"):].rsplit(":", 1)
+            doc = json.loads((preset_results / preset / "metrics.json").read_text())
+            row = next(r for r in doc["metrics"] if r["model"] == model)
+            assert abs(row[col] - s["value"]) <= 1e-9 * max(1.0, abs(row[col])), s
+            checked += 1
+    assert checked >= 20
+
+
+def test_no_overflow_at_1400px_and_unique_ids(driver, preset_report):
+    driver.set_window_size(1400, 1000)
+    driver.get(preset_report.as_uri())
+    assert driver.execute_script(
+        "return document.documentElement.scrollWidth <= window.innerWidth")
+    # the main table fits without its own scroll bar
+    assert driver.execute_script(
+        "const t = document.getElementById('reproduced-table-paper');"
+        "return t.parentElement.scrollWidth <= t.parentElement.clientWidth")
+    dup = driver.execute_script(
+        "const ids = Array.from(document.querySelectorAll('[id]')).map(e => e.id);"
+        "return ids.filter((x, i) => ids.indexOf(x) !== i)")
+    assert dup == []
+
+
+def test_print_keeps_every_column(driver, preset_report):
+    """In print media the collapsed full table opens and every column is laid out."""
+    import base64
+
+    driver.set_window_size(1400, 1000)
+    driver.get(preset_report.as_uri())
+    driver.execute_cdp_cmd("Emulation.setEmulatedMedia", {"media": "print"})
+    try:
+        cols = driver.execute_script(
+            "const t = document.getElementById('reproduced-table-full-paper');"
+            "const body = document.body.getBoundingClientRect();"
+            "return Array.from(t.querySelectorAll('thead th')).map(th => {"
+            "  const r = th.getBoundingClientRect();"
+            "  return [th.textContent, r.width > 0 && th.checkVisibility(),"
+            "          r.right <= body.right + 1]; })")
+    finally:
+        driver.execute_cdp_cmd("Emulation.setEmulatedMedia", {"media": ""})
+    assert len(cols) >= 10
+    assert all(shown and inside for _, shown, inside in cols), cols
+    pdf = driver.execute_cdp_cmd("Page.printToPDF", {"paperWidth": 8.27, "paperHeight": 11.69})
+    assert base64.b64decode(pdf["data"])[:5] == b"%PDF-"

@@ -145,8 +145,32 @@ def test_pipeline_reflects_the_config():
     boxes = {b["title"]: b for col in cols for b in col}
     assert "Optics: diffusion" in boxes
     hw = boxes["Hardware"]
-    assert "shot" in hw["noise_off"] and "johnson ×2" in hw["noise_on"]
+    assert "shot (off)" in hw["noise_off"] and "johnson (×2)" in hw["noise_on"]
     assert "ambient light" in boxes["Environment"]["noise_on"]
+
+
+def test_pipeline_noise_follows_the_device():
+    """Issue 32: a noise source the device removes is not drawn as acting (paper vs wearable)."""
+    from nirglucose.report.figures.descriptive import noise_states
+    from nirglucose.report.figures.sections import _pipeline_caption
+
+    def boxes(preset):
+        return {b["title"]: b for col in pipeline_columns(resolve_config(preset)) for b in col}
+
+    paper, wearable = boxes("paper"), boxes("wearable")
+    assert ("pmf measurement (exact physiology: device.physiology = exact)"
+            in paper["Measured outputs"]["noise_off"])
+    assert "pmf measurement" in wearable["Measured outputs"]["noise_on"]
+    assert any(s.startswith("contact pressure (constant-force")
+               for s in paper["Physiology + contact"]["noise_off"])
+    assert "contact pressure" in wearable["Physiology + contact"]["noise_on"]
+    states = noise_states(resolve_config("paper"))
+    n_on = sum(s == "on" for s, _ in states.values())
+    cap = _pipeline_caption(resolve_config("paper"))
+    assert f"{n_on} of {len(states)} noise sources act" in cap and n_on < len(states)
+    assert "exact: it equals the truth" in cap and "device.physiology = exact" in cap
+    assert "measured: it carries the instruments' errors" in _pipeline_caption(
+        resolve_config("wearable"))
 
 
 def test_pipeline_says_what_the_device_knows():

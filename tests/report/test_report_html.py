@@ -80,7 +80,7 @@ def _parse(path: Path) -> tuple[str, _Page]:
 
 def test_report_contains_every_figure_as_embedded_png(synthetic_report):
     _, page = _parse(synthetic_report)
-    assert set(page.figures) == {f"fig-{k}" for k in FIGURES}
+    assert set(page.figures) == {f"fig-{k}" for k in FIGURES} | {"fig-headline"}
     for key, number in FIGURES.items():
         fig = page.figures[f"fig-{key}"]
         assert len(fig["imgs"]) == 1, key
@@ -95,9 +95,11 @@ def test_report_contains_every_figure_as_embedded_png(synthetic_report):
 def test_report_tables(synthetic_report):
     text, page = _parse(synthetic_report)
     # two header rows + one row per model
-    assert page.tables["reproduced-table"] == 2 + len(REPORT_TEST_MODELS)
-    assert page.tables["extra-table"] == 1 + len(REPORT_TEST_MODELS)
-    assert "comparisons" in page.tables
+    # the essentials and, behind a toggle, every column
+    assert page.tables["reproduced-table-paper"] == 2 + len(REPORT_TEST_MODELS)
+    assert page.tables["reproduced-table-full-paper"] == 2 + len(REPORT_TEST_MODELS)
+    assert page.tables["extra-table-paper"] == 1 + len(REPORT_TEST_MODELS)
+    assert "comparisons-paper" in page.tables
     assert "<td class=\"study\">13.6</td>" in text  # the study's EBL RMSE
     assert "<td class=\"study\">14.6</td>" in text  # and Original PINN
     assert re.search(r"<td>\d+\.\d \[\d+\.\d, \d+\.\d\]</td>", text)  # ours with a CI
@@ -136,7 +138,7 @@ def test_cli_report_with_missing_optional_inputs(minimal_results, tmp_path, caps
     text, page = _parse(out)
     # no dataset: no diabetes status, so one Parkes figure (type 1, said so)
     assert set(page.figures) == ({f"fig-{k}" for k in FIGURES if not k.startswith("parkes")}
-                                 | {"fig-parkes"})
+                                 | {"fig-parkes", "fig-headline"})
     for name in ("histories.json", "importance.csv", "dataset.parquet", "comparisons.csv"):
         assert f"No {name}" in text
     assert page.figures["fig-training"]["imgs"] == []

@@ -1,16 +1,37 @@
-"""Figure 12: RMSE with its 95 % confidence interval per model, study values marked."""
+"""RMSE with its 95 % confidence interval per model: the forest plot (study values
+marked) and the headline figure (models × presets, with each preset's no-skill and
+oracle lines)."""
 
 from __future__ import annotations
+
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.transforms import offset_copy
 
-from .style import GREY, model_colors, model_label, model_marker, new_axes, styled
+from .style import (
+    GREY,
+    model_color,
+    model_colors,
+    model_label,
+    model_marker,
+    new_axes,
+    plot_style,
+    styled,
+)
 
-__all__ = ["plot_rmse_forest"]
+__all__ = ["plot_rmse_forest", "plot_preset_forest", "figure_headline", "HEADLINE_STATUS"]
+
+#: Marker fill of the headline figure by status against the preset's best model.
+HEADLINE_STATUS = {
+    "best": "best (lowest RMSE)",
+    "tied": "not distinguishable from the best (paired, Holm)",
+    "worse": "significantly worse than the best",
+}
 
 
 @styled
@@ -78,3 +99,119 @@ def plot_rmse_forest(
               bbox_transform=below, ncol=2, fontsize=7.5, frameon=False)
     ax.set_title(title if title is not None else "RMSE with 95 % confidence interval")
     return ax
+
+
+@styled
+def plot_preset_forest(
+    table: pd.DataFrame,
+    references: Mapping[str, float],
+    order: list[str],
+    *,
+    title: str | None = None,
+    xmax: float | None = None,
+    ax: Axes | None = None,
+) -> Axes:
+    """One preset's panel of the headline figure.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The preset's rows: ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high``
+        and ``status`` (``"best"``, ``"tied"``, ``"worse"`` or ``""``). [mg/dL]
+    references : mapping of str to float
+        ``"mean"`` (no skill) and ``"oracle"`` RMSE, drawn as vertical lines. [mg/dL]
+    order : list of str
+        Models top to bottom (a model missing from ``table`` leaves its row empty).
+    title : str, optional
+        Axes title.
+    xmax : float, optional
+        Upper x limit. [mg/dL]
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        One ErrorbarContainer per model drawn; one Line2D per reference line.
+    """
+    ax = new_axes(ax, figsize=(5.0, 0.42 * max(len(order), 1) + 1.4))
+    t = table.set_index("model")
+    y = {m: float(len(order) - 1 - k) for k, m in enumerate(order)}
+    best = t.index[t["status"] == "best"] if "status" in t else []
+    if len(best):
+        b = t.loc[best[0]]
+        ax.axvspan(b["rmse_ci_low"], b["rmse_ci_high"], color=model_color(best[0]),
+                   alpha=0.12, lw=0, zorder=0)
+    for m in [m for m in order if m in t.index]:
+        r = t.loc[m]
+        lo, hi, v = r["rmse_ci_low"], r["rmse_ci_high"], r["rmse_mgdl"]
+        err = ([[max(v - lo, 0.0)], [max(hi - v, 0.0)]]
+               if np.isfinite(lo) and np.isfinite(hi) else None)
+        c = model_color(m)
+        open_ = r.get("status", "") == "worse"
+        ax.errorbar([v], [y[m]], xerr=err, fmt=model_marker(m), ms=8 if r.get("status") ==
+                    "best" else 6.5, color=c, ecolor=c, mfc="white" if open_ else c,
+                    mec=c if open_ else "black", mew=1.3 if open_ else 0.6, elinewidth=1.6,
+                    capsize=3, zorder=3)
+    styles = {"mean": ("--", GREY, "no skill"), "oracle": (":", "black", "oracle")}
+    for ref, x in references.items():
+        ls, col, name = styles.get(ref, ("-.", GREY, ref))
+        ax.axvline(x, ls=ls, color=col, lw=1.2, zorder=1)
+        ax.annotate(f"{name} {x:.1f}", (x, 1.0), xycoords=("data", "axes fraction"),
+                    xytext=(2, 2), textcoords="offset points", fontsize=7.5, color=col,
+                    ha="left" if ref == "oracle" else "right", va="bottom")
+    ax.set_yticks([y[m] for m in order])
+    ax.set_yticklabels([model_label(m) for m in order])
+    ax.set_ylim(-0.7, len(order) - 0.3)
+    ax.set_xlim(0.0, xmax)
+    ax.grid(axis="x", color=GREY, alpha=0.25, lw=0.6)
+    ax.set_xlabel("RMSE [mg/dL], 95 % CI")
+    if title:
+        ax.set_title(title, pad=14)
+    return ax
+
+
+def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, float]],
+                    ) -> Figure:
+    """The headline figure: one panel per preset, models on shared rows.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``preset``, ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high``,
+        ``status`` (:func:`nirglucose.evaluation.findings.headline_table`). [mg/dL]
+    references : mapping
+        Preset -> ``{"mean": ..., "oracle": ...}``. [mg/dL]
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Models sorted by the first preset's RMSE; filled markers for the best model and
+        those not distinguishable from it, open ones for those significantly worse; the
+        best model's CI shaded.
+    """
+    presets = list(dict.fromkeys(table["preset"]))
+    first = table[table["preset"] == presets[0]].sort_values("rmse_mgdl")
+    order = list(dict.fromkeys([*first["model"], *table["model"]]))
+    with plot_style():
+        fig = Figure(figsize=(4.6 * len(presets) + 1.6, 0.36 * len(order) + 1.9),
+                     layout="constrained")
+        axes = fig.subplots(1, len(presets), sharey=True, squeeze=False).ravel()
+        for ax, p in zip(axes, presets, strict=True):
+            part = table[table["preset"] == p]
+            refs = dict(references.get(p, {}))
+            xmax = 1.08 * max([*part["rmse_ci_high"].dropna(), *refs.values(), 1.0])
+            plot_preset_forest(part, refs, order, title=f"preset: {p}", xmax=xmax, ax=ax)
+        handles = [Line2D([], [], ls="none", marker="o", ms=8, mfc="#444444", mec="black",
+                          label=HEADLINE_STATUS["best"] + " (its CI shaded)"),
+                   Line2D([], [], ls="none", marker="o", ms=6.5, mfc="#444444", mec="black",
+                          label=HEADLINE_STATUS["tied"]),
+                   Line2D([], [], ls="none", marker="o", ms=6.5, mfc="white", mec="#444444",
+                          mew=1.3, label=HEADLINE_STATUS["worse"]),
+                   Line2D([], [], ls="--", color=GREY, label="no skill (training mean)"),
+                   Line2D([], [], ls=":", color="black", label="oracle (true nuisances, a bound)")]
+        if not (table["status"] != "").any():  # no comparisons: no status to show
+            handles = handles[3:]
+        fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=7.5,
+                   frameon=False)
+    return fig

@@ -38,7 +38,8 @@ def _box_lines(box: Mapping[str, object]) -> list[tuple[str, str, bool]]:
     if on or off:
         lines.append(("noise sources:", "#222222", False))
         lines.extend((f"  \u2713 {name}", "#222222", False) for name in on)
-        lines.extend((f"  \u2717 {name} (off)", GREY, False) for name in off)
+        lines.extend((f"  \u2717 {name}" if name.endswith(")") else f"  \u2717 {name} (off)",
+                      GREY, False) for name in off)
     return lines
 
 

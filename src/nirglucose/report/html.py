@@ -66,6 +66,23 @@ pre { background: #f6f8fa; padding: .7rem; overflow-x: auto; font-size: 12px; }
 code { font-family: ui-monospace, "DejaVu Sans Mono", monospace; font-size: .92em; }
 details summary { cursor: pointer; color: var(--accent); }
 .sig { color: #D55E00; font-weight: 600; }
+section#findings ul.findings li { margin: .3rem 0; }
+span.v { border-bottom: 1px dotted var(--muted); }
+a.ev { font-size: .85em; white-space: nowrap; }
+td.untested { color: var(--muted); font-style: italic; text-align: center; }
+details.more { margin: -.4rem 0 1rem; }
+@media print {
+  @page { size: A4; margin: 10mm; }
+  body { max-width: none; padding: 0; font-size: 10px; }
+  details > * { display: block; }
+  details::details-content { content-visibility: visible; display: contents; }
+  .scroll { overflow: visible; }
+  table { font-size: 7px; width: 100%; }
+  th, td { white-space: normal; padding: .1rem .2rem; }
+  figure { break-inside: avoid; }
+  figure img { max-width: 100%; }
+  nav ul.figs { columns: 2; }
+}
 """
 
 # (metrics column, ci stem, study column, header, digits)
@@ -210,15 +227,37 @@ def _user_data_md(md: str) -> str:
     return re.sub(r" ?Study: [^.]*?test n = \d+\.", "", md)
 
 
-def _reproduced_table(results: Results) -> str:
+def preset_of(results: Results) -> str:
+    """The preset name of a run (its directory's name when none is recorded)."""
+    p = results.meta.get("preset")
+    return str(p) if p not in (None, "", "None") else results.directory.name or "run"
+
+
+#: Columns of the main table shown without opening the toggle (metrics columns); the
+#: study's value is shown beside ours for RMSE only.
+_ESSENTIAL: tuple[str, ...] = ("rmse_mgdl", "mard_pct", "clarke_a_pct", "within15_pct",
+                               "coverage90_pct", "n_parameters")
+
+
+def _table_columns(m: pd.DataFrame) -> list[tuple[str, str | None, str | None, str, int]]:
+    base = list(_TABLE_COLUMNS)
+    intervals = [c for c in _INTERVAL_COLUMNS if c[0] in m.columns]
+    return base[:1] + [(c, stem, None, h, d) for c, stem, h, d in intervals] + base[1:]
+
+
+def _reproduced_table(results: Results, *, full: bool = True, table_id: str | None = None
+                      ) -> str:
+    """The main table: every column (``full``) or the essentials (RMSE with the study's)."""
     from ..evaluation.reference import STUDY_TABLE
 
     with_study = not results.user_data
     study = {str(r["model"]): r for r in STUDY_TABLE} if with_study else {}
     m = results.metrics.drop_duplicates("model").set_index("model")
-    base = list(_TABLE_COLUMNS)
-    intervals = [c for c in _INTERVAL_COLUMNS if c[0] in m.columns]
-    columns = base[:1] + [(c, stem, None, h, d) for c, stem, h, d in intervals] + base[1:]
+    columns = _table_columns(m)
+    if not full:
+        columns = [c for c in columns if c[0] in _ESSENTIAL]
+        columns = [(c, stem, scol if c == "rmse_mgdl" else None, h, d)
+                   for c, stem, scol, h, d in columns]
     span = 2 if with_study else 1
     head1 = "<th rowspan=2>Model</th>" + "".join(
         f"<th colspan={span if scol else 1}>{_esc(h)}</th>" for _, _, scol, h, _ in columns)
@@ -241,8 +280,17 @@ def _reproduced_table(results: Results) -> str:
                 cells.append(f'<td class="study">{_num(s.get(scol), digits) if s else "–"}'
                              "</td>")
         rows.append("<tr>" + "".join(cells) + "</tr>")
-    return (f'<div class="scroll"><table id="reproduced-table"><thead><tr>{head1}</tr>'
+    tid = table_id or f"reproduced-table{'-full' if full else ''}-{preset_of(results)}"
+    return (f'<div class="scroll"><table id="{_esc(tid)}"><thead><tr>{head1}</tr>'
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
+
+
+def main_table(results: Results) -> str:
+    """The essentials, then every column behind a toggle (opened in print)."""
+    return (_reproduced_table(results, full=False)
+            + '<details class="more"><summary>Every column: the study\'s value beside each '
+            "metric, prediction intervals, latency</summary>"
+            + _reproduced_table(results, full=True) + "</details>")
 
 
 def _extra_table(results: Results) -> str:
@@ -256,7 +304,8 @@ def _extra_table(results: Results) -> str:
         r = m.loc[model]
         rows.append(f"<tr><td>{_esc(_model_label(model, r))}</td>" + "".join(
             f"<td>{_num(r.get(c), d)}</td>" for c, _, d in cols) + "</tr>")
-    return (f'<div class="scroll"><table id="extra-table"><thead><tr>{head}</tr></thead>'
+    return (f'<div class="scroll"><table id="extra-table-{_esc(preset_of(results))}">'
+            f"<thead><tr>{head}</tr></thead>"
             f"<tbody>{''.join(rows)}</tbody></table></div>")
 
 
@@ -303,13 +352,15 @@ def _significance(results: Results) -> str:
         body = "".join("<tr>" + "".join(f"<td>{cell(k, r[k])}</td>" for k in cols) + "</tr>"
                        for _, r in c.iterrows())
         parts.append(f"<details><summary>All paired comparisons (comparisons.csv, "
-                     f"{len(c)} rows)</summary><div class=\"scroll\"><table id=\"comparisons\">"
+                     f"{len(c)} rows)</summary><div class=\"scroll\">"
+                     f"<table id=\"comparisons-{_esc(preset_of(results))}\">"
                      f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>"
                      f"</details>")
     if not parts:
         parts.append('<p class="note">No significance statements: neither table.md nor '
                      "comparisons.csv is in the results directory.</p>")
-    return "\n".join(parts)
+    return (f'<div id="study-orderings-{_esc(preset_of(results))}">' + "\n".join(parts)
+            + "</div>")
 
 
 def _run_info(results: Results) -> str:
@@ -368,13 +419,52 @@ def _figure_html(f: RenderedFigure) -> str:
         return f'<figure id="{anchor}">{note}<figcaption>{cap}</figcaption></figure>'
     data = base64.b64encode(f.png).decode("ascii")
     return (f'<figure id="{anchor}"><img src="data:image/png;base64,{data}" '
-            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}">{note}'
+            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}. {_esc(f.caption)}">{note}'
             f"<figcaption>{cap}</figcaption></figure>")
+
+
+#: Contents entries of optional sections: (element id, title).
+_OPTIONAL_CONTENTS = (("findings", "Findings"), ("fig-headline", "Headline figure"),
+                      ("distance-table", "Distance from no skill and the oracle"))
+_MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metrics by preset"),
+                    ("separation", "What separates the presets"),
+                    ("ablations", "Physics ablation"), ("subgroups", "Subgroups"))
+
+
+def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Sequence[str],
+              extra: Sequence[str]) -> str:
+    """The contents list: every section present on the page, and every figure."""
+    def have(sections: Sequence[str], anchor: str) -> bool:
+        return any(f'id="{anchor}"' in x for x in sections)
+
+    items = [(a, t) for a, t in _OPTIONAL_CONTENTS if have(top, a)]
+    items += [("table", "Reproduced table"), ("further", "Further metrics"),
+              ("significance", "Significance")]
+    items += [(a, t) for a, t in _MIDDLE_CONTENTS if have(middle, a)]
+    if not have(middle, "ablations"):  # one preset: its own ablation heading
+        items += [(m.group(1), "Physics ablation") for x in middle
+                  for m in re.finditer(r'<h3 id="(ablation-[^"]+)"', x)]
+    items += [("run", "Configuration and provenance"), ("figures", "Figures")]
+    items += [(m.group(1), html.unescape(m.group(2))) for x in extra
+              for m in re.finditer(r'<h2 id="([^"]+)">([^<]+)</h2>', x)]
+    toc = "".join(f'<li><a href="#{_esc(a)}">{_esc(t)}</a></li>' for a, t in items)
+    toc_figs = "".join(f'<li><a href="#fig-{_esc(f.key)}">Figure {_esc(f.number)}: '
+                       f"{_esc(f.title)}</a></li>" for f in figures)
+    return f'<nav><b>Contents</b><ol>{toc}</ol><ul class="figs">{toc_figs}</ul></nav>'
+
+
+def _latency_note(results: Results, peers: Sequence[Results] = ()) -> str:
+    """How far the latencies can be trusted (shown under the main table)."""
+    from .figures.inputs import latency_resolution
+
+    res = latency_resolution(results.metrics, [p.metrics for p in peers])
+    return f'<p class="note" id="latency-note">{_esc(res["text"])}</p>' if res else ""
 
 
 def render_html(results: Results, figures: Sequence[RenderedFigure], *,
                 title: str = REPORT_TITLE, extra_sections: Sequence[str] = (),
-                middle_sections: Sequence[str] = ()) -> str:
+                middle_sections: Sequence[str] = (), top_sections: Sequence[str] = (),
+                peers: Sequence[Results] = ()) -> str:
     """The report page as a string (no I/O).
 
     Parameters
@@ -385,8 +475,12 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         Rendered figures (:func:`nirglucose.report.figures.render_figures`).
     title : str
         Page title.
-    extra_sections, middle_sections : sequence of str
-        HTML added after the figures / after the significance section.
+    extra_sections, middle_sections, top_sections : sequence of str
+        HTML added after the figures / after the significance section / before the
+        table (the findings).
+    peers : sequence of Results
+        The other presets' runs of the same benchmark (their timings measure the noise
+        of the latencies).
 
     Returns
     -------
@@ -403,25 +497,20 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         f"generated {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}",
     ) if p)
     notes = "".join(f'<p class="note">{_esc(n)}</p>' for n in results.notes)
-    toc_figs = "".join(f'<li><a href="#fig-{_esc(f.key)}">Figure {_esc(f.number)}: '
-                       f"{_esc(f.title)}</a></li>" for f in figures)
     sections = [
         f"<h1>{_esc(title)}</h1>",
         f'<p class="sub">{_esc(sub)}</p>',
         notes,
-        '<nav><b>Contents</b><ol><li><a href="#table">Reproduced table</a></li>'
-        '<li><a href="#significance">Significance</a></li>'
-        '<li><a href="#run">Configuration and provenance</a></li>'
-        f'<li><a href="#figures">Figures</a></li></ol><ul class="figs">{toc_figs}</ul></nav>',
+        _contents(figures, top_sections, middle_sections, extra_sections),
+        *top_sections,
         '<h2 id="table">Reproduced table</h2>',
         ("<p>This run's metrics with 95 % confidence intervals on your data. The study's "
-         "Table 1 is left out: it was measured on other data. Latency: median "
-         "single-sample prediction time on this machine.</p>" if results.user_data else
+         "Table 1 is left out: it was measured on other data.</p>" if results.user_data else
          "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
-         "(single 60/20/20 split by subject, test n = 48; no intervals reported). "
-         "Latency: median single-sample prediction time on this machine.</p>"),
-        _reproduced_table(results),
-        "<h3>Further metrics</h3>",
+         "(single 60/20/20 split by subject, test n = 48; no intervals reported).</p>"),
+        main_table(results),
+        _latency_note(results, peers),
+        '<h3 id="further">Further metrics</h3>',
         _extra_table(results),
         '<h2 id="significance">Significance</h2>',
         _significance(results),
@@ -494,13 +583,20 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     compare = None
     if len(runs) > 1:  # every preset on the performance panel's shared axes
         compare = {str(r.meta.get("preset") or r.directory.name): r.metrics for r in runs}
-    figures = render_figures(results, figures_dir, compare=compare)
+    figures = render_figures(results, figures_dir, compare=compare, peers=runs[1:])
+    from .findings import findings_section
     from .sweep import sweep_section
 
     # several presets: the ablations are shown side by side in the presets section
-    middle = [presets_section(runs)] if len(runs) > 1 else [ablation_section(primary)]
+    middle = ([presets_section(runs)] if len(runs) > 1 else
+              [ablation_section(primary, preset=preset_of(results))])
+    from .subgroups import subgroup_tables, subgroups_section
+
+    groups = subgroup_tables(runs)
+    middle.append(subgroups_section(runs, groups))
+    top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
-                       middle_sections=middle)
+                       middle_sections=middle, top_sections=top, peers=runs[1:])
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
     path.chmod(0o644)  # the temporary file was private; a report is for reading
     return path

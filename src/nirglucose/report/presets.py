@@ -68,31 +68,59 @@ def _read_ablation(d: Path) -> pd.DataFrame | None:
         return None
 
 
-def ablation_section(results_dir: str | Path, heading: str = "Physics ablation") -> str:
-    """HTML of ``ablation.csv``: each PINN with physics against without (empty if none)."""
-    a = _read_ablation(Path(results_dir))
+def _tuned_lambdas(d: Path) -> dict[str, float]:
+    """Each model's tuned physics weight ``lambda_phys`` from ``meta.json`` (if recorded)."""
+    try:
+        meta = json.loads((d / "meta.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    params = meta.get("model_params") if isinstance(meta, dict) else None
+    return {str(m): float(p["lambda_phys"]) for m, p in (params or {}).items()
+            if isinstance(p, dict) and p.get("lambda_phys") is not None}
+
+
+def ablation_section(results_dir: str | Path, heading: str = "Physics ablation", *,
+                     preset: str | None = None) -> str:
+    """HTML of ``ablation.csv``: each PINN with physics against without (empty if none).
+
+    Where tuning set the physics weight to 0 (``lambda_phys`` of ``meta.json``), or the
+    two fits are identical, no question was asked: the row says so and shows no Δ, p
+    or verdict (:func:`nirglucose.evaluation.findings.physics_verdicts`).
+    """
+    from ..evaluation.findings import RunData, physics_verdicts
+
+    d = Path(results_dir)
+    a = _read_ablation(d)
     if a is None or a.empty:
         return ""
+    preset = preset or d.name
+    lam = _tuned_lambdas(d)
+    run = RunData(preset, pd.DataFrame({"model": []}),
+                  {"model_params": {m: {"lambda_phys": v} for m, v in lam.items()}},
+                  pd.DataFrame(), ablation=a)
     rows = []
-    for _, r in a.iterrows():
-        if bool(r["significant"]):
-            verdict = "physics helps" if bool(r["physics_helps"]) else "physics hurts"
+    for v in physics_verdicts(run):
+        r = v["row"]
+        lam_txt = "–" if v["lambda"] is None else f"{v['lambda']:g}"
+        if v["tested"]:
+            diff = (f"<td>{_num(r['rmse_diff_mgdl'], 2, True)} [{_num(r['ci_low'], 2, True)}, "
+                    f"{_num(r['ci_high'], 2, True)}]</td><td>{_num(r['p_holm'], 3)}</td>")
         else:
-            verdict = "no significant difference"
+            diff = '<td colspan=2 class="untested">not tested</td>'
         rows.append(
-            f"<tr><td>{_esc(_model_label(r['model']))}</td>"
+            f"<tr><td>{_esc(_model_label(r['model']))}</td><td>{lam_txt}</td>"
             f"<td>{_num(r['rmse_mgdl'])}</td><td>{_num(r['ablated_rmse_mgdl'])}</td>"
-            f"<td>{_num(r['rmse_diff_mgdl'], 2, True)} [{_num(r['ci_low'], 2, True)}, "
-            f"{_num(r['ci_high'], 2, True)}]</td><td>{_num(r['p_holm'], 3)}</td>"
-            f"<td>{_esc(verdict)}</td></tr>"
+            f"{diff}<td>{_esc(v['verdict'])}</td></tr>"
         )
     return (
-        f"<h3>{_esc(heading)}</h3><p>Each PINN refitted with its physics term off "
-        "(<code>lambda_phys = 0</code>), everything else identical (same splits, seeds and "
-        "parameters). Δ RMSE = with physics − without (negative: the physics term helps); "
-        "paired cluster bootstrap over subjects, Holm-adjusted over the PINNs.</p>"
+        f'<h3 id="ablation-{_esc(preset)}">{_esc(heading)}</h3><p>Each PINN refitted with '
+        "its physics term off (<code>lambda_phys = 0</code>), everything else identical "
+        "(same splits, seeds and parameters). Δ RMSE = with physics − without (negative: "
+        "the physics term helps); paired cluster bootstrap over subjects, Holm-adjusted "
+        "over the PINNs. Where tuning chose λ = 0 both fits are the same model: the "
+        "question is not asked and no verdict is given.</p>"
         '<div class="scroll"><table class="ablation"><thead><tr><th>PINN</th>'
-        "<th>RMSE with physics [mg/dL]</th><th>RMSE without [mg/dL]</th>"
+        "<th>tuned λ</th><th>RMSE with physics [mg/dL]</th><th>RMSE without [mg/dL]</th>"
         "<th>Δ RMSE [95 % CI]</th><th>p (Holm)</th><th>verdict</th></tr></thead>"
         f"<tbody>{''.join(rows)}</tbody></table></div>"
     )
@@ -155,7 +183,7 @@ def presets_section(runs: Sequence[Results]) -> str:
         "columns), and the performance-comparison figure draws all presets on shared "
         "axes.</p>",
         _comparison_table(names, loaded, models, label),
-        "<h3>What separates the presets</h3>",
+        '<h3 id="separation">What separates the presets</h3>',
         _separation(names, loaded, label),
         _ablations_side_by_side(dirs, names),
         *_preset_details(runs[1:], names[1:]),
@@ -218,25 +246,23 @@ def _metric_cell(met: pd.DataFrame, model: str, col: str, ci: str | None) -> str
 
 def _ablations_side_by_side(dirs: list[Path], names: list[str]) -> str:
     """Each preset's ablation table next to the others ("" when no run has one)."""
-    ablations = [(n, ablation_section(d, f"Physics ablation on {n}"))
+    ablations = [(n, ablation_section(d, f"Physics ablation on {n}", preset=n))
                  for d, n in zip(dirs, names, strict=True)]
     ablations = [(n, a) for n, a in ablations if a]
     if not ablations:
         return ""
-    return ('<h3>Physics ablation, presets side by side</h3><div class="side">'
+    return ('<h3 id="ablations">Physics ablation, presets side by side</h3><div class="side">'
             + "".join(f"<div>{a}</div>" for _, a in ablations) + "</div>")
 
 
 def _preset_details(runs: Sequence[Results], names: list[str]) -> list[str]:
     """A collapsed block per preset with its reproduced table and significance statements."""
-    from .html import _reproduced_table, markdown_to_html
+    from .html import _extra_table, _significance, main_table
 
     out = []
     for res, n in zip(runs, names, strict=True):
-        inner = [_reproduced_table(res)]
-        if res.table_md:
-            inner.append(markdown_to_html(strip_ablation(res.table_md), skip_tables=True,
-                                          skip_h1=True))
+        inner = [main_table(res), "<h4>Further metrics</h4>", _extra_table(res),
+                 _significance(res)]
         out.append(f'<details id="preset-{_esc(n)}"><summary>Full reproduced table and '
                    f"significance statements on <code>{_esc(n)}</code></summary>"
                    + "\n".join(inner) + "</details>")
@@ -278,7 +304,8 @@ def _separation(
         oracle = meta.get("oracle_rmse_mgdl")
         bound = f"; oracle bound {_num(oracle)} mg/dL" if oracle is not None else ""
         items.append(
-            f"<li>Results on <code>{_esc(n)}</code>: best model {_esc(label.get(best, best))} at "
-            f"{_num(met.loc[best, 'rmse_mgdl'])} mg/dL{mean}{bound}.</li>"
+            f"<li>Results on <code>{_esc(n)}</code>: lowest RMSE {_esc(label.get(best, best))} "
+            f"at {_num(met.loc[best, 'rmse_mgdl'])} mg/dL{mean}{bound} (which models are "
+            'not distinguishable from it: <a href="#findings">Findings</a>).</li>'
         )
     return "<ul>" + "".join(items) + "</ul>"

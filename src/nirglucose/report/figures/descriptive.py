@@ -13,7 +13,8 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-__all__ = ["NOISE_LAYER", "ARCHITECTURE_MODELS", "fitted_architectures", "ebl_feature_table",
+__all__ = ["NOISE_LAYER", "NEUTRALISED_BY", "REDUCED_BY", "noise_states",
+           "ARCHITECTURE_MODELS", "fitted_architectures", "ebl_feature_table",
            "feature_categories", "pipeline_columns", "environment_panels",
            "physiology_panels"]
 
@@ -34,6 +35,54 @@ NOISE_LAYER: Final[dict[str, str]] = {
     "adc_offset_drift": "hardware",
     "pmf_measurement": "measurement",
 }
+
+#: Noise sources a device capability neutralises although they are switched on:
+#: source -> (capability, what the diagram says), from the simulator's layers
+#: (simulate/measurement.py, contact.py, hardware.py).
+NEUTRALISED_BY: Final[dict[str, tuple[str, str]]] = {
+    "pmf_measurement": ("exact_physiology", "exact physiology: device.physiology = exact"),
+    "contact_pressure": ("constant_force_probe", "constant-force probe"),
+    "led_ageing": ("monitor_photodiode", "cancelled in adc/adc_ref by the monitor photodiode"),
+    "led_flicker": ("monitor_photodiode", "cancelled in adc/adc_ref by the monitor "
+                    "photodiode"),
+}
+#: Noise sources a capability reduces but does not remove: source -> (capability, note).
+REDUCED_BY: Final[dict[str, tuple[str, str]]] = {
+    # its junction-temperature jitter also drives the wavelength shift (simulator.py),
+    # which the monitor does not cancel
+    "led_thermal_drift": ("monitor_photodiode", "power drift cancelled in adc/adc_ref by "
+                          "the monitor photodiode; the junction-temperature jitter still "
+                          "shifts the wavelength"),
+    "humidity_coupling": ("humidity_compensation", "compensated down to the RH sensor's "
+                          "error"),
+}
+
+
+def noise_states(config) -> dict[str, tuple[str, str]]:
+    """Each noise source's effect on this device's readings: (state, note).
+
+    ``state`` is ``"on"``, ``"neutralised"`` (switched on, but a device capability of
+    the configuration removes it: :data:`NEUTRALISED_BY`) or ``"off"`` (factor 0);
+    ``note`` is the factor when not ×1 and the capability's effect.
+    """
+    from ...config import NOISE_SOURCES, device_capabilities
+
+    caps = set(device_capabilities(config))
+    out: dict[str, tuple[str, str]] = {}
+    for src in NOISE_SOURCES:
+        f = config.noise_factor(src)
+        if f <= 0:
+            out[src] = ("off", "off")
+            continue
+        factor = f"×{f:g}" if f != 1 else ""
+        cap, note = NEUTRALISED_BY.get(src, (None, ""))
+        if cap in caps:
+            out[src] = ("neutralised", note)
+            continue
+        cap, note = REDUCED_BY.get(src, (None, ""))
+        out[src] = ("on", ", ".join(x for x in (factor, note if cap in caps else "") if x))
+    return out
+
 
 #: Model families of the architecture figure, in the study's order.
 ARCHITECTURE_MODELS: Final = ("ebl", "original-pinn", "optimized-pinn", "rte-pinn",
@@ -148,17 +197,18 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
 
     Each box lists settings of its layer and the noise sources acting in it
     (:data:`NOISE_LAYER`), on (with their effective factor, enabled × scale ×
-    ``noise_scale``) or off.
+    ``noise_scale``, when not 1) or not acting, with the reason: off, or neutralised by
+    a device capability (:func:`noise_states`).
     """
-    from ...config import NOISE_SOURCES
-
     noise: dict[str, tuple[list[str], list[str]]] = {}
-    for src in NOISE_SOURCES:
+    for src, (state, note) in noise_states(config).items():
         layer = NOISE_LAYER.get(src, "hardware")
         on, off = noise.setdefault(layer, ([], []))
-        f = config.noise_factor(src)
-        (on if f > 0 else off).append(f"{src.replace('_', ' ')}" + (f" ×{f:g}" if f > 0 and f != 1
-                                                                       else ""))
+        name = src.replace("_", " ")
+        if state == "on":
+            on.append(f"{name} ({note})" if note else name)  # note: factor, compensation
+        else:
+            off.append(f"{name} ({note})")
 
     def box(title: str, layers: Sequence[str], details: list[str], kind: str) -> dict[str, Any]:
         on = [s for layer in layers for s in noise.get(layer, ([], []))[0]]

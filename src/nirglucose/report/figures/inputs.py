@@ -21,7 +21,7 @@ __all__ = [
     "channel_correlations", "error_grid_inputs", "bland_altman_inputs", "linearity_inputs",
     "radar_scores", "pareto_front", "combined_cost_index", "efficiency_table",
     "is_ablation_row", "competitors", "reference_values", "physics_depth_table",
-    "importance_matrix", "forest_table", "performance_table",
+    "importance_matrix", "forest_table", "performance_table", "latency_resolution",
 ]
 
 #: Physics depth of each registered model: how much of the forward model it uses, as
@@ -196,10 +196,13 @@ def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
                         level: float = 0.95) -> dict[str, dict[str, Any]]:
     """Bland–Altman points, bias, limits of agreement and their confidence intervals.
 
-    The intervals are the approximate ones of Bland & Altman (1986): standard error
+    The points are every repeat's predictions pooled; the bias and limits are computed
+    per repeat and averaged over repeats, as the table's ``bias_mgdl``,
+    ``loa_low_mgdl`` and ``loa_high_mgdl`` are (one definition for both). The
+    intervals are the approximate ones of Bland & Altman (1986): standard error
     ``s / sqrt(n)`` for the bias and ``s sqrt(3 / n)`` for each limit, with a t quantile
-    on ``n - 1`` degrees of freedom. Pairs from the same subject are treated as
-    independent, so the intervals are somewhat narrow.
+    on ``n - 1`` degrees of freedom, ``n`` the snapshots of one repeat. Pairs from the
+    same subject are treated as independent, so the intervals are somewhat narrow.
 
     References
     ----------
@@ -207,16 +210,15 @@ def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
        methods of clinical measurement. Lancet 327(8476):307-310, 1986.
        doi:10.1016/S0140-6736(86)90837-8
     """
-    from ...metrics import bland_altman
-
     col = scored_column(predictions)
     out: dict[str, dict[str, Any]] = {}
     for m in models:
-        ref, pred, _ = _finite_pairs(pooled(predictions, m), col)
-        n = ref.size
-        if n < 3:
+        p = pooled(predictions, m)
+        ref, pred, ok = _finite_pairs(p, col)
+        if ref.size < 3:
             continue
-        bias, low, high = bland_altman(ref, pred)
+        rep = p["repeat"].to_numpy()[ok] if "repeat" in p.columns else np.zeros(ref.size)
+        bias, low, high, n = _per_repeat_limits(ref, pred, rep)
         s = (high - bias) / 1.96
         tq = _t_quantile(level, n - 1)
         se_b, se_l = s / math.sqrt(n), s * math.sqrt(3.0 / n)
@@ -229,6 +231,25 @@ def bland_altman_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
             "loa_high_ci": (high - tq * se_l, high + tq * se_l),
         }
     return out
+
+
+def _per_repeat_limits(ref: np.ndarray, pred: np.ndarray, rep: np.ndarray
+                       ) -> tuple[float, float, float, int]:
+    """Bias and limits of agreement per repeat, averaged over repeats (the table's).
+
+    Each repeat predicts every snapshot once; the benchmark computes every metric per
+    repeat and averages (:mod:`nirglucose.evaluation.stats`), so the figure does too.
+    Returns (bias, lower, upper, snapshots per repeat, the smallest).
+    """
+    from ...metrics import bland_altman
+
+    per = [bland_altman(ref[rep == r], pred[rep == r]) for r in np.unique(rep)
+           if (rep == r).sum() >= 3]
+    if not per:
+        per = [bland_altman(ref, pred)]
+    arr = np.asarray(per, dtype=float)
+    n = int(min((rep == r).sum() for r in np.unique(rep)))
+    return float(arr[:, 0].mean()), float(arr[:, 1].mean()), float(arr[:, 2].mean()), n
 
 
 def linearity_inputs(predictions: pd.DataFrame, models: Sequence[str], *,
@@ -275,7 +296,8 @@ def _metric(metrics: pd.DataFrame, models: Sequence[str], col: str) -> np.ndarra
 RADAR_COST_DECADES: Final = 6.0
 
 
-def radar_scores(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
+def radar_scores(metrics: pd.DataFrame, models: Sequence[str], *, latency: bool = True
+                 ) -> pd.DataFrame:
     """Scores in [0, 1] per model and radar axis, 1 = best of these models.
 
     Accuracy axes are ratios to the best model (``best / x`` for RMSE and MARD,
@@ -283,6 +305,7 @@ def radar_scores(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
     (parameters, latency) lose ``1 / RADAR_COST_DECADES`` per decade above the
     cheapest model: ``1 - log10(x / best) / 6``, floored at 0 (parameter counts below 1
     and latencies below 1 µs count as 1 and 1 µs). A missing value is NaN.
+    ``latency=False`` leaves the latency axis out (differences inside timing noise).
 
     Examples
     --------
@@ -294,6 +317,8 @@ def radar_scores(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
     """
     cols = {}
     for label, col, higher, log in RADAR_AXES:
+        if col == "latency_single_ms" and not latency:
+            continue  # inside timing noise (latency_resolution): not scored
         v = _metric(metrics, models, col)
         floor = 1.0 if col == "n_parameters" else 1e-3  # 0 parameters scores as 1
         ok = np.isfinite(v) & (v > 0 if not (log or higher) else v >= 0)
@@ -351,10 +376,14 @@ def combined_cost_index(n_parameters: Sequence[float], latency_ms: Sequence[floa
     return np.nanmean(np.vstack(parts), axis=0) if parts else np.array([])
 
 
-def efficiency_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
-    """Inputs of figure 10: costs, the combined index and the three Pareto fronts.
+def efficiency_table(metrics: pd.DataFrame, models: Sequence[str], *, latency: bool = True
+                     ) -> pd.DataFrame:
+    """Inputs of the efficiency figure: costs, the combined index and the Pareto fronts.
 
-    Only competitors (:func:`competitors`); the references are drawn as lines.
+    Only competitors (:func:`competitors`); the references are drawn as lines. With
+    ``latency=False`` (differences inside timing noise, :func:`latency_resolution`)
+    every latency counts as equal: the latency front is the most accurate model only
+    and the combined index is the parameters' alone.
     """
     models = competitors(models)
     t = pd.DataFrame({
@@ -363,11 +392,15 @@ def efficiency_table(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFra
         "n_parameters": _metric(metrics, models, "n_parameters"),
         "latency_single_ms": _metric(metrics, models, "latency_single_ms"),
     })
-    t["combined_index"] = combined_cost_index(t["n_parameters"], t["latency_single_ms"])
+    lat_cost = t["latency_single_ms"] if latency else pd.Series(
+        np.where(np.isfinite(t["latency_single_ms"]), 1.0, np.nan))
+    t["combined_index"] = combined_cost_index(t["n_parameters"], lat_cost)
     for col, front, log in (("n_parameters", "front_parameters", True),
                             ("latency_single_ms", "front_latency", True),
                             ("combined_index", "front_combined", False)):
         cost = t[col].to_numpy(float)
+        if col == "latency_single_ms" and not latency:
+            cost = np.where(np.isfinite(cost), 1.0, np.nan)
         if log:  # a log axis cannot show zero cost: the front is among what is drawn
             cost = np.where(cost > 0, cost, np.nan)
         t[front] = pareto_front(cost, t["rmse_mgdl"])
@@ -455,3 +488,60 @@ def forest_table(metrics: pd.DataFrame, models: Sequence[str], *,
 
 
 # --------------------------------------------------------------------------- data figures
+
+
+def latency_resolution(metrics: pd.DataFrame, peers: Sequence[pd.DataFrame] = ()
+                       ) -> dict[str, Any] | None:
+    """Whether the competitors' latencies differ by more than the timing noise.
+
+    The noise is measured, not assumed: the largest ratio between one model's median
+    single-sample latencies on the runs given (``metrics`` and each of ``peers``: the
+    other presets of one benchmark, timed on the same machine), and at least each
+    model's p90 / median ratio within a run. Latencies are *resolved* when the
+    competitors' spread (slowest / fastest) exceeds that noise; otherwise no figure or
+    table may rank models on latency.
+
+    Returns
+    -------
+    dict or None
+        ``noise`` (ratio), ``spread`` (ratio), ``resolved`` (bool), ``low``/``high``
+        (fastest and slowest median latency) [ms] and ``text`` (a sentence); None
+        without latencies.
+
+    Examples
+    --------
+    >>> a = pd.DataFrame({"model": ["ebl", "pls"], "latency_single_ms": [0.1, 0.06]})
+    >>> b = pd.DataFrame({"model": ["ebl", "pls"], "latency_single_ms": [0.04, 0.05]})
+    >>> r = latency_resolution(a, [b]); round(r["noise"], 1), r["resolved"]
+    (2.5, False)
+    """
+    def lat(m: pd.DataFrame, col: str = "latency_single_ms") -> pd.Series:
+        if col not in m.columns:
+            return pd.Series(dtype=float)
+        s = pd.to_numeric(m.drop_duplicates("model").set_index("model")[col], errors="coerce")
+        return s[[x for x in s.index if x in set(competitors(s.index))]].dropna()
+
+    own = lat(metrics)
+    own = own[own > 0]
+    if len(own) < 2:
+        return None
+    ratios = [float((lat(metrics, "latency_single_p90_ms") / own).max())] \
+        if "latency_single_p90_ms" in metrics.columns else []
+    for peer in peers:
+        other = lat(peer).reindex(own.index)
+        ok = other.notna() & (other > 0)
+        if ok.any():
+            r = np.maximum(own[ok] / other[ok], other[ok] / own[ok])
+            ratios.append(float(r.max()))
+    noise = max([x for x in ratios if np.isfinite(x)] or [1.0])
+    spread = float(own.max() / own.min())
+    resolved = spread > noise
+    across = " between this benchmark's presets" if peers else " (p90 / median)"
+    text = (f"Latency: median single-sample prediction time on the benchmark's machine; "
+            f"the competitors span {own.min():.3f}–{own.max():.3f} ms ({spread:.1f}×) and the "
+            f"same model's timing varies up to {noise:.1f}×{across}. ")
+    text += ("The differences exceed that noise." if resolved else
+             "The differences are inside that noise, so no table or figure here ranks the "
+             "models on latency (Python call overhead, not the models' arithmetic).")
+    return {"noise": noise, "spread": spread, "resolved": resolved,
+            "low": float(own.min()), "high": float(own.max()), "text": text}

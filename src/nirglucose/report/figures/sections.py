@@ -19,12 +19,12 @@ import pandas as pd
 from ...exceptions import DataError
 from .descriptive import (
     ARCHITECTURE_MODELS,
-    NOISE_LAYER,
     _adc_by_wavelength,
     ebl_feature_table,
     environment_panels,
     feature_categories,
     fitted_architectures,
+    noise_states,
     physiology_panels,
     pipeline_columns,
 )
@@ -39,6 +39,7 @@ from .inputs import (
     forest_table,
     importance_matrix,
     is_ablation_row,
+    latency_resolution,
     linearity_inputs,
     model_order,
     performance_table,
@@ -67,6 +68,8 @@ class _Page:
     formats: Sequence[str]
     wanted: set[str] | None
     compare: Mapping[str, pd.DataFrame] | None
+    #: The other presets' runs of the same benchmark (figures drawn for each too).
+    peers: Sequence[Results] = ()
     rendered: list[RenderedFigure] = field(default_factory=list)
     count: int = 0
     #: Models fitted for the architecture figure, by name (the features figure reuses EBL).
@@ -163,8 +166,13 @@ def _section_data(page: _Page) -> None:
                  lambda: data.figure_distributions(env, ncols=5))
     phys = physiology_panels(frame)
     if phys:
+        cfg = page.results.config
+        how = ("the exact physiological vector the models see (device.physiology = exact: "
+               "it equals the truth)" if cfg is not None and cfg.device.physiology == "exact"
+               else "the measured physiological vector the models see"
+               if cfg is not None else "the physiological vector the models see")
         page.add("physiology", "Physiology",
-                 "Distributions of the measured physiological vector the models see"
+                 f"Distributions of {how}, one count per snapshot"
                  + (" (its humidity and pressure entries are shown with the environment)."
                     if env else "."),
                  lambda: data.figure_distributions(phys, ncols=5))
@@ -182,13 +190,31 @@ def _section_pipeline(page: _Page) -> None:
         page.add("pipeline", "Data-generation pipeline", "The simulator's layers.", None,
                  note="No resolved configuration in the results: diagram not drawn.")
         return
-    n_off = sum(1 for s in NOISE_LAYER if cfg.noise_factor(s) == 0)
-    page.add("pipeline", "Data-generation pipeline",
-             f"The simulator's layers for this run, left to right in the order applied, with "
-             f"the '{cfg.optics.model}' forward model and {len(NOISE_LAYER) - n_off} of "
-             f"{len(NOISE_LAYER)} noise sources on (✓ on, with its factor when not ×1; "
-             f"✗ off).",
+    page.add("pipeline", "Data-generation pipeline", _pipeline_caption(cfg),
              lambda: _figure_pipeline(pipeline, cfg, plot_style))
+    for peer in page.peers:  # every preset's device, not only the primary's
+        pcfg = peer.config
+        if pcfg is not None:
+            page.add(f"pipeline_{pcfg.preset}", f"Data-generation pipeline on {pcfg.preset}",
+                     _pipeline_caption(pcfg),
+                     lambda pcfg=pcfg: _figure_pipeline(pipeline, pcfg, plot_style))
+
+
+def _pipeline_caption(cfg) -> str:
+    """What the pipeline diagram shows, counted from the device's noise states."""
+    states = noise_states(cfg)
+    n = {k: sum(1 for s, _ in states.values() if s == k) for k in ("on", "neutralised", "off")}
+    neut = [src.replace("_", " ") for src, (s, _) in states.items() if s == "neutralised"]
+    how = "exact: it equals the truth" if cfg.device.physiology == "exact" else \
+        "measured: it carries the instruments' errors"
+    return (f"The simulator's layers for preset '{cfg.preset}', left to right in the order "
+            f"applied, with the '{cfg.optics.model}' forward model: {n['on']} of "
+            f"{len(states)} noise sources act on the readings (✓, with their factor when not "
+            f"×1)" + (f", {n['neutralised']} are switched on but removed by the device "
+                      f"({', '.join(neut)}; ✗ with the reason)" if neut else "")
+            + (f", {n['off']} are off (✗)" if n["off"] else "")
+            + f". The physiological vector the models see is {how} "
+            f"(device.physiology = {cfg.device.physiology}).")
 
 
 def _section_architecture(page: _Page) -> None:
@@ -294,18 +320,20 @@ def _section_agreement(page: _Page) -> None:
     """Figures 5-6: Bland–Altman and linearity."""
     from ...plots import agreement
 
-    preds, rep_note = page.preds, page.rep_note
+    preds = page.preds
     ba = bland_altman_inputs(preds, page.pred_models)
     page.add("bland_altman", "Bland–Altman",
-             f"Prediction minus reference against their mean for each model ({rep_note}), on "
-             f"one y range for all panels, with the bias (solid) and 95 % limits of agreement "
-             f"(dashed), their values and 95 % confidence intervals (shaded) under each title "
-             f"(Bland & Altman 1986).",
+             f"Prediction minus reference against their mean for each model ({_points(page)}),"
+             f" on one y range for all panels, with the bias (solid) and 95 % limits of "
+             f"agreement (dashed), their values and 95 % confidence intervals (shaded) under "
+             f"each title (Bland & Altman 1986). The bias and limits are computed per repeat "
+             f"and averaged over repeats, the definition of the further-metrics table's "
+             f"bias and LoA columns, so the numbers are the same.",
              lambda: agreement.figure_bland_altman(ba) if ba else None,
              note=None if ba else "Too few predictions: figure not drawn.")
     lin = linearity_inputs(preds, page.pred_models)
     page.add("linearity", "Linearity",
-             f"Predicted against reference glucose for each model ({rep_note}), with the "
+             f"Predicted against reference glucose for each model ({_points(page)}), with the "
              f"unity line and the least-squares line (slope with its 95 % CI, intercept, R²)"
              + ("; vertical bars: each prediction's 90 % interval, with the share that covers "
                 "the reference." if {"lower90_mgdl", "upper90_mgdl"} <= set(preds.columns)
@@ -314,30 +342,48 @@ def _section_agreement(page: _Page) -> None:
              note=None if lin else "Too few predictions: figure not drawn.")
 
 
+def _points(page: _Page) -> str:
+    """Which predictions a scatter draws (no claim about the table)."""
+    p = page.preds
+    n_rep = int(p["repeat"].nunique()) if "repeat" in p.columns else 1
+    return (f"every out-of-fold prediction of all {n_rep} repeats pooled" if n_rep > 1
+            else "every out-of-fold prediction")
+
+
 def _section_training(page: _Page) -> None:
-    """Figure 7: training dynamics of the networks."""
+    """Training dynamics of the networks, one figure per preset that recorded them."""
+    _training_figure(page, page.results, "training", "Training dynamics")
+    for peer in page.peers:
+        preset = str(peer.meta.get("preset") or peer.directory.name)
+        _training_figure(page, peer, f"training_{preset}", f"Training dynamics on {preset}")
+
+
+def _training_figure(page: _Page, res: Results, key: str, title: str) -> None:
     from ...plots import training
 
-    histories = page.results.histories
+    histories = res.histories
+    where = f" on preset '{res.meta['preset']}'" if res.meta.get("preset") else ""
     if histories is None:
-        page.add("training", "Training dynamics", "Training and validation loss per epoch.",
-                 None, note="No histories.json in the results directory: figure not drawn.")
+        page.add(key, title, "Training and validation loss per epoch.", None,
+                 note="No histories.json in the results directory: figure not drawn.")
         return
     hist = {m: histories[m] for m in model_order(histories) if not is_ablation_row(m)}
     has_val = any("val_loss" in h and h["val_loss"].notna().any() for h in hist.values())
     caption = ((f"Training (solid){' and validation (dashed)' if has_val else ''} loss per "
-                "epoch of each network, thick the total and thin each term of the "
-                "physics-informed ones (a term equal to another curve is named in that "
-                "curve's legend entry rather than drawn under it). Losses are mean squared "
-                "errors of glucose standardised on the training rows, so 1 is the training "
-                "mean's loss; physics terms are in their own squared residual units. "
-                + ("" if has_val else "These fits used no validation split, so there are no "
-                   "validation curves. ")
+                f"epoch of each network{where} (the timed fit: first fold of the first "
+                "repeat), thick the total and thin each term of the physics-informed ones (a "
+                "term equal to another curve is named in that curve's legend entry rather "
+                "than drawn under it). Losses are mean squared errors of glucose "
+                "standardised on the training rows, so 1 is the training mean's loss; "
+                "physics terms are in their own squared residual units. "
+                + ("The validation curves are on the rows each fit held out for early "
+                   "stopping (val_fraction of its training rows). " if has_val else
+                   "These fits recorded no validation loss (no validation split), so there "
+                   "are no validation curves. ")
                 + "The physics-ablation refits are left out: their physics weight is 0, so "
                 "their total is their MSE.") if hist else
                "No networks in this run, so there are no training curves to show.")
-    page.add("training", "Training dynamics", caption,
-             lambda: training.figure_training_dynamics(hist),
+    page.add(key, title, caption, lambda: training.figure_training_dynamics(hist),
              note=None if hist else "No networks in this run.")
 
 
@@ -356,13 +402,19 @@ def _section_radar(page: _Page) -> None:
     """Figure 8: normalised scores."""
     from ...plots import tradeoffs
 
-    scores = radar_scores(page.results.metrics, competitors(page.models))
+    timed = _latency_ok(page)
+    scores = radar_scores(page.results.metrics, competitors(page.models), latency=timed)
     page.add("radar", "Normalised scores",
              "One panel per model (its polygon in colour, the other models' outlines in grey "
              "for comparison), with its mean score in the title: each model's RMSE, MARD, "
              "Clarke zone A and share within ±15 % as a ratio to the best model shown "
-             "(1 = best), and its parameter count and latency scored 1 for the "
-             "smallest and fastest, minus 1/6 per decade above it (the oracle, a bound, and "
+             "(1 = best), and its parameter count"
+             + (" and latency" if timed else "") + " scored 1 for the "
+             + ("smallest and fastest" if timed else "smallest")
+             + ", minus 1/6 per decade above it"
+             + ("" if timed else "; latency is left out, its differences being inside "
+                "timing noise (see the note under the main table)")
+             + " (the oracle, a bound, and "
              "the training mean, no skill, are references rather than competitors and are "
              "left out; so are the ablation rows).",
              lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
@@ -389,13 +441,24 @@ def _section_costs(page: _Page) -> None:
                  (11.0, 5.2), plot_style)
              if len(depth) else None,
              note=None if len(depth) else "No model with a known physics depth.")
-    eff = efficiency_table(metrics, models)
+    timed = _latency_ok(page)
+    eff = efficiency_table(metrics, models, latency=timed)
     page.add("efficiency", "Efficiency landscape",
              "RMSE (axis from 0) against trainable parameters, single-sample latency and a "
              "combined cost index (mean of the normalised log parameters and log latency); "
              "Pareto-optimal models (no other model both cheaper and more accurate) have a "
-             f"black edge and are joined by a dashed line.{ref_txt}",
+             f"black edge and are joined by a dashed line.{ref_txt}"
+             + ("" if timed else " The latencies differ by less than their timing noise (see "
+                "the note under the main table), so they count as equal: the speed panel "
+                "marks only the most accurate model and the combined index is the "
+                "parameters' alone."),
              lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
+
+
+def _latency_ok(page: _Page) -> bool:
+    """Whether latencies differ by more than their timing noise (True when unknown)."""
+    res = latency_resolution(page.results.metrics, [p.metrics for p in page.peers])
+    return res is None or bool(res["resolved"])
 
 
 def _section_performance(page: _Page) -> None:
@@ -413,7 +476,9 @@ def _section_performance(page: _Page) -> None:
              + (f", one bar per preset ({', '.join(by_preset)}) on shared axes"
                 if len(by_preset) > 1 else "")
              + "; parameters and latency on log scales. Latency is the median single-sample "
-             "prediction time measured during each run, so it depends on that machine's load.",
+             "prediction time measured during each run, so it depends on that machine's load"
+             + ("." if _latency_ok(page) else "; its differences here are inside that timing "
+                "noise (see the note under the main table) and rank nothing."),
              (lambda: architecture.figure_performance_panel(perf)) if len(perf) else None,
              note=None if len(perf) else "No competitor models in this run.")
 
@@ -470,7 +535,8 @@ _SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
 def render_figures(results: Results, figures_dir: str | Path | None = None,
                    formats: Sequence[str] = ("png", "svg"), *,
                    include: Iterable[str] | None = None,
-                   compare: Mapping[str, pd.DataFrame] | None = None) -> list[RenderedFigure]:
+                   compare: Mapping[str, pd.DataFrame] | None = None,
+                   peers: Sequence[Results] = ()) -> list[RenderedFigure]:
     """Build every figure of the report from loaded results.
 
     Parameters
@@ -487,6 +553,9 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     compare : mapping of str to pandas.DataFrame, optional
         Metrics of each preset of a multi-preset run (the primary first): the
         performance panel then shows every preset on shared axes.
+    peers : sequence of Results, optional
+        The other presets' runs: the training dynamics are drawn for each, and their
+        timings measure the latencies' noise.
 
     Returns
     -------
@@ -500,7 +569,8 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
             raise DataError(f"figure directory's parent {str(out_dir.parent)!r} does not exist")
         out_dir.mkdir(exist_ok=True)
     page = _Page(results=results, out_dir=out_dir, formats=formats,
-                 wanted=None if include is None else set(include), compare=compare)
+                 wanted=None if include is None else set(include), compare=compare,
+                 peers=tuple(peers))
     for section in _SECTIONS:
         section(page)
     return page.rendered
