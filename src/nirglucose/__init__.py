@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import importlib
 from importlib.metadata import PackageNotFoundError, version
 
 try:
@@ -36,3 +37,28 @@ __all__ = [
     "DataError",
     "NotFittedError",
 ]
+
+#: Subpackages reachable as attributes (``ng.models``, ``ng.metrics``, ...), imported on
+#: first access so that ``import nirglucose`` stays light (torch, numba and matplotlib
+#: load only when a model, kernel or figure asks for them).
+SUBPACKAGES = ("config", "evaluation", "export", "features", "metrics", "models", "optics",
+               "plots", "portable", "report")
+
+
+def __getattr__(name: str):
+    """``ng.models``, ``ng.metrics``, ``ng.evaluation``, ...: the subpackage, imported on
+    first access (then a plain attribute).
+
+    Examples
+    --------
+    >>> import nirglucose as ng
+    >>> ng.metrics.rmse([100.0, 120.0], [110.0, 120.0]) > 0
+    True
+    """
+    if name in SUBPACKAGES:
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *SUBPACKAGES})
