@@ -133,8 +133,9 @@ from test_simulate_golden import GOLDEN, frame_hash, golden_frame
 from threadpoolctl import threadpool_info
 import hashlib, numpy as np
 np_exp = hashlib.sha256(np.exp(np.linspace(0.1, 5.0, 1001)).tobytes()).hexdigest()
-print(json.dumps({{"np_exp": np_exp, "blas": sorted({{i.get("architecture") for i in threadpool_info()
-                                   if i.get("internal_api") == "openblas"}}),
+blas = sorted({{i.get("architecture") for i in threadpool_info()
+               if i.get("internal_api") == "openblas"}})
+print(json.dumps({{"np_exp": np_exp, "blas": blas,
                   "hashes": {{n: frame_hash(golden_frame(n)) for n in GOLDEN}}}}))
 """
 
