@@ -9,7 +9,8 @@ that came from the user or a file is printed without Rich markup.
 
 One module per command group, registered on :data:`app` in the order ``--help``
 lists them: :mod:`.data_commands` (simulate, keys, models), :mod:`.benchmark_command`,
-:mod:`.sweep_command`, :mod:`.device_commands` (fit, predict, export-c) and
+:mod:`.sweep_command`, :mod:`.device_commands` (fit, predict, export-c), :mod:`.export_commands`
+(export-onnx) and
 :mod:`.report_command`; the shared options and checks live in :mod:`._common`, the
 entry point and its error mapping in :mod:`._main`.
 """
@@ -26,6 +27,7 @@ from .data_commands import keys, list_models, simulate
 from .benchmark_command import benchmark
 from .sweep_command import sweep
 from .device_commands import export_c_source, fit_model, predict_glucose
+from .export_commands import export_onnx_file
 from .report_command import report
 
 # isort: on
@@ -38,6 +40,7 @@ __all__ += [  # also importable, as before the split into a package
     "benchmark",
     "console",
     "export_c_source",
+    "export_onnx_file",
     "fit_model",
     "keys",
     "list_models",

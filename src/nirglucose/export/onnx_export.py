@@ -1,0 +1,204 @@
+"""Export a fitted model as an ONNX graph, for any runtime beyond a microcontroller.
+
+:func:`export_onnx` writes one ``.onnx`` file whose graph takes the device's raw columns
+and returns glucose, with nothing to compute outside it:
+
+* input ``raw``: float32 ``(n, width)``, the columns of the device the model was fitted
+  on in ``schema.raw_columns`` order (ADC codes, then reference codes where the device
+  has them, then the physiological columns; the file's metadata lists them);
+* output ``glucose_mgdl``: float32 ``(n,)``;
+* output ``status``: int32 ``(n,)``, 0 for a reading the model can use, 1 for a code
+  outside (0, full scale] (its glucose is then meaningless, never silently used: a
+  caller reads the status).
+
+The graph is the model's own prediction written in torch and traced once by
+:func:`torch.onnx.export`: decadic absorbances ``log10(I0 / I)`` from the codes (the
+ADC's full scale as ``I0`` for a device without reference codes), the model's
+standardisation, then its network (the torch networks), its Gaussian-process posterior
+mean (``gp``), its folded linear map (``pls``) or its constant (``mean``). Float32
+throughout; the tests hold it to the Python prediction within 0.05 mg/dL.
+
+Models without an ONNX path (:data:`NO_ONNX_PATH` says why): the Enhanced Beer–Lambert
+ridge (its 56 physics features are NumPy code: :func:`nirglucose.export.export_c`
+exports it for a microcontroller), gradient boosting, the oracle (it reads the truth),
+the forward-model estimator and the hybrids.
+
+Needs the optional packages ``onnx`` (and ``onnxruntime`` to run the file):
+``pip install "nirglucose[onnx]"``.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..dataset import atomic_write
+from ..exceptions import ConfigError, DataError
+
+__all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "export_onnx", "onnx_graph_bytes"]
+
+#: ONNX operator set of the exported graphs (onnxruntime 1.16 and later run it).
+OPSET = 17
+#: Registered models with an ONNX path.
+ONNX_MODELS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn",
+               "gp", "pls", "mean")
+#: Registered models without one, and why.
+NO_ONNX_PATH = {
+    "ebl": "its 56 physics features are NumPy code; export-c writes it as C for a "
+           "microcontroller",
+    "gbr": "not yet: its trees would need ONNX's tree-ensemble operator",
+    "oracle": "it reads the simulation's truth, which no device has",
+    "physics-inversion": "an iterative solver per reading (Levenberg-Marquardt), not a "
+                         "fixed graph",
+    "ebl+gp": "its EBL backbone has no ONNX path",
+    "physics-inversion+gp": "its physics-inversion backbone has no ONNX path",
+}
+
+
+def _torch():
+    import torch  # heavy: only an export needs it
+
+    return torch
+
+
+def _absorbance_and_physiology(torch, schema, raw):
+    """Torch twin of :meth:`nirglucose.schema.DeviceSchema.split` plus the status."""
+    k = schema.n_channels
+    full = float(schema.full_scale)
+    adc = raw[:, :k]
+    if schema.reference:
+        ref, start = raw[:, k : 2 * k], 2 * k
+        codes = torch.cat([adc, ref], dim=1)
+    else:
+        ref, start = torch.full_like(adc, full), k
+        codes = adc
+    bad = ((codes <= 0) | (codes > full)).any(dim=1)
+    a = (torch.log(ref) - torch.log(adc)) / math.log(10.0)
+    return a, raw[:, start:], bad.to(torch.int32)
+
+
+def _standardise(torch, x, mean, scale):
+    return (x - torch.as_tensor(np.asarray(mean), dtype=torch.float32)) / torch.as_tensor(
+        np.asarray(scale), dtype=torch.float32)
+
+
+def _graph_module(model):
+    """A torch module ``raw -> (glucose_mgdl, status)`` equal to ``model.predict``."""
+    torch = _torch()
+    name = model.registry_name
+    schema = model.schema_
+    f32 = torch.float32
+
+    class Graph(torch.nn.Module):
+        def __init__(self):
+            super().__init__()
+            if name not in ("gp", "pls", "mean"):
+                self.net = model.module_.eval()
+
+        def forward(self, raw):
+            a, pmf, status = _absorbance_and_physiology(torch, schema, raw)
+            if name == "mean":
+                g = torch.zeros_like(raw[:, 0]) + float(model.mean_)
+            elif name == "pls":
+                z = torch.cat([a, pmf], dim=1)
+                g = z @ torch.as_tensor(model.coef_, dtype=f32) + float(model.intercept_)
+            elif name == "gp":
+                z = torch.cat([a, pmf], dim=1)
+                z = _standardise(torch, z, model.x_mean_, model.x_scale_ * model.length_scales_)
+                t = torch.as_tensor(model.X_train_ / model.length_scales_, dtype=f32)
+                d2 = (z * z).sum(1, keepdim=True) + (t * t).sum(1)[None, :] - 2.0 * z @ t.T
+                k = float(model.signal_variance_) * torch.exp(-0.5 * torch.clamp(d2, min=0.0))
+                g = (k @ torch.as_tensor(model.alpha_, dtype=f32)) * float(model.y_std_) \
+                    + float(model.y_mean_)
+            else:
+                s = model.scaler_
+                if pmf.shape[1] == 0:
+                    pmf = torch.zeros_like(raw[:, :1])
+                out = self.net(_standardise(torch, a, s["nir_mean"], s["nir_scale"]),
+                               _standardise(torch, pmf, s["pmf_mean"], s["pmf_scale"]))
+                out = out[0] if isinstance(out, tuple) else out
+                g = out.reshape(-1) * float(s["y_scale"]) + float(s["y_mean"])
+            return g.reshape(-1), status
+
+    return Graph().eval()
+
+
+def _trace(torch, graph, example, buf) -> None:
+    torch.onnx.export(graph, (example,), buf, input_names=["raw"],
+                      output_names=["glucose_mgdl", "status"],
+                      dynamic_axes={"raw": {0: "n"}, "glucose_mgdl": {0: "n"}, "status": {0: "n"}},
+                      opset_version=OPSET, dynamo=False)
+
+
+def onnx_graph_bytes(model: Any) -> bytes:
+    """The ONNX file of a fitted ``model`` as bytes (see the module docstring).
+
+    Raises
+    ------
+    ConfigError
+        If the model has no ONNX path, or ``onnx`` is not installed.
+    DataError
+        If the model is not fitted on a device's data.
+    """
+    name = getattr(model, "registry_name", type(model).__name__)
+    if name not in ONNX_MODELS:
+        why = NO_ONNX_PATH.get(name, "no ONNX path is written for it")
+        raise ConfigError(f"model {name!r} cannot be exported to ONNX: {why}; models with an "
+                          f"ONNX path: {', '.join(ONNX_MODELS)}")
+    schema = getattr(model, "schema_", None)
+    if schema is None:
+        raise DataError(f"model {name!r} is not fitted (or was fitted on a plain array, "
+                        "with no device to describe); fit it on a Dataset or a file first")
+    try:
+        import onnx
+    except ImportError as exc:
+        raise ConfigError('ONNX export needs the onnx package: pip install "nirglucose[onnx]"'
+                          ) from exc
+    torch = _torch()
+    graph = _graph_module(model)
+    example = torch.ones((2, len(schema.raw_columns)), dtype=torch.float32)
+    buf = io.BytesIO()
+    fastpath = torch.backends.mha.get_fastpath_enabled()
+    # attention's fused inference kernel has no ONNX form: trace the composite operators
+    torch.backends.mha.set_fastpath_enabled(False)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the TorchScript exporter's deprecation notice
+            _trace(torch, graph, example, buf)
+    finally:
+        torch.backends.mha.set_fastpath_enabled(fastpath)
+    proto = onnx.load_from_string(buf.getvalue())
+    meta = {"nirglucose_model": name, "raw_columns": json.dumps(list(schema.raw_columns)),
+            "adc_bits": str(schema.adc_bits), "glucose_unit": "mg/dL"}
+    for key, value in meta.items():
+        entry = proto.metadata_props.add()
+        entry.key, entry.value = key, value
+    proto.producer_name = "nirglucose"
+    return proto.SerializeToString()
+
+
+def export_onnx(model: Any, path: str | Path) -> Path:
+    """Write ``model`` as one ONNX file at ``path`` (atomically).
+
+    Parameters
+    ----------
+    model : estimator
+        A fitted model with an ONNX path (:data:`ONNX_MODELS`), fitted on a device's data.
+    path : str or Path
+        The ``.onnx`` file to write; its directory must exist.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    path = Path(path)
+    blob = onnx_graph_bytes(model)
+    atomic_write(path, lambda tmp: Path(tmp).write_bytes(blob))
+    return path

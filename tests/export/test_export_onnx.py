@@ -1,0 +1,68 @@
+"""``export-onnx`` (issue 28): every model with an ONNX path, run by onnxruntime, predicts
+what Python predicts, flags unusable codes, and writes the same bytes twice."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import nirglucose as ng
+from nirglucose.cli import main
+from nirglucose.export.onnx_export import NO_ONNX_PATH, ONNX_MODELS
+from nirglucose.models import make_model
+from nirglucose.models.registry import MODELS
+
+ort = pytest.importorskip("onnxruntime")
+onnx = pytest.importorskip("onnx")
+
+#: Short fits: the graph, not the accuracy, is under test.
+FAST = {name: {"max_epochs": 5, "random_state": 0} for name in ONNX_MODELS
+        if name not in ("gp", "pls", "mean")}
+
+
+@pytest.fixture(scope="module")
+def data():
+    return ng.simulate("wearable", 20, 2, seed=0)
+
+
+def test_every_registered_model_has_an_onnx_path_or_a_reason():
+    assert set(ONNX_MODELS) | set(NO_ONNX_PATH) == set(MODELS)
+    assert not set(ONNX_MODELS) & set(NO_ONNX_PATH)
+
+
+@pytest.mark.parametrize("name", ONNX_MODELS)
+def test_onnx_predicts_what_python_predicts(name, data, tmp_path, capsys):
+    model = make_model(name, **FAST.get(name, {})).fit(data)
+    model.save(tmp_path / "model.json")
+    out = tmp_path / "model.onnx"
+    assert main(["export-onnx", "--model", str(tmp_path / "model.json"), "--out", str(out)]) == 0
+    assert "wrote" in capsys.readouterr().out
+    session = ort.InferenceSession(str(out))
+    raw = data.frame[list(model.schema_.raw_columns)].to_numpy(np.float32)
+    glucose, status = session.run(None, {"raw": raw})
+    np.testing.assert_allclose(glucose, model.predict(data), atol=0.05)
+    assert status.dtype == np.int32 and not status.any()
+    meta = {p.key: p.value for p in onnx.load(str(out)).metadata_props}
+    assert json.loads(meta["raw_columns"]) == list(model.schema_.raw_columns)
+    assert meta["adc_bits"] == str(model.schema_.adc_bits) and meta["nirglucose_model"] == name
+    # a code of 0 or above full scale is flagged, never silently used
+    bad = raw[:3].copy()
+    bad[0, 0], bad[1, 0] = 0.0, 2.0**model.schema_.adc_bits
+    assert session.run(None, {"raw": bad})[1].tolist() == [1, 1, 0]
+    # the same model writes the same bytes
+    again = tmp_path / "again.onnx"
+    assert main(["export-onnx", "--model", str(tmp_path / "model.json"), "--out", str(again)]) == 0
+    assert again.read_bytes() == out.read_bytes()
+
+
+@pytest.mark.parametrize("name", ["ebl", "gbr"])
+def test_a_model_without_an_onnx_path_is_one_line_exit_2(name, data, tmp_path, capsys):
+    make_model(name).fit(data).save(tmp_path / "model.json")
+    code = main(["export-onnx", "--model", str(tmp_path / "model.json"),
+                 "--out", str(tmp_path / "m.onnx")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err and "cannot be exported to ONNX" in err, err
+    assert NO_ONNX_PATH[name].split(":")[0] in err
+    assert not (tmp_path / "m.onnx").exists()
