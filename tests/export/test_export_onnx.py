@@ -19,7 +19,7 @@ onnx = pytest.importorskip("onnx")
 
 #: Short fits: the graph, not the accuracy, is under test.
 FAST = {name: {"max_epochs": 5, "random_state": 0} for name in ONNX_MODELS
-        if name not in ("gp", "pls", "mean")}
+        if name not in ("ebl", "gp", "pls", "mean")}
 
 
 @pytest.fixture(scope="module")
@@ -57,12 +57,32 @@ def test_onnx_predicts_what_python_predicts(name, data, tmp_path, capsys):
     assert again.read_bytes() == out.read_bytes()
 
 
-@pytest.mark.parametrize("name", ["ebl", "gbr"])
+@pytest.mark.parametrize("name", ["gbr", "physics-inversion"])
 def test_a_model_without_an_onnx_path_is_one_line_exit_2(name, data, tmp_path, capsys):
-    make_model(name).fit(data).save(tmp_path / "model.json")
+    params = {"n_em": 2} if name == "physics-inversion" else {}
+    make_model(name, **params).fit(data).save(tmp_path / "model.json")
     code = main(["export-onnx", "--model", str(tmp_path / "model.json"),
                  "--out", str(tmp_path / "m.onnx")])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err and "cannot be exported to ONNX" in err, err
     assert NO_ONNX_PATH[name].split(":")[0] in err
     assert not (tmp_path / "m.onnx").exists()
+
+
+@pytest.mark.parametrize("device", ["paper", "three-led-10-bit"])
+def test_ebl_features_in_onnx_follow_any_device(device, tmp_path):
+    """The physics features in the graph are the device's own (PPG columns on `paper`,
+    three LEDs and no reference codes below)."""
+    from nirglucose.export.onnx_export import onnx_graph_bytes
+
+    if device == "paper":
+        ds = ng.simulate("paper", 20, 2, seed=1)
+    else:
+        led = {"fwhm_nm": 40, "power_mw": 3, "responsivity_a_per_w": 0.5}
+        ds = ng.simulate("wearable", 20, 2, seed=1, overrides={
+            "leds": [{"wavelength_nm": w, **led} for w in (850, 940, 1150)],
+            "hardware.adc_bits": 10})
+    model = make_model("ebl").fit(ds)
+    session = ort.InferenceSession(onnx_graph_bytes(model))
+    raw = ds.frame[list(model.schema_.raw_columns)].to_numpy(np.float32)
+    np.testing.assert_allclose(session.run(None, {"raw": raw})[0], model.predict(ds), atol=0.05)

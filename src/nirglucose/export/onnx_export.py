@@ -14,14 +14,14 @@ and returns glucose, with nothing to compute outside it:
 The graph is the model's own prediction written in torch and traced once by
 :func:`torch.onnx.export`: decadic absorbances ``log10(I0 / I)`` from the codes (the
 ADC's full scale as ``I0`` for a device without reference codes), the model's
-standardisation, then its network (the torch networks), its Gaussian-process posterior
-mean (``gp``), its folded linear map (``pls``) or its constant (``mean``). Float32
+standardisation, then its network (the torch networks), its physics features and ridge
+coefficients (``ebl``: :func:`_features_torch`, the twin of
+:func:`nirglucose.features.compute_features`), its Gaussian-process posterior mean
+(``gp``), its folded linear map (``pls``) or its constant (``mean``). Float32
 throughout; the tests hold it to the Python prediction within 0.05 mg/dL.
 
-Models without an ONNX path (:data:`NO_ONNX_PATH` says why): the Enhanced Beer–Lambert
-ridge (its 56 physics features are NumPy code: :func:`nirglucose.export.export_c`
-exports it for a microcontroller), gradient boosting, the oracle (it reads the truth),
-the forward-model estimator and the hybrids.
+Models without an ONNX path (:data:`NO_ONNX_PATH` says why): gradient boosting, the
+oracle (it reads the truth), the forward-model estimator and the hybrids.
 
 Needs the optional packages ``onnx`` (and ``onnxruntime`` to run the file):
 ``pip install "nirglucose[onnx]"``.
@@ -46,17 +46,15 @@ __all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "export_onnx", "onnx_graph_by
 #: ONNX operator set of the exported graphs (onnxruntime 1.16 and later run it).
 OPSET = 17
 #: Registered models with an ONNX path.
-ONNX_MODELS = ("sdnn", "original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn",
-               "gp", "pls", "mean")
+ONNX_MODELS = ("ebl", "sdnn", "original-pinn", "optimized-pinn", "rte-pinn",
+               "selective-rte-pinn", "gp", "pls", "mean")
 #: Registered models without one, and why.
 NO_ONNX_PATH = {
-    "ebl": "its 56 physics features are NumPy code; export-c writes it as C for a "
-           "microcontroller",
     "gbr": "not yet: its trees would need ONNX's tree-ensemble operator",
     "oracle": "it reads the simulation's truth, which no device has",
     "physics-inversion": "an iterative solver per reading (Levenberg-Marquardt), not a "
                          "fixed graph",
-    "ebl+gp": "its EBL backbone has no ONNX path",
+    "ebl+gp": "not yet: its GP on EBL's residual would need both graphs joined",
     "physics-inversion+gp": "its physics-inversion backbone has no ONNX path",
 }
 
@@ -88,6 +86,34 @@ def _standardise(torch, x, mean, scale):
         np.asarray(scale), dtype=torch.float32)
 
 
+def _features_torch(torch, table, schema, A, P):
+    """Torch twin of :func:`nirglucose.features.compute_features`: (n, p) features from
+    absorbances ``A`` (n, k) and physiology ``P`` (n, m), one column per table row."""
+    from ..features.blocks import _ENV, NOMINAL_BLOOD_PCT, PERFUSION_COEFFS, PRESSURE_CENTER_MBAR
+    from ..features.blocks import SKIN_TEMP_CENTER_C
+
+    col = {c: P[:, m] for m, c in enumerate(schema.physiology)}
+    env = {s: (col[c] - c0) / sc for s, (c, c0, sc) in _ENV.items() if c in col}
+    pc = PERFUSION_COEFFS
+    if "blood_volume_pct" in col:
+        perf = col["blood_volume_pct"] / NOMINAL_BLOOD_PCT
+    elif {"skin_temp_c", "systolic_bp_mmhg", "pressure_mbar"} <= set(col):
+        perf = torch.exp(pc["temp"] * (col["skin_temp_c"] - SKIN_TEMP_CENTER_C)
+                         + pc["sbp"] * (col["systolic_bp_mmhg"] - pc["sbp_center"])
+                         + pc["pressure"] * (col["pressure_mbar"] - PRESSURE_CENTER_MBAR))
+    ops = {
+        "A": lambda op: A[:, op[1]],
+        "lin": lambda op: sum(w * A[:, c] for c, w in op[1]),
+        "AA": lambda op: A[:, op[1]] * A[:, op[2]],
+        "w": lambda op: (op[2] * col["skin_thickness_mm"] + op[3] * perf
+                         + op[4] * col["melanin_fraction"]) * A[:, op[1]],
+        "envA": lambda op: env[op[1]] * A[:, op[2]],
+        "pmf": lambda op: P[:, op[1]],
+        "env2": lambda op: env[op[1]] * env[op[2]],
+    }
+    return torch.stack([ops[spec.op[0]](spec.op) for spec in table], dim=1)
+
+
 def _graph_module(model):
     """A torch module ``raw -> (glucose_mgdl, status)`` equal to ``model.predict``."""
     torch = _torch()
@@ -98,13 +124,16 @@ def _graph_module(model):
     class Graph(torch.nn.Module):
         def __init__(self):
             super().__init__()
-            if name not in ("gp", "pls", "mean"):
+            if name not in ("ebl", "gp", "pls", "mean"):
                 self.net = model.module_.eval()
 
         def forward(self, raw):
             a, pmf, status = _absorbance_and_physiology(torch, schema, raw)
             if name == "mean":
                 g = torch.zeros_like(raw[:, 0]) + float(model.mean_)
+            elif name == "ebl":
+                z = _features_torch(torch, model.table_, schema, a, pmf)
+                g = z @ torch.as_tensor(model.coef_, dtype=f32) + float(model.intercept_)
             elif name == "pls":
                 z = torch.cat([a, pmf], dim=1)
                 g = z @ torch.as_tensor(model.coef_, dtype=f32) + float(model.intercept_)
