@@ -89,8 +89,13 @@ def _standardise(torch, x, mean, scale):
 def _features_torch(torch, table, schema, A, P):
     """Torch twin of :func:`nirglucose.features.compute_features`: (n, p) features from
     absorbances ``A`` (n, k) and physiology ``P`` (n, m), one column per table row."""
-    from ..features.blocks import _ENV, NOMINAL_BLOOD_PCT, PERFUSION_COEFFS, PRESSURE_CENTER_MBAR
-    from ..features.blocks import SKIN_TEMP_CENTER_C
+    from ..features.blocks import (
+        _ENV,
+        NOMINAL_BLOOD_PCT,
+        PERFUSION_COEFFS,
+        PRESSURE_CENTER_MBAR,
+        SKIN_TEMP_CENTER_C,
+    )
 
     col = {c: P[:, m] for m, c in enumerate(schema.physiology)}
     env = {s: (col[c] - c0) / sc for s, (c, c0, sc) in _ENV.items() if c in col}
