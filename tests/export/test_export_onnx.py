@@ -19,7 +19,7 @@ onnx = pytest.importorskip("onnx")
 
 #: Short fits: the graph, not the accuracy, is under test.
 FAST = {name: {"max_epochs": 5, "random_state": 0} for name in ONNX_MODELS
-        if name not in ("ebl", "gp", "pls", "mean")}
+        if name not in ("ebl", "gp", "pls", "mean", "ebl+gp")}
 
 
 @pytest.fixture(scope="module")

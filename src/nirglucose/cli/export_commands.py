@@ -18,7 +18,7 @@ def export_onnx_file(
 ) -> None:
     """Write a fitted model as one ONNX file: raw device columns in, glucose and a status out.
 
-    Models with an ONNX path: ebl, the torch networks, gp, pls and mean.
+    Models with an ONNX path: ebl, the torch networks, gp, pls, mean and ebl+gp.
     """
     from ..export.onnx_export import export_onnx
     from ..models import load_model

@@ -17,11 +17,12 @@ ADC's full scale as ``I0`` for a device without reference codes), the model's
 standardisation, then its network (the torch networks), its physics features and ridge
 coefficients (``ebl``: :func:`_features_torch`, the twin of
 :func:`nirglucose.features.compute_features`), its Gaussian-process posterior mean
-(``gp``), its folded linear map (``pls``) or its constant (``mean``). Float32
+(``gp``), its folded linear map (``pls``), its constant (``mean``), or EBL then the GP
+on EBL's residual (``ebl+gp``). Float32
 throughout; the tests hold it to the Python prediction within 0.05 mg/dL.
 
 Models without an ONNX path (:data:`NO_ONNX_PATH` says why): gradient boosting, the
-oracle (it reads the truth), the forward-model estimator and the hybrids.
+oracle (it reads the truth), the forward-model estimator and its hybrid.
 
 Needs the optional packages ``onnx`` (and ``onnxruntime`` to run the file):
 ``pip install "nirglucose[onnx]"``.
@@ -47,14 +48,13 @@ __all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "export_onnx", "onnx_graph_by
 OPSET = 17
 #: Registered models with an ONNX path.
 ONNX_MODELS = ("ebl", "sdnn", "original-pinn", "optimized-pinn", "rte-pinn",
-               "selective-rte-pinn", "gp", "pls", "mean")
+               "selective-rte-pinn", "gp", "pls", "mean", "ebl+gp")
 #: Registered models without one, and why.
 NO_ONNX_PATH = {
     "gbr": "not yet: its trees would need ONNX's tree-ensemble operator",
     "oracle": "it reads the simulation's truth, which no device has",
     "physics-inversion": "an iterative solver per reading (Levenberg-Marquardt), not a "
                          "fixed graph",
-    "ebl+gp": "not yet: its GP on EBL's residual would need both graphs joined",
     "physics-inversion+gp": "its physics-inversion backbone has no ONNX path",
 }
 
@@ -119,46 +119,62 @@ def _features_torch(torch, table, schema, A, P):
     return torch.stack([ops[spec.op[0]](spec.op) for spec in table], dim=1)
 
 
+def _linear(torch, z, coef, intercept):
+    return z @ torch.as_tensor(np.asarray(coef), dtype=torch.float32) + float(intercept)
+
+
+def _gp_mean(torch, gp, u):
+    """Posterior mean of a fitted :class:`~nirglucose.models.reference.GPReference` at
+    inputs ``u`` (n, p), as its ``predict`` computes it."""
+    f32 = torch.float32
+    z = _standardise(torch, u, gp.x_mean_, gp.x_scale_ * gp.length_scales_)
+    t = torch.as_tensor(gp.X_train_ / gp.length_scales_, dtype=f32)
+    d2 = (z * z).sum(1, keepdim=True) + (t * t).sum(1)[None, :] - 2.0 * z @ t.T
+    k = float(gp.signal_variance_) * torch.exp(-0.5 * torch.clamp(d2, min=0.0))
+    return (k @ torch.as_tensor(gp.alpha_, dtype=f32)) * float(gp.y_std_) + float(gp.y_mean_)
+
+
+def _network(torch, model, net, a, pmf):
+    s = model.scaler_
+    if pmf.shape[1] == 0:
+        pmf = torch.zeros_like(a[:, :1])
+    out = net(_standardise(torch, a, s["nir_mean"], s["nir_scale"]),
+              _standardise(torch, pmf, s["pmf_mean"], s["pmf_scale"]))
+    out = out[0] if isinstance(out, tuple) else out
+    return out.reshape(-1) * float(s["y_scale"]) + float(s["y_mean"])
+
+
+def _glucose_torch(torch, model, a, pmf):
+    """``model``'s glucose from absorbances and physiology, in torch (one per family)."""
+    name = model.registry_name
+    if name == "mean":
+        return torch.zeros_like(a[:, 0]) + float(model.mean_)
+    if name == "ebl":
+        return _linear(torch, _features_torch(torch, model.table_, model.schema_, a, pmf),
+                       model.coef_, model.intercept_)
+    if name == "pls":
+        return _linear(torch, torch.cat([a, pmf], dim=1), model.coef_, model.intercept_)
+    if name == "gp":
+        return _gp_mean(torch, model, torch.cat([a, pmf], dim=1))
+    if name == "ebl+gp":  # the backbone, then the GP on [inputs, backbone] (its predict)
+        base = _glucose_torch(torch, model.backbone_, a, pmf)
+        return base + _gp_mean(torch, model.residual_, torch.cat([a, pmf, base[:, None]], 1))
+    return _network(torch, model, model.module_.eval(), a, pmf)
+
+
 def _graph_module(model):
     """A torch module ``raw -> (glucose_mgdl, status)`` equal to ``model.predict``."""
     torch = _torch()
-    name = model.registry_name
     schema = model.schema_
-    f32 = torch.float32
 
     class Graph(torch.nn.Module):
         def __init__(self):
             super().__init__()
-            if name not in ("ebl", "gp", "pls", "mean"):
-                self.net = model.module_.eval()
+            self.net = getattr(model, "module_", None)  # registered: traced as a submodule
 
         def forward(self, raw):
             a, pmf, status = _absorbance_and_physiology(torch, schema, raw)
-            if name == "mean":
-                g = torch.zeros_like(raw[:, 0]) + float(model.mean_)
-            elif name == "ebl":
-                z = _features_torch(torch, model.table_, schema, a, pmf)
-                g = z @ torch.as_tensor(model.coef_, dtype=f32) + float(model.intercept_)
-            elif name == "pls":
-                z = torch.cat([a, pmf], dim=1)
-                g = z @ torch.as_tensor(model.coef_, dtype=f32) + float(model.intercept_)
-            elif name == "gp":
-                z = torch.cat([a, pmf], dim=1)
-                z = _standardise(torch, z, model.x_mean_, model.x_scale_ * model.length_scales_)
-                t = torch.as_tensor(model.X_train_ / model.length_scales_, dtype=f32)
-                d2 = (z * z).sum(1, keepdim=True) + (t * t).sum(1)[None, :] - 2.0 * z @ t.T
-                k = float(model.signal_variance_) * torch.exp(-0.5 * torch.clamp(d2, min=0.0))
-                g = (k @ torch.as_tensor(model.alpha_, dtype=f32)) * float(model.y_std_) \
-                    + float(model.y_mean_)
-            else:
-                s = model.scaler_
-                if pmf.shape[1] == 0:
-                    pmf = torch.zeros_like(raw[:, :1])
-                out = self.net(_standardise(torch, a, s["nir_mean"], s["nir_scale"]),
-                               _standardise(torch, pmf, s["pmf_mean"], s["pmf_scale"]))
-                out = out[0] if isinstance(out, tuple) else out
-                g = out.reshape(-1) * float(s["y_scale"]) + float(s["y_mean"])
-            return g.reshape(-1), status
+            return _glucose_torch(torch, model, a, pmf).reshape(-1), status
 
     return Graph().eval()
 
