@@ -15,8 +15,8 @@ The package is split by concept; every name is importable from here as before:
 :mod:`._base` (the shared bounded model), :mod:`.leds`, :mod:`.subject` (physiology,
 glucose), :mod:`.environment` (ambient conditions, probe contact), :mod:`.instrument`
 (optics, hardware, measured physiology), :mod:`.noise`, :mod:`.device`,
-:mod:`.scenario`, :mod:`.presets` and :mod:`.overrides` (``--set`` keys and
-:func:`resolve_config`).
+:mod:`.scenario`, :mod:`.presets`, :mod:`.keys` (every key's unit, range and the
+nearest valid keys) and :mod:`.overrides` (``--set`` parsing and :func:`resolve_config`).
 """
 
 from __future__ import annotations
@@ -31,9 +31,10 @@ from .instrument import (
     OpticsConfig,
     ReferenceTissue,
 )
+from .keys import valid_keys
 from .leds import DEFAULT_LEDS, LED, LEGACY_LED_KEYS, LEDConfig
 from .noise import NOISE_SOURCES, NoiseConfig, NoiseSource
-from .overrides import apply_overrides, is_valid_key, parse_override, resolve_config, valid_keys
+from .overrides import apply_overrides, is_valid_key, parse_override, resolve_config
 from .presets import (
     DEVICE_CAPABILITIES,
     PAPER_SIGNAL_GAIN,

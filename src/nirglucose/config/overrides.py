@@ -9,23 +9,10 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from ..exceptions import ConfigError, unknown_name
+from .keys import out_of_range_message, suggest_keys, unit_of, valid_keys
 from .leds import LED, LEGACY_LED_KEYS, _merge_legacy_leds
 from .presets import PRESETS
 from .scenario import ScenarioConfig
-
-
-def valid_keys(model: type[BaseModel] = ScenarioConfig, prefix: str = "") -> list[str]:
-    """Every dotted key accepted by :func:`apply_overrides`."""
-    keys = []
-    for name, field in model.model_fields.items():
-        ann = field.annotation
-        if not prefix and name == "preset":  # a label set by the preset, not a setting
-            continue
-        if isinstance(ann, type) and issubclass(ann, BaseModel):
-            keys.extend(valid_keys(ann, f"{prefix}{name}."))
-        else:
-            keys.append(f"{prefix}{name}")
-    return keys
 
 
 def parse_override(text: str) -> tuple[str, Any]:
@@ -116,8 +103,6 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
             if is_valid_key(dotted):
                 per_led[dotted] = value
                 continue
-            from ..config_keys import suggest_keys
-
             close = suggest_keys(dotted, keys)
             hint = f"; did you mean {', '.join(close)}?" if close else ""
             raise ConfigError(
@@ -175,8 +160,6 @@ def resolve_config(
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = ".".join(str(p) for p in err["loc"]) or "config"
-        from ..config_keys import out_of_range_message, unit_of
-
         if err["type"] in _RANGE_ERRORS:
             msg = out_of_range_message(loc, err.get("input"))
             if msg is not None:

@@ -91,6 +91,7 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from ...exceptions import ConfigError
+from .._environment import mc_threads_from_env
 from .._inputs import check_n_photons
 
 __all__ = [
@@ -361,8 +362,6 @@ class WhiteRun:
 def _n_threads(n_threads: int | None) -> int:
     if n_threads is not None:
         return max(1, int(n_threads))
-    from ..lut.cache import mc_threads_from_env  # the optics' one reader of the environment
-
     env = mc_threads_from_env()
     if env is not None:
         return env

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...exceptions import ConfigError
+from .._environment import mc_threads_from_env
 from .build import build_lut
 from .grid import SkinLUT, _mc_photons, _resolve_grid, lut_key
 
@@ -162,25 +162,3 @@ def get_lut(
                     float(n_ambient), grid, str(cache_dir()), solver)
 
 
-def mc_threads_from_env() -> int | None:
-    """Threads of the white Monte Carlo from ``$NIRGLUCOSE_MC_THREADS`` (None: unset).
-
-    Read here so that the optics read environment variables in one module; used by
-    :func:`nirglucose.optics.kernels.mc_white.white_mc_run` when it is given no ``n_threads``.
-
-    Raises
-    ------
-    ConfigError
-        If the variable is set but is not an integer >= 1.
-    """
-    env = os.environ.get("NIRGLUCOSE_MC_THREADS")
-    if not env:
-        return None
-    try:
-        n = int(env)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise ConfigError(f"NIRGLUCOSE_MC_THREADS = {env!r} is invalid; expected an integer "
-                          "in [1, inf) [-]")
-    return n
