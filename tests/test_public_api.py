@@ -46,3 +46,13 @@ def test_unknown_attribute_is_an_attribute_error():
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         ng.nope  # noqa: B018
     assert {"models", "metrics", "evaluation"} <= set(dir(ng))
+
+
+def test_loading_a_model_does_not_import_the_evaluation_package(tmp_path):
+    from nirglucose.models import make_model
+
+    make_model("ebl").fit(ng.simulate("paper", 12, 2, seed=0)).save(tmp_path / "m.json")
+    got = _fresh("from nirglucose.models import load_model; "
+                 f"load_model({str(tmp_path / 'm.json')!r}); "
+                 "print(sorted(m for m in sys.modules if m.startswith('nirglucose.evaluation')))")
+    assert got == "[]"

@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import ConfigError, DataError
+from ..models._validate import check_calibration_doc
 from .stats import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
@@ -53,7 +54,7 @@ __all__ = [
     "interval",
     "out_of_fold_intervals",
     "coverage_summary",
-    "check_calibration_doc",
+    "check_calibration_doc",  # defined in models._validate (model files read it)
 ]
 
 #: Nominal coverages reported everywhere (90 % and 80 %).
@@ -232,33 +233,6 @@ def split_conformal(
             "seed": int(seed),
         },
     )
-
-
-def check_calibration_doc(doc: Any, where: str = "model file") -> dict[str, Any]:
-    """Validate a stored calibration (from a model file); returns it."""
-    ok = (
-        isinstance(doc, dict)
-        and doc.get("method") == "split"
-        and isinstance(doc.get("half_width_mgdl"), dict)
-        and len(doc["half_width_mgdl"]) > 0
-    )
-    if ok:
-        for key in ("half_width_mgdl", "half_width_offset1_mgdl"):
-            for k, v in (doc.get(key) or {}).items():
-                if v is None and key == "half_width_offset1_mgdl":
-                    continue
-                if (
-                    not str(k).isdigit()
-                    or not 0 < int(k) < 100
-                    or isinstance(v, bool)
-                    or not isinstance(v, int | float)
-                    or not math.isfinite(v)
-                    or v < 0
-                ):
-                    ok = False
-    if not ok:
-        raise DataError(f"{where}: malformed conformal calibration; refit the model")
-    return doc
 
 
 def attach(model, calibration: dict[str, Any]):

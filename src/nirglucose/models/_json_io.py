@@ -26,7 +26,7 @@ import numpy as np
 
 from ..dataset import atomic_write
 from ..exceptions import DataError
-from ._validate import MODEL_FORMAT, check_array, read_model_document
+from ._validate import MODEL_FORMAT, check_array, check_calibration_doc, read_model_document
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "JsonModelMixin"]
 
@@ -139,8 +139,6 @@ class JsonModelMixin:
             setattr(model, key, _state_value(path, key, state[key], shape))
         model._restore()
         if "conformal" in doc:
-            from ..evaluation.conformal import check_calibration_doc
-
             model.conformal_ = check_calibration_doc(doc["conformal"], repr(str(path)))
         return model
 

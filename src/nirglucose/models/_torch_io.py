@@ -17,7 +17,13 @@ import torch
 from ..dataset import atomic_write
 from ..exceptions import DataError
 from ..schema import DeviceSchema
-from ._validate import MODEL_FORMAT, check_torch_doc, check_weights, read_model_document
+from ._validate import (
+    MODEL_FORMAT,
+    check_calibration_doc,
+    check_torch_doc,
+    check_weights,
+    read_model_document,
+)
 
 __all__ = ["FORMAT_VERSION", "TorchIOMixin", "WHITENING_KEY"]
 
@@ -134,8 +140,6 @@ class TorchIOMixin:
         self.refit_epochs_ = len(self.refit_history_)
         self.start_val_mse_ = doc.get("start_val_mse")
         if "conformal" in doc:  # the interval calibration saved with the model
-            from ..evaluation.conformal import check_calibration_doc
-
             self.conformal_ = check_calibration_doc(doc["conformal"], repr(str(path)))
         self.n_features_in_ = len(self.schema_.raw_columns)
         if not self.schema_.is_plain:

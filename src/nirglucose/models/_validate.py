@@ -9,6 +9,7 @@ naming the file, the entry and what is wrong. They never execute anything.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,7 @@ __all__ = [
     "MAX_ABS_STATE",
     "MAX_Y_SCALE_MGDL",
     "check_array",
+    "check_calibration_doc",
     "check_predictions",
     "check_torch_doc",
     "check_weights",
@@ -182,4 +184,35 @@ def read_model_document(
             f"{str(path)!r} has format_version {doc.get('format_version')!r}; this "
             f"nirglucose reads version {version}"
         )
+    return doc
+
+
+def check_calibration_doc(doc: Any, where: str = "model file") -> dict[str, Any]:
+    """Validate a stored split-conformal calibration (from a model file); returns it.
+
+    Lives with the model-file checks, so loading a model never imports the evaluation
+    package; :mod:`nirglucose.evaluation.conformal` writes what it reads.
+    """
+    ok = (
+        isinstance(doc, dict)
+        and doc.get("method") == "split"
+        and isinstance(doc.get("half_width_mgdl"), dict)
+        and len(doc["half_width_mgdl"]) > 0
+    )
+    if ok:
+        for key in ("half_width_mgdl", "half_width_offset1_mgdl"):
+            for k, v in (doc.get(key) or {}).items():
+                if v is None and key == "half_width_offset1_mgdl":
+                    continue
+                if (
+                    not str(k).isdigit()
+                    or not 0 < int(k) < 100
+                    or isinstance(v, bool)
+                    or not isinstance(v, int | float)
+                    or not math.isfinite(v)
+                    or v < 0
+                ):
+                    ok = False
+    if not ok:
+        raise DataError(f"{where}: malformed conformal calibration; refit the model")
     return doc
