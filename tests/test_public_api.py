@@ -51,7 +51,12 @@ def test_unknown_attribute_is_an_attribute_error():
 def test_loading_a_model_does_not_import_the_evaluation_package(tmp_path):
     from nirglucose.models import make_model
 
-    make_model("ebl").fit(ng.simulate("paper", 12, 2, seed=0)).save(tmp_path / "m.json")
+    from nirglucose.evaluation.conformal import attach
+
+    model = make_model("ebl").fit(ng.simulate("paper", 12, 2, seed=0))
+    # with a calibration: the loader checks it (that check once imported evaluation)
+    attach(model, {"method": "split", "half_width_mgdl": {"90": 10.0}}).save(tmp_path / "m.json")
+    assert "conformal" in (tmp_path / "m.json").read_text()
     got = _fresh("from nirglucose.models import load_model; "
                  f"load_model({str(tmp_path / 'm.json')!r}); "
                  "print(sorted(m for m in sys.modules if m.startswith('nirglucose.evaluation')))")
