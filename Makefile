@@ -12,7 +12,7 @@ OUT    ?= results
 # runs them); tests/test_makefile.py keeps this list equal to the registry minus those
 MODELS ?= ebl,pls,oracle,physics-inversion,original-pinn,optimized-pinn,rte-pinn,selective-rte-pinn,sdnn,mean,gp,gbr
 
-.PHONY: run test install lint bench clean
+.PHONY: run test install lint bench docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -38,5 +38,16 @@ lint: $(STAMP)
 bench: $(STAMP)
 	for b in benchmarks/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 
+# the documentation site: installs the docs extra into the same .venv, warnings are errors
+DOCS_STAMP := $(VENV)/.installed-docs
+
+$(DOCS_STAMP): $(STAMP) pyproject.toml requirements.lock
+	$(BIN)/python -m pip install -q -c requirements.lock -e ".[dev,docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	MPLBACKEND=agg $(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
+	@echo "docs: $(abspath docs/_build/html)/index.html"
+
 clean:
-	rm -rf $(VENV) results .pytest_cache build src/*.egg-info
+	rm -rf $(VENV) results .pytest_cache build src/*.egg-info docs/_build docs/_generated docs/generated docs/auto_examples

@@ -37,6 +37,7 @@ Studies (:data:`STUDIES`)
         :data:`DATA_SIZE_TEST_SUBJECTS` subjects (another seed, derived from the
         task's). :func:`ranking_crossings` says between which sizes two models swap
         places.
+
     Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
     Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
 
