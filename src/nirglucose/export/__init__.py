@@ -1,4 +1,5 @@
-"""Export fitted models for embedded targets (C99 source + header for linear models)."""
+"""Export fitted models: C99 source + header for a microcontroller (linear models) and one
+ONNX graph for any other runtime (:mod:`.onnx_export`)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from .c_codegen import (
     generate_c,
     prototype,
 )
+from .onnx_export import NO_ONNX_PATH, ONNX_MODELS, export_onnx, onnx_graph_bytes
 
 __all__ = [
     "EXPORTABLE_MODELS",
@@ -22,4 +24,8 @@ __all__ = [
     "c_float",
     "export_c",
     "generate_c",
+    "ONNX_MODELS",
+    "NO_ONNX_PATH",
+    "export_onnx",
+    "onnx_graph_bytes",
 ]
