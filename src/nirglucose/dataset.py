@@ -341,10 +341,10 @@ class PartitionedDataset(Dataset):
         self.path = Path(path)
         self.parts = list(parts)
         self._n_rows = int(n_rows)
-        super().__init__(None, config=config, seed=seed, metadata=metadata)  # type: ignore[arg-type]
+        super().__init__(None, config=config, seed=seed, metadata=metadata)
 
     @property
-    def frame(self) -> pd.DataFrame:  # type: ignore[override]
+    def frame(self) -> pd.DataFrame:
         """Every row as one DataFrame (read from the parts on first access)."""
         if self._frame is None:
             frames = [pq.read_table(p).to_pandas() for p in self.parts]

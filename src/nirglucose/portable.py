@@ -118,16 +118,15 @@ def _compile(name: str) -> np.ufunc:
     import numba  # heavy: compiled on first use, so ``import nirglucose`` does not need it
 
     fn = getattr(math, UFUNC_NAMES[name])
-    if name == "power":
-        def kernel(x, y):
-            return fn(x, y)
 
-        signature = "float64(float64, float64)"
-    else:
-        def kernel(x):
-            return fn(x)
+    def binary(x, y):
+        return fn(x, y)
 
-        signature = "float64(float64)"
+    def unary(x):
+        return fn(x)
+
+    kernel, signature = ((binary, "float64(float64, float64)") if name == "power"
+                         else (unary, "float64(float64)"))
     kernel.__name__ = kernel.__qualname__ = name
     return numba.vectorize([signature])(kernel).ufunc
 

@@ -348,7 +348,7 @@ class DeviceSchema:
             ref = Xa[:, k : 2 * k]
             start = 2 * k
         else:
-            ref = float(self.full_scale)
+            ref = np.full_like(adc, float(self.full_scale))
             start = k
         if not (adc > 0).all() or not np.all(np.asarray(ref) > 0):
             raise DataError("ADC and reference codes must be > 0 to form absorbances log10(I0/I)")

@@ -176,13 +176,13 @@ class Bounds:
         lo_open = hi_open = False
         for m in metadata:
             if isinstance(m, at.Ge):
-                lo, lo_open = m.ge, False
+                lo, lo_open = float(m.ge), False  # type: ignore[arg-type]
             elif isinstance(m, at.Gt):
-                lo, lo_open = m.gt, True
+                lo, lo_open = float(m.gt), True  # type: ignore[arg-type]
             elif isinstance(m, at.Le):
-                hi, hi_open = m.le, False
+                hi, hi_open = float(m.le), False  # type: ignore[arg-type]
             elif isinstance(m, at.Lt):
-                hi, hi_open = m.lt, True
+                hi, hi_open = float(m.lt), True  # type: ignore[arg-type]
         return cls(lo, hi, lo_open, hi_open)
 
 

@@ -58,7 +58,7 @@ def is_valid_key(dotted: str) -> bool:
     if dotted in valid_keys() or dotted == "leds" or dotted in LEGACY_LED_KEYS:
         return True
     m = _PER_LED_KEY.fullmatch(dotted)
-    return bool(m) and m.group(2) in LED.model_fields
+    return m is not None and m.group(2) in LED.model_fields
 
 
 def _plain(value: Any) -> Any:

@@ -198,7 +198,7 @@ def _check_diabetes_type(diabetes_type: int) -> int:
     return int(diabetes_type)
 
 
-def _percentages_from_codes(codes: NDArray[np.int8]) -> dict[str, float]:
+def _percentages_from_codes(codes: NDArray[np.integer]) -> dict[str, float]:
     counts = np.bincount(codes, minlength=len(ZONE_LABELS))
     total = codes.shape[0]
     return {label: float(100.0 * counts[i] / total) for i, label in enumerate(ZONE_LABELS)}

@@ -123,4 +123,5 @@ def load_model(path: str | Path):
     from ._validate import read_model_document
 
     doc = read_model_document(Path(path))
-    return get_model_class(doc["model"]).load(path)
+    cls: Any = get_model_class(doc["model"])  # every registered class has a load()
+    return cls.load(path)
