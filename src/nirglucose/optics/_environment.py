@@ -1,16 +1,19 @@
-"""Where the Monte Carlo kernel reads the environment: ``$NIRGLUCOSE_MC_THREADS``.
+"""The one place the optics read environment variables.
 
-A leaf module (it imports no other optics module), so that the white Monte Carlo kernel
-and the look-up-table cache read the same variable without importing each other.
+``$NIRGLUCOSE_MC_THREADS`` (white Monte Carlo threads), ``$NIRGLUCOSE_CACHE`` and
+``$XDG_CACHE_HOME`` (the table cache's directory) and ``$NIRGLUCOSE_LUT_GRID`` (the grid
+used where none is named). A leaf module (it imports no other optics module), so that the
+white Monte Carlo kernel and the look-up-table cache read them without importing each other.
 """
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 from ..exceptions import ConfigError
 
-__all__ = ["mc_threads_from_env"]
+__all__ = ["mc_threads_from_env", "cache_dir_from_env", "lut_grid_from_env"]
 
 
 def mc_threads_from_env() -> int | None:
@@ -36,3 +39,17 @@ def mc_threads_from_env() -> int | None:
                           "in [1, inf) [-]")
     return n
 
+
+
+def cache_dir_from_env() -> Path:
+    """``$NIRGLUCOSE_CACHE``, else ``$XDG_CACHE_HOME/nirglucose``, else ``~/.cache/nirglucose``."""
+    env = os.environ.get("NIRGLUCOSE_CACHE")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "nirglucose"
+
+
+def lut_grid_from_env() -> str:
+    """The look-up-table grid named by ``$NIRGLUCOSE_LUT_GRID``, else ``"default"``."""
+    return os.environ.get("NIRGLUCOSE_LUT_GRID") or "default"

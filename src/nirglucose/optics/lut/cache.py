@@ -1,11 +1,12 @@
-"""The table's disk cache, and the one place the optics read environment variables.
+"""The table's disk cache.
 
 Cache: ``<cache dir>/lut-<key>.npz``, where the key (:func:`~.grid.lut_key`) hashes the
 geometry, the grid and the solver settings; the directory is ``$NIRGLUCOSE_CACHE``, else
 ``$XDG_CACHE_HOME/nirglucose``, else ``~/.cache/nirglucose``. Files are written
 atomically (temporary file + rename) and read with ``allow_pickle=False``. The grid is
 ``$NIRGLUCOSE_LUT_GRID`` (default ``"default"``) where none is named, and the white Monte
-Carlo's threads ``$NIRGLUCOSE_MC_THREADS`` (:func:`mc_threads_from_env`).
+Carlo's threads ``$NIRGLUCOSE_MC_THREADS`` (:func:`mc_threads_from_env`); all are read in
+:mod:`nirglucose.optics._environment`.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._environment import mc_threads_from_env
+from .._environment import cache_dir_from_env, lut_grid_from_env, mc_threads_from_env
 from .build import build_lut
 from .grid import SkinLUT, _mc_photons, _resolve_grid, lut_key
 
@@ -31,11 +32,7 @@ _log = logging.getLogger(__name__)
 
 def cache_dir() -> Path:
     """``$NIRGLUCOSE_CACHE``, else ``$XDG_CACHE_HOME/nirglucose``, else ``~/.cache/nirglucose``."""
-    env = os.environ.get("NIRGLUCOSE_CACHE")
-    if env:
-        return Path(env)
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "nirglucose"
+    return cache_dir_from_env()
 
 
 def _save(lut: SkinLUT, path: Path) -> None:
@@ -157,7 +154,7 @@ def get_lut(
 
     ``grid`` defaults to ``$NIRGLUCOSE_LUT_GRID``, else ``"default"``.
     """
-    grid = grid or os.environ.get("NIRGLUCOSE_LUT_GRID", "default")
+    grid = grid or lut_grid_from_env()
     return _get_lut(float(separation_cm), float(epidermis_thickness_cm), float(n_tissue),
                     float(n_ambient), grid, str(cache_dir()), solver)
 
