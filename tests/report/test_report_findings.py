@@ -268,7 +268,7 @@ def test_latency_inside_timing_noise_ranks_nothing():
     b = a.assign(latency_single_ms=[0.044, 0.050, 0.066])  # the same models, another run
     res = latency_resolution(a, [b])
     assert not res["resolved"] and math.isclose(res["noise"], 0.12 / 0.044)
-    assert "latency" not in radar_scores(a, list(a["model"]), latency=False).columns
+    assert "latency" not in radar_scores(a, list(a["model"])).columns  # never an axis
     eff = efficiency_table(a, list(a["model"]), latency=False)
     assert eff["front_latency"].tolist() == [True, False, False]  # only the most accurate
     # a spread far beyond the noise is resolved

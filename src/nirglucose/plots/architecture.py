@@ -19,7 +19,6 @@ from .style import GREY, OKABE_ITO, model_color, model_label, plain_log_ticks, p
 __all__ = ["figure_architectures", "figure_feature_engineering", "figure_performance_panel"]
 
 #: Colour of each preset's bars (the primary first).
-_PRESET_COLORS = (OKABE_ITO["blue"], OKABE_ITO["vermillion"], OKABE_ITO["bluish_green"])
 
 
 def _box(ax: Axes, x: float, y: float, w: float, h: float, text: str, color: str,
@@ -133,28 +132,38 @@ def figure_feature_engineering(n_channels: int, n_physiology: int,
     return fig
 
 
+#: Markers of the presets in the performance panel (colour stays the model's).
+_PRESET_MARKERS = ("o", "s", "D")
+
+
 def figure_performance_panel(table: pd.DataFrame) -> Figure:
-    """Error metrics, parameters and latency side by side, one bar per model and preset.
+    """Error metrics and costs side by side, one row per model and preset.
+
+    RMSE and MARD are bars from zero (RMSE with its CI); parameters and
+    multiply-accumulates per prediction are dots on log axes (a bar on a log axis has
+    no meaningful length). Colour is the model's, as in every figure; the presets
+    differ by marker and by a lighter bar.
 
     Parameters
     ----------
     table : pandas.DataFrame
         Columns ``preset``, ``model``, ``rmse_mgdl`` (optionally ``rmse_ci_low`` and
-        ``rmse_ci_high``), ``mard_pct``, ``n_parameters``, ``latency_single_ms``.
-        [-, -, mg/dL, %, -, ms]
+        ``rmse_ci_high``), ``mard_pct``, ``n_parameters``, ``macs_per_prediction``.
+        [-, -, mg/dL, %, -, -]
 
     Returns
     -------
     matplotlib.figure.Figure
-        Four Axes sharing the model axis; parameters and latency on log scales.
+        Four Axes sharing the model axis; parameters and MACs on log scales.
     """
     presets = list(dict.fromkeys(table["preset"]))
     models = list(dict.fromkeys(table["model"]))
     panels = (("rmse_mgdl", "RMSE [mg/dL]", False), ("mard_pct", "MARD [%]", False),
               ("n_parameters", "trainable parameters [-]", True),
-              ("latency_single_ms", "single-sample latency [ms]", True))
+              ("macs_per_prediction", "multiply-accumulates per prediction [-]", True))
     bar_h = 0.8 / max(len(presets), 1)
     y0 = np.arange(len(models), dtype=float)
+    colors = [model_color(m) for m in models]
     with plot_style():
         fig = Figure(figsize=(13.0, 0.42 * len(models) * max(len(presets), 1) ** 0.5 + 1.6),
                      layout="constrained")
@@ -164,24 +173,30 @@ def figure_performance_panel(table: pd.DataFrame) -> Figure:
                 t = table[table["preset"] == preset].set_index("model").reindex(models)
                 v = t[col].to_numpy(float) if col in t else np.full(len(models), np.nan)
                 y = y0 - 0.4 + bar_h * (k + 0.5)
+                marker = _PRESET_MARKERS[k % len(_PRESET_MARKERS)]
+                if log:
+                    ok = np.isfinite(v) & (v > 0)
+                    ax.scatter(v[ok], y[ok], c=[c for c, o in zip(colors, ok, strict=True)
+                                                if o], marker=marker, s=28, zorder=3)
+                    continue
                 xerr = None
                 if col == "rmse_mgdl" and {"rmse_ci_low", "rmse_ci_high"} <= set(t.columns):
                     lo = t["rmse_ci_low"].to_numpy(float)
                     hi = t["rmse_ci_high"].to_numpy(float)
                     xerr = np.nan_to_num(np.vstack([v - lo, hi - v]), nan=0.0)
-                ax.barh(y, np.nan_to_num(v, nan=0.0), height=bar_h * 0.9,
-                        color=_PRESET_COLORS[k % len(_PRESET_COLORS)], xerr=xerr,
-                        error_kw={"lw": 0.8, "capsize": 2},
-                        label=preset if len(presets) > 1 else None)
-            if log:  # bars from the decade below the smallest value, not from an
-                # arbitrary autoscaled edge, so that their lengths compare
+                ax.barh(y, np.nan_to_num(v, nan=0.0), height=bar_h * 0.9, color=colors,
+                        alpha=1.0 if k == 0 else 0.45, xerr=xerr,
+                        error_kw={"lw": 0.8, "capsize": 2})
+                ax.scatter(np.nan_to_num(v, nan=0.0), y, color="black", marker=marker, s=10,
+                           zorder=3)
+            if log:
                 ax.set_xscale("log")
                 shown = table[col].to_numpy(float) if col in table else np.array([])
                 shown = shown[np.isfinite(shown) & (shown > 0)]
                 if shown.size:
-                    ax.set_xlim(10.0 ** np.floor(np.log10(shown.min())), 1.6 * shown.max())
-                    plain_log_ticks(ax.xaxis, np.r_[shown, 10.0 ** np.floor(
-                        np.log10(shown.min()))])
+                    ax.set_xlim(shown.min() / 2.0, 2.0 * shown.max())
+                    plain_log_ticks(ax.xaxis, shown)
+                ax.grid(axis="y", color="#EEEEEE", lw=0.6)
             else:
                 ax.set_xlim(left=0)
             ax.set_xlabel(xlabel)
@@ -190,6 +205,11 @@ def figure_performance_panel(table: pd.DataFrame) -> Figure:
         axes[0].set_yticklabels([model_label(m) for m in models])
         axes[0].invert_yaxis()
         if len(presets) > 1:
-            fig.legend(*axes[0].get_legend_handles_labels(), title="preset", fontsize=8,
+            from matplotlib.lines import Line2D
+
+            handles = [Line2D([], [], ls="none", marker=_PRESET_MARKERS[k % 3], color="black",
+                              label=f"{p} ({'solid' if k == 0 else 'light'} bar)")
+                       for k, p in enumerate(presets)]
+            fig.legend(handles=handles, title="preset", fontsize=8,
                        loc="outside upper center", ncol=len(presets))
     return fig

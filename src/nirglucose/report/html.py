@@ -92,7 +92,9 @@ _TABLE_COLUMNS: tuple[tuple[str, str | None, str | None, str, int], ...] = (
     ("clarke_a_pct", "clarke_a", "clarke_a_pct", "Clarke A [%]", 1),
     ("within15_pct", "within15", "within15_pct", "±15 % [%]", 1),
     ("n_parameters", None, "n_parameters", "Parameters", 0),
-    ("latency_single_ms", None, "latency_single_ms", "Latency [ms/sample]", 3),
+    ("macs_per_prediction", None, None, "MACs / prediction", 0),
+    ("latency_single_ms", None, "latency_single_ms", "Latency median [ms]", 3),
+    ("latency_single_p90_ms", None, None, "Latency p90 [ms]", 3),
 )
 
 _EXTRA_COLUMNS: tuple[tuple[str, str, int], ...] = (
@@ -236,7 +238,7 @@ def preset_of(results: Results) -> str:
 #: Columns of the main table shown without opening the toggle (metrics columns); the
 #: study's value is shown beside ours for RMSE only.
 _ESSENTIAL: tuple[str, ...] = ("rmse_mgdl", "mard_pct", "clarke_a_pct", "within15_pct",
-                               "coverage90_pct", "n_parameters")
+                               "coverage90_pct", "n_parameters", "macs_per_prediction")
 
 
 def _table_columns(m: pd.DataFrame) -> list[tuple[str, str | None, str | None, str, int]]:
@@ -363,6 +365,18 @@ def _significance(results: Results) -> str:
             + "</div>")
 
 
+def _machine_text(machine: Any) -> str | None:
+    """``timing_machine`` of ``meta.json`` in one line (None when not recorded)."""
+    if not isinstance(machine, dict):
+        return None
+    cores = machine.get("cores")
+    usable = machine.get("cores_usable")
+    core_txt = f"{cores} logical cores" + (f" ({usable} usable)" if usable not in (None, cores)
+                                           else "")
+    return (f"{machine.get('cpu', '?')}, {core_txt}; Python {machine.get('python', '?')}, "
+            f"NumPy {machine.get('numpy', '?')}, PyTorch {machine.get('torch', '?')}")
+
+
 def _run_info(results: Results) -> str:
     from .. import __version__
 
@@ -388,6 +402,7 @@ def _run_info(results: Results) -> str:
         ("confidence intervals", meta.get("ci_method")),
         ("comparisons", meta.get("comparison_method")),
         ("timing", meta.get("timing_method")),
+        ("timing machine", _machine_text(meta.get("timing_machine"))),
         ("results directory", str(results.directory)),
     ]
     dl = "".join(f"<dt>{_esc(k)}</dt><dd>{_esc(v)}</dd>" for k, v in items

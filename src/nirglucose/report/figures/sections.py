@@ -402,21 +402,18 @@ def _section_radar(page: _Page) -> None:
     """Figure 8: normalised scores."""
     from ...plots import tradeoffs
 
-    timed = _latency_ok(page)
-    scores = radar_scores(page.results.metrics, competitors(page.models), latency=timed)
+    scores = radar_scores(page.results.metrics, competitors(page.models))
     page.add("radar", "Normalised scores",
              "One panel per model (its polygon in colour, the other models' outlines in grey "
-             "for comparison), with its mean score in the title: each model's RMSE, MARD, "
-             "Clarke zone A and share within ±15 % as a ratio to the best model shown "
-             "(1 = best), and its parameter count"
-             + (" and latency" if timed else "") + " scored 1 for the "
-             + ("smallest and fastest" if timed else "smallest")
-             + ", minus 1/6 per decade above it"
-             + ("" if timed else "; latency is left out, its differences being inside "
-                "timing noise (see the note under the main table)")
-             + " (the oracle, a bound, and "
-             "the training mean, no skill, are references rather than competitors and are "
-             "left out; so are the ablation rows).",
+             "for comparison): each model's RMSE, MARD, Clarke zone A and share within ±15 % "
+             "as a ratio to the best model shown (1 = best), and its parameter count and "
+             "multiply-accumulates per prediction scored 1 for the smallest, minus 1/6 per "
+             "decade above it. Latency is not an axis (it measures the machine and Python's "
+             "call overhead; the multiply-accumulates are the machine-independent cost). No "
+             "composite score is given: a mean over these axes weighs accuracy against cost "
+             "by the arbitrary 1/6 per decade, and it ranked PLS (25 mg/dL on paper) above "
+             "every PINN. The oracle, a bound, and the training mean, no skill, are "
+             "references rather than competitors and are left out; so are the ablation rows.",
              lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
              note=None if len(scores) else "No model besides the oracle.")
 
@@ -444,14 +441,16 @@ def _section_costs(page: _Page) -> None:
     timed = _latency_ok(page)
     eff = efficiency_table(metrics, models, latency=timed)
     page.add("efficiency", "Efficiency landscape",
-             "RMSE (axis from 0) against trainable parameters, single-sample latency and a "
-             "combined cost index (mean of the normalised log parameters and log latency); "
-             "Pareto-optimal models (no other model both cheaper and more accurate) have a "
-             f"black edge and are joined by a dashed line.{ref_txt}"
+             "RMSE (axis from 0) against three costs, each with its own Pareto front (no "
+             "other model both cheaper and more accurate; black edge, dashed line): "
+             "trainable parameters; multiply-accumulates per prediction, counted from the "
+             "fitted model, the same on every machine; and the median single-sample "
+             "latency with a grey whisker to its 90th percentile, measured on the machine "
+             "recorded under Run information. No combined index: how size, arithmetic and "
+             f"time weigh against each other depends on the device.{ref_txt}"
              + ("" if timed else " The latencies differ by less than their timing noise (see "
                 "the note under the main table), so they count as equal: the speed panel "
-                "marks only the most accurate model and the combined index is the "
-                "parameters' alone."),
+                "marks only the most accurate model."),
              lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
 
 
@@ -471,14 +470,14 @@ def _section_performance(page: _Page) -> None:
     perf_models = [m for m in page.models if not is_ablation_row(m) and m not in REFERENCE_ROWS]
     perf = performance_table(by_preset, perf_models)
     page.add("performance", "Performance comparison",
-             "Error metrics (RMSE with its 95 % CI, MARD), trainable parameters and "
-             "single-sample latency side by side"
-             + (f", one bar per preset ({', '.join(by_preset)}) on shared axes"
-                if len(by_preset) > 1 else "")
-             + "; parameters and latency on log scales. Latency is the median single-sample "
-             "prediction time measured during each run, so it depends on that machine's load"
-             + ("." if _latency_ok(page) else "; its differences here are inside that timing "
-                "noise (see the note under the main table) and rank nothing."),
+             "Error metrics as bars from zero (RMSE with its 95 % CI, MARD) and two "
+             "machine-independent costs as dots on log axes (trainable parameters, "
+             "multiply-accumulates per prediction counted from the fitted model)"
+             + (f", one row per preset ({', '.join(by_preset)}: marker and bar shade) on "
+                "shared axes" if len(by_preset) > 1 else "")
+             + ". Colour is the model's, as in every figure. Latency is left out: it "
+             "measures the machine (see the main table's median and p90 and the efficiency "
+             "landscape).",
              (lambda: architecture.figure_performance_panel(perf)) if len(perf) else None,
              note=None if len(perf) else "No competitor models in this run.")
 
