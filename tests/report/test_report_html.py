@@ -18,10 +18,10 @@ from nirglucose.report import build_report, load_results
 #: Every figure of the report: anchor key -> printed number.
 FIGURES = {
     "data": "1", "environment": "2", "physiology": "3", "pipeline": "4",
-    "architecture": "5", "features": "6", "clarke": "7", "parkes_type1": "8",
-    "parkes_type2": "9", "bland_altman": "10", "linearity": "11", "training": "12",
-    "radar": "13", "physics_depth": "14", "efficiency": "15", "performance": "16",
-    "wavelengths": "17", "forest": "18",
+    "architecture": "5", "features": "6", "scatter": "7", "bland_altman": "8",
+    "residuals": "9", "fold_spread": "10", "training": "11", "radar": "12",
+    "physics_depth": "13", "efficiency": "14", "performance": "15", "wavelengths": "16",
+    "forest": "17",
 }
 
 
@@ -136,13 +136,11 @@ def test_cli_report_with_missing_optional_inputs(minimal_results, tmp_path, caps
     out = tmp_path / "report.html"
     assert main(["report", str(minimal_results), "--out", str(out)]) == 0
     text, page = _parse(out)
-    # no dataset: no diabetes status, so one Parkes figure (type 1, said so)
-    assert set(page.figures) == ({f"fig-{k}" for k in FIGURES if not k.startswith("parkes")}
-                                 | {"fig-parkes", "fig-headline"})
+    assert set(page.figures) == {f"fig-{k}" for k in FIGURES} | {"fig-headline"}
     for name in ("histories.json", "importance.csv", "dataset.parquet", "comparisons.csv"):
         assert f"No {name}" in text
     assert page.figures["fig-training"]["imgs"] == []
-    assert page.figures["fig-clarke"]["imgs"]  # required inputs still give figures
+    assert page.figures["fig-scatter"]["imgs"]  # required inputs still give figures
     assert page.figures["fig-pipeline"]["imgs"]  # config from metrics.json meta
     assert str(out) in capsys.readouterr().out
 

@@ -28,6 +28,7 @@ from .descriptive import (
     physiology_panels,
     pipeline_columns,
 )
+from .diagnostics import section_residuals, section_scatter, section_spread
 from .inputs import (
     PHYSICS_DEPTH_LABELS,
     REFERENCE_ROWS,
@@ -35,16 +36,13 @@ from .inputs import (
     channel_correlations,
     competitors,
     efficiency_table,
-    error_grid_inputs,
     forest_table,
     importance_matrix,
     is_ablation_row,
     latency_resolution,
-    linearity_inputs,
     model_order,
     performance_table,
     physics_depth_table,
-    pooled,
     radar_scores,
     reference_values,
 )
@@ -74,6 +72,9 @@ class _Page:
     count: int = 0
     #: Models fitted for the architecture figure, by name (the features figure reuses EBL).
     fitted: dict[str, Any] = field(default_factory=dict)
+    #: Added to every key and title (a preset's figures drawn for each preset).
+    key_suffix: str = ""
+    title_suffix: str = ""
 
     @property
     def models(self) -> list[str]:
@@ -111,6 +112,7 @@ class _Page:
 
         self.count += 1
         number = str(self.count)
+        key, title = key + self.key_suffix, title + self.title_suffix
         if not self.wants(key):
             return
         out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
@@ -270,76 +272,21 @@ def _section_features(page: _Page) -> None:
              note=None if feat else "No dataset.parquet in the results: diagram not drawn.")
 
 
-def _diabetes_status(page: _Page) -> pd.Series | None:
-    """Diabetes status by measurement id, when both the dataset and predictions have ids."""
-    ds = page.results.dataset
-    if ds is None or "diabetes_status" not in ds.frame or "measurement_id" not in ds.frame \
-            or "measurement_id" not in page.preds.columns:
-        return None
-    return ds.frame.set_index("measurement_id")["diabetes_status"].astype(str)
-
-
-def _section_grids(page: _Page) -> None:
-    """Figures 3-4: the Clarke and Parkes error grids."""
-    from ...plots import grids
-
-    preds, pred_models, rep_note = page.preds, page.pred_models, page.rep_note
-    n_first = len(pooled(preds, pred_models[0])) if pred_models else 0
-    cg, clipped = error_grid_inputs(preds, pred_models, kind="clarke")
-    clip_txt = f" ({clipped} negative predictions placed at 0 mg/dL)" if clipped else ""
-    page.add("clarke", "Clarke error grids",
-             f"Clarke error grid of each model ({rep_note}, n = {n_first} per model)"
-             f"{clip_txt}, with the share of points in each zone in the legend.",
-             lambda: grids.figure_error_grids(cg, kind="clarke") if cg else None,
-             note=None if cg else "No predictions: figure not drawn.")
-    status = _diabetes_status(page)
-    if status is None:
-        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=1)
-        page.add("parkes", "Parkes error grids",
-                 f"Parkes (consensus) error grid for type 1 diabetes of each model "
-                 f"({rep_note}); the diabetes status of each snapshot is not recorded here, "
-                 f"so the type-1 grid is applied to all.",
-                 lambda: grids.figure_error_grids(pg, kind="parkes") if pg else None,
-                 note=None if pg else "No predictions: figure not drawn.")
-        return
-    t2, other = status.index[status == "type2"], status.index[status != "type2"]
-    for dtype, ids, who in ((1, other, "type-1, prediabetes and normal"), (2, t2, "type-2")):
-        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=dtype,
-                                  measurement_ids=ids)
-        page.add(f"parkes_type{dtype}", f"Parkes error grids, type {dtype}",
-                 f"Parkes (consensus) error grid for type {dtype} diabetes, applied to the "
-                 f"{len(ids)} {who} snapshots only ({rep_note.split(',')[0]}), with the "
-                 f"share of points in each zone in the legend. The table's Parkes A column "
-                 f"uses the type-1 grid for every snapshot.",
-                 (lambda pg=pg, dtype=dtype: grids.figure_error_grids(
-                     pg, kind="parkes", diabetes_type=dtype)) if pg else None,
-                 note=None if pg else f"No {who} snapshots: figure not drawn.")
-
-
 def _section_agreement(page: _Page) -> None:
-    """Figures 5-6: Bland–Altman and linearity."""
+    """Bland–Altman (the linearity panels are part of the agreement scatter now)."""
     from ...plots import agreement
 
-    preds = page.preds
-    ba = bland_altman_inputs(preds, page.pred_models)
+    ba = bland_altman_inputs(page.preds, page.pred_models)
     page.add("bland_altman", "Bland–Altman",
              f"Prediction minus reference against their mean for each model ({_points(page)}),"
-             f" on one y range for all panels, with the bias (solid) and 95 % limits of "
-             f"agreement (dashed), their values and 95 % confidence intervals (shaded) under "
-             f"each title (Bland & Altman 1986). The bias and limits are computed per repeat "
-             f"and averaged over repeats, the definition of the further-metrics table's "
-             f"bias and LoA columns, so the numbers are the same.",
+             f" each panel on its own y range (so that every interval shows), with the bias "
+             f"(solid) and 95 % limits of agreement (dashed), their values and 95 % "
+             f"confidence intervals (shaded) under each title (Bland & Altman 1986). The "
+             f"bias and limits are computed per repeat and averaged over repeats, the "
+             f"definition of the further-metrics table's bias and LoA columns, so the "
+             f"numbers are the same.",
              lambda: agreement.figure_bland_altman(ba) if ba else None,
              note=None if ba else "Too few predictions: figure not drawn.")
-    lin = linearity_inputs(preds, page.pred_models)
-    page.add("linearity", "Linearity",
-             f"Predicted against reference glucose for each model ({_points(page)}), with the "
-             f"unity line and the least-squares line (slope with its 95 % CI, intercept, R²)"
-             + ("; vertical bars: each prediction's 90 % interval, with the share that covers "
-                "the reference." if {"lower90_mgdl", "upper90_mgdl"} <= set(preds.columns)
-                else "."),
-             lambda: agreement.figure_linearity(lin) if lin else None,
-             note=None if lin else "Too few predictions: figure not drawn.")
 
 
 def _points(page: _Page) -> str:
@@ -525,10 +472,43 @@ def _section_forest(page: _Page) -> None:
 #: The report's figures, section by section in page order (each builder adds its figures).
 _SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
     _section_data, _section_pipeline, _section_architecture, _section_features,
-    _section_grids, _section_agreement, _section_training, _section_radar, _section_costs,
+    section_scatter, _section_agreement, section_residuals, section_spread,
+    _section_training, _section_radar, _section_costs,
     _section_performance, _section_wavelengths, _section_forest,
 )
 
+#: Sections drawn once per preset of a multi-preset run (each preset's figure right
+#: after the primary's, its key and title suffixed with the preset).
+_PER_PRESET: Final[tuple[Callable[[_Page], None], ...]] = (
+    _section_data, section_scatter, _section_agreement, section_residuals, section_spread,
+    _section_radar, _section_costs, _section_wavelengths,
+)
+
+
+def _preset_name(res: Results) -> str:
+    return str(res.meta.get("preset") or res.directory.name)
+
+
+def _run_sections(page: _Page) -> None:
+    """Every section in page order; the per-preset ones once more for each peer.
+
+    With peers, the primary's per-preset figures say their preset in the title too.
+    """
+    from dataclasses import replace
+
+    for section in _SECTIONS:
+        if not (page.peers and section in _PER_PRESET):
+            section(page)
+            continue
+        own = replace(page, title_suffix=f" on {_preset_name(page.results)}")
+        subs = [own] + [replace(page, results=peer, peers=(page.results,), compare=None,
+                                fitted={}, key_suffix=f"_{_preset_name(peer)}",
+                                title_suffix=f" on {_preset_name(peer)}")
+                        for peer in page.peers]
+        for sub in subs:  # they share the figure list; the count runs on
+            sub.rendered, sub.count = page.rendered, page.count
+            section(sub)
+            page.count = sub.count
 
 
 def render_figures(results: Results, figures_dir: str | Path | None = None,
@@ -570,8 +550,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     page = _Page(results=results, out_dir=out_dir, formats=formats,
                  wanted=None if include is None else set(include), compare=compare,
                  peers=tuple(peers))
-    for section in _SECTIONS:
-        section(page)
+    _run_sections(page)
     return page.rendered
 
 
