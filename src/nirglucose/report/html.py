@@ -70,6 +70,7 @@ section#findings ul.findings li { margin: .3rem 0; }
 span.v { border-bottom: 1px dotted var(--muted); }
 a.ev { font-size: .85em; white-space: nowrap; }
 td.untested { color: var(--muted); font-style: italic; text-align: center; }
+td.off { color: var(--muted); font-style: italic; }
 details.more { margin: -.4rem 0 1rem; }
 @media print {
   @page { size: A4; margin: 10mm; }
@@ -443,7 +444,8 @@ _OPTIONAL_CONTENTS = (("findings", "Findings"), ("fig-headline", "Headline figur
                       ("distance-table", "Distance from no skill and the oracle"))
 _MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metrics by preset"),
                     ("separation", "What separates the presets"),
-                    ("ablations", "Physics ablation"), ("subgroups", "Subgroups"))
+                    ("ablations", "Physics ablation"), ("subgroups", "Subgroups"),
+                    ("hyperparameters", "Tuned hyper-parameters"))
 
 
 def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Sequence[str],
@@ -609,6 +611,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
 
     groups = subgroup_tables(runs)
     middle.append(subgroups_section(runs, groups))
+    from .params import hyperparameter_section
+
+    middle.append(hyperparameter_section(runs))
     top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:])
