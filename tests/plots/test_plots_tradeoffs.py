@@ -125,3 +125,11 @@ def test_efficiency_reference_lines_lie_within_the_axes():
                          xlabel="parameters [-]", log_x=True, references=refs,
                          ax=Figure().add_subplot())
     _reference_lines_within(ax, refs)
+
+
+def test_physics_depth_axis_runs_from_most_physics_to_none():
+    t = pd.DataFrame({"model": ["ebl", "sdnn"], "physics_depth": [4, 0],
+                      "rmse_mgdl": [14.0, 35.0], "n_parameters": [56, 3713]})
+    ax = plot_physics_depth(t)
+    x = {m: ax.transData.transform((d, 0))[0] for m, d in (("ebl", 4), ("sdnn", 0))}
+    assert x["ebl"] < x["sdnn"]  # the study's direction: physics on the left

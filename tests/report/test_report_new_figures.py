@@ -196,3 +196,25 @@ def test_performance_panel_in_the_report_uses_the_run_s_metrics(synthetic_result
     for widths, col in zip(drawn["widths"], cols, strict=True):
         np.testing.assert_allclose(widths, [met.at[m, col] for m in models], rtol=1e-12,
                                    err_msg=col)
+
+
+def test_architecture_draws_branches_side_by_side_and_the_physics_loss(paper_ds):
+    from nirglucose.report.figures.descriptive import physics_loss_texts
+
+    fitted: dict = {}
+    archs = fitted_architectures(paper_ds, "paper", ["original-pinn", "sdnn"], fitted=fitted)
+    physics = physics_loss_texts(fitted)
+    assert set(physics) == {"original-pinn"}  # only a PINN has a physics term
+    lam = fitted["original-pinn"].lambda_phys
+    assert f"λ = {lam:g}" in physics["original-pinn"]
+    fig = figure_architectures(archs, physics=physics)
+    ax_pinn, ax_sdnn = [ax for ax in fig.axes if ax.texts]
+    centre = {t.get_text().split("\n")[0]: t.get_position() for t in ax_pinn.texts
+              if t.get_text()}
+    assert centre["nir"][1] == centre["pmf"][1]  # one row: parallel, not a chain
+    assert centre["nir"][0] < centre["pmf"][0]
+    assert centre["head"][1] < centre["nir"][1]
+    assert centre["training loss only"][1] < centre["output"][1]
+    dashed = [p for p in ax_pinn.patches if p.get_linestyle() == "--"]
+    assert len(dashed) == 1 and len(ax_pinn.patches) == len(archs["original-pinn"][0]) + 1
+    assert not any(p.get_linestyle() == "--" for p in ax_sdnn.patches)

@@ -18,7 +18,6 @@ from .style import GREY, OKABE_ITO, model_color, model_label, plain_log_ticks, p
 
 __all__ = ["figure_architectures", "figure_feature_engineering", "figure_performance_panel"]
 
-#: Colour of each preset's bars (the primary first).
 
 
 def _box(ax: Axes, x: float, y: float, w: float, h: float, text: str, color: str,
@@ -33,39 +32,88 @@ def _arrow(ax: Axes, xy_from: tuple[float, float], xy_to: tuple[float, float]) -
                 arrowprops={"arrowstyle": "-|>", "color": GREY, "lw": 1.0})
 
 
+def _rows(blocks: Sequence[tuple[str, str]]) -> list[list[int]]:
+    """Block indices per row: the ``nir`` and ``pmf`` branches side by side (they run in
+    parallel on the two inputs and are concatenated), every other block on its own row."""
+    rows: list[list[int]] = []
+    i = 0
+    while i < len(blocks):
+        if blocks[i][0] == "nir" and i + 1 < len(blocks) and blocks[i + 1][0] == "pmf":
+            rows.append([i, i + 1])
+            i += 2
+        else:
+            rows.append([i])
+            i += 1
+    return rows
+
+
+def _draw_blocks(ax: Axes, blocks: Sequence[tuple[str, str]], color: str) -> int:
+    """Boxes row by row, arrows between rows (split and merged at parallel branches)."""
+    rows = _rows(blocks)
+    for r, row in enumerate(rows):
+        xs = [0.5] if len(row) == 1 else [0.26, 0.74]
+        w = 0.92 if len(row) == 1 else 0.44
+        for x, i in zip(xs, row, strict=True):
+            name, sizes = blocks[i]
+            _box(ax, x, -r, w, 0.62, f"{name}\n{sizes}",
+                 "white" if i in (0, len(blocks) - 1) else color + "40",
+                 fontsize=8.0 if len(row) == 1 else 7.0)
+        if r:
+            prev = [0.5] if len(rows[r - 1]) == 1 else [0.26, 0.74]
+            for x0 in prev:
+                for x1 in xs:
+                    if len(prev) == len(xs) == 2 and x0 != x1:
+                        continue  # parallel branches stay apart
+                    _arrow(ax, (x0, -r + 0.69), (x1, -r + 0.31))
+    return len(rows)
+
+
 def figure_architectures(archs: Mapping[str, tuple[Sequence[tuple[str, str]], int]],
-                         *, ncols: int = 3) -> Figure:
+                         *, physics: Mapping[str, str] | None = None,
+                         ncols: int = 3) -> Figure:
     """One block diagram per model family, top (inputs) to bottom (glucose).
+
+    The absorbance (``nir``) and physiology (``pmf``) branches are drawn side by side,
+    split from the inputs and merged into the next block; a physics loss term, used in
+    training only, is a dashed box under the output.
 
     Parameters
     ----------
     archs : mapping of str to (sequence of (str, str), int)
         Model -> (blocks as ``(name, sizes)``, trainable parameter count). [-]
+    physics : mapping of str to str, optional
+        Model -> its training loss with the physics term (e.g. ``"MSE + λ·Beer–Lambert
+        residual, λ = 0.01"``); models absent have none. [-]
     ncols : int
         Panels per row. [-]
 
     Returns
     -------
     matplotlib.figure.Figure
-        One Axes per model, with one box per block.
+        One Axes per model, with one box per block (and one for the physics loss).
     """
     models = list(archs)
+    physics = physics or {}
     ncols = max(1, min(ncols, len(models)))
     nrows = -(-max(len(models), 1) // ncols)
-    depth = max((len(b) for b, _ in archs.values()), default=1)
+    depth = max((len(_rows(b)) + (m in physics) for m, (b, _) in archs.items()), default=1)
     with plot_style():
         fig = Figure(figsize=(4.4 * ncols, (0.62 * depth + 0.9) * nrows), layout="constrained")
         axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
         for ax, model in zip(axes, models, strict=False):
             blocks, n_params = archs[model]
-            color = model_color(model)
             ax.set_xlim(0, 1)
             ax.set_ylim(-depth + 0.4, 0.6)
-            for i, (name, sizes) in enumerate(blocks):
-                _box(ax, 0.5, -i, 0.92, 0.62, f"{name}\n{sizes}",
-                     "white" if i in (0, len(blocks) - 1) else color + "40")
-                if i:
-                    _arrow(ax, (0.5, -i + 0.69), (0.5, -i + 0.31))
+            n = _draw_blocks(ax, blocks, model_color(model))
+            if model in physics:
+                ax.add_patch(FancyBboxPatch((0.04, -n - 0.31), 0.92, 0.62,
+                                            boxstyle="round,pad=0.01", fc="white",
+                                            ec=GREY, lw=0.9, ls="--"))
+                ax.text(0.5, -n, f"training loss only\n{physics[model]}", ha="center",
+                        va="center", fontsize=7.0, color="#333333")
+                ax.annotate("", xy=(0.5, -n + 0.31), xytext=(0.5, -n + 0.69),
+                            arrowprops={"arrowstyle": "-|>", "color": GREY, "lw": 1.0,
+                                        "ls": "--"})
             ax.set_title(f"{model_label(model)}\n{n_params:,} trainable parameters",
                          fontsize=9.5)
             ax.set_axis_off()

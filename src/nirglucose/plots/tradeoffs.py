@@ -243,15 +243,16 @@ def plot_physics_depth(
     levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
     ax.set_xticks(levels)
     ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
-    if levels:
-        ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
+    if levels:  # most physics on the left, as the study orders its methods
+        ax.set_xlim(max(levels) + 0.8, min(levels) - 0.8)
     y = t["rmse_mgdl"].to_numpy(float)
     lines = _reference_lines(ax, references)
     # the reference lines too: a no-skill line above the data must not fall off the axes
     top = max(([float(np.nanmax(y))] if y.size else [1.0]) + [v for _, v in lines])
     ax.set_ylim(0.0, 1.25 * top)  # from zero: differences keep their true proportion
     _bubble_legend(ax, pmax, bool(front.any()), [name for name, _ in lines])
-    ax.set_xlabel("physics depth (how much of the forward model a method uses)")
+    ax.set_xlabel("physics depth: how much of the forward model a method uses "
+                  "(most on the left, none on the right)")
     ax.set_ylabel("RMSE [mg/dL]")
     ax.set_title(title if title is not None else "Accuracy vs physics depth")
     if own:

@@ -25,6 +25,7 @@ from .descriptive import (
     feature_categories,
     fitted_architectures,
     noise_states,
+    physics_loss_texts,
     physiology_panels,
     pipeline_columns,
 )
@@ -242,8 +243,12 @@ def _section_architecture(page: _Page) -> None:
              + ("the default parameters" if page.user_data else "this preset's tuned "
                 "parameters")
              + " and fitted for one epoch on this run's dataset, so they are the sizes that "
-             "ran.",
-             (lambda: architecture.figure_architectures(archs)) if archs else None,
+             "ran. The absorbance (nir) and physiology (pmf) branches run in parallel and "
+             "are concatenated; the dashed box is each physics-informed network's training "
+             "loss with its physics term and the λ it was fitted with (not part of "
+             "prediction).",
+             (lambda: architecture.figure_architectures(
+                 archs, physics=physics_loss_texts(page.fitted))) if archs else None,
              note=arch_err)
 
 
@@ -376,7 +381,8 @@ def _section_costs(page: _Page) -> None:
     ref_txt = _reference_text(refs)
     lo_txt = f" ({', '.join(left_out)} left out: no physics depth or metrics)" if left_out else ""
     page.add("physics_depth", "Accuracy vs physics depth",
-             f"RMSE against how much of the forward model each method uses (the RMSE axis "
+             f"RMSE against how much of the forward model each method uses, from the most "
+             f"physics on the left to none on the right, the study's direction (the RMSE axis "
              f"starts at 0), bubble area proportional to the trainable parameter count; a "
              f"black ring marks the bubbles on the parameters–RMSE Pareto front."
              f"{ref_txt}{lo_txt}",
