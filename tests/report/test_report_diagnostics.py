@@ -25,7 +25,7 @@ def test_every_diagnostic_figure_is_drawn_for_each_preset(preset_report):
     text = preset_report.read_text(encoding="utf-8")
     for key in PER_PRESET:
         for k in (key, f"{key}_wearable"):
-            assert f'<figure id="fig-{k}"><img' in text, k
+            assert f'<figure id="fig-{k}"><div class="zoom"><img' in text, k
         i = text.index(f'<figure id="fig-{key}_wearable">')
         assert " on wearable.</b>" in text[i:text.index("</figure>", i)], key
     # the duplicate grids are gone: one scatter per preset

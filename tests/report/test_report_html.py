@@ -204,3 +204,27 @@ def test_metrics_without_required_column(minimal_results, tmp_path):
 def test_output_directory_must_exist(minimal_results, tmp_path):
     with pytest.raises(DataError, match="does not exist"):
         build_report(minimal_results, tmp_path / "missing" / "r.html")
+
+
+def test_hypoglycaemia_caveat_sits_beside_the_error_grid_columns(tmp_path):
+    from nirglucose.report.html import glucose_coverage
+
+    d = write_synthetic_results(tmp_path / "r", models=("ebl",), networks=(), n_subjects=8,
+                                repeats=1, with_optional=False)
+    res = load_results(d)
+    lo, hi, n, n_hypo = glucose_coverage(res)
+    ref = res.predictions.drop_duplicates("measurement_id")["reference_mgdl"]
+    assert (lo, hi, n, n_hypo) == (ref.min(), ref.max(), len(ref), int((ref < 70).sum()))
+    text = build_report(d, tmp_path / "r.html").read_text(encoding="utf-8")
+    table = text[text.index('id="reproduced-table-paper"'):]
+    table = table[:table.index("</thead>")]
+    assert re.search(r"Clarke A \[%\]<a class=\"mark\" href=\"#hypo-note-paper\"", table)
+    assert "MARD [%]<a" not in table  # only the error-grid columns carry it
+    note = re.search(r'<p class="note" id="hypo-note-paper">([^<]+)</p>', text).group(1)
+    assert f"{lo:.0f}–{hi:.0f} mg/dL" in note
+    if n_hypo == 0:
+        assert "no reading of this run is below 70 mg/dL" in note
+    else:
+        assert f"{n_hypo:,} of the {n:,} readings are below 70 mg/dL" in note
+    # the note follows the main table directly
+    assert text.index('id="hypo-note-paper"') < text.index('id="further"')

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from ..exceptions import DataError
@@ -54,6 +55,14 @@ td.study { background: #fafafa; color: var(--muted); }
 .scroll { overflow-x: auto; }
 figure { margin: 1.2rem 0 2rem; }
 figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
+.zoom-hint { display: none; color: var(--muted); font-size: .85em; margin: .2rem 0 0; }
+@media screen and (max-width: 760px) {
+  body { padding: 1rem .8rem 3rem; }
+  /* on a phone every figure opens at full size in its own box: scroll it sideways */
+  figure .zoom { overflow-x: auto; border: 1px solid #eee; }
+  figure .zoom img { max-width: none; width: auto; border: 0; }
+  .zoom-hint { display: block; }
+}
 figcaption { color: var(--fg); margin-top: .35rem; max-width: 70rem; }
 figcaption b { color: var(--accent); }
 .note { border-left: 4px solid #E69F00; background: #fff8e8; padding: .45rem .8rem;
@@ -69,6 +78,7 @@ details summary { cursor: pointer; color: var(--accent); }
 section#findings ul.findings li { margin: .3rem 0; }
 span.v { border-bottom: 1px dotted var(--muted); }
 a.ev { font-size: .85em; white-space: nowrap; }
+a.mark { text-decoration: none; margin-left: .1em; }
 td.untested { color: var(--muted); font-style: italic; text-align: center; }
 td.off { color: var(--muted); font-style: italic; }
 details.more { margin: -.4rem 0 1rem; }
@@ -262,8 +272,10 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
         columns = [(c, stem, scol if c == "rmse_mgdl" else None, h, d)
                    for c, stem, scol, h, d in columns]
     span = 2 if with_study else 1
+    mark = _hypo_mark(results)
     head1 = "<th rowspan=2>Model</th>" + "".join(
-        f"<th colspan={span if scol else 1}>{_esc(h)}</th>" for _, _, scol, h, _ in columns)
+        f"<th colspan={span if scol else 1}>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}"
+        "</th>" for c, _, scol, h, _ in columns)
     head2 = "".join(f"<th>{'ours [95 % CI]' if stem else 'ours'}</th>"
                     + ("<th>study</th>" if with_study and scol else "")
                     for _, stem, scol, _, _ in columns)
@@ -288,6 +300,57 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
 
 
+#: Columns of error-grid shares: their header carries the hypoglycaemia caveat's mark.
+_ZONE_COLUMNS: tuple[str, ...] = ("clarke_a_pct", "clarke_ab_pct", "parkes_a_pct",
+                                  "iso15197_pct")
+
+
+def glucose_coverage(results: Results) -> tuple[float, float, int, int] | None:
+    """Reference glucose of the run: (min, max, readings, readings below 70 mg/dL).
+
+    Each snapshot counted once (by ``measurement_id`` when recorded); None without
+    predictions.
+    """
+    p = results.predictions
+    if p is None or not len(p) or "reference_mgdl" not in p.columns:
+        return None
+    if "measurement_id" in p.columns:
+        p = p.drop_duplicates("measurement_id")
+    ref = p["reference_mgdl"].to_numpy(float)
+    ref = ref[np.isfinite(ref)]
+    if not ref.size:
+        return None
+    return float(ref.min()), float(ref.max()), int(ref.size), int((ref < 70.0).sum())
+
+
+def _hypo_id(results: Results) -> str:
+    return f"hypo-note-{preset_of(results)}"
+
+
+def _hypo_mark(results: Results) -> str:
+    """The † after an error-grid column's header, linked to :func:`hypo_note`."""
+    return (f'<a class="mark" href="#{_esc(_hypo_id(results))}" title="glucose range '
+            'caveat">†</a>' if glucose_coverage(results) else "")
+
+
+def hypo_note(results: Results) -> str:
+    """The caveat beside the error-grid columns: what range of glucose they tested."""
+    cov = glucose_coverage(results)
+    if cov is None:
+        return ""
+    lo, hi, n, n_hypo = cov
+    if n_hypo == 0:
+        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): no reading of this run "
+                f"is below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} mg/dL, {n:,} "
+                "readings), so these shares say nothing about hypoglycaemia, where an "
+                "error matters most.")
+    else:
+        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): {n_hypo:,} of the "
+                f"{n:,} readings are below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} "
+                "mg/dL).")
+    return f'<p class="note" id="{_esc(_hypo_id(results))}">{_esc(text)}</p>'
+
+
 def main_table(results: Results) -> str:
     """The essentials, then every column behind a toggle (opened in print)."""
     return (_reproduced_table(results, full=False)
@@ -301,7 +364,9 @@ def _extra_table(results: Results) -> str:
     cols = [c for c in _EXTRA_COLUMNS if c[0] in m.columns]
     if not cols:
         return ""
-    head = "<th>Model</th>" + "".join(f"<th>{_esc(h)}</th>" for _, h, _ in cols)
+    mark = _hypo_mark(results)
+    head = "<th>Model</th>" + "".join(
+        f"<th>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}</th>" for c, h, _ in cols)
     rows = []
     for model in results.models:
         r = m.loc[model]
@@ -434,8 +499,9 @@ def _figure_html(f: RenderedFigure) -> str:
     if not f.png:
         return f'<figure id="{anchor}">{note}<figcaption>{cap}</figcaption></figure>'
     data = base64.b64encode(f.png).decode("ascii")
-    return (f'<figure id="{anchor}"><img src="data:image/png;base64,{data}" '
-            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}. {_esc(f.caption)}">{note}'
+    return (f'<figure id="{anchor}"><div class="zoom"><img src="data:image/png;base64,{data}" '
+            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}. {_esc(f.caption)}"></div>'
+            f'<p class="zoom-hint">Full size: scroll the figure sideways.</p>{note}'
             f"<figcaption>{cap}</figcaption></figure>")
 
 
@@ -526,6 +592,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
          "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
          "(single 60/20/20 split by subject, test n = 48; no intervals reported).</p>"),
         main_table(results),
+        hypo_note(results),
         _latency_note(results, peers),
         '<h3 id="further">Further metrics</h3>',
         _extra_table(results),
