@@ -105,3 +105,25 @@ def test_bland_altman_panels_keep_their_own_range(synthetic_results):
     for ax, p in zip(fig.axes[:2], ba.values(), strict=True):
         lo, hi = ax.get_ylim()
         assert lo < p["loa_low_ci"][0] and p["loa_high_ci"][1] < hi  # every CI shows
+
+
+def test_no_data_figure_borrows_a_model_colour(synthetic_results):
+    """A colour means one model in every figure: the data figures use none of them."""
+    from matplotlib.colors import to_hex
+
+    from nirglucose.plots import data
+    from nirglucose.plots.style import MODEL_COLORS
+
+    res = load_results(synthetic_results)
+    frame = res.dataset.frame
+    g = frame["glucose_mgdl"].to_numpy(float)
+    adc = {850.0: np.log(g + 100.0), 940.0: np.log(2 * g + 50.0)}
+    fig = data.figure_data_characteristics(g, frame["diabetes_status"].astype(str), adc,
+                                           {850.0: 0.5, 940.0: 0.4})
+    used = set()
+    for ax in fig.axes:
+        for c in ax.collections:
+            used |= {to_hex(x) for x in c.get_facecolors()}
+        used |= {to_hex(p.get_facecolor()) for p in ax.patches}
+    model = {to_hex(c) for m, c in MODEL_COLORS.items() if m != "oracle"}  # black: ink
+    assert used and not used & model, used & model

@@ -34,8 +34,9 @@ def _panel_text(p: Mapping[str, object]) -> str:
     lines = []
     zones = p.get("clarke_pct") or {}
     if zones:
-        lines.append("Clarke " + " ".join(f"{z} {zones[z]:.0f}" for z in "ABCDE"
-                                          if zones.get(z, 0) > 0) + " %")
+        lines.append("Clarke " + " ".join(
+            f"{z} {zones[z]:.0f}" if zones[z] >= 0.5 else f"{z} <1" for z in "ABCDE"
+            if zones.get(z, 0) > 0) + " %")
     parkes = p.get("parkes_a_pct")
     if parkes is not None and np.isfinite(parkes):
         lines.append(f"Parkes A {parkes:.1f} %")
