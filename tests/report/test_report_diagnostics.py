@@ -127,3 +127,20 @@ def test_no_data_figure_borrows_a_model_colour(synthetic_results):
         used |= {to_hex(p.get_facecolor()) for p in ax.patches}
     model = {to_hex(c) for m, c in MODEL_COLORS.items() if m != "oracle"}  # black: ink
     assert used and not used & model, used & model
+
+
+def test_training_curves_carry_the_held_out_error(synthetic_results):
+    from nirglucose.plots.training import figure_training_dynamics
+    from nirglucose.report.figures.sections import _held_out_mse
+
+    res = load_results(synthetic_results)
+    held = _held_out_mse(res, ["original-pinn", "not-run"])
+    ref = res.predictions.drop_duplicates("measurement_id")["reference_mgdl"]
+    rmse = res.metrics.set_index("model").at["original-pinn", "rmse_mgdl"]
+    assert held == {"original-pinn": pytest.approx(rmse ** 2 / np.var(ref))}
+    hist = {"original-pinn": res.histories["original-pinn"]}
+    fig = figure_training_dynamics(hist, held_out=held)
+    lines = [ln for ln in fig.axes[0].lines if ln.get_linestyle() == "-."]
+    assert len(lines) == 1 and lines[0].get_ydata()[0] == pytest.approx(held["original-pinn"])
+    lo, hi = fig.axes[0].get_ylim()
+    assert lo < held["original-pinn"] < hi

@@ -92,6 +92,7 @@ def plot_training_history(
     color: str | None = None,
     title: str | None = None,
     log_scale: bool = True,
+    held_out: float | None = None,
     ax: Axes | None = None,
 ) -> Axes:
     """Loss per epoch: training and validation totals and each loss term.
@@ -108,13 +109,18 @@ def plot_training_history(
         Axes title.
     log_scale : bool
         Logarithmic loss axis (when every value is positive). [-]
+    held_out : float, optional
+        The model's held-out error in the same units (its cross-validated MSE on
+        standardised glucose), drawn as a horizontal dash-dot line, so that the gap
+        between fitting and generalising shows. [loss units]
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure's by default.
 
     Returns
     -------
     matplotlib.axes.Axes
-        The Axes, with one line per total-loss column present and one per loss term.
+        The Axes, with one line per total-loss column present and one per loss term
+        (and the held-out line when given).
     """
     ax = new_axes(ax, figsize=(4.6, 3.4))
     if "epoch" in history.columns:
@@ -152,6 +158,10 @@ def plot_training_history(
                 lw=1.8 if total else 0.9, zorder=3 if total else 2,
                 label=f"{split} {'(' + name + ')' if total else name}")
         values.append(y)
+    if held_out is not None and np.isfinite(held_out) and values:
+        ax.axhline(held_out, color="black", ls="-.", lw=1.1, zorder=4,
+                   label="held-out (CV, all folds)")
+        values.append(np.array([held_out]))
     finite = np.concatenate(values) if values else np.array([])
     finite = finite[np.isfinite(finite)]
     if log_scale and finite.size and finite.min() > 0:
@@ -170,13 +180,16 @@ def plot_training_history(
     return ax
 
 
-def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: int = 3) -> Figure:
+def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: int = 3,
+                             held_out: Mapping[str, float] | None = None) -> Figure:
     """One training-history panel per network, or a panel saying there is none.
 
     Parameters
     ----------
     histories : mapping of str to pandas.DataFrame
         Model -> per-epoch history (see :func:`plot_training_history`).
+    held_out : mapping of str to float, optional
+        Model -> its held-out MSE in loss units (see :func:`plot_training_history`).
     ncols : int
         Panels per row. [-]
 
@@ -199,7 +212,8 @@ def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: in
         axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
         for ax, model in zip(axes, models, strict=False):
             plot_training_history(histories[model], color=model_color(model),
-                                  title=model_label(model), ax=ax)
+                                  title=model_label(model),
+                                  held_out=(held_out or {}).get(model), ax=ax)
         for ax in axes[len(models):]:
             ax.set_axis_off()
     return fig

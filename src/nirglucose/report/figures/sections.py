@@ -335,8 +335,30 @@ def _training_figure(page: _Page, res: Results, key: str, title: str) -> None:
                 + "The physics-ablation refits are left out: their physics weight is 0, so "
                 "their total is their MSE.") if hist else
                "No networks in this run, so there are no training curves to show.")
-    page.add(key, title, caption, lambda: training.figure_training_dynamics(hist),
+    held = _held_out_mse(res, list(hist))
+    if held:
+        caption += (" The black dash-dot line is each network's held-out error in the same "
+                    "units: its cross-validated RMSE over all folds and repeats squared and "
+                    "divided by the variance of the cohort's reference glucose "
+                    "(approximately the standardisation of one fold's training rows); the "
+                    "gap between it and the training curve is how much the fit does not "
+                    "carry over to new subjects.")
+    page.add(key, title, caption,
+             lambda: training.figure_training_dynamics(hist, held_out=held),
              note=None if hist else "No networks in this run.")
+
+
+def _held_out_mse(res: Results, models: Sequence[str]) -> dict[str, float]:
+    """Each model's cross-validated MSE in the training loss's units (standardised
+    glucose: RMSE² / variance of the run's reference glucose, each snapshot once)."""
+    p, m = res.predictions, res.metrics.drop_duplicates("model").set_index("model")
+    if p is None or not len(p) or "rmse_mgdl" not in m.columns:
+        return {}
+    if "measurement_id" in p.columns:
+        p = p.drop_duplicates("measurement_id")
+    var = float(np.nanvar(p["reference_mgdl"].to_numpy(float)))
+    return {k: float(m.at[k, "rmse_mgdl"]) ** 2 / var for k in models
+            if k in m.index and var > 0 and np.isfinite(m.at[k, "rmse_mgdl"])}
 
 
 def _reference_text(refs: Mapping[str, float]) -> str:
