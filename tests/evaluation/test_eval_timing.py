@@ -128,3 +128,23 @@ def test_macs_are_counted_from_the_fitted_model(small, name):
         linear = [m for m in model.module_.modules() if isinstance(m, torch.nn.Linear)]
         assert macs == sum(m.in_features * m.out_features for m in linear)
         assert macs < model.n_parameters  # biases are parameters, not MACs
+
+
+def test_benchmark_records_macs_and_the_timing_machine(small, tmp_path):
+    import json
+
+    from nirglucose.evaluation import run_benchmark
+
+    res = run_benchmark(small, ["ebl", "mean"], n_splits=3, repeats=1, n_boot=20,
+                        out=tmp_path / "r", importance_repeats=1, seed=0,
+                        timing={"n_single": 5, "min_single": 2, "batch_rows": 50,
+                                "batch_repeats": 1})
+    m = res.metrics.set_index("model")
+    assert m.at["mean", "macs_per_prediction"] == 0
+    ebl_macs = m.at["ebl", "macs_per_prediction"]
+    assert ebl_macs == m.at["ebl", "n_parameters"] - 1  # coefficients, not the intercept
+    assert m.at["ebl", "macs_counted"] == "one per coefficient"
+    meta = json.loads((tmp_path / "r" / "meta.json").read_text())
+    assert meta["timing_machine"]["numpy"] == np.__version__
+    table = (tmp_path / "r" / "table.md").read_text()
+    assert "MACs / prediction" in table and f"| {ebl_macs:,.0f} |" in table
