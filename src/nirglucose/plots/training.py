@@ -110,17 +110,14 @@ def plot_training_history(
     log_scale : bool
         Logarithmic loss axis (when every value is positive). [-]
     held_out : float, optional
-        The model's held-out error in the same units (its cross-validated MSE on
-        standardised glucose), drawn as a horizontal dash-dot line, so that the gap
-        between fitting and generalising shows. [loss units]
+        Held-out (cross-validated) MSE in the same units, a dash-dot line. [loss units]
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure's by default.
 
     Returns
     -------
     matplotlib.axes.Axes
-        The Axes, with one line per total-loss column present and one per loss term
-        (and the held-out line when given).
+        The Axes: one line per total-loss column, per loss term, and the held-out one.
     """
     ax = new_axes(ax, figsize=(4.6, 3.4))
     if "epoch" in history.columns:
@@ -158,10 +155,7 @@ def plot_training_history(
                 lw=1.8 if total else 0.9, zorder=3 if total else 2,
                 label=f"{split} {'(' + name + ')' if total else name}")
         values.append(y)
-    if held_out is not None and np.isfinite(held_out) and values:
-        ax.axhline(held_out, color="black", ls="-.", lw=1.1, zorder=4,
-                   label="held-out (CV, all folds)")
-        values.append(np.array([held_out]))
+    values += _held_out_line(ax, held_out) if values else []
     finite = np.concatenate(values) if values else np.array([])
     finite = finite[np.isfinite(finite)]
     if log_scale and finite.size and finite.min() > 0:
@@ -178,6 +172,15 @@ def plot_training_history(
     ax.set_ylabel(LOSS_AXIS_LABEL)
     ax.set_title(title if title is not None else "Training dynamics")
     return ax
+
+
+def _held_out_line(ax: Axes, held_out: float | None) -> list[np.ndarray]:
+    """Draw the held-out error as a dash-dot line; its value, for the axis range."""
+    if held_out is None or not np.isfinite(held_out):
+        return []
+    ax.axhline(held_out, color="black", ls="-.", lw=1.1, zorder=4,
+               label="held-out (CV, all folds)")
+    return [np.array([held_out])]
 
 
 def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: int = 3,
