@@ -120,10 +120,8 @@ def plot_training_history(
         The Axes: one line per total-loss column, per loss term, and the held-out one.
     """
     ax = new_axes(ax, figsize=(4.6, 3.4))
-    if "epoch" in history.columns:
-        epoch = history["epoch"].to_numpy(float)
-    else:
-        epoch = np.arange(1, len(history) + 1, dtype=float)
+    epoch = (history["epoch"].to_numpy(float) if "epoch" in history.columns
+             else np.arange(1, len(history) + 1, dtype=float))
     color = color or OKABE_ITO["blue"]
     # Each curve: (split, name, values, colour, total?); a curve equal to one already
     # kept (an SDNN's mse is its total; a physics term that is a single sub-term) is not
@@ -168,9 +166,8 @@ def plot_training_history(
         below = offset_copy(ax.transAxes, fig=ax.figure, y=-30, units="points")
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0),
                   bbox_transform=below, ncol=2, frameon=False)
-    ax.set_xlabel("epoch [-]")
-    ax.set_ylabel(LOSS_AXIS_LABEL)
-    ax.set_title(title if title is not None else "Training dynamics")
+    ax.set(xlabel="epoch [-]", ylabel=LOSS_AXIS_LABEL,
+           title=title if title is not None else "Training dynamics")
     return ax
 
 
