@@ -17,7 +17,7 @@ from nirglucose.report.figures.diagnostics import fold_scores, residual_inputs, 
 from nirglucose.report.figures.inputs import bland_altman_inputs
 
 #: Figures drawn once per preset (the primary's key, the peer's with ``_<preset>``).
-PER_PRESET = ("data", "scatter", "bland_altman", "residuals", "fold_spread", "radar",
+PER_PRESET = ("data", "features", "scatter", "bland_altman", "residuals", "fold_spread", "radar",
               "physics_depth", "efficiency", "wavelengths")
 
 

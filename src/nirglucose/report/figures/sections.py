@@ -508,8 +508,8 @@ _SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
 #: Sections drawn once per preset of a multi-preset run (each preset's figure right
 #: after the primary's, its key and title suffixed with the preset).
 _PER_PRESET: Final[tuple[Callable[[_Page], None], ...]] = (
-    _section_data, section_scatter, _section_agreement, section_residuals, section_spread,
-    _section_radar, _section_costs, _section_wavelengths,
+    _section_data, _section_features, section_scatter, _section_agreement,
+    section_residuals, section_spread, _section_radar, _section_costs, _section_wavelengths,
 )
 
 
