@@ -65,6 +65,13 @@ def _draw_blocks(ax: Axes, blocks: Sequence[tuple[str, str]], color: str) -> int
                     if len(prev) == len(xs) == 2 and x0 != x1:
                         continue  # parallel branches stay apart
                     _arrow(ax, (x0, -r + 0.69), (x1, -r + 0.31))
+    names = [blocks[row[0]][0] for row in rows]
+    for r in range(len(names) - 2):  # a block that also reads the one two rows up:
+        # RTE's glucose head (trunk and optics), SDNN's stack (front and physiology)
+        if names[r:r + 3] in (["trunk", "optics", "glucose"], ["inputs", "front", "stack"]):
+            ax.annotate("", xy=(0.96, -r - 2), xytext=(0.96, -r),
+                        arrowprops={"arrowstyle": "-|>", "color": GREY, "lw": 1.0,
+                                    "connectionstyle": "arc3,rad=-0.35"})
     return len(rows)
 
 

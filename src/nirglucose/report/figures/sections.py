@@ -244,9 +244,11 @@ def _section_architecture(page: _Page) -> None:
                 "parameters")
              + " and fitted for one epoch on this run's dataset, so they are the sizes that "
              "ran. The absorbance (nir) and physiology (pmf) branches run in parallel and "
-             "are concatenated; the dashed box is each physics-informed network's training "
-             "loss with its physics term and the λ it was fitted with (not part of "
-             "prediction).",
+             "are concatenated; a curved arrow is an input that skips a block (the RTE "
+             "networks' glucose head reads the trunk besides the optics, the SDNN's stack "
+             "the physiology besides the front); the dashed box is each physics-informed "
+             "network's training loss with its physics term and the λ it was fitted with "
+             "(not part of prediction).",
              (lambda: architecture.figure_architectures(
                  archs, physics=physics_loss_texts(page.fitted))) if archs else None,
              note=arch_err)
