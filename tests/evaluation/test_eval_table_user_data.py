@@ -37,4 +37,4 @@ def test_user_data_table_has_no_study_columns(tmp_path):
     assert "your data" in table and "None" not in table
     assert "study" not in table.lower() and "n = 48" not in table
     header = next(line for line in table.splitlines() if line.startswith("| Model"))
-    assert header.count("|") == 9  # model, 6 metrics, RMSE / oracle
+    assert header.count("|") == 10  # model, 6 metrics, MACs, RMSE / oracle

@@ -43,7 +43,13 @@ def test_latency_keys_and_counts(small):
         "n_single",
         "throughput_per_s",
         "batch_rows",
+        "macs_per_prediction",
+        "macs_counted",
+        "machine",
     }
+    assert np.isnan(out["macs_per_prediction"]) and "no rule" in out["macs_counted"]
+    assert {"cpu", "cores", "numpy", "torch"} <= set(out["machine"])
+    assert out["machine"]["numpy"] == np.__version__
     assert out["n_single"] == 50 and out["batch_rows"] == 1000
     assert 0 < out["latency_single_ms"] <= out["latency_single_p90_ms"]
     assert out["throughput_per_s"] > 0
@@ -95,3 +101,50 @@ def test_permutation_importance_finds_the_only_channel_used(small):
     by_wl = imp.set_index("wavelength_nm")["rmse_increase_mgdl"]
     assert by_wl[1050.0] > 1.0
     assert by_wl.drop(1050.0).abs().max() == 0.0
+
+
+@pytest.mark.parametrize("name", ["ebl", "pls", "gp", "gbr", "mean", "oracle", "sdnn"])
+def test_macs_are_counted_from_the_fitted_model(small, name):
+    from nirglucose.evaluation.timing import count_macs
+    from nirglucose.models import make_model
+
+    kw = {"max_epochs": 1} if name == "sdnn" else {}
+    model = make_model(name, **kw).fit(small)
+    macs, what = count_macs(model, small.rows(np.arange(1)))
+    if name in ("ebl", "pls"):  # one multiply-accumulate per coefficient
+        assert macs == np.size(model.coef_) == model.n_parameters - 1
+    elif name == "gp":  # distance to every kept row over every input, then the weights
+        n, p = model.X_train_.shape
+        assert macs == n * (p + 1) and f"{n} rows" in what
+    elif name == "gbr":
+        assert macs == model.value_.shape[0] * model.depth_ and "comparisons" in what
+    elif name == "mean":
+        assert macs == 0
+    elif name == "oracle":
+        assert np.isnan(macs) and "iterative" in what
+    else:  # a network: every Linear layer's in x out on one row, no more
+        import torch
+
+        linear = [m for m in model.module_.modules() if isinstance(m, torch.nn.Linear)]
+        assert macs == sum(m.in_features * m.out_features for m in linear)
+        assert macs < model.n_parameters  # biases are parameters, not MACs
+
+
+def test_benchmark_records_macs_and_the_timing_machine(small, tmp_path):
+    import json
+
+    from nirglucose.evaluation import run_benchmark
+
+    res = run_benchmark(small, ["ebl", "mean"], n_splits=3, repeats=1, n_boot=20,
+                        out=tmp_path / "r", importance_repeats=1, seed=0,
+                        timing={"n_single": 5, "min_single": 2, "batch_rows": 50,
+                                "batch_repeats": 1})
+    m = res.metrics.set_index("model")
+    assert m.at["mean", "macs_per_prediction"] == 0
+    ebl_macs = m.at["ebl", "macs_per_prediction"]
+    assert ebl_macs == m.at["ebl", "n_parameters"] - 1  # coefficients, not the intercept
+    assert m.at["ebl", "macs_counted"] == "one per coefficient"
+    meta = json.loads((tmp_path / "r" / "meta.json").read_text())
+    assert meta["timing_machine"]["numpy"] == np.__version__
+    table = (tmp_path / "r" / "table.md").read_text()
+    assert "MACs / prediction" in table and f"| {ebl_macs:,.0f} |" in table

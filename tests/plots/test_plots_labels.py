@@ -21,6 +21,8 @@ METRICS = pd.DataFrame({
               "selective-rte-pinn", "sdnn", "gp", "gbr", "mean", "rte-pinn/no-physics"],
     "rmse_mgdl": [35.4, 41.0, 0.8, 34.1, 33.9, 33.7, 33.6, 35.2, 21.0, 55.8, 58.8, 33.8],
     "n_parameters": [59, 19, 16, 20257, 76353, 187977, 187461, 3809, 1378, 1317, 1, 187977],
+    "macs_per_prediction": [58, 18, float("nan"), 19872, 108224, 186816, 186304, 3688,
+                            1520, 300, 0, 186816],
     "latency_single_ms": [1.6, 1.7, 5.7, 2.1, 2.2, 2.6, 2.3, 1.9, 0.02, 0.04, 0.01, 2.6],
 })
 MODELS = list(METRICS["model"])

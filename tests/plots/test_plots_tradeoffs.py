@@ -81,14 +81,22 @@ def test_efficiency_rejects_mismatch():
 def test_efficiency_landscape_three_panels():
     t = pd.DataFrame({"model": MODELS, "rmse_mgdl": [13.6, 20.0, 14.6, 35.1],
                       "n_parameters": [56, 17, 163_000, 3_713],
+                      "macs_per_prediction": [55, 16, 160_000, 3_600],
                       "latency_single_ms": [0.01, 0.02, 3.8, 0.8],
-                      "combined_index": [0.0, 0.05, 1.0, 0.6],
+                      "latency_single_p90_ms": [0.02, 0.03, 4.0, 0.9],
                       "front_parameters": [True, True, False, False],
-                      "front_latency": [True, False, False, False],
-                      "front_combined": [True, False, False, False]})
+                      "front_macs": [True, True, False, False],
+                      "front_latency": [True, False, False, False]})
     fig = figure_efficiency_landscape(t)
     assert len(fig.axes) == 3
-    assert all(len(ax.collections) == len(MODELS) for ax in fig.axes)
+    assert [ax.get_xlabel().split(" [")[0] for ax in fig.axes] == [
+        "trainable parameters", "multiply-accumulates per prediction", "single-sample latency"]
+    assert all(sum(type(c).__name__ == "PathCollection" for c in ax.collections) == len(MODELS)
+               for ax in fig.axes)
+    whiskers = [c for c in fig.axes[2].collections if type(c).__name__ == "LineCollection"]
+    assert len(whiskers) == 1  # median to p90, one segment per model
+    segs = whiskers[0].get_segments()
+    np.testing.assert_allclose([s[1][0] for s in segs], t["latency_single_p90_ms"])
 
 
 def _reference_lines_within(ax, refs):
@@ -117,3 +125,11 @@ def test_efficiency_reference_lines_lie_within_the_axes():
                          xlabel="parameters [-]", log_x=True, references=refs,
                          ax=Figure().add_subplot())
     _reference_lines_within(ax, refs)
+
+
+def test_physics_depth_axis_runs_from_most_physics_to_none():
+    t = pd.DataFrame({"model": ["ebl", "sdnn"], "physics_depth": [4, 0],
+                      "rmse_mgdl": [14.0, 35.0], "n_parameters": [56, 3713]})
+    ax = plot_physics_depth(t)
+    x = {m: ax.transData.transform((d, 0))[0] for m, d in (("ebl", 4), ("sdnn", 0))}
+    assert x["ebl"] < x["sdnn"]  # the study's direction: physics on the left

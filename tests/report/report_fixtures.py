@@ -23,6 +23,7 @@ SYNTHETIC_MODELS = ("ebl", "pls", "oracle", "original-pinn", "sdnn")
 _NOISE_SD = {"ebl": 14.0, "pls": 20.0, "oracle": 5.0, "original-pinn": 16.0, "sdnn": 30.0,
              "mean": 60.0, "original-pinn/no-physics": 18.0}
 _PARAMS = {"ebl": 56, "pls": 17, "oracle": 0, "original-pinn": 163_000, "sdnn": 3_713}
+_MACS = {"ebl": 55, "pls": 16, "oracle": float("nan"), "original-pinn": 160_000, "sdnn": 3_600}
 _LATENCY = {"ebl": 0.02, "pls": 0.03, "oracle": 0.5, "original-pinn": 1.2, "sdnn": 0.4}
 _NETWORKS = ("original-pinn", "sdnn")
 #: Models of the shared report fixture: a linear model, the bound and a physics-informed
@@ -62,7 +63,9 @@ def write_synthetic_results(out: Path, *, models=SYNTHETIC_MODELS, networks=_NET
             row[f"{stem}_ci_low"] = row[col] - 2.0
             row[f"{stem}_ci_high"] = row[col] + 2.0
         row.update(n_parameters=_PARAMS.get(m, 100), latency_single_ms=_LATENCY.get(m, 1.0),
-                   throughput_per_s=1e4, n_predictions=len(p))
+                   latency_single_p90_ms=1.5 * _LATENCY.get(m, 1.0),
+                   macs_per_prediction=_MACS.get(m, 90), throughput_per_s=1e4,
+                   n_predictions=len(p))
         rows.append(row)
     metrics = pd.DataFrame(rows)
     oracle = metrics.loc[metrics["model"] == "oracle", "rmse_mgdl"]

@@ -144,3 +144,27 @@ def test_print_keeps_every_column(driver, preset_report):
     assert all(shown and inside for _, shown, inside in cols), cols
     pdf = driver.execute_cdp_cmd("Page.printToPDF", {"paperWidth": 8.27, "paperHeight": 11.69})
     assert base64.b64decode(pdf["data"])[:5] == b"%PDF-"
+
+
+def test_figures_open_full_size_on_a_phone(driver, report):
+    """At 400 px a figure is shown at its natural width in its own scroll box; the page
+    itself does not scroll sideways."""
+    driver.set_window_size(400, 900)
+    try:
+        driver.get(report.as_uri())
+        widths = driver.execute_script(
+            "return Array.from(document.querySelectorAll('figure .zoom img')).map(i => ["
+            "  i.getBoundingClientRect().width, i.naturalWidth,"
+            "  i.parentElement.clientWidth, getComputedStyle(i.parentElement).overflowX])")
+        assert widths and all(abs(w - nat) < 1 and box < nat and ov == "auto"
+                              for w, nat, box, ov in widths), widths
+        assert driver.execute_script(
+            "return document.documentElement.scrollWidth <= window.innerWidth")
+        assert driver.execute_script(
+            "return getComputedStyle(document.querySelector('.zoom-hint')).display") == "block"
+    finally:
+        driver.set_window_size(1400, 1000)
+    driver.get(report.as_uri())
+    assert driver.execute_script(  # on a wide screen the figures fit the column again
+        "const i = document.querySelector('figure .zoom img');"
+        "return i.getBoundingClientRect().width <= i.parentElement.clientWidth + 1")

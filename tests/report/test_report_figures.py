@@ -11,7 +11,6 @@ from nirglucose.metrics import bland_altman, clarke_zones, zone_percentages
 from nirglucose.report.figures import (
     bland_altman_inputs,
     channel_correlations,
-    combined_cost_index,
     efficiency_table,
     error_grid_inputs,
     importance_matrix,
@@ -102,30 +101,32 @@ def test_channel_correlations():
     assert r[850.0] == pytest.approx(1.0) and np.isnan(r[940.0])
 
 
-def test_pareto_and_combined_index():
+def test_pareto_front():
     assert pareto_front([1, 2, 3, np.nan], [3, 2, 4, 1]).tolist() == [True, True, False, False]
-    idx = combined_cost_index([56, 163_000, 0], [0.01, 3.8, 0.5])
-    assert idx[1] == 1.0 and 0 < idx[0] < idx[2] < 1  # 0 parameters count as 1
 
 
 def test_radar_scores_orientation():
     m = pd.DataFrame({"model": ["a", "b"], "rmse_mgdl": [10.0, 20.0], "mard_pct": [5, 10],
                       "clarke_a_pct": [90.0, 45.0], "within15_pct": [80.0, 80.0],
-                      "n_parameters": [10, 10_000_000], "latency_single_ms": [1.0, 10.0]})
+                      "n_parameters": [10, 10_000_000], "macs_per_prediction": [100, 1000],
+                      "latency_single_ms": [1.0, 10.0]})
     s = radar_scores(m, ["a", "b"])
     assert s.loc["a"].tolist() == [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]
     assert s.loc["b", "RMSE"] == 0.5 and s.loc["b", "Clarke A"] == 0.5
     assert s.loc["b", "parameters"] == 0.0  # six decades above the smallest
-    assert s.loc["b", "latency"] == pytest.approx(1 - 1 / 6)
+    assert s.loc["b", "MACs"] == pytest.approx(1 - 1 / 6)
+    assert "latency" not in s.columns  # it measures the machine, not the model
 
 
 def test_efficiency_and_depth_tables():
     m = pd.DataFrame({"model": ["ebl", "sdnn", "oracle"], "rmse_mgdl": [14.0, 35.0, 5.0],
-                      "n_parameters": [56, 3713, 0], "latency_single_ms": [0.01, 0.8, 0.5]})
+                      "n_parameters": [56, 3713, 0], "macs_per_prediction": [900, 100, 0],
+                      "latency_single_ms": [0.01, 0.8, 0.5]})
     t = efficiency_table(m, ["ebl", "sdnn", "oracle"])
     assert list(t["model"]) == ["ebl", "sdnn"]  # the oracle is a reference line now
     assert t["front_parameters"].tolist() == [True, False]
-    assert t["front_combined"].tolist() == [True, False]
+    assert t["front_macs"].tolist() == [True, True]  # sdnn: fewer MACs, worse RMSE
+    assert "combined_index" not in t.columns
     d, left_out = physics_depth_table(m, ["ebl", "sdnn", "oracle", "mine"])
     assert list(d["model"]) == ["ebl", "sdnn"] and left_out == ["mine"]  # oracle: a line
 

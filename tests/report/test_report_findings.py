@@ -204,8 +204,8 @@ def test_links_ids_and_contents(preset_report):
 
 def test_headline_figure_and_alt_text(preset_report, preset_results):
     text = preset_report.read_text(encoding="utf-8")
-    m = re.search(r'<figure id="fig-headline"><img src="data:image/png;base64,[^"]+" '
-                  r'alt="([^"]+)"', text)
+    m = re.search(r'<figure id="fig-headline"><div class="zoom"><img '
+                  r'src="data:image/png;base64,[^"]+" alt="([^"]+)"', text)
     assert m
     alt = m.group(1)
     for preset in ("paper", "wearable"):
@@ -213,8 +213,8 @@ def test_headline_figure_and_alt_text(preset_report, preset_results):
         ns = next(r for r in doc["metrics"] if r["model"] == "mean")["rmse_mgdl"]
         assert f"{preset}: best" in alt and f"no skill {ns:.1f}" in alt
     # every figure's alt text says what it shows, not only its title
-    figs = re.findall(r'<figure id="fig-[^"]+"><img [^>]*alt="([^"]*)".*?<figcaption><b>'
-                      r'[^<]*?\. ([^<]+?)\.</b>', text)
+    figs = re.findall(r'<figure id="fig-[^"]+"><div class="zoom"><img [^>]*alt="([^"]*)"'
+                      r'.*?<figcaption><b>[^<]*?\. ([^<]+?)\.</b>', text)
     assert len(figs) >= 15
     for alt, title in figs:
         assert title in alt and len(alt) > len(title) + 40, alt
@@ -268,7 +268,7 @@ def test_latency_inside_timing_noise_ranks_nothing():
     b = a.assign(latency_single_ms=[0.044, 0.050, 0.066])  # the same models, another run
     res = latency_resolution(a, [b])
     assert not res["resolved"] and math.isclose(res["noise"], 0.12 / 0.044)
-    assert "latency" not in radar_scores(a, list(a["model"]), latency=False).columns
+    assert "latency" not in radar_scores(a, list(a["model"])).columns  # never an axis
     eff = efficiency_table(a, list(a["model"]), latency=False)
     assert eff["front_latency"].tolist() == [True, False, False]  # only the most accurate
     # a spread far beyond the noise is resolved
@@ -280,7 +280,7 @@ def test_every_preset_gets_its_training_and_pipeline_figures(preset_report):
     text = preset_report.read_text(encoding="utf-8")
     for key in ("fig-training", "fig-training_wearable", "fig-pipeline",
                 "fig-pipeline_wearable"):
-        assert f'<figure id="{key}"><img' in text, key
+        assert f'<figure id="{key}"><div class="zoom"><img' in text, key
     i = text.index('<figure id="fig-training_wearable">')
     cap = text[i:text.index("</figure>", i)]
     assert "validation (dashed)" in cap and "no validation split" not in cap

@@ -18,10 +18,10 @@ from nirglucose.report import build_report, load_results
 #: Every figure of the report: anchor key -> printed number.
 FIGURES = {
     "data": "1", "environment": "2", "physiology": "3", "pipeline": "4",
-    "architecture": "5", "features": "6", "clarke": "7", "parkes_type1": "8",
-    "parkes_type2": "9", "bland_altman": "10", "linearity": "11", "training": "12",
-    "radar": "13", "physics_depth": "14", "efficiency": "15", "performance": "16",
-    "wavelengths": "17", "forest": "18",
+    "architecture": "5", "features": "6", "scatter": "7", "bland_altman": "8",
+    "residuals": "9", "fold_spread": "10", "training": "11", "radar": "12",
+    "physics_depth": "13", "efficiency": "14", "performance": "15", "wavelengths": "16",
+    "forest": "17",
 }
 
 
@@ -136,13 +136,11 @@ def test_cli_report_with_missing_optional_inputs(minimal_results, tmp_path, caps
     out = tmp_path / "report.html"
     assert main(["report", str(minimal_results), "--out", str(out)]) == 0
     text, page = _parse(out)
-    # no dataset: no diabetes status, so one Parkes figure (type 1, said so)
-    assert set(page.figures) == ({f"fig-{k}" for k in FIGURES if not k.startswith("parkes")}
-                                 | {"fig-parkes", "fig-headline"})
+    assert set(page.figures) == {f"fig-{k}" for k in FIGURES} | {"fig-headline"}
     for name in ("histories.json", "importance.csv", "dataset.parquet", "comparisons.csv"):
         assert f"No {name}" in text
     assert page.figures["fig-training"]["imgs"] == []
-    assert page.figures["fig-clarke"]["imgs"]  # required inputs still give figures
+    assert page.figures["fig-scatter"]["imgs"]  # required inputs still give figures
     assert page.figures["fig-pipeline"]["imgs"]  # config from metrics.json meta
     assert str(out) in capsys.readouterr().out
 
@@ -206,3 +204,27 @@ def test_metrics_without_required_column(minimal_results, tmp_path):
 def test_output_directory_must_exist(minimal_results, tmp_path):
     with pytest.raises(DataError, match="does not exist"):
         build_report(minimal_results, tmp_path / "missing" / "r.html")
+
+
+def test_hypoglycaemia_caveat_sits_beside_the_error_grid_columns(tmp_path):
+    from nirglucose.report.html import glucose_coverage
+
+    d = write_synthetic_results(tmp_path / "r", models=("ebl",), networks=(), n_subjects=8,
+                                repeats=1, with_optional=False)
+    res = load_results(d)
+    lo, hi, n, n_hypo = glucose_coverage(res)
+    ref = res.predictions.drop_duplicates("measurement_id")["reference_mgdl"]
+    assert (lo, hi, n, n_hypo) == (ref.min(), ref.max(), len(ref), int((ref < 70).sum()))
+    text = build_report(d, tmp_path / "r.html").read_text(encoding="utf-8")
+    table = text[text.index('id="reproduced-table-paper"'):]
+    table = table[:table.index("</thead>")]
+    assert re.search(r"Clarke A \[%\]<a class=\"mark\" href=\"#hypo-note-paper\"", table)
+    assert "MARD [%]<a" not in table  # only the error-grid columns carry it
+    note = re.search(r'<p class="note" id="hypo-note-paper">([^<]+)</p>', text).group(1)
+    assert f"{lo:.0f}–{hi:.0f} mg/dL" in note
+    if n_hypo == 0:
+        assert "no reading of this run is below 70 mg/dL" in note
+    else:
+        assert f"{n_hypo:,} of the {n:,} readings are below 70 mg/dL" in note
+    # the note follows the main table directly
+    assert text.index('id="hypo-note-paper"') < text.index('id="further"')

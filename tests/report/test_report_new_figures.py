@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 
+import matplotlib.colors
 import numpy as np
 import pandas as pd
 import pytest
@@ -21,7 +22,7 @@ from nirglucose.plots.architecture import (
     figure_feature_engineering,
     figure_performance_panel,
 )
-from nirglucose.plots.style import model_label
+from nirglucose.plots.style import model_color, model_label
 from nirglucose.report.figures import (
     ARCHITECTURE_MODELS,
     ebl_feature_table,
@@ -140,25 +141,29 @@ def test_performance_panel_numbers_equal_the_benchmark_table(synthetic_results):
     table = performance_table({"paper": met, "wearable": other}, models)
     assert list(table["preset"]) == ["paper", "paper", "wearable", "wearable"]
     src = {"paper": met.set_index("model"), "wearable": other.set_index("model")}
-    cols = ("rmse_mgdl", "mard_pct", "n_parameters", "latency_single_ms")
+    cols = ("rmse_mgdl", "mard_pct", "n_parameters", "macs_per_prediction")
     for _, row in table.iterrows():
         for col in cols:
             assert row[col] == src[row["preset"]].at[row["model"], col], (row["model"], col)
     fig = figure_performance_panel(table)
     assert len(fig.axes) == 4
     for ax, col in zip(fig.axes, cols, strict=True):
-        bars = [p for p in ax.patches if p.get_height() > 0]
-        assert len(bars) == 4, col
         for k, preset in enumerate(("paper", "wearable")):
-            drawn = [b.get_width() for b in bars[2 * k: 2 * k + 2]]
             want = [src[preset].at[m, col] for m in models]
+            if ax.get_xscale() == "log":  # costs: dots, no bars on a log axis
+                assert not ax.patches, col
+                drawn = ax.collections[k].get_offsets()[:, 0]
+            else:
+                bars = [p for p in ax.patches if p.get_height() > 0]
+                drawn = [b.get_width() for b in bars[2 * k: 2 * k + 2]]
             np.testing.assert_allclose(drawn, want, rtol=1e-12, err_msg=f"{col} {preset}")
-        if ax.get_xscale() == "log":  # bars start at the decade below the smallest value
-            lo = ax.get_xlim()[0]
-            assert np.log10(lo) == np.floor(np.log10(table[col].min())), col
+        # colour is the model's in every panel, never the preset's
+    bars = [p for p in fig.axes[0].patches if p.get_height() > 0]
+    assert [matplotlib.colors.to_hex(b.get_facecolor()) for b in bars[:2]] == [
+        model_color(m).lower() for m in models]
     assert [t.get_text() for t in fig.axes[0].get_yticklabels()] == [model_label(m)
                                                                      for m in models]
-    assert fig.legends and [t.get_text() for t in fig.legends[0].get_texts()] == [
+    assert fig.legends and [t.get_text().split(" ")[0] for t in fig.legends[0].get_texts()] == [
         "paper", "wearable"]
 
 
@@ -172,7 +177,7 @@ def test_performance_panel_in_the_report_uses_the_run_s_metrics(synthetic_result
         out = figure_performance_panel(table)
         drawn["labels"] = [t.get_text() for t in out.axes[0].get_yticklabels()]
         drawn["widths"] = [[b.get_width() for b in ax.patches if b.get_height() > 0]
-                           for ax in out.axes]
+                           or list(ax.collections[0].get_offsets()[:, 0]) for ax in out.axes]
         return out
 
     monkeypatch.setattr(architecture, "figure_performance_panel", spy)
@@ -186,8 +191,30 @@ def test_performance_panel_in_the_report_uses_the_run_s_metrics(synthetic_result
     by_label = {model_label(m): m for m in met.index}
     models = [by_label[t] for t in drawn["labels"]]
     assert {"ebl", "original-pinn"} <= set(models)
-    cols = ("rmse_mgdl", "mard_pct", "n_parameters", "latency_single_ms")
+    cols = ("rmse_mgdl", "mard_pct", "n_parameters", "macs_per_prediction")
     assert len(drawn["widths"]) == len(cols)
     for widths, col in zip(drawn["widths"], cols, strict=True):
         np.testing.assert_allclose(widths, [met.at[m, col] for m in models], rtol=1e-12,
                                    err_msg=col)
+
+
+def test_architecture_draws_branches_side_by_side_and_the_physics_loss(paper_ds):
+    from nirglucose.report.figures.descriptive import physics_loss_texts
+
+    fitted: dict = {}
+    archs = fitted_architectures(paper_ds, "paper", ["original-pinn", "sdnn"], fitted=fitted)
+    physics = physics_loss_texts(fitted)
+    assert set(physics) == {"original-pinn"}  # only a PINN has a physics term
+    lam = fitted["original-pinn"].lambda_phys
+    assert f"λ = {lam:g}" in physics["original-pinn"]
+    fig = figure_architectures(archs, physics=physics)
+    ax_pinn, ax_sdnn = [ax for ax in fig.axes if ax.texts]
+    centre = {t.get_text().split("\n")[0]: t.get_position() for t in ax_pinn.texts
+              if t.get_text()}
+    assert centre["nir"][1] == centre["pmf"][1]  # one row: parallel, not a chain
+    assert centre["nir"][0] < centre["pmf"][0]
+    assert centre["head"][1] < centre["nir"][1]
+    assert centre["training loss only"][1] < centre["output"][1]
+    dashed = [p for p in ax_pinn.patches if p.get_linestyle() == "--"]
+    assert len(dashed) == 1 and len(ax_pinn.patches) == len(archs["original-pinn"][0]) + 1
+    assert not any(p.get_linestyle() == "--" for p in ax_sdnn.patches)

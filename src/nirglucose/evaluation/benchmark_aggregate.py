@@ -92,6 +92,10 @@ def aggregate(
     )
     ablation = _ablation(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
     meta["study_orderings"] = _study_orderings(comparisons)
+    meta["timing_machine"] = next(
+        (res["timing"]["machine"] for _, _, res in runs if res.get("timing", {}).get("machine")),
+        None,
+    )
     return BenchmarkResult(
         metrics=metrics,
         predictions=preds,
@@ -214,6 +218,8 @@ def _metric_row(
         "latency_single_p90_ms": t.get("latency_single_p90_ms", np.nan),
         "throughput_per_s": t.get("throughput_per_s", np.nan),
         "latency_input": t.get("latency_input", ""),
+        "macs_per_prediction": t.get("macs_per_prediction", np.nan),
+        "macs_counted": t.get("macs_counted", ""),
         "fit_time_s": float(np.mean([res["fit_time_s"] for _, res in runs])),
         "n_predictions": int(len(p)),
         "n_invalid_predictions": count_invalid(raw),

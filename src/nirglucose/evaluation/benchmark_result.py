@@ -92,6 +92,8 @@ METRIC_COLUMNS = (
     "latency_single_p90_ms",
     "throughput_per_s",
     "latency_input",
+    "macs_per_prediction",
+    "macs_counted",
     "rmse_vs_oracle",
     "fit_time_s",
     "n_predictions",
@@ -266,6 +268,13 @@ def _fmt_ms(v: Any) -> str:
     return f"{v:.3f}" if v < 0.1 else f"{v:.2f}" if v < 10 else f"{v:.1f}"
 
 
+def _fmt_macs(v: Any) -> str:
+    """A multiply-accumulate count: ``–`` when not counted, thousands separated."""
+    if v is None or not math.isfinite(float(v)):
+        return "–"
+    return f"{float(v):,.0f}"
+
+
 def _table_markdown(res: BenchmarkResult) -> str:
     """``table.md``: the metrics beside the study's Table 1 on a simulated preset; on a
     user's own data (no preset) the same metrics without the study's columns."""
@@ -285,7 +294,9 @@ def _table_markdown(res: BenchmarkResult) -> str:
         f"{m['n_subjects']} subjects, {m['n_snapshots']} snapshots, {source}, "
         f"dataset {m['dataset_hash']}; 95 % CIs from a cluster bootstrap "
         f"over subjects ({m['n_boot']:,} resamples).{study_note} Inference: our median "
-        "single-sample `predict` time.",
+        "single-sample `predict` time, median and 90th percentile over repeated calls "
+        "(machine in `meta.json`, `timing_machine`); MACs: multiply-accumulates per "
+        "prediction counted from the fitted model (`macs_counted` in `metrics.csv`).",
         "",
         *_table_rows(res, study=None if user else {r["model"]: r for r in STUDY_TABLE}),
         "",
@@ -299,7 +310,8 @@ def _table_rows(res: BenchmarkResult, study: dict | None) -> list[str]:
     """The metrics table's header and one row per model (study columns when given)."""
     cols = ["RMSE mg/dL", "MARD %", "Clarke A %", "±15 %", "Params", "Inference ms"]
     head = [c for name in cols for c in ((name, "study") if study is not None else (name,))]
-    head.append("RMSE / oracle")
+    head[len(head) - 1 - (study is not None)] = "Inference ms (median, p90)"
+    head += ["MACs / prediction", "RMSE / oracle"]
     lines = ["| Model | " + " | ".join(head) + " |", "|---" * (len(head) + 1) + "|"]
     for _, r in res.metrics.iterrows():
         s = (study or {}).get(r["model"], {})
@@ -313,12 +325,14 @@ def _table_rows(res: BenchmarkResult, study: dict | None) -> list[str]:
             (ci("clarke_a", "clarke_a_pct"), _fmt(s.get("clarke_a_pct"))),
             (ci("within15", "within15_pct"), _fmt(s.get("within15_pct"))),
             (_fmt(int(r["n_parameters"])), _fmt(s.get("n_parameters"))),
-            (_fmt_ms(r["latency_single_ms"]), _fmt_ms(s.get("latency_single_ms", np.nan))),
+            (
+                f"{_fmt_ms(r['latency_single_ms'])}, {_fmt_ms(r.get('latency_single_p90_ms'))}",
+                _fmt_ms(s.get("latency_single_ms", np.nan)),
+            ),
         ]
         flat = [c for pair in cells for c in (pair if study is not None else pair[:1])]
-        lines.append(
-            f"| {r['label']} | " + " | ".join(flat) + f" | {_fmt(r['rmse_vs_oracle'], 2)} |"
-        )
+        flat += [_fmt_macs(r.get("macs_per_prediction")), _fmt(r["rmse_vs_oracle"], 2)]
+        lines.append(f"| {r['label']} | " + " | ".join(flat) + " |")
     return lines
 
 

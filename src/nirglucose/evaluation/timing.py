@@ -15,10 +15,17 @@ Input form
     an estimator that cannot predict from it (the oracle, which reads ``true_*``
     columns) is timed on a one-row :class:`~nirglucose.dataset.Dataset`. The form used is
     reported as ``latency_input``.
+
+Cost that does not depend on the machine
+    :func:`count_macs` counts the multiply-accumulates one prediction takes, from the
+    fitted model (what is counted is returned beside the count); :func:`machine_info`
+    records where the timings were taken (CPU model, cores, library versions).
 """
 
 from __future__ import annotations
 
+import os
+import platform
 import time
 import warnings
 from typing import Any
@@ -28,7 +35,7 @@ import pandas as pd
 
 from ..dataset import Dataset
 
-__all__ = ["measure_latency", "timing_inputs", "tile_rows"]
+__all__ = ["count_macs", "machine_info", "measure_latency", "timing_inputs", "tile_rows"]
 
 
 def tile_rows(data: Any, n_rows: int) -> Any:
@@ -115,7 +122,9 @@ def measure_latency(
     -------
     dict
         ``latency_single_ms`` (median) [ms], ``latency_single_p90_ms`` [ms],
-        ``n_single`` [-], ``throughput_per_s`` [samples/s], ``batch_rows`` [-].
+        ``n_single`` [-], ``throughput_per_s`` [samples/s], ``batch_rows`` [-];
+        ``macs_per_prediction`` [-] and ``macs_counted`` from :func:`count_macs`;
+        ``machine`` from :func:`machine_info`.
     """
     n = len(data)
     singles = [_row(data, k) for k in range(min(n, 16))]
@@ -140,10 +149,129 @@ def measure_latency(
         if time.perf_counter() - start > time_budget_s:
             break
     t_ms = np.asarray(times, dtype=float) / 1e6
+    macs, counted = count_macs(model, singles[0])
     return {
         "latency_single_ms": float(np.median(t_ms)),
         "latency_single_p90_ms": float(np.quantile(t_ms, 0.9)),
         "n_single": float(len(t_ms)),
         "throughput_per_s": float(batch_rows / max(best / 1e9, 1e-12)),
         "batch_rows": float(batch_rows),
+        "macs_per_prediction": macs,
+        "macs_counted": counted,
+        "machine": machine_info(),
     }
+
+
+def machine_info() -> dict[str, Any]:
+    """Where timings are taken: CPU model, logical cores (and those usable), versions."""
+    import numpy  # noqa: F401 - version below
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            names = [ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")]
+        cpu = names[0] if names else cpu
+    except OSError:
+        pass
+    usable = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+    try:
+        import torch
+
+        torch_version: str | None = str(torch.__version__)
+    except ImportError:  # pragma: no cover - torch is a dependency
+        torch_version = None
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "cores_usable": usable,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "torch": torch_version,
+        "platform": platform.platform(),
+    }
+
+
+def count_macs(model: Any, row: Any = None) -> tuple[float, str]:
+    """Multiply-accumulates one prediction of the fitted ``model`` takes, and what counts.
+
+    Counted from the fitted state, so the number is the same on every machine:
+
+    * linear models (EBL, PLS): one per folded coefficient;
+    * torch networks: ``in x out`` of every ``Linear`` layer run on one row (physics
+      branches included when they are ``Linear`` layers), attention as its four
+      projections plus query-key and weight-value products; activations, norms and
+      the element-wise physics are not counted;
+    * Gaussian process: ``rows x (inputs + 1)`` (the scaled distance to every kept
+      training row, then the weighted sum);
+    * gradient boosting: ``trees x depth`` threshold comparisons (not MACs: said so);
+    * hybrids: the backbone's count plus the residual GP's;
+    * the training mean: 0; iterative solvers (oracle, physics inversion): NaN, their
+      cost depends on the iterations each reading takes; any other model: NaN.
+
+    Parameters
+    ----------
+    model : fitted estimator
+    row : array, DataFrame or Dataset, optional
+        One row in the form ``model.predict`` takes; needed for torch networks.
+
+    Returns
+    -------
+    (float, str)
+        The count [-] (NaN when not counted) and a short statement of what was counted.
+    """
+    backbone, residual = getattr(model, "backbone_", None), getattr(model, "residual_", None)
+    if backbone is not None and residual is not None:
+        (a, what_a), (b, what_b) = count_macs(backbone, row), count_macs(residual, row)
+        return a + b, f"{what_a} + residual {what_b}"
+    if getattr(model, "module_", None) is not None:
+        return _torch_macs(model, row), "Linear in×out (+attention) on one row"
+    if "X_train_" in model.__dict__ and "alpha_" in model.__dict__:
+        n, p = np.shape(model.X_train_)
+        return float(n * (p + 1)), f"GP: {n} rows × ({p} inputs + 1)"
+    if "value_" in model.__dict__ and "depth_" in model.__dict__:
+        trees = int(np.shape(model.value_)[0])
+        return float(trees * int(model.depth_)), f"comparisons: {trees} trees × depth"
+    if "coef_" in model.__dict__:
+        return float(np.size(model.coef_)), "one per coefficient"
+    if "mean_" in model.__dict__:
+        return 0.0, "none (a constant)"
+    if "max_iter" in model.__dict__:
+        return float("nan"), "not counted (iterative solver: cost varies per reading)"
+    return float("nan"), "not counted (no rule for this model)"
+
+
+def _torch_macs(model: Any, row: Any) -> float:
+    """MACs of ``model.module_`` on one row, counted by forward hooks."""
+    import torch
+    from torch import nn
+
+    from ..models._base import predict_input
+
+    nir, pmf = model._inputs32(predict_input(model, row)[:1])
+    total = [0]
+
+    def linear(mod: nn.Linear, inp: tuple, _out: Any) -> None:
+        total[0] += int(inp[0].numel()) * int(mod.out_features)
+
+    def attention(mod: nn.MultiheadAttention, inp: tuple, _out: Any) -> None:
+        tokens, d = int(inp[0].numel()) // int(mod.embed_dim), int(mod.embed_dim)
+        total[0] += 4 * tokens * d * d + 2 * tokens * tokens * d
+
+    hooks = [
+        m.register_forward_hook(attention if isinstance(m, nn.MultiheadAttention) else linear)
+        for m in model.module_.modules()
+        if isinstance(m, (nn.Linear, nn.MultiheadAttention))
+        and not (isinstance(m, nn.Linear) and "out_proj" in _names(model.module_, m))
+    ]
+    try:
+        model.module_.eval()
+        with torch.inference_mode():
+            model.module_(torch.from_numpy(nir), torch.from_numpy(pmf))
+    finally:
+        for h in hooks:
+            h.remove()
+    return float(total[0])
+
+
+def _names(root: Any, module: Any) -> str:
+    return next((name for name, m in root.named_modules() if m is module), "")

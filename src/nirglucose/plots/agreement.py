@@ -236,7 +236,11 @@ def _per_model_figure(
 
 
 def figure_bland_altman(panels: Mapping[str, Mapping[str, object]], *, ncols: int = 4) -> Figure:
-    """One Bland–Altman panel per model, all on the same y range.
+    """One Bland–Altman panel per model, each on its own y range.
+
+    A shared range is set by the worst model (the no-skill one spans ±250 mg/dL) and
+    flattens every other panel's limits and intervals to a few pixels; each panel is
+    therefore scaled to its own limits and differences.
 
     Parameters
     ----------
@@ -252,13 +256,9 @@ def figure_bland_altman(panels: Mapping[str, Mapping[str, object]], *, ncols: in
     matplotlib.figure.Figure
     """
 
-    spans = [_ba_span(p["loa_low"], p["loa_high"], p["difference_mgdl"])
-             for p in panels.values() if len(np.asarray(p["difference_mgdl"]))]
-    half = 1.1 * max(spans) if spans else None
-
     def draw(ax: Axes, p: dict, color: str, title: str) -> Axes:
         return plot_bland_altman(p.pop("mean_mgdl"), p.pop("difference_mgdl"), color=color,
-                                 title=title, ylim_mgdl=half, ax=ax, **p)
+                                 title=title, ax=ax, **p)
 
     return _per_model_figure(panels, draw, (3.7, 3.3), ncols)
 

@@ -15,7 +15,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
-from .style import GREY, OKABE_ITO, STATUS_COLORS, new_axes, plot_style, styled
+from .style import DATA_COLOR, GREY, STATUS_COLORS, new_axes, plot_style, styled
 
 __all__ = [
     "plot_glucose_by_status",
@@ -26,12 +26,6 @@ __all__ = [
     "figure_distributions",
 ]
 
-_CHANNEL_COLORS = (
-    OKABE_ITO["reddish_purple"],
-    OKABE_ITO["vermillion"],
-    OKABE_ITO["bluish_green"],
-    OKABE_ITO["blue"],
-)
 
 
 @styled
@@ -66,7 +60,7 @@ def plot_glucose_by_status(
     if g.shape != s.shape:
         raise ValueError(f"glucose and status differ in length: {g.shape} vs {s.shape}")
     order = [k for k in STATUS_COLORS if k in set(s)] + sorted(set(s) - set(STATUS_COLORS))
-    fallback = iter([OKABE_ITO["sky_blue"], OKABE_ITO["reddish_purple"], OKABE_ITO["black"]])
+    fallback = iter(["#BDBDBD", "#8A8A8A", "#2B2B2B"])
     data = [g[s == k] for k in order]
     colors = [STATUS_COLORS.get(k) or next(fallback, GREY) for k in order]
     labels = [f"{k} (n = {len(d)})" for k, d in zip(order, data, strict=True)]
@@ -118,7 +112,7 @@ def plot_nir_vs_glucose(
     y = np.asarray(log_adc, dtype=float)
     if g.shape != y.shape:
         raise ValueError(f"glucose and log_adc differ in length: {g.shape} vs {y.shape}")
-    ax.scatter(g, y, s=9, alpha=0.55, color=color or OKABE_ITO["blue"], linewidths=0)
+    ax.scatter(g, y, s=9, alpha=0.55, color=color or DATA_COLOR, linewidths=0)
     ax.set_xlabel("glucose [mg/dL]")
     ax.set_ylabel("ln(ADC code) [-]")
     title = f"{wavelength_nm:g} nm"
@@ -169,7 +163,7 @@ def plot_distribution(
     if log and v.size:
         lo, hi = np.log10(v.min()), np.log10(v.max())
         edges = np.logspace(lo, hi if hi > lo else lo + 1, bins + 1)
-    ax.hist(v, bins=edges, color=color or OKABE_ITO["sky_blue"], edgecolor="white", linewidth=0.4)
+    ax.hist(v, bins=edges, color=color or DATA_COLOR, edgecolor="white", linewidth=0.4)
     if log:
         ax.set_xscale("log")
     ax.set_xlabel(xlabel)
@@ -206,7 +200,7 @@ def plot_category_counts(
     ax = new_axes(ax, figsize=(3.2, 2.6))
     items = list(dict(counts).items())
     labels = [str(k) for k, _ in items]
-    ax.bar(labels, [v for _, v in items], color=color or OKABE_ITO["sky_blue"],
+    ax.bar(labels, [v for _, v in items], color=color or DATA_COLOR,
            edgecolor="white")
     ax.set_xlabel(xlabel)
     ax.set_ylabel("count")
@@ -248,7 +242,7 @@ def figure_data_characteristics(
             ax = fig.add_subplot(gs[k // (ncols - 2), 2 + k % (ncols - 2)])
             plot_nir_vs_glucose(glucose_mgdl, log_adc[wl], wavelength_nm=wl,
                                 correlation=correlations.get(wl),
-                                color=_CHANNEL_COLORS[k % len(_CHANNEL_COLORS)], ax=ax)
+                                color=DATA_COLOR, ax=ax)
             if k % (ncols - 2):
                 ax.set_ylabel("")
     return fig

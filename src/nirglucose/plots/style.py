@@ -29,6 +29,7 @@ __all__ = [
     "MODEL_COLORS",
     "MODEL_MARKERS",
     "STATUS_COLORS",
+    "DATA_COLOR",
     "RC_PARAMS",
     "FIGURE_FORMATS",
     "model_color",
@@ -92,13 +93,17 @@ MODEL_MARKERS: dict[str, str] = {
     "mean": "d",  # a filled marker: a line marker vanishes into a horizontal error bar
 }
 
-#: Colour of each diabetes status of the simulated cohort.
+#: Colour of each diabetes status of the simulated cohort: four shades of brown, a hue
+#: no model has, so that no colour means a model in one figure and a group in another.
 STATUS_COLORS: dict[str, str] = {
-    "normal": OKABE_ITO["bluish_green"],
-    "prediabetes": OKABE_ITO["orange"],
-    "type1": OKABE_ITO["vermillion"],
-    "type2": OKABE_ITO["blue"],
+    "normal": "#E8D2AE",
+    "prediabetes": "#C99A5B",
+    "type1": "#94632B",
+    "type2": "#4F3315",
 }
+
+#: Colour of data that belong to no model (measurements, inputs, the cohort).
+DATA_COLOR = "#4D4D4D"
 
 #: File formats :func:`save_figure` writes by default.
 FIGURE_FORMATS: tuple[str, ...] = ("png", "svg")

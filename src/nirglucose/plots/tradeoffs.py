@@ -3,7 +3,7 @@
 * radar of normalised scores per model (figure 8);
 * accuracy against physics depth, bubble area proportional to the parameter count
   (figure 9);
-* the efficiency landscape: parameters, latency and a combined cost index against
+* the efficiency landscape: parameters, multiply-accumulates and latency against
   RMSE, the Pareto front marked (figure 10).
 
 Scores, indices and Pareto fronts are computed by the report layer and passed in.
@@ -172,7 +172,8 @@ def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
     -------
     matplotlib.figure.Figure
         One polar Axes per model: its polygon filled in its colour, every other model's
-        outline thin and grey for comparison, the mean score in the title.
+        outline thin and grey for comparison. No mean score: averaging accuracy and cost
+        axes weighs them by an arbitrary scale.
     """
     models = [str(m) for m in scores.index]
     ncols = max(1, min(ncols, len(models)))
@@ -194,8 +195,7 @@ def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
             _radar_frame(ax, angles, names, pad=1, fontsize=7.5)
             ax.set_yticks([0.5, 1.0])
             ax.set_yticklabels([])
-            mean = float(np.nanmean(scores.loc[model].to_numpy(float)))
-            ax.set_title(f"{model_label(model)}\nmean score {mean:.2f}", fontsize=9, pad=10)
+            ax.set_title(model_label(model), fontsize=9, pad=10)
     return fig
 
 
@@ -243,15 +243,16 @@ def plot_physics_depth(
     levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
     ax.set_xticks(levels)
     ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
-    if levels:
-        ax.set_xlim(min(levels) - 0.8, max(levels) + 0.8)
+    if levels:  # most physics on the left, as the study orders its methods
+        ax.set_xlim(max(levels) + 0.8, min(levels) - 0.8)
     y = t["rmse_mgdl"].to_numpy(float)
     lines = _reference_lines(ax, references)
     # the reference lines too: a no-skill line above the data must not fall off the axes
     top = max(([float(np.nanmax(y))] if y.size else [1.0]) + [v for _, v in lines])
     ax.set_ylim(0.0, 1.25 * top)  # from zero: differences keep their true proportion
     _bubble_legend(ax, pmax, bool(front.any()), [name for name, _ in lines])
-    ax.set_xlabel("physics depth (how much of the forward model a method uses)")
+    ax.set_xlabel("physics depth: how much of the forward model a method uses "
+                  "(most on the left, none on the right)")
     ax.set_ylabel("RMSE [mg/dL]")
     ax.set_title(title if title is not None else "Accuracy vs physics depth")
     if own:
@@ -383,15 +384,15 @@ def plot_efficiency(
 
 def figure_efficiency_landscape(table: pd.DataFrame,
                                 references: Mapping[str, float] | None = None) -> Figure:
-    """Parameters, latency and a combined cost index against RMSE, fronts marked.
+    """Parameters, multiply-accumulates and latency against RMSE, fronts marked.
 
     Parameters
     ----------
     table : pandas.DataFrame
         One row per model with ``model``, ``rmse_mgdl``, ``n_parameters``,
-        ``latency_single_ms``, ``combined_index`` (0 = smallest and fastest, 1 =
-        largest and slowest) and the boolean fronts ``front_parameters``,
-        ``front_latency``, ``front_combined``, all computed by the caller.
+        ``macs_per_prediction``, ``latency_single_ms`` (optionally
+        ``latency_single_p90_ms``, drawn as a whisker to the right) and the boolean fronts
+        ``front_parameters``, ``front_macs``, ``front_latency``, all computed by the caller.
     references : mapping of str to float, optional
         Reference rows (oracle bound, no-skill mean) drawn as horizontal lines. [mg/dL]
 
@@ -402,10 +403,10 @@ def figure_efficiency_landscape(table: pd.DataFrame,
     panels = (
         ("n_parameters", "front_parameters", "trainable parameters [-]", True,
          "Size vs accuracy"),
-        ("latency_single_ms", "front_latency", "single-sample latency [ms]", True,
-         "Speed vs accuracy"),
-        ("combined_index", "front_combined", "combined cost index [-] (0 = small and fast)",
-         False, "Combined efficiency"),
+        ("macs_per_prediction", "front_macs", "multiply-accumulates per prediction [-]", True,
+         "Arithmetic vs accuracy"),
+        ("latency_single_ms", "front_latency", "single-sample latency [ms] (median–p90)", True,
+         "Time on this machine vs accuracy"),
     )
     with plot_style():
         fig = Figure(figsize=(14.0, 4.6), layout="constrained")
@@ -419,9 +420,17 @@ def figure_efficiency_landscape(table: pd.DataFrame,
                             on_front=table[front].to_numpy(bool)[ok] if front in table else None,
                             xlabel=xlabel, log_x=log_x, references=references,
                             title=title, ax=ax)
-            if not ok.all():
-                ax.text(0.98, 0.02, f"{int((~ok).sum())} model(s) without {xlabel.split(' [')[0]}",
-                        transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color=GREY)
+            if col == "latency_single_ms" and "latency_single_p90_ms" in table:
+                p90 = table["latency_single_p90_ms"].to_numpy(float)[ok]
+                ax.hlines(table["rmse_mgdl"].to_numpy(float)[ok], x[ok], p90, color=GREY,
+                          lw=1.0, zorder=1)
+            if not ok.any():  # results written before this cost was recorded
+                ax.text(0.5, 0.5, f"{xlabel.split(' [')[0]}:\nnot in these results",
+                        transform=ax.transAxes, ha="center", va="center", fontsize=8,
+                        color=GREY)
+            elif not ok.all():
+                ax.text(0.98, 0.98, f"{int((~ok).sum())} model(s) without {xlabel.split(' [')[0]}",
+                        transform=ax.transAxes, ha="right", va="top", fontsize=7, color=GREY)
         seen: dict[str, object] = {}
         for ax in axes:
             for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):

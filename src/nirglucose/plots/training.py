@@ -92,6 +92,7 @@ def plot_training_history(
     color: str | None = None,
     title: str | None = None,
     log_scale: bool = True,
+    held_out: float | None = None,
     ax: Axes | None = None,
 ) -> Axes:
     """Loss per epoch: training and validation totals and each loss term.
@@ -108,19 +109,19 @@ def plot_training_history(
         Axes title.
     log_scale : bool
         Logarithmic loss axis (when every value is positive). [-]
+    held_out : float, optional
+        Held-out (cross-validated) MSE in the same units, a dash-dot line. [loss units]
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure's by default.
 
     Returns
     -------
     matplotlib.axes.Axes
-        The Axes, with one line per total-loss column present and one per loss term.
+        The Axes: one line per total-loss column, per loss term, and the held-out one.
     """
     ax = new_axes(ax, figsize=(4.6, 3.4))
-    if "epoch" in history.columns:
-        epoch = history["epoch"].to_numpy(float)
-    else:
-        epoch = np.arange(1, len(history) + 1, dtype=float)
+    epoch = (history["epoch"].to_numpy(float) if "epoch" in history.columns
+             else np.arange(1, len(history) + 1, dtype=float))
     color = color or OKABE_ITO["blue"]
     # Each curve: (split, name, values, colour, total?); a curve equal to one already
     # kept (an SDNN's mse is its total; a physics term that is a single sub-term) is not
@@ -152,6 +153,7 @@ def plot_training_history(
                 lw=1.8 if total else 0.9, zorder=3 if total else 2,
                 label=f"{split} {'(' + name + ')' if total else name}")
         values.append(y)
+    values += _held_out_line(ax, held_out) if values else []
     finite = np.concatenate(values) if values else np.array([])
     finite = finite[np.isfinite(finite)]
     if log_scale and finite.size and finite.min() > 0:
@@ -164,19 +166,30 @@ def plot_training_history(
         below = offset_copy(ax.transAxes, fig=ax.figure, y=-30, units="points")
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0),
                   bbox_transform=below, ncol=2, frameon=False)
-    ax.set_xlabel("epoch [-]")
-    ax.set_ylabel(LOSS_AXIS_LABEL)
-    ax.set_title(title if title is not None else "Training dynamics")
+    ax.set(xlabel="epoch [-]", ylabel=LOSS_AXIS_LABEL,
+           title=title if title is not None else "Training dynamics")
     return ax
 
 
-def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: int = 3) -> Figure:
+def _held_out_line(ax: Axes, held_out: float | None) -> list[np.ndarray]:
+    """Draw the held-out error as a dash-dot line; its value, for the axis range."""
+    if held_out is None or not np.isfinite(held_out):
+        return []
+    ax.axhline(held_out, color="black", ls="-.", lw=1.1, zorder=4,
+               label="held-out (CV, all folds)")
+    return [np.array([held_out])]
+
+
+def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: int = 3,
+                             held_out: Mapping[str, float] | None = None) -> Figure:
     """One training-history panel per network, or a panel saying there is none.
 
     Parameters
     ----------
     histories : mapping of str to pandas.DataFrame
         Model -> per-epoch history (see :func:`plot_training_history`).
+    held_out : mapping of str to float, optional
+        Model -> its held-out MSE in loss units (see :func:`plot_training_history`).
     ncols : int
         Panels per row. [-]
 
@@ -199,7 +212,8 @@ def figure_training_dynamics(histories: Mapping[str, pd.DataFrame], *, ncols: in
         axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
         for ax, model in zip(axes, models, strict=False):
             plot_training_history(histories[model], color=model_color(model),
-                                  title=model_label(model), ax=ax)
+                                  title=model_label(model),
+                                  held_out=(held_out or {}).get(model), ax=ax)
         for ax in axes[len(models):]:
             ax.set_axis_off()
     return fig

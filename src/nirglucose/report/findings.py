@@ -116,8 +116,10 @@ def _headline_html(runs: Sequence[RunData]) -> str:
     data = base64.b64encode(figure_bytes(fig, "png")).decode("ascii")
     presets = list(dict.fromkeys(table["preset"]))
     alt = "; ".join(_alt_of(table, refs, p) for p in presets)
-    return (f'<figure id="fig-headline"><img src="data:image/png;base64,{data}" '
-            f'alt="{_esc(alt)}"><figcaption><b>Headline figure.</b> Each competitor\'s RMSE '
+    return (f'<figure id="fig-headline"><div class="zoom"><img '
+            f'src="data:image/png;base64,{data}" alt="{_esc(alt)}"></div>'
+            '<p class="zoom-hint">Full size: scroll the figure sideways.</p>'
+            "<figcaption><b>Headline figure.</b> Each competitor's RMSE "
             "with its 95 % cluster-bootstrap CI on every preset (rows sorted by the first "
             "preset's RMSE, one colour and marker per model as in every figure). Filled: "
             "the best model (its CI shaded) and those not distinguishable from it (paired "

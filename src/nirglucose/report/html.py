@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from ..exceptions import DataError
@@ -54,6 +55,14 @@ td.study { background: #fafafa; color: var(--muted); }
 .scroll { overflow-x: auto; }
 figure { margin: 1.2rem 0 2rem; }
 figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
+.zoom-hint { display: none; color: var(--muted); font-size: .85em; margin: .2rem 0 0; }
+@media screen and (max-width: 760px) {
+  body { padding: 1rem .8rem 3rem; }
+  /* on a phone every figure opens at full size in its own box: scroll it sideways */
+  figure .zoom { overflow-x: auto; border: 1px solid #eee; }
+  figure .zoom img { max-width: none; width: auto; border: 0; }
+  .zoom-hint { display: block; }
+}
 figcaption { color: var(--fg); margin-top: .35rem; max-width: 70rem; }
 figcaption b { color: var(--accent); }
 .note { border-left: 4px solid #E69F00; background: #fff8e8; padding: .45rem .8rem;
@@ -69,7 +78,9 @@ details summary { cursor: pointer; color: var(--accent); }
 section#findings ul.findings li { margin: .3rem 0; }
 span.v { border-bottom: 1px dotted var(--muted); }
 a.ev { font-size: .85em; white-space: nowrap; }
+a.mark { text-decoration: none; margin-left: .1em; }
 td.untested { color: var(--muted); font-style: italic; text-align: center; }
+td.off { color: var(--muted); font-style: italic; }
 details.more { margin: -.4rem 0 1rem; }
 @media print {
   @page { size: A4; margin: 10mm; }
@@ -92,7 +103,9 @@ _TABLE_COLUMNS: tuple[tuple[str, str | None, str | None, str, int], ...] = (
     ("clarke_a_pct", "clarke_a", "clarke_a_pct", "Clarke A [%]", 1),
     ("within15_pct", "within15", "within15_pct", "±15 % [%]", 1),
     ("n_parameters", None, "n_parameters", "Parameters", 0),
-    ("latency_single_ms", None, "latency_single_ms", "Latency [ms/sample]", 3),
+    ("macs_per_prediction", None, None, "MACs / prediction", 0),
+    ("latency_single_ms", None, "latency_single_ms", "Latency median [ms]", 3),
+    ("latency_single_p90_ms", None, None, "Latency p90 [ms]", 3),
 )
 
 _EXTRA_COLUMNS: tuple[tuple[str, str, int], ...] = (
@@ -236,7 +249,7 @@ def preset_of(results: Results) -> str:
 #: Columns of the main table shown without opening the toggle (metrics columns); the
 #: study's value is shown beside ours for RMSE only.
 _ESSENTIAL: tuple[str, ...] = ("rmse_mgdl", "mard_pct", "clarke_a_pct", "within15_pct",
-                               "coverage90_pct", "n_parameters")
+                               "coverage90_pct", "n_parameters", "macs_per_prediction")
 
 
 def _table_columns(m: pd.DataFrame) -> list[tuple[str, str | None, str | None, str, int]]:
@@ -259,8 +272,10 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
         columns = [(c, stem, scol if c == "rmse_mgdl" else None, h, d)
                    for c, stem, scol, h, d in columns]
     span = 2 if with_study else 1
+    mark = _hypo_mark(results)
     head1 = "<th rowspan=2>Model</th>" + "".join(
-        f"<th colspan={span if scol else 1}>{_esc(h)}</th>" for _, _, scol, h, _ in columns)
+        f"<th colspan={span if scol else 1}>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}"
+        "</th>" for c, _, scol, h, _ in columns)
     head2 = "".join(f"<th>{'ours [95 % CI]' if stem else 'ours'}</th>"
                     + ("<th>study</th>" if with_study and scol else "")
                     for _, stem, scol, _, _ in columns)
@@ -285,6 +300,57 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
 
 
+#: Columns of error-grid shares: their header carries the hypoglycaemia caveat's mark.
+_ZONE_COLUMNS: tuple[str, ...] = ("clarke_a_pct", "clarke_ab_pct", "parkes_a_pct",
+                                  "iso15197_pct")
+
+
+def glucose_coverage(results: Results) -> tuple[float, float, int, int] | None:
+    """Reference glucose of the run: (min, max, readings, readings below 70 mg/dL).
+
+    Each snapshot counted once (by ``measurement_id`` when recorded); None without
+    predictions.
+    """
+    p = results.predictions
+    if p is None or not len(p) or "reference_mgdl" not in p.columns:
+        return None
+    if "measurement_id" in p.columns:
+        p = p.drop_duplicates("measurement_id")
+    ref = p["reference_mgdl"].to_numpy(float)
+    ref = ref[np.isfinite(ref)]
+    if not ref.size:
+        return None
+    return float(ref.min()), float(ref.max()), int(ref.size), int((ref < 70.0).sum())
+
+
+def _hypo_id(results: Results) -> str:
+    return f"hypo-note-{preset_of(results)}"
+
+
+def _hypo_mark(results: Results) -> str:
+    """The † after an error-grid column's header, linked to :func:`hypo_note`."""
+    return (f'<a class="mark" href="#{_esc(_hypo_id(results))}" title="glucose range '
+            'caveat">†</a>' if glucose_coverage(results) else "")
+
+
+def hypo_note(results: Results) -> str:
+    """The caveat beside the error-grid columns: what range of glucose they tested."""
+    cov = glucose_coverage(results)
+    if cov is None:
+        return ""
+    lo, hi, n, n_hypo = cov
+    if n_hypo == 0:
+        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): no reading of this run "
+                f"is below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} mg/dL, {n:,} "
+                "readings), so these shares say nothing about hypoglycaemia, where an "
+                "error matters most.")
+    else:
+        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): {n_hypo:,} of the "
+                f"{n:,} readings are below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} "
+                "mg/dL).")
+    return f'<p class="note" id="{_esc(_hypo_id(results))}">{_esc(text)}</p>'
+
+
 def main_table(results: Results) -> str:
     """The essentials, then every column behind a toggle (opened in print)."""
     return (_reproduced_table(results, full=False)
@@ -298,7 +364,9 @@ def _extra_table(results: Results) -> str:
     cols = [c for c in _EXTRA_COLUMNS if c[0] in m.columns]
     if not cols:
         return ""
-    head = "<th>Model</th>" + "".join(f"<th>{_esc(h)}</th>" for _, h, _ in cols)
+    mark = _hypo_mark(results)
+    head = "<th>Model</th>" + "".join(
+        f"<th>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}</th>" for c, h, _ in cols)
     rows = []
     for model in results.models:
         r = m.loc[model]
@@ -363,6 +431,18 @@ def _significance(results: Results) -> str:
             + "</div>")
 
 
+def _machine_text(machine: Any) -> str | None:
+    """``timing_machine`` of ``meta.json`` in one line (None when not recorded)."""
+    if not isinstance(machine, dict):
+        return None
+    cores = machine.get("cores")
+    usable = machine.get("cores_usable")
+    core_txt = f"{cores} logical cores" + (f" ({usable} usable)" if usable not in (None, cores)
+                                           else "")
+    return (f"{machine.get('cpu', '?')}, {core_txt}; Python {machine.get('python', '?')}, "
+            f"NumPy {machine.get('numpy', '?')}, PyTorch {machine.get('torch', '?')}")
+
+
 def _run_info(results: Results) -> str:
     from .. import __version__
 
@@ -388,6 +468,7 @@ def _run_info(results: Results) -> str:
         ("confidence intervals", meta.get("ci_method")),
         ("comparisons", meta.get("comparison_method")),
         ("timing", meta.get("timing_method")),
+        ("timing machine", _machine_text(meta.get("timing_machine"))),
         ("results directory", str(results.directory)),
     ]
     dl = "".join(f"<dt>{_esc(k)}</dt><dd>{_esc(v)}</dd>" for k, v in items
@@ -418,8 +499,9 @@ def _figure_html(f: RenderedFigure) -> str:
     if not f.png:
         return f'<figure id="{anchor}">{note}<figcaption>{cap}</figcaption></figure>'
     data = base64.b64encode(f.png).decode("ascii")
-    return (f'<figure id="{anchor}"><img src="data:image/png;base64,{data}" '
-            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}. {_esc(f.caption)}">{note}'
+    return (f'<figure id="{anchor}"><div class="zoom"><img src="data:image/png;base64,{data}" '
+            f'alt="Figure {_esc(f.number)}: {_esc(f.title)}. {_esc(f.caption)}"></div>'
+            f'<p class="zoom-hint">Full size: scroll the figure sideways.</p>{note}'
             f"<figcaption>{cap}</figcaption></figure>")
 
 
@@ -428,7 +510,8 @@ _OPTIONAL_CONTENTS = (("findings", "Findings"), ("fig-headline", "Headline figur
                       ("distance-table", "Distance from no skill and the oracle"))
 _MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metrics by preset"),
                     ("separation", "What separates the presets"),
-                    ("ablations", "Physics ablation"), ("subgroups", "Subgroups"))
+                    ("ablations", "Physics ablation"), ("subgroups", "Subgroups"),
+                    ("hyperparameters", "Tuned hyper-parameters"))
 
 
 def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Sequence[str],
@@ -509,6 +592,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
          "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "
          "(single 60/20/20 split by subject, test n = 48; no intervals reported).</p>"),
         main_table(results),
+        hypo_note(results),
         _latency_note(results, peers),
         '<h3 id="further">Further metrics</h3>',
         _extra_table(results),
@@ -594,6 +678,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
 
     groups = subgroup_tables(runs)
     middle.append(subgroups_section(runs, groups))
+    from .params import hyperparameter_section
+
+    middle.append(hyperparameter_section(runs))
     top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:])

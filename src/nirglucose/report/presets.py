@@ -257,11 +257,11 @@ def _ablations_side_by_side(dirs: list[Path], names: list[str]) -> str:
 
 def _preset_details(runs: Sequence[Results], names: list[str]) -> list[str]:
     """A collapsed block per preset with its reproduced table and significance statements."""
-    from .html import _extra_table, _significance, main_table
+    from .html import _extra_table, _significance, hypo_note, main_table
 
     out = []
     for res, n in zip(runs, names, strict=True):
-        inner = [main_table(res), "<h4>Further metrics</h4>", _extra_table(res),
+        inner = [main_table(res), hypo_note(res), "<h4>Further metrics</h4>", _extra_table(res),
                  _significance(res)]
         out.append(f'<details id="preset-{_esc(n)}"><summary>Full reproduced table and '
                    f"significance statements on <code>{_esc(n)}</code></summary>"

@@ -14,7 +14,8 @@ import numpy as np
 import pandas as pd
 
 __all__ = ["NOISE_LAYER", "NEUTRALISED_BY", "REDUCED_BY", "noise_states",
-           "ARCHITECTURE_MODELS", "fitted_architectures", "ebl_feature_table",
+           "ARCHITECTURE_MODELS", "fitted_architectures", "physics_loss_texts",
+           "ebl_feature_table",
            "feature_categories", "pipeline_columns", "environment_panels",
            "physiology_panels"]
 
@@ -144,6 +145,31 @@ def fitted_architectures(dataset, preset: str | None,
                 + _module_blocks(m.module_) \
                 + [("output", "glucose [mg/dL]")]
         out[name] = (blocks, int(m.n_parameters))
+    return out
+
+
+#: The physics term of each PINN family's training loss, in words.
+PHYSICS_TERMS: dict[str, str] = {
+    "original-pinn": "Beer–Lambert residual A − εcl",
+    "optimized-pinn": "Beer–Lambert residual A − εcl",
+    "rte-pinn": "diffusion reflectance from μa, μs′ (optics) + μs′ prior",
+    "selective-rte-pinn": "diffusion reflectance at 1050, 1150 nm + μs′ prior",
+}
+
+
+def physics_loss_texts(fitted: dict[str, Any]) -> dict[str, str]:
+    """Model -> its training loss with the physics term and the λ it was fitted with.
+
+    Only models with a ``lambda_phys`` (the PINNs); λ = 0 is said to switch it off.
+    """
+    out = {}
+    for name, m in fitted.items():
+        lam = getattr(m, "lambda_phys", None)
+        if lam is None:
+            continue
+        term = PHYSICS_TERMS.get(name, "physics residual")
+        out[name] = (f"MSE + λ·{term}\nλ = {lam:g}" + (" (off: tuned to 0)" if lam == 0
+                                                        else ""))
     return out
 
 

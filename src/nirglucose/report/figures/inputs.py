@@ -19,7 +19,7 @@ __all__ = [
     "PHYSICS_DEPTH", "REFERENCE_ROWS", "PHYSICS_DEPTH_LABELS", "RADAR_AXES",
     "RADAR_COST_DECADES", "model_order", "scored_column", "first_repeat", "pooled",
     "channel_correlations", "error_grid_inputs", "bland_altman_inputs", "linearity_inputs",
-    "radar_scores", "pareto_front", "combined_cost_index", "efficiency_table",
+    "radar_scores", "pareto_front", "efficiency_table",
     "is_ablation_row", "competitors", "reference_values", "physics_depth_table",
     "importance_matrix", "forest_table", "performance_table", "latency_resolution",
 ]
@@ -59,7 +59,7 @@ RADAR_AXES: Final[tuple[tuple[str, str, bool, bool], ...]] = (
     ("Clarke A", "clarke_a_pct", True, False),
     ("±15 %", "within15_pct", True, False),
     ("parameters", "n_parameters", False, True),
-    ("latency", "latency_single_ms", False, True),
+    ("MACs", "macs_per_prediction", False, True),
 )
 
 
@@ -67,7 +67,7 @@ def performance_table(metrics_by_preset: Mapping[str, pd.DataFrame],
                       models: Sequence[str]) -> pd.DataFrame:
     """Long table of the performance panel: one row per preset and model."""
     cols = ("rmse_mgdl", "rmse_ci_low", "rmse_ci_high", "mard_pct", "n_parameters",
-            "latency_single_ms")
+            "macs_per_prediction", "latency_single_ms")
     rows = []
     for preset, met in metrics_by_preset.items():
         m = met.drop_duplicates("model").set_index("model")
@@ -296,16 +296,17 @@ def _metric(metrics: pd.DataFrame, models: Sequence[str], col: str) -> np.ndarra
 RADAR_COST_DECADES: Final = 6.0
 
 
-def radar_scores(metrics: pd.DataFrame, models: Sequence[str], *, latency: bool = True
-                 ) -> pd.DataFrame:
+def radar_scores(metrics: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
     """Scores in [0, 1] per model and radar axis, 1 = best of these models.
 
     Accuracy axes are ratios to the best model (``best / x`` for RMSE and MARD,
     ``x / best`` for Clarke A and ±15 %), so that close models look close. Cost axes
-    (parameters, latency) lose ``1 / RADAR_COST_DECADES`` per decade above the
-    cheapest model: ``1 - log10(x / best) / 6``, floored at 0 (parameter counts below 1
-    and latencies below 1 µs count as 1 and 1 µs). A missing value is NaN.
-    ``latency=False`` leaves the latency axis out (differences inside timing noise).
+    (parameters, multiply-accumulates per prediction) lose ``1 / RADAR_COST_DECADES``
+    per decade above the cheapest model: ``1 - log10(x / best) / 6``, floored at 0
+    (counts below 1 count as 1). A missing value is NaN. Latency is not an axis: it
+    measures the machine and Python's call overhead more than the model (the MACs
+    are its machine-independent stand-in). No composite is formed: a mean over these
+    axes weighs accuracy against cost by the arbitrary 1/6 per decade.
 
     Examples
     --------
@@ -317,10 +318,8 @@ def radar_scores(metrics: pd.DataFrame, models: Sequence[str], *, latency: bool 
     """
     cols = {}
     for label, col, higher, log in RADAR_AXES:
-        if col == "latency_single_ms" and not latency:
-            continue  # inside timing noise (latency_resolution): not scored
         v = _metric(metrics, models, col)
-        floor = 1.0 if col == "n_parameters" else 1e-3  # 0 parameters scores as 1
+        floor = 1.0  # 0 parameters or MACs score as 1
         ok = np.isfinite(v) & (v > 0 if not (log or higher) else v >= 0)
         score = np.full(v.shape, np.nan)
         if ok.any():
@@ -353,56 +352,34 @@ def pareto_front(cost: Sequence[float], rmse: Sequence[float]) -> np.ndarray:
     return ok & ~dominated
 
 
-def combined_cost_index(n_parameters: Sequence[float], latency_ms: Sequence[float]
-                        ) -> np.ndarray:
-    """Mean of the min–max normalised log10 parameter count and log10 latency.
-
-    0 is the smallest and fastest model of the set, 1 the largest and slowest (counts
-    below 1 parameter and latencies below 1 µs are taken as 1 and 1 µs).
-
-    Examples
-    --------
-    >>> combined_cost_index([10, 1000], [0.01, 1.0]).tolist()
-    [0.0, 1.0]
-    """
-    parts = []
-    for v, floor in ((n_parameters, 1.0), (latency_ms, 1e-3)):
-        x = np.log10(np.maximum(np.asarray(v, dtype=float), floor))
-        finite = x[np.isfinite(x)]
-        if finite.size and np.ptp(finite) > 0:
-            parts.append((x - finite.min()) / np.ptp(finite))
-        else:
-            parts.append(np.where(np.isfinite(x), 0.0, np.nan))
-    return np.nanmean(np.vstack(parts), axis=0) if parts else np.array([])
-
-
 def efficiency_table(metrics: pd.DataFrame, models: Sequence[str], *, latency: bool = True
                      ) -> pd.DataFrame:
-    """Inputs of the efficiency figure: costs, the combined index and the Pareto fronts.
+    """Inputs of the efficiency figure: costs and the Pareto fronts, one per cost.
 
-    Only competitors (:func:`competitors`); the references are drawn as lines. With
+    Only competitors (:func:`competitors`); the references are drawn as lines. The
+    costs are the trainable parameters, the multiply-accumulates per prediction
+    (machine-independent) and the median single-sample latency with its 90th
+    percentile. No combined index: how parameters, arithmetic and time should weigh
+    against each other depends on the device, so each keeps its own front. With
     ``latency=False`` (differences inside timing noise, :func:`latency_resolution`)
-    every latency counts as equal: the latency front is the most accurate model only
-    and the combined index is the parameters' alone.
+    every latency counts as equal: the latency front is the most accurate model only.
     """
     models = competitors(models)
     t = pd.DataFrame({
         "model": list(models),
         "rmse_mgdl": _metric(metrics, models, "rmse_mgdl"),
         "n_parameters": _metric(metrics, models, "n_parameters"),
+        "macs_per_prediction": _metric(metrics, models, "macs_per_prediction"),
         "latency_single_ms": _metric(metrics, models, "latency_single_ms"),
+        "latency_single_p90_ms": _metric(metrics, models, "latency_single_p90_ms"),
     })
-    lat_cost = t["latency_single_ms"] if latency else pd.Series(
-        np.where(np.isfinite(t["latency_single_ms"]), 1.0, np.nan))
-    t["combined_index"] = combined_cost_index(t["n_parameters"], lat_cost)
-    for col, front, log in (("n_parameters", "front_parameters", True),
-                            ("latency_single_ms", "front_latency", True),
-                            ("combined_index", "front_combined", False)):
+    for col, front in (("n_parameters", "front_parameters"),
+                       ("macs_per_prediction", "front_macs"),
+                       ("latency_single_ms", "front_latency")):
         cost = t[col].to_numpy(float)
         if col == "latency_single_ms" and not latency:
             cost = np.where(np.isfinite(cost), 1.0, np.nan)
-        if log:  # a log axis cannot show zero cost: the front is among what is drawn
-            cost = np.where(cost > 0, cost, np.nan)
+        cost = np.where(cost > 0, cost, np.nan)  # a log axis cannot show zero cost
         t[front] = pareto_front(cost, t["rmse_mgdl"])
     return t
 

@@ -25,9 +25,11 @@ from .descriptive import (
     feature_categories,
     fitted_architectures,
     noise_states,
+    physics_loss_texts,
     physiology_panels,
     pipeline_columns,
 )
+from .diagnostics import section_residuals, section_scatter, section_spread
 from .inputs import (
     PHYSICS_DEPTH_LABELS,
     REFERENCE_ROWS,
@@ -35,16 +37,13 @@ from .inputs import (
     channel_correlations,
     competitors,
     efficiency_table,
-    error_grid_inputs,
     forest_table,
     importance_matrix,
     is_ablation_row,
     latency_resolution,
-    linearity_inputs,
     model_order,
     performance_table,
     physics_depth_table,
-    pooled,
     radar_scores,
     reference_values,
 )
@@ -74,6 +73,9 @@ class _Page:
     count: int = 0
     #: Models fitted for the architecture figure, by name (the features figure reuses EBL).
     fitted: dict[str, Any] = field(default_factory=dict)
+    #: Added to every key and title (a preset's figures drawn for each preset).
+    key_suffix: str = ""
+    title_suffix: str = ""
 
     @property
     def models(self) -> list[str]:
@@ -111,6 +113,7 @@ class _Page:
 
         self.count += 1
         number = str(self.count)
+        key, title = key + self.key_suffix, title + self.title_suffix
         if not self.wants(key):
             return
         out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
@@ -240,8 +243,14 @@ def _section_architecture(page: _Page) -> None:
              + ("the default parameters" if page.user_data else "this preset's tuned "
                 "parameters")
              + " and fitted for one epoch on this run's dataset, so they are the sizes that "
-             "ran.",
-             (lambda: architecture.figure_architectures(archs)) if archs else None,
+             "ran. The absorbance (nir) and physiology (pmf) branches run in parallel and "
+             "are concatenated; a curved arrow is an input that skips a block (the RTE "
+             "networks' glucose head reads the trunk besides the optics, the SDNN's stack "
+             "the physiology besides the front); the dashed box is each physics-informed "
+             "network's training loss with its physics term and the λ it was fitted with "
+             "(not part of prediction).",
+             (lambda: architecture.figure_architectures(
+                 archs, physics=physics_loss_texts(page.fitted))) if archs else None,
              note=arch_err)
 
 
@@ -270,76 +279,21 @@ def _section_features(page: _Page) -> None:
              note=None if feat else "No dataset.parquet in the results: diagram not drawn.")
 
 
-def _diabetes_status(page: _Page) -> pd.Series | None:
-    """Diabetes status by measurement id, when both the dataset and predictions have ids."""
-    ds = page.results.dataset
-    if ds is None or "diabetes_status" not in ds.frame or "measurement_id" not in ds.frame \
-            or "measurement_id" not in page.preds.columns:
-        return None
-    return ds.frame.set_index("measurement_id")["diabetes_status"].astype(str)
-
-
-def _section_grids(page: _Page) -> None:
-    """Figures 3-4: the Clarke and Parkes error grids."""
-    from ...plots import grids
-
-    preds, pred_models, rep_note = page.preds, page.pred_models, page.rep_note
-    n_first = len(pooled(preds, pred_models[0])) if pred_models else 0
-    cg, clipped = error_grid_inputs(preds, pred_models, kind="clarke")
-    clip_txt = f" ({clipped} negative predictions placed at 0 mg/dL)" if clipped else ""
-    page.add("clarke", "Clarke error grids",
-             f"Clarke error grid of each model ({rep_note}, n = {n_first} per model)"
-             f"{clip_txt}, with the share of points in each zone in the legend.",
-             lambda: grids.figure_error_grids(cg, kind="clarke") if cg else None,
-             note=None if cg else "No predictions: figure not drawn.")
-    status = _diabetes_status(page)
-    if status is None:
-        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=1)
-        page.add("parkes", "Parkes error grids",
-                 f"Parkes (consensus) error grid for type 1 diabetes of each model "
-                 f"({rep_note}); the diabetes status of each snapshot is not recorded here, "
-                 f"so the type-1 grid is applied to all.",
-                 lambda: grids.figure_error_grids(pg, kind="parkes") if pg else None,
-                 note=None if pg else "No predictions: figure not drawn.")
-        return
-    t2, other = status.index[status == "type2"], status.index[status != "type2"]
-    for dtype, ids, who in ((1, other, "type-1, prediabetes and normal"), (2, t2, "type-2")):
-        pg, _ = error_grid_inputs(preds, pred_models, kind="parkes", diabetes_type=dtype,
-                                  measurement_ids=ids)
-        page.add(f"parkes_type{dtype}", f"Parkes error grids, type {dtype}",
-                 f"Parkes (consensus) error grid for type {dtype} diabetes, applied to the "
-                 f"{len(ids)} {who} snapshots only ({rep_note.split(',')[0]}), with the "
-                 f"share of points in each zone in the legend. The table's Parkes A column "
-                 f"uses the type-1 grid for every snapshot.",
-                 (lambda pg=pg, dtype=dtype: grids.figure_error_grids(
-                     pg, kind="parkes", diabetes_type=dtype)) if pg else None,
-                 note=None if pg else f"No {who} snapshots: figure not drawn.")
-
-
 def _section_agreement(page: _Page) -> None:
-    """Figures 5-6: Bland–Altman and linearity."""
+    """Bland–Altman (the linearity panels are part of the agreement scatter now)."""
     from ...plots import agreement
 
-    preds = page.preds
-    ba = bland_altman_inputs(preds, page.pred_models)
+    ba = bland_altman_inputs(page.preds, page.pred_models)
     page.add("bland_altman", "Bland–Altman",
              f"Prediction minus reference against their mean for each model ({_points(page)}),"
-             f" on one y range for all panels, with the bias (solid) and 95 % limits of "
-             f"agreement (dashed), their values and 95 % confidence intervals (shaded) under "
-             f"each title (Bland & Altman 1986). The bias and limits are computed per repeat "
-             f"and averaged over repeats, the definition of the further-metrics table's "
-             f"bias and LoA columns, so the numbers are the same.",
+             f" each panel on its own y range (so that every interval shows), with the bias "
+             f"(solid) and 95 % limits of agreement (dashed), their values and 95 % "
+             f"confidence intervals (shaded) under each title (Bland & Altman 1986). The "
+             f"bias and limits are computed per repeat and averaged over repeats, the "
+             f"definition of the further-metrics table's bias and LoA columns, so the "
+             f"numbers are the same.",
              lambda: agreement.figure_bland_altman(ba) if ba else None,
              note=None if ba else "Too few predictions: figure not drawn.")
-    lin = linearity_inputs(preds, page.pred_models)
-    page.add("linearity", "Linearity",
-             f"Predicted against reference glucose for each model ({_points(page)}), with the "
-             f"unity line and the least-squares line (slope with its 95 % CI, intercept, R²)"
-             + ("; vertical bars: each prediction's 90 % interval, with the share that covers "
-                "the reference." if {"lower90_mgdl", "upper90_mgdl"} <= set(preds.columns)
-                else "."),
-             lambda: agreement.figure_linearity(lin) if lin else None,
-             note=None if lin else "Too few predictions: figure not drawn.")
 
 
 def _points(page: _Page) -> str:
@@ -383,8 +337,30 @@ def _training_figure(page: _Page, res: Results, key: str, title: str) -> None:
                 + "The physics-ablation refits are left out: their physics weight is 0, so "
                 "their total is their MSE.") if hist else
                "No networks in this run, so there are no training curves to show.")
-    page.add(key, title, caption, lambda: training.figure_training_dynamics(hist),
+    held = _held_out_mse(res, list(hist))
+    if held:
+        caption += (" The black dash-dot line is each network's held-out error in the same "
+                    "units: its cross-validated RMSE over all folds and repeats squared and "
+                    "divided by the variance of the cohort's reference glucose "
+                    "(approximately the standardisation of one fold's training rows); the "
+                    "gap between it and the training curve is how much the fit does not "
+                    "carry over to new subjects.")
+    page.add(key, title, caption,
+             lambda: training.figure_training_dynamics(hist, held_out=held),
              note=None if hist else "No networks in this run.")
+
+
+def _held_out_mse(res: Results, models: Sequence[str]) -> dict[str, float]:
+    """Each model's cross-validated MSE in the training loss's units (standardised
+    glucose: RMSE² / variance of the run's reference glucose, each snapshot once)."""
+    p, m = res.predictions, res.metrics.drop_duplicates("model").set_index("model")
+    if p is None or not len(p) or "rmse_mgdl" not in m.columns:
+        return {}
+    if "measurement_id" in p.columns:
+        p = p.drop_duplicates("measurement_id")
+    var = float(np.nanvar(p["reference_mgdl"].to_numpy(float)))
+    return {k: float(m.at[k, "rmse_mgdl"]) ** 2 / var for k in models
+            if k in m.index and var > 0 and np.isfinite(m.at[k, "rmse_mgdl"])}
 
 
 def _reference_text(refs: Mapping[str, float]) -> str:
@@ -402,21 +378,18 @@ def _section_radar(page: _Page) -> None:
     """Figure 8: normalised scores."""
     from ...plots import tradeoffs
 
-    timed = _latency_ok(page)
-    scores = radar_scores(page.results.metrics, competitors(page.models), latency=timed)
+    scores = radar_scores(page.results.metrics, competitors(page.models))
     page.add("radar", "Normalised scores",
              "One panel per model (its polygon in colour, the other models' outlines in grey "
-             "for comparison), with its mean score in the title: each model's RMSE, MARD, "
-             "Clarke zone A and share within ±15 % as a ratio to the best model shown "
-             "(1 = best), and its parameter count"
-             + (" and latency" if timed else "") + " scored 1 for the "
-             + ("smallest and fastest" if timed else "smallest")
-             + ", minus 1/6 per decade above it"
-             + ("" if timed else "; latency is left out, its differences being inside "
-                "timing noise (see the note under the main table)")
-             + " (the oracle, a bound, and "
-             "the training mean, no skill, are references rather than competitors and are "
-             "left out; so are the ablation rows).",
+             "for comparison): each model's RMSE, MARD, Clarke zone A and share within ±15 % "
+             "as a ratio to the best model shown (1 = best), and its parameter count and "
+             "multiply-accumulates per prediction scored 1 for the smallest, minus 1/6 per "
+             "decade above it. Latency is not an axis (it measures the machine and Python's "
+             "call overhead; the multiply-accumulates are the machine-independent cost). No "
+             "composite score is given: a mean over these axes weighs accuracy against cost "
+             "by the arbitrary 1/6 per decade, and it ranked PLS (25 mg/dL on paper) above "
+             "every PINN. The oracle, a bound, and the training mean, no skill, are "
+             "references rather than competitors and are left out; so are the ablation rows.",
              lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
              note=None if len(scores) else "No model besides the oracle.")
 
@@ -432,7 +405,8 @@ def _section_costs(page: _Page) -> None:
     ref_txt = _reference_text(refs)
     lo_txt = f" ({', '.join(left_out)} left out: no physics depth or metrics)" if left_out else ""
     page.add("physics_depth", "Accuracy vs physics depth",
-             f"RMSE against how much of the forward model each method uses (the RMSE axis "
+             f"RMSE against how much of the forward model each method uses, from the most "
+             f"physics on the left to none on the right, the study's direction (the RMSE axis "
              f"starts at 0), bubble area proportional to the trainable parameter count; a "
              f"black ring marks the bubbles on the parameters–RMSE Pareto front."
              f"{ref_txt}{lo_txt}",
@@ -444,14 +418,16 @@ def _section_costs(page: _Page) -> None:
     timed = _latency_ok(page)
     eff = efficiency_table(metrics, models, latency=timed)
     page.add("efficiency", "Efficiency landscape",
-             "RMSE (axis from 0) against trainable parameters, single-sample latency and a "
-             "combined cost index (mean of the normalised log parameters and log latency); "
-             "Pareto-optimal models (no other model both cheaper and more accurate) have a "
-             f"black edge and are joined by a dashed line.{ref_txt}"
+             "RMSE (axis from 0) against three costs, each with its own Pareto front (no "
+             "other model both cheaper and more accurate; black edge, dashed line): "
+             "trainable parameters; multiply-accumulates per prediction, counted from the "
+             "fitted model, the same on every machine; and the median single-sample "
+             "latency with a grey whisker to its 90th percentile, measured on the machine "
+             "recorded under Run information. No combined index: how size, arithmetic and "
+             f"time weigh against each other depends on the device.{ref_txt}"
              + ("" if timed else " The latencies differ by less than their timing noise (see "
                 "the note under the main table), so they count as equal: the speed panel "
-                "marks only the most accurate model and the combined index is the "
-                "parameters' alone."),
+                "marks only the most accurate model."),
              lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
 
 
@@ -471,14 +447,14 @@ def _section_performance(page: _Page) -> None:
     perf_models = [m for m in page.models if not is_ablation_row(m) and m not in REFERENCE_ROWS]
     perf = performance_table(by_preset, perf_models)
     page.add("performance", "Performance comparison",
-             "Error metrics (RMSE with its 95 % CI, MARD), trainable parameters and "
-             "single-sample latency side by side"
-             + (f", one bar per preset ({', '.join(by_preset)}) on shared axes"
-                if len(by_preset) > 1 else "")
-             + "; parameters and latency on log scales. Latency is the median single-sample "
-             "prediction time measured during each run, so it depends on that machine's load"
-             + ("." if _latency_ok(page) else "; its differences here are inside that timing "
-                "noise (see the note under the main table) and rank nothing."),
+             "Error metrics as bars from zero (RMSE with its 95 % CI, MARD) and two "
+             "machine-independent costs as dots on log axes (trainable parameters, "
+             "multiply-accumulates per prediction counted from the fitted model)"
+             + (f", one row per preset ({', '.join(by_preset)}: marker and bar shade) on "
+                "shared axes" if len(by_preset) > 1 else "")
+             + ". Colour is the model's, as in every figure. Latency is left out: it "
+             "measures the machine (see the main table's median and p90 and the efficiency "
+             "landscape).",
              (lambda: architecture.figure_performance_panel(perf)) if len(perf) else None,
              note=None if len(perf) else "No competitor models in this run.")
 
@@ -526,10 +502,43 @@ def _section_forest(page: _Page) -> None:
 #: The report's figures, section by section in page order (each builder adds its figures).
 _SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
     _section_data, _section_pipeline, _section_architecture, _section_features,
-    _section_grids, _section_agreement, _section_training, _section_radar, _section_costs,
+    section_scatter, _section_agreement, section_residuals, section_spread,
+    _section_training, _section_radar, _section_costs,
     _section_performance, _section_wavelengths, _section_forest,
 )
 
+#: Sections drawn once per preset of a multi-preset run (each preset's figure right
+#: after the primary's, its key and title suffixed with the preset).
+_PER_PRESET: Final[tuple[Callable[[_Page], None], ...]] = (
+    _section_data, _section_features, section_scatter, _section_agreement,
+    section_residuals, section_spread, _section_radar, _section_costs, _section_wavelengths,
+)
+
+
+def _preset_name(res: Results) -> str:
+    return str(res.meta.get("preset") or res.directory.name)
+
+
+def _run_sections(page: _Page) -> None:
+    """Every section in page order; the per-preset ones once more for each peer.
+
+    With peers, the primary's per-preset figures say their preset in the title too.
+    """
+    from dataclasses import replace
+
+    for section in _SECTIONS:
+        if not (page.peers and section in _PER_PRESET):
+            section(page)
+            continue
+        own = replace(page, title_suffix=f" on {_preset_name(page.results)}")
+        subs = [own] + [replace(page, results=peer, peers=(page.results,), compare=None,
+                                fitted={}, key_suffix=f"_{_preset_name(peer)}",
+                                title_suffix=f" on {_preset_name(peer)}")
+                        for peer in page.peers]
+        for sub in subs:  # they share the figure list; the count runs on
+            sub.rendered, sub.count = page.rendered, page.count
+            section(sub)
+            page.count = sub.count
 
 
 def render_figures(results: Results, figures_dir: str | Path | None = None,
@@ -571,8 +580,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     page = _Page(results=results, out_dir=out_dir, formats=formats,
                  wanted=None if include is None else set(include), compare=compare,
                  peers=tuple(peers))
-    for section in _SECTIONS:
-        section(page)
+    _run_sections(page)
     return page.rendered
 
 
