@@ -81,6 +81,8 @@ from .benchmark_result import (
     PREDICTION_COLUMNS,
     REFERENCE_MODELS,
     BenchmarkResult,
+    ablation_base,
+    lambda_row,
 )
 from .calibration import check_k, personal_calibration
 from .conformal import LEVELS
@@ -265,17 +267,41 @@ def _model_params(name: str, preset: str | None) -> dict[str, Any]:
     return dict(tuned_params(name, preset))
 
 
-def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str, Any]]]:
-    """Row name -> (registered model, forced parameters); PINNs (networks with a
-    ``lambda_phys``) twice under ablation."""
+def _variants(
+    names: list[str], ablation: bool, params: Mapping[str, dict[str, Any]], preset: str | None
+) -> tuple[dict[str, tuple[str, dict[str, Any]]], list[dict[str, Any]]]:
+    """Row name -> (registered model, forced parameters), and the ablation's pairs.
+
+    Under ablation every PINN (a network with a ``lambda_phys``) gets a
+    ``<name>/no-physics`` row (λ = 0). Where its own λ is 0 (tuning chose it, or the
+    caller did) the PINN *is* that fit: the pair is kept untested, and the PINN is also
+    run at the best λ > 0 of the tuning's validation curve
+    (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
+    paired against ``<name>/no-physics``.
+    """
     from ..models.registry import is_pinn
+    from ..models.tuning import best_positive_lambda
 
     out: dict[str, tuple[str, dict[str, Any]]] = {n: (n, {}) for n in names}
-    if ablation:
-        for n in names:
-            if is_pinn(n):
-                out[n + NO_PHYSICS] = (n, {"lambda_phys": 0.0})
-    return out
+    pairs: list[dict[str, Any]] = []
+    if not ablation:
+        return out, pairs
+    for n in (n for n in names if is_pinn(n)):
+        off = n + NO_PHYSICS
+        out[off] = (n, {"lambda_phys": 0.0})
+        lam = params[n].get("lambda_phys")
+        lam = float(get_model_class(n)().lambda_phys if lam is None else lam)
+        tuned = preset is not None and "lambda_phys" in _model_params(n, preset)
+        source = "tuned" if tuned and _model_params(n, preset)["lambda_phys"] == lam else "given"
+        pairs.append({"model": n, "ablated_model": off, "lambda_phys": lam,
+                      "lambda_source": source, "tested": lam > 0})
+        best = best_positive_lambda(n, preset) if (lam == 0 and preset is not None) else None
+        if best is not None:
+            row = lambda_row(n, best)
+            out[row] = (n, {"lambda_phys": best})
+            pairs.append({"model": row, "ablated_model": off, "lambda_phys": best,
+                          "lambda_source": "best > 0 on the tuning curve", "tested": True})
+    return out, pairs
 
 
 @dataclass(frozen=True)
@@ -302,6 +328,7 @@ class _Plan:
     data_hash: str
     splits: list[Split]
     tasks: list[_Task]
+    ablation_pairs: list[dict[str, Any]]
 
     def specs(self) -> dict[str, dict[str, Any]]:
         """Task key -> specification, in plan order."""
@@ -324,18 +351,19 @@ def _row_params(
     explicit: Mapping[str, dict[str, Any]] | None,
     preset: str | None,
     ablation: bool,
-) -> tuple[list[str], dict[str, str], dict[str, dict[str, Any]]]:
-    """Rows (PINNs twice under ablation), each row's registered model and parameters."""
+) -> tuple[list[str], dict[str, str], dict[str, dict[str, Any]], list[dict[str, Any]]]:
+    """Rows (PINNs two or three times under ablation), each row's registered model and
+    parameters, and the ablation's pairs (:func:`_variants`)."""
     explicit = dict(explicit or {})
     unknown = sorted(set(explicit) - set(names) - {ORACLE})
     if unknown:
         raise ConfigError(f"model_params for models not benchmarked: {unknown}; models: {names}")
     params = {n: {**_model_params(n, preset), **explicit.get(n, {})} for n in [*names, ORACLE]}
-    variants = _variants(names, ablation)
+    variants, pairs = _variants(names, ablation, params, preset)
     for row, (base, forced) in variants.items():
         if row != base:
             params[row] = {**params[base], **forced}
-    return list(variants), {n: variants[n][0] for n in variants}, params
+    return list(variants), {n: variants[n][0] for n in variants}, params, pairs
 
 
 def _oracle_rows(
@@ -378,7 +406,9 @@ def _plan(
     if opts["references"]:
         names += [m for m in REFERENCE_MODELS if m not in names]
     preset = getattr(dataset.config, "preset", None)
-    names, base_of, params = _row_params(names, opts["model_params"], preset, opts["ablation"])
+    names, base_of, params, pairs = _row_params(
+        names, opts["model_params"], preset, opts["ablation"]
+    )
     aux, oracle_note = _oracle_rows(dataset, names, opts["oracle_reference"])
     base_of.update({a: a for a in aux})
     protocol = opts["protocol"]
@@ -414,7 +444,8 @@ def _plan(
             )
             planned.append(_Task(tasks.task_key(spec), spec, split, classes[name]))
     return _Plan(
-        names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned
+        names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned,
+        pairs,
     )
 
 
@@ -468,7 +499,8 @@ def _meta(
         "auxiliary_models": plan.aux,
         "model_params": tasks.canonical({k: v for k, v in plan.model_params.items() if v}),
         "references": [m for m in REFERENCE_MODELS if m in plan.names],
-        "ablation": [n for n in plan.names if n.endswith(NO_PHYSICS)],
+        "ablation": [n for n in plan.names if ablation_base(n) is not None],
+        "ablation_pairs": plan.ablation_pairs,
         "ablation_method": _METHODS["ablation_method"],
         "n_boot": opts["n_boot"],
         "alpha": opts["alpha"],
