@@ -87,6 +87,7 @@ from .benchmark_result import (
 from .calibration import check_k, personal_calibration
 from .conformal import LEVELS
 from .importance import permutation_importance
+from .inverse import inverse_table, task_state
 from .progress import task_hooks
 from .reference import STUDY_PROTOCOL
 from .splits import Split, check_protocol, effective_layout, make_splits
@@ -204,6 +205,7 @@ def _run_task(
         imp = permutation_importance(
             model, test, n_repeats=spec["importance_repeats"], seed=task_seed
         )
+        state = task_state(model, test)
     return {
         "predicted_mgdl": [float(v) for v in pred],
         "val_predicted_mgdl": None if val_pred is None else [float(v) for v in val_pred],
@@ -213,6 +215,7 @@ def _run_task(
         "task_wall_s": time.perf_counter() - wall0,
         "task_cpu_s": time.process_time() - cpu0,
         "history": _history(model),
+        "state": state,
         "timing": latency,
         "importance": {
             "wavelength_nm": imp["wavelength_nm"].tolist(),
@@ -669,6 +672,9 @@ def run_benchmark(
             n_boot=opts["n_boot"],
             seed=seed,
         )
+    result.inverse = inverse_table(
+        dataset.frame, runs, plan.names, n_boot=opts["n_boot"], seed=seed
+    )
     result.meta["wall_time_s"] = time.perf_counter() - t_start
     if out is not None:
         result.save(out)

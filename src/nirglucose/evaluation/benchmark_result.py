@@ -19,6 +19,7 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from .calibration import CALIBRATION_COLUMNS
+from .inverse import INVERSE_COLUMNS
 from .reference import STUDY_TABLE
 from .stats import PAIRED_COLUMNS
 from .tasks import prepare_out
@@ -177,6 +178,7 @@ OUTPUT_FILES = (
     "importance.csv",
     "ablation.csv",
     "calibration.csv",
+    "inverse.csv",
     "dataset.parquet",
     "meta.json",
 )
@@ -212,6 +214,10 @@ class BenchmarkResult:
     calibration : pandas.DataFrame
         Personal calibration (:data:`~nirglucose.evaluation.calibration.CALIBRATION_COLUMNS`);
         empty without ``calibration=k``.
+    inverse : pandas.DataFrame
+        The inverse task (:data:`~nirglucose.evaluation.inverse.INVERSE_COLUMNS`): each
+        state-predicting model's tissue-state error against the truth; empty when no
+        model predicts state or the data has no ``true_*`` columns.
     """
 
     metrics: pd.DataFrame
@@ -225,6 +231,7 @@ class BenchmarkResult:
     calibration: pd.DataFrame = field(
         default_factory=lambda: pd.DataFrame(columns=CALIBRATION_COLUMNS)
     )
+    inverse: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=INVERSE_COLUMNS))
 
     def table_markdown(self) -> str:
         """The study's Table 1 layout with our values (95 % CIs) beside the study's."""
@@ -254,6 +261,7 @@ class BenchmarkResult:
         _write_csv(out / "importance.csv", self.importance)
         _write_csv(out / "ablation.csv", self.ablation)
         _write_csv(out / "calibration.csv", self.calibration)
+        _write_csv(out / "inverse.csv", self.inverse)
         if self.dataset is not None:
             self.dataset.save(out / "dataset.parquet")
         _write_text(out / "meta.json", _dumps(self.meta))
