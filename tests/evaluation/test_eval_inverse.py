@@ -77,3 +77,19 @@ def test_no_truth_no_rows():
     f = pd.DataFrame({"subject_id": [0, 0, 1, 1]})
     runs = _runs(_frame(2, 2), lambda q, i: np.zeros(len(i)))
     assert inverse_table(f, runs, ["m"]).empty
+
+
+def test_report_section_renders_the_csv(tmp_path):
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.inverse import inverse_section
+
+    ds = ng.simulate("paper", n_subjects=8, per_subject=2, seed=1)
+    run_benchmark(ds, ["physics-inversion"], protocol="grouped-cv", n_splits=2, repeats=1,
+                  seed=0, n_boot=20, importance_repeats=1, oracle_reference=False,
+                  out=tmp_path / "r", model_params={"physics-inversion": {"n_em": 2}})
+    html = inverse_section([load_results(tmp_path / "r")])
+    assert 'id="inverse-paper"' in html and "skin thickness under the probe" in html
+    t = pd.read_csv(tmp_path / "r" / "inverse.csv")
+    assert html.count("<tr><td>") == len(t)
+    (tmp_path / "r" / "inverse.csv").unlink()
+    assert inverse_section([load_results(tmp_path / "r")]) == ""

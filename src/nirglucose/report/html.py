@@ -594,6 +594,8 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
 
     groups = subgroup_tables(runs)
     middle.append(subgroups_section(runs, groups))
+    from .inverse import inverse_section  # lazy, as subgroups: it imports html
+    middle.append(inverse_section(runs))
     top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:])
