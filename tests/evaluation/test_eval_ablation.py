@@ -138,10 +138,13 @@ def test_lambda_zero_gets_no_verdict_and_best_positive_lambda_is_tested(data, tm
     assert set(res.metrics["model"]) == {on, off, at, "optimized-pinn",
                                          "optimized-pinn" + NO_PHYSICS}
     specs = {(s["model"], s["fold"]): s for s in seen}
-    for fold in (0, 1):  # the λ row differs from the no-physics row in λ only
-        assert specs[(at, fold)]["params"] == {**specs[(off, fold)]["params"],
+    for fold in (0, 1):  # the λ row differs from the no-physics fit (here the PINN's own,
+        # shared: λ = 0) in λ only
+        assert (off, fold) not in specs
+        assert specs[(at, fold)]["params"] == {**specs[(on, fold)]["params"],
                                                "lambda_phys": 10.0}
-        assert specs[(at, fold)]["seed_model"] == specs[(off, fold)]["seed_model"]
+        assert specs[(on, fold)]["params"]["lambda_phys"] == 0.0
+        assert specs[(at, fold)]["seed_model"] == specs[(on, fold)]["seed_model"] == on
     a = res.ablation.set_index("model")
     assert list(res.ablation.columns) == list(ABLATION_COLUMNS)
     untested = a.loc[on]
@@ -174,3 +177,16 @@ def test_lambda_zero_given_by_the_caller_is_physics_off(data, tmp_path):
     row = res.ablation.iloc[0]
     assert not row["tested"] and row["verdict"] in ("physics off", "physics off by tuning")
     assert np.isnan(row["rmse_diff_mgdl"])
+
+
+def test_no_physics_row_of_a_pinn_at_lambda_zero_shares_its_fit(data, tmp_path):
+    seen = []
+    res = _run(data, tmp_path, models=["original-pinn"], ablation=True,
+               model_params={"original-pinn": {"max_epochs": 5, "lambda_phys": 0.0}},
+               on_task=lambda spec, cached: seen.append(spec))
+    assert len(seen) == 2  # two folds, fitted once for both rows
+    p = res.predictions
+    np.testing.assert_array_equal(
+        p[p["model"] == "original-pinn"]["predicted_mgdl"].to_numpy(),
+        p[p["model"] == "original-pinn" + NO_PHYSICS]["predicted_mgdl"].to_numpy())
+    assert res.meta["tasks_total"] == 2

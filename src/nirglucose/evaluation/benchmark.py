@@ -334,8 +334,11 @@ class _Plan:
     ablation_pairs: list[dict[str, Any]]
 
     def specs(self) -> dict[str, dict[str, Any]]:
-        """Task key -> specification, in plan order."""
-        return {t.key: t.spec for t in self.tasks}
+        """Task key -> specification, in plan order (a shared fit: its first row's)."""
+        out: dict[str, dict[str, Any]] = {}
+        for t in self.tasks:
+            out.setdefault(t.key, t.spec)
+        return out
 
 
 def _as_dataset(dataset: Dataset | pd.DataFrame) -> Dataset:
@@ -445,7 +448,11 @@ def _plan(
                     "timed": split.repeat == 0 and split.fold == 0,
                 }
             )
-            planned.append(_Task(tasks.task_key(spec), spec, split, classes[name]))
+            # a row whose fit is its PINN's (a no-physics row of a PINN at λ = 0) shares
+            # that fit's task: the same model, seeds and parameters, fitted once
+            same = base_of[name] != name and params.get(name) == params.get(base_of[name])
+            key = tasks.task_key({**spec, "model": base_of[name]} if same else spec)
+            planned.append(_Task(key, spec, split, classes[name]))
     return _Plan(
         names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned,
         pairs,
@@ -461,12 +468,14 @@ def _execute(
     opts: dict[str, Any],
 ) -> None:
     """Run the pending tasks (serially or on ``jobs`` processes) into ``cache``."""
-    by_key = {t.key: t for t in plan.tasks}
+    by_key: dict[str, _Task] = {}
+    for t in plan.tasks:  # a shared fit runs as its first row
+        by_key.setdefault(t.key, t)
     items = [
         (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
     ]
     hooks = task_hooks(
-        "benchmark", len(plan.tasks), len(cache.results), "cached", show=opts["progress"],
+        "benchmark", len(by_key), len(cache.results), "cached", show=opts["progress"],
         describe=lambda spec: f"{spec['model']} r{spec['repeat']} f{spec['fold']}",
         on_task=opts["on_task"],
     )
@@ -485,7 +494,7 @@ def _meta(
     dataset: Dataset, plan: _Plan, cache: tasks.TaskCache, n_pending: int, opts: dict[str, Any]
 ) -> dict[str, Any]:
     """The run's metadata (``meta.json``): protocol, data, models, methods, task counts."""
-    n_total = len(plan.tasks)
+    n_total = len(plan.specs())  # fits: a shared fit counts once
     return {
         "protocol": plan.protocol,
         "n_splits": plan.n_splits,
