@@ -37,6 +37,11 @@ Reference rows and the physics ablation
     identical: the same folds, the same seeds, the same other parameters) as the row
     ``<name>/no-physics``; ``ablation.csv`` holds the paired RMSE difference (with
     physics minus without) with its cluster-bootstrap CI and Holm-adjusted p-value.
+    Where the PINN's own ``lambda_phys`` is 0 (tuning chose it) it *is* its no-physics
+    fit (the two rows share one fit): that pair is untested, with no verdict, and the
+    PINN is also run at the best λ > 0 of the tuning's validation curve
+    (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
+    paired against ``<name>/no-physics``.
 
 Scoring
     Predictions below 0 mg/dL are scored as 0 and non-finite ones as the median
@@ -539,7 +544,9 @@ _METHODS = {
     "ablation_method": (
         "each PINN refitted with lambda_phys=0, everything else identical (same "
         "splits, seeds and other parameters); paired cluster bootstrap of the RMSE "
-        "difference (with physics minus without), Holm over the PINNs"
+        "difference (with physics minus without), Holm over the tested pairs; a PINN "
+        "tuned to lambda_phys=0 is its no-physics fit (untested, no verdict) and is also "
+        "run at the best lambda_phys > 0 of the tuning's validation curve"
     ),
     "ci_method": (
         "percentile cluster bootstrap over subjects; metrics computed per "
