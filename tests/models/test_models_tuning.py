@@ -157,7 +157,7 @@ def test_new_families_have_a_grid_of_the_common_size(name):
 def test_new_families_tuned_where_recorded_build_valid_models(name):
     doc = tuning_record()
     tuned = [p for p in TUNED_PRESETS if name in doc["params"].get(p, {})]
-    assert "paper" in tuned and "wearable" in tuned, f"{name} not tuned on paper/wearable"
+    assert "paper" in tuned, f"{name} not tuned on paper"
     for preset in tuned:
         params = tuned_params(name, preset)
         space = search_space(name)
@@ -166,7 +166,7 @@ def test_new_families_tuned_where_recorded_build_valid_models(name):
             assert value in grid, (name, preset, key, value)
         assert len(doc["scores"][preset][name]["all_configs_rmse_mgdl"]) == N_CONFIGS
     ds = ng.simulate("paper", 10, 2, seed=0)
-    make_model(name, **tuned_params(name, "paper")).fit(ds)
+    make_model(name, **tuned_params(name, "paper")).fit(ds).predict(ds)
 
 
 @pytest.mark.parametrize("preset", TUNED_PRESETS)
