@@ -190,3 +190,8 @@ def test_no_physics_row_of_a_pinn_at_lambda_zero_shares_its_fit(data, tmp_path):
         p[p["model"] == "original-pinn"]["predicted_mgdl"].to_numpy(),
         p[p["model"] == "original-pinn" + NO_PHYSICS]["predicted_mgdl"].to_numpy())
     assert res.meta["tasks_total"] == 2
+
+
+def test_importance_repeats_zero_computes_no_importance(data, tmp_path):
+    res = _run(data, tmp_path, models=["ebl"], importance_repeats=0)
+    assert res.importance.empty and len(res.metrics) == 1

@@ -207,8 +207,12 @@ def _run_task(
         if spec["timed"]:
             form, data = timing_inputs(model, test)
             latency = {**measure_latency(model, data, **timing), "latency_input": form}
-        imp = permutation_importance(
-            model, test, n_repeats=spec["importance_repeats"], seed=task_seed
+        imp = (
+            permutation_importance(
+                model, test, n_repeats=spec["importance_repeats"], seed=task_seed
+            )
+            if spec["importance_repeats"] > 0
+            else _NO_IMPORTANCE
         )
         state = task_state(model, test)
     return {
@@ -228,6 +232,11 @@ def _run_task(
             "rmse_increase_sd_mgdl": imp["rmse_increase_sd_mgdl"].tolist(),
         },
     }
+
+
+#: The importance of a task run with ``importance_repeats=0`` (none computed).
+_NO_IMPORTANCE = {"wavelength_nm": np.array([]), "rmse_increase_mgdl": np.array([]),
+                  "rmse_increase_sd_mgdl": np.array([])}
 
 
 def _run_task_of(args: tuple[Any, ...]) -> dict[str, Any]:
@@ -641,7 +650,8 @@ def run_benchmark(
     timing : dict, optional
         Keyword arguments of :func:`~nirglucose.evaluation.timing.measure_latency`.
     importance_repeats : int
-        Permutations per wavelength channel.
+        Permutations per wavelength channel; 0 computes no importance (an empty
+        ``importance``: what a sweep, which reads the metrics only, asks for).
     oracle_reference : bool
         Fit the oracle for ``rmse_vs_oracle`` when it is not among ``models`` (and the
         data has ``true_*`` columns); False leaves the ratio NaN.
