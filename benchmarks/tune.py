@@ -19,6 +19,15 @@ changing the simulator or a model.
 Usage::
 
     python benchmarks/tune.py [--presets wearable,paper] [--models ...] [--out PATH]
+    python benchmarks/tune.py --lambda-curve-only [--presets ...]
+
+The validation curve of each PINN (its ``lambda_curve`` in ``scores``): the tuned
+training parameters refitted with every value of ``LAMBDA_PHYS_GRID`` on the same
+seeds, folds and random states (the ``slice``), next to the best tuning draw per λ
+(the ``profile``). ``--lambda-curve-only`` adds the curve to PINNs already tuned (their
+tuned configuration is found among the deterministic draws, which must reproduce
+the recorded RMSEs' argmin) without re-tuning them. The benchmark's ablation reads the
+slice's best λ > 0 where tuning chose λ = 0.
 
 Torch runs on one thread. The last line of the output is one JSON object (budget,
 time, the chosen parameters and their tuning-CV RMSE next to the no-skill RMSE).
@@ -40,7 +49,7 @@ import nirglucose as ng
 from nirglucose.dataset import Dataset
 from nirglucose.exceptions import ConfigError
 from nirglucose.models import make_model
-from nirglucose.models.registry import MODELS
+from nirglucose.models.registry import MODELS, get_model_class, is_pinn
 from nirglucose.models.tuning import (
     LAMBDA_PHYS_GRID,
     N_CONFIGS,
@@ -93,11 +102,84 @@ def _rows(ds: Dataset, idx: np.ndarray) -> Dataset:
     return Dataset(ds.frame.iloc[idx].reset_index(drop=True), config=ds.config, seed=ds.seed)
 
 
+def _seeded(name: str) -> bool:
+    return "random_state" in get_model_class(name)().get_params()
+
+
+def cv_rmse(name: str, cfg: dict, k: int, data) -> tuple[float, int]:
+    """Pooled held-out RMSE of configuration ``k`` over the tuning seeds' folds, and
+    the number of fits (random state ``100 k + fold`` where the model takes one)."""
+    sq = []
+    for ds, y, folds in data:
+        for f, (tr, te) in enumerate(folds):
+            extra = {"random_state": 100 * k + f} if _seeded(name) else {}
+            m = make_model(name, **cfg, **extra).fit(_rows(ds, tr))
+            sq.append((m.predict(_rows(ds, te)) - y[te]) ** 2)
+    return float(np.sqrt(np.mean(np.concatenate(sq)))), len(sq)
+
+
+def lambda_curve(name: str, scores: list[float], k_best: int, data) -> tuple[dict, int]:
+    """The PINN's validation curve: ``slice`` (tuned training parameters, every λ, the
+    same random states) and ``profile`` (best draw per λ); and the fits it took."""
+    configs = configurations(name)
+    tuned = configs[k_best]
+    slice_, fits = [], 0
+    for lam in LAMBDA_PHYS_GRID:
+        if lam == tuned["lambda_phys"]:
+            slice_.append(round(scores[k_best], 3))  # the tuning's own fit
+            continue
+        rmse, n = cv_rmse(name, {**tuned, "lambda_phys": float(lam)}, k_best, data)
+        slice_.append(round(rmse, 3))
+        fits += n
+    profile = [
+        round(min(r for c, r in zip(configs, scores, strict=True) if c["lambda_phys"] == lam), 3)
+        for lam in LAMBDA_PHYS_GRID
+    ]
+    curve = {
+        "lambda_phys": list(LAMBDA_PHYS_GRID),
+        "slice_cv_rmse_mgdl": slice_,
+        "profile_cv_rmse_mgdl": profile,
+        "slice_training_params": f"the tuned configuration (draw {k_best})",
+    }
+    return curve, fits
+
+
+def _tuning_data(preset: str) -> tuple[list, float]:
+    """Each tuning seed's data, targets and grouped folds, and the no-skill RMSE."""
+    data = []
+    for seed in TUNING_SEEDS:
+        ds = ng.simulate(preset, N_SUBJECTS, PER_SUBJECT, seed=seed)
+        y = ds.frame["glucose_mgdl"].to_numpy()
+        groups = ds.frame["subject_id"].to_numpy()
+        folds = list(GroupKFold(N_FOLDS).split(y, groups=groups))
+        data.append((ds, y, folds))
+    sq = [(y[te] - y[tr].mean()) ** 2 for _, y, folds in data for tr, te in folds]
+    return data, float(np.sqrt(np.mean(np.concatenate(sq))))
+
+
+def _curves_only(preset: str, models: list[str], params: dict, scores: dict) -> int:
+    """Add the λ curve to PINNs already tuned on ``preset`` (no re-tuning)."""
+    data, _ = _tuning_data(preset)
+    fits = 0
+    for name in (m for m in models if is_pinn(m) and m in params.get(preset, {})):
+        recorded = scores[preset][name]["all_configs_rmse_mgdl"]
+        k = int(np.argmin(recorded))
+        if configurations(name)[k] != params[preset][name]:
+            raise SystemExit(f"{preset} {name}: the draws no longer reproduce the tuning")
+        curve, n = lambda_curve(name, recorded, k, data)
+        scores[preset][name]["lambda_curve"] = curve
+        fits += n
+        print(f"{preset} {name} lambda curve {curve['slice_cv_rmse_mgdl']}", flush=True)
+    return fits
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--presets", default=",".join(TUNED_PRESETS))
     ap.add_argument("--models", default=",".join(FAMILIES))
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--lambda-curve-only", action="store_true",
+                    help="add the PINNs' lambda curves to their recorded tuning")
     args = ap.parse_args()
     torch.set_num_threads(1)
     presets = [p for p in args.presets.split(",") if p]
@@ -112,48 +194,33 @@ def main() -> None:
     sources = doc.get("presets", {})
     fits = 0
     for preset in presets:
+        if args.lambda_curve_only:
+            fits += _curves_only(preset, models, params, scores)
+            continue
         sources[preset] = {"simulated_as": preset}
-        data = []
-        for seed in TUNING_SEEDS:
-            ds = ng.simulate(preset, N_SUBJECTS, PER_SUBJECT, seed=seed)
-            y = ds.frame["glucose_mgdl"].to_numpy()
-            groups = ds.frame["subject_id"].to_numpy()
-            folds = list(GroupKFold(N_FOLDS).split(y, groups=groups))
-            data.append((ds, y, folds))
-        no_skill = float(
-            np.sqrt(
-                np.mean(
-                    np.concatenate(
-                        [(y[te] - y[tr].mean()) ** 2 for _, y, folds in data for tr, te in folds]
-                    )
-                )
-            )
-        )
+        data, no_skill = _tuning_data(preset)
         for name in models:
             results = []
             for k, cfg in enumerate(configurations(name)):
                 t0 = time.perf_counter()
-                sq = []
-                for ds, y, folds in data:
-                    for f, (tr, te) in enumerate(folds):
-                        extra = {} if name in ("ebl", "pls") else {"random_state": 100 * k + f}
-                        m = make_model(name, **cfg, **extra).fit(_rows(ds, tr))
-                        sq.append((m.predict(_rows(ds, te)) - y[te]) ** 2)
-                        fits += 1
-                rmse = float(np.sqrt(np.mean(np.concatenate(sq))))
+                rmse, n = cv_rmse(name, cfg, k, data)
+                fits += n
                 results.append((rmse, k, cfg))
                 print(
                     f"{preset} {name} {k:2d} {rmse:6.2f} ({time.perf_counter() - t0:.1f} s) {cfg}",
                     flush=True,
                 )
             rmse, k, cfg = min(results, key=lambda r: (r[0], r[1]))
-            out = {key: (list(v) if isinstance(v, tuple) else v) for key, v in cfg.items()}
-            params.setdefault(preset, {})[name] = out
+            params.setdefault(preset, {})[name] = json.loads(json.dumps(cfg))
             scores.setdefault(preset, {})[name] = {
                 "tuning_cv_rmse_mgdl": round(rmse, 3),
                 "no_skill_rmse_mgdl": round(no_skill, 3),
                 "all_configs_rmse_mgdl": [round(r[0], 3) for r in results],
             }
+            if is_pinn(name):
+                curve, n = lambda_curve(name, [r[0] for r in results], k, data)
+                scores[preset][name]["lambda_curve"] = curve
+                fits += n
     elapsed = time.perf_counter() - t_start
     doc = {
         "format": "nirglucose-tuned-params",
@@ -169,11 +236,19 @@ def main() -> None:
             "per_subject": PER_SUBJECT,
             "lambda_phys_grid": list(LAMBDA_PHYS_GRID),
             "criterion": "pooled RMSE over the tuning seeds' held-out folds",
+            "lambda_curve": (
+                "each PINN's tuned training parameters refitted at every lambda_phys of the "
+                "grid on the same seeds, folds and random states (slice); best draw per "
+                "lambda (profile)"
+            ),
         },
         "presets": sources,
         "params": params,
         "scores": scores,
+        "previous_runs": doc.get("previous_runs", [])
+        + ([doc["last_run"]] if "last_run" in doc else []),
         "last_run": {
+            "lambda_curve_only": bool(args.lambda_curve_only),
             "presets": presets,
             "models": models,
             "fits": fits,

@@ -48,7 +48,7 @@ def test_ablation_rows_are_paired(data, tmp_path):
     seen = []
     res = _run(
         data, tmp_path, models=["ebl", "original-pinn"], ablation=True,
-        model_params={"original-pinn": {"max_epochs": 5}},
+        model_params={"original-pinn": {"max_epochs": 5, "lambda_phys": 1.0}},
         on_task=lambda spec, cached: seen.append(spec),
     )
     off = "original-pinn" + NO_PHYSICS
@@ -115,3 +115,85 @@ def test_model_params_are_the_packaged_tuned_ones():
 
     assert bm._model_params("sdnn", "paper") == tuned_params("sdnn", "paper") != {}
     assert bm._model_params("sdnn", None) == {}  # a user's data: no preset, defaults
+
+
+def test_lambda_zero_gets_no_verdict_and_best_positive_lambda_is_tested(data, tmp_path,
+                                                                        monkeypatch):
+    """Where tuning chose λ = 0, the PINN is its no-physics fit: no Δ, no p, no verdict;
+    the PINN is also run at the tuning curve's best λ > 0, paired against no-physics."""
+    import nirglucose.models.tuning as tuning
+    from nirglucose.evaluation.benchmark_result import lambda_row
+
+    tuned = {"original-pinn": {"max_epochs": 5, "lambda_phys": 0.0},
+             "optimized-pinn": {"max_epochs": 5, "lambda_phys": 1.0}}
+    monkeypatch.setattr(bm, "_model_params", lambda name, preset: dict(tuned.get(name, {})))
+    monkeypatch.setattr(tuning, "best_positive_lambda",
+                        lambda name, preset: {"original-pinn": 10.0}.get(name))
+    seen = []
+    res = _run(data, tmp_path, models=["original-pinn", "optimized-pinn"], ablation=True,
+               on_task=lambda spec, cached: seen.append(spec))
+    on, off = "original-pinn", "original-pinn" + NO_PHYSICS
+    at = lambda_row(on, 10.0)
+    assert at == "original-pinn/lambda=10"
+    assert set(res.metrics["model"]) == {on, off, at, "optimized-pinn",
+                                         "optimized-pinn" + NO_PHYSICS}
+    specs = {(s["model"], s["fold"]): s for s in seen}
+    for fold in (0, 1):  # the λ row differs from the no-physics fit (here the PINN's own,
+        # shared: λ = 0) in λ only
+        assert (off, fold) not in specs
+        assert specs[(at, fold)]["params"] == {**specs[(on, fold)]["params"],
+                                               "lambda_phys": 10.0}
+        assert specs[(on, fold)]["params"]["lambda_phys"] == 0.0
+        assert specs[(at, fold)]["seed_model"] == specs[(on, fold)]["seed_model"] == on
+    a = res.ablation.set_index("model")
+    assert list(res.ablation.columns) == list(ABLATION_COLUMNS)
+    untested = a.loc[on]
+    assert not untested["tested"] and untested["lambda_phys"] == 0.0
+    assert untested["verdict"] == "physics off by tuning"
+    assert np.isnan(untested["rmse_diff_mgdl"]) and np.isnan(untested["p_holm"])
+    assert not untested["significant"] and untested["physics_helps"] is None
+    row = a.loc[at]
+    assert row["tested"] and row["ablated_model"] == off and row["lambda_phys"] == 10.0
+    assert row["lambda_source"] == "best > 0 on the tuning curve"
+    rm = res.metrics.set_index("model")["rmse_mgdl"]
+    assert rm[at] != rm[off]  # a different fit: a real comparison
+    assert row["rmse_diff_mgdl"] == pytest.approx(rm[at] - rm[off], abs=1e-9)
+    assert row["ci_low"] <= row["rmse_diff_mgdl"] <= row["ci_high"]
+    assert np.isfinite(row["p_holm"]) and row["p_holm"] >= row["p_value"]
+    assert row["verdict"] in ("physics helps", "physics hurts", "no significant difference")
+    assert a.loc["optimized-pinn", "tested"] and a.loc["optimized-pinn", "verdict"] != (
+        "physics off by tuning")
+    table = (tmp_path / "r" / "table.md").read_text().split("## Physics ablation")[1]
+    line = next(x for x in table.splitlines() if x.startswith("| Original PINN |"))
+    assert "physics off by tuning" in line and "no significant" not in line and "—" in line
+    assert "Holm over the 2 tested pairs" in table
+    doc = json.loads((tmp_path / "r" / "meta.json").read_text())
+    assert {p["model"] for p in doc["ablation_pairs"]} == {on, at, "optimized-pinn"}
+
+
+def test_lambda_zero_given_by_the_caller_is_physics_off(data, tmp_path):
+    res = _run(data, tmp_path, models=["original-pinn"], ablation=True,
+               model_params={"original-pinn": {"max_epochs": 5, "lambda_phys": 0.0}})
+    row = res.ablation.iloc[0]
+    assert not row["tested"] and row["verdict"] in ("physics off", "physics off by tuning")
+    assert np.isnan(row["rmse_diff_mgdl"])
+
+
+def test_no_physics_row_of_a_pinn_at_lambda_zero_shares_its_fit(data, tmp_path):
+    seen = []
+    res = _run(data, tmp_path, models=["original-pinn"], ablation=True,
+               model_params={"original-pinn": {"max_epochs": 5, "lambda_phys": 0.0}},
+               on_task=lambda spec, cached: seen.append(spec))
+    models = [s["model"] for s in seen]
+    assert models.count("original-pinn") == 2  # two folds, fitted once for both rows
+    assert "original-pinn" + NO_PHYSICS not in models
+    p = res.predictions
+    np.testing.assert_array_equal(
+        p[p["model"] == "original-pinn"]["predicted_mgdl"].to_numpy(),
+        p[p["model"] == "original-pinn" + NO_PHYSICS]["predicted_mgdl"].to_numpy())
+    assert res.meta["tasks_total"] == len(seen)  # (a /lambda= row, if any, is its own fit)
+
+
+def test_importance_repeats_zero_computes_no_importance(data, tmp_path):
+    res = _run(data, tmp_path, models=["ebl"], importance_repeats=0)
+    assert res.importance.empty and len(res.metrics) == 1

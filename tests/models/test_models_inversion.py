@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import nirglucose as ng
@@ -133,3 +134,14 @@ def test_hybrids_are_registered():
     assert isinstance(make_model("ebl+gp"), EBLGP)
     assert isinstance(make_model("physics-inversion+gp"), PhysicsInversionGP)
     assert isinstance(make_model("physics-inversion"), PhysicsInversion)
+
+
+def test_inversion_hybrid_reports_its_backbones_state(paper):
+    train, test = paper
+    m = PhysicsInversionGP(backbone_params={"n_em": 3}, cv=0, random_state=0).fit(train)
+    state = m.estimate_state(test)
+    back = m.backbone_.estimate_state(test)
+    pd.testing.assert_frame_equal(state.drop(columns="glucose_mgdl"),
+                                  back.drop(columns="glucose_mgdl"))
+    np.testing.assert_allclose(state["glucose_mgdl"], m.predict(test))
+    assert not np.allclose(state["glucose_mgdl"], back["glucose_mgdl"])  # the GP corrects

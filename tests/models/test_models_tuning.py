@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -135,3 +137,60 @@ def test_linear_lookups_do_not_import_torch():
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-1500:]
+
+
+# ----------------------------------------------------------------- new families, λ curve
+
+NEW_FAMILIES = ("physics-inversion", "ebl+gp", "physics-inversion+gp")
+
+
+@pytest.mark.parametrize("name", NEW_FAMILIES)
+def test_new_families_have_a_grid_of_the_common_size(name):
+    space = search_space(name)
+    assert int(np.prod([len(v) for v in space.values()])) == N_CONFIGS
+    cls = type(make_model(name))
+    for key in space:  # every grid key is a constructor argument
+        assert key in cls().get_params(), (name, key)
+
+
+@pytest.mark.parametrize("name", NEW_FAMILIES)
+def test_new_families_tuned_where_recorded_build_valid_models(name):
+    doc = tuning_record()
+    tuned = [p for p in TUNED_PRESETS if name in doc["params"].get(p, {})]
+    assert "paper" in tuned, f"{name} not tuned on paper"
+    for preset in tuned:
+        params = tuned_params(name, preset)
+        space = search_space(name)
+        for key, value in params.items():  # a grid point, as JSON stores it
+            grid = [json.loads(json.dumps(v)) for v in space[key]]
+            assert value in grid, (name, preset, key, value)
+        assert len(doc["scores"][preset][name]["all_configs_rmse_mgdl"]) == N_CONFIGS
+    ds = ng.simulate("paper", 10, 2, seed=0)
+    make_model(name, **tuned_params(name, "paper")).fit(ds).predict(ds)
+
+
+@pytest.mark.parametrize("preset", TUNED_PRESETS)
+@pytest.mark.parametrize("name", PINNS)
+def test_lambda_curve_is_recorded_and_consistent(name, preset):
+    from nirglucose.models.tuning import best_positive_lambda, lambda_curve
+
+    curve = lambda_curve(name, preset)
+    assert curve is not None, f"no lambda curve for {name} on {preset}"
+    assert curve["lambda_phys"] == list(LAMBDA_PHYS_GRID)
+    score = tuning_record()["scores"][preset][name]
+    tuned = curve["tuned_lambda_phys"]
+    at_tuned = curve["slice_cv_rmse_mgdl"][curve["lambda_phys"].index(tuned)]
+    assert at_tuned == pytest.approx(score["tuning_cv_rmse_mgdl"], abs=1e-3)
+    # the profile is the best recorded draw per λ, and its minimum is the tuning's choice
+    assert min(curve["profile_cv_rmse_mgdl"]) == pytest.approx(score["tuning_cv_rmse_mgdl"])
+    best = best_positive_lambda(name, preset)
+    pts = zip(curve["lambda_phys"], curve["slice_cv_rmse_mgdl"], strict=True)
+    positive = {lam: r for lam, r in pts if lam > 0}
+    assert best > 0 and positive[best] == min(positive.values())
+
+
+def test_best_positive_lambda_without_a_curve_is_none():
+    from nirglucose.models.tuning import best_positive_lambda
+
+    assert best_positive_lambda("sdnn", "paper") is None
+    assert best_positive_lambda("rte-pinn", "no-such-preset") is None

@@ -37,6 +37,11 @@ Reference rows and the physics ablation
     identical: the same folds, the same seeds, the same other parameters) as the row
     ``<name>/no-physics``; ``ablation.csv`` holds the paired RMSE difference (with
     physics minus without) with its cluster-bootstrap CI and Holm-adjusted p-value.
+    Where the PINN's own ``lambda_phys`` is 0 (tuning chose it) it *is* its no-physics
+    fit (the two rows share one fit): that pair is untested, with no verdict, and the
+    PINN is also run at the best λ > 0 of the tuning's validation curve
+    (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
+    paired against ``<name>/no-physics``.
 
 Scoring
     Predictions below 0 mg/dL are scored as 0 and non-finite ones as the median
@@ -81,10 +86,13 @@ from .benchmark_result import (
     PREDICTION_COLUMNS,
     REFERENCE_MODELS,
     BenchmarkResult,
+    ablation_base,
+    lambda_row,
 )
 from .calibration import check_k, personal_calibration
 from .conformal import LEVELS
 from .importance import permutation_importance
+from .inverse import inverse_table, task_state
 from .progress import task_hooks
 from .reference import STUDY_PROTOCOL
 from .splits import Split, check_protocol, effective_layout, make_splits
@@ -199,9 +207,14 @@ def _run_task(
         if spec["timed"]:
             form, data = timing_inputs(model, test)
             latency = {**measure_latency(model, data, **timing), "latency_input": form}
-        imp = permutation_importance(
-            model, test, n_repeats=spec["importance_repeats"], seed=task_seed
+        imp = (
+            permutation_importance(
+                model, test, n_repeats=spec["importance_repeats"], seed=task_seed
+            )
+            if spec["importance_repeats"] > 0
+            else _NO_IMPORTANCE
         )
+        state = task_state(model, test)
     return {
         "predicted_mgdl": [float(v) for v in pred],
         "val_predicted_mgdl": None if val_pred is None else [float(v) for v in val_pred],
@@ -211,6 +224,7 @@ def _run_task(
         "task_wall_s": time.perf_counter() - wall0,
         "task_cpu_s": time.process_time() - cpu0,
         "history": _history(model),
+        "state": state,
         "timing": latency,
         "importance": {
             "wavelength_nm": imp["wavelength_nm"].tolist(),
@@ -218,6 +232,11 @@ def _run_task(
             "rmse_increase_sd_mgdl": imp["rmse_increase_sd_mgdl"].tolist(),
         },
     }
+
+
+#: The importance of a task run with ``importance_repeats=0`` (none computed).
+_NO_IMPORTANCE = {"wavelength_nm": np.array([]), "rmse_increase_mgdl": np.array([]),
+                  "rmse_increase_sd_mgdl": np.array([])}
 
 
 def _run_task_of(args: tuple[Any, ...]) -> dict[str, Any]:
@@ -265,17 +284,41 @@ def _model_params(name: str, preset: str | None) -> dict[str, Any]:
     return dict(tuned_params(name, preset))
 
 
-def _variants(names: list[str], ablation: bool) -> dict[str, tuple[str, dict[str, Any]]]:
-    """Row name -> (registered model, forced parameters); PINNs (networks with a
-    ``lambda_phys``) twice under ablation."""
+def _variants(
+    names: list[str], ablation: bool, params: Mapping[str, dict[str, Any]], preset: str | None
+) -> tuple[dict[str, tuple[str, dict[str, Any]]], list[dict[str, Any]]]:
+    """Row name -> (registered model, forced parameters), and the ablation's pairs.
+
+    Under ablation every PINN (a network with a ``lambda_phys``) gets a
+    ``<name>/no-physics`` row (λ = 0). Where its own λ is 0 (tuning chose it, or the
+    caller did) the PINN *is* that fit: the pair is kept untested, and the PINN is also
+    run at the best λ > 0 of the tuning's validation curve
+    (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
+    paired against ``<name>/no-physics``.
+    """
     from ..models.registry import is_pinn
+    from ..models.tuning import best_positive_lambda
 
     out: dict[str, tuple[str, dict[str, Any]]] = {n: (n, {}) for n in names}
-    if ablation:
-        for n in names:
-            if is_pinn(n):
-                out[n + NO_PHYSICS] = (n, {"lambda_phys": 0.0})
-    return out
+    pairs: list[dict[str, Any]] = []
+    if not ablation:
+        return out, pairs
+    for n in (n for n in names if is_pinn(n)):
+        off = n + NO_PHYSICS
+        out[off] = (n, {"lambda_phys": 0.0})
+        lam = params[n].get("lambda_phys")
+        lam = float(get_model_class(n)().lambda_phys if lam is None else lam)
+        tuned = preset is not None and "lambda_phys" in _model_params(n, preset)
+        source = "tuned" if tuned and _model_params(n, preset)["lambda_phys"] == lam else "given"
+        pairs.append({"model": n, "ablated_model": off, "lambda_phys": lam,
+                      "lambda_source": source, "tested": lam > 0})
+        best = best_positive_lambda(n, preset) if (lam == 0 and preset is not None) else None
+        if best is not None:
+            row = lambda_row(n, best)
+            out[row] = (n, {"lambda_phys": best})
+            pairs.append({"model": row, "ablated_model": off, "lambda_phys": best,
+                          "lambda_source": "best > 0 on the tuning curve", "tested": True})
+    return out, pairs
 
 
 @dataclass(frozen=True)
@@ -302,10 +345,14 @@ class _Plan:
     data_hash: str
     splits: list[Split]
     tasks: list[_Task]
+    ablation_pairs: list[dict[str, Any]]
 
     def specs(self) -> dict[str, dict[str, Any]]:
-        """Task key -> specification, in plan order."""
-        return {t.key: t.spec for t in self.tasks}
+        """Task key -> specification, in plan order (a shared fit: its first row's)."""
+        out: dict[str, dict[str, Any]] = {}
+        for t in self.tasks:
+            out.setdefault(t.key, t.spec)
+        return out
 
 
 def _as_dataset(dataset: Dataset | pd.DataFrame) -> Dataset:
@@ -324,18 +371,19 @@ def _row_params(
     explicit: Mapping[str, dict[str, Any]] | None,
     preset: str | None,
     ablation: bool,
-) -> tuple[list[str], dict[str, str], dict[str, dict[str, Any]]]:
-    """Rows (PINNs twice under ablation), each row's registered model and parameters."""
+) -> tuple[list[str], dict[str, str], dict[str, dict[str, Any]], list[dict[str, Any]]]:
+    """Rows (PINNs two or three times under ablation), each row's registered model and
+    parameters, and the ablation's pairs (:func:`_variants`)."""
     explicit = dict(explicit or {})
     unknown = sorted(set(explicit) - set(names) - {ORACLE})
     if unknown:
         raise ConfigError(f"model_params for models not benchmarked: {unknown}; models: {names}")
     params = {n: {**_model_params(n, preset), **explicit.get(n, {})} for n in [*names, ORACLE]}
-    variants = _variants(names, ablation)
+    variants, pairs = _variants(names, ablation, params, preset)
     for row, (base, forced) in variants.items():
         if row != base:
             params[row] = {**params[base], **forced}
-    return list(variants), {n: variants[n][0] for n in variants}, params
+    return list(variants), {n: variants[n][0] for n in variants}, params, pairs
 
 
 def _oracle_rows(
@@ -378,7 +426,9 @@ def _plan(
     if opts["references"]:
         names += [m for m in REFERENCE_MODELS if m not in names]
     preset = getattr(dataset.config, "preset", None)
-    names, base_of, params = _row_params(names, opts["model_params"], preset, opts["ablation"])
+    names, base_of, params, pairs = _row_params(
+        names, opts["model_params"], preset, opts["ablation"]
+    )
     aux, oracle_note = _oracle_rows(dataset, names, opts["oracle_reference"])
     base_of.update({a: a for a in aux})
     protocol = opts["protocol"]
@@ -412,9 +462,14 @@ def _plan(
                     "timed": split.repeat == 0 and split.fold == 0,
                 }
             )
-            planned.append(_Task(tasks.task_key(spec), spec, split, classes[name]))
+            # a row whose fit is its PINN's (a no-physics row of a PINN at λ = 0) shares
+            # that fit's task: the same model, seeds and parameters, fitted once
+            same = base_of[name] != name and params.get(name) == params.get(base_of[name])
+            key = tasks.task_key({**spec, "model": base_of[name]} if same else spec)
+            planned.append(_Task(key, spec, split, classes[name]))
     return _Plan(
-        names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned
+        names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned,
+        pairs,
     )
 
 
@@ -427,12 +482,14 @@ def _execute(
     opts: dict[str, Any],
 ) -> None:
     """Run the pending tasks (serially or on ``jobs`` processes) into ``cache``."""
-    by_key = {t.key: t for t in plan.tasks}
+    by_key: dict[str, _Task] = {}
+    for t in plan.tasks:  # a shared fit runs as its first row
+        by_key.setdefault(t.key, t)
     items = [
         (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
     ]
     hooks = task_hooks(
-        "benchmark", len(plan.tasks), len(cache.results), "cached", show=opts["progress"],
+        "benchmark", len(by_key), len(cache.results), "cached", show=opts["progress"],
         describe=lambda spec: f"{spec['model']} r{spec['repeat']} f{spec['fold']}",
         on_task=opts["on_task"],
     )
@@ -451,7 +508,7 @@ def _meta(
     dataset: Dataset, plan: _Plan, cache: tasks.TaskCache, n_pending: int, opts: dict[str, Any]
 ) -> dict[str, Any]:
     """The run's metadata (``meta.json``): protocol, data, models, methods, task counts."""
-    n_total = len(plan.tasks)
+    n_total = len(plan.specs())  # fits: a shared fit counts once
     return {
         "protocol": plan.protocol,
         "n_splits": plan.n_splits,
@@ -468,7 +525,8 @@ def _meta(
         "auxiliary_models": plan.aux,
         "model_params": tasks.canonical({k: v for k, v in plan.model_params.items() if v}),
         "references": [m for m in REFERENCE_MODELS if m in plan.names],
-        "ablation": [n for n in plan.names if n.endswith(NO_PHYSICS)],
+        "ablation": [n for n in plan.names if ablation_base(n) is not None],
+        "ablation_pairs": plan.ablation_pairs,
         "ablation_method": _METHODS["ablation_method"],
         "n_boot": opts["n_boot"],
         "alpha": opts["alpha"],
@@ -495,7 +553,9 @@ _METHODS = {
     "ablation_method": (
         "each PINN refitted with lambda_phys=0, everything else identical (same "
         "splits, seeds and other parameters); paired cluster bootstrap of the RMSE "
-        "difference (with physics minus without), Holm over the PINNs"
+        "difference (with physics minus without), Holm over the tested pairs; a PINN "
+        "tuned to lambda_phys=0 is its no-physics fit (untested, no verdict) and is also "
+        "run at the best lambda_phys > 0 of the tuning's validation curve"
     ),
     "ci_method": (
         "percentile cluster bootstrap over subjects; metrics computed per "
@@ -590,7 +650,8 @@ def run_benchmark(
     timing : dict, optional
         Keyword arguments of :func:`~nirglucose.evaluation.timing.measure_latency`.
     importance_repeats : int
-        Permutations per wavelength channel.
+        Permutations per wavelength channel; 0 computes no importance (an empty
+        ``importance``: what a sweep, which reads the metrics only, asks for).
     oracle_reference : bool
         Fit the oracle for ``rmse_vs_oracle`` when it is not among ``models`` (and the
         data has ``true_*`` columns); False leaves the ratio NaN.
@@ -637,6 +698,9 @@ def run_benchmark(
             n_boot=opts["n_boot"],
             seed=seed,
         )
+    result.inverse = inverse_table(
+        dataset.frame, runs, plan.names, n_boot=opts["n_boot"], seed=seed
+    )
     result.meta["wall_time_s"] = time.perf_counter() - t_start
     if out is not None:
         result.save(out)

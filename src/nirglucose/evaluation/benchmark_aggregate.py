@@ -21,11 +21,13 @@ from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
     IMPORTANCE_COLUMNS,
+    LAMBDA_ROW,
     METRIC_COLUMNS,
     NO_PHYSICS,
     ORACLE,
     PREDICTION_COLUMNS,
     BenchmarkResult,
+    ablation_base,
 )
 from .conformal import LEVELS, coverage_summary, out_of_fold_intervals
 from .reference import MODEL_LABELS, STUDY_ORDER
@@ -90,7 +92,10 @@ def aggregate(
         if (comparisons["family"] == "vs_best").any()
         else (metrics["model"].iloc[0] if len(metrics) else None)
     )
-    ablation = _ablation(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
+    ablation = _ablation(
+        preds, names, meta.get("ablation_pairs"), metrics.set_index("model")["rmse_mgdl"],
+        n_boot=n_boot, alpha=alpha, seed=seed,
+    )
     meta["study_orderings"] = _study_orderings(comparisons)
     meta["timing_machine"] = next(
         (res["timing"]["machine"] for _, _, res in runs if res.get("timing", {}).get("machine")),
@@ -251,25 +256,64 @@ def _importance(names: list[str], by_model: dict[str, list]) -> pd.DataFrame:
 
 
 def _label(name: str) -> str:
+    base = ablation_base(name)
+    if base is None:
+        return MODEL_LABELS.get(name, name)
     if name.endswith(NO_PHYSICS):
-        base = name[: -len(NO_PHYSICS)]
         return f"{MODEL_LABELS.get(base, base)} (no physics)"
-    return MODEL_LABELS.get(name, name)
+    return f"{MODEL_LABELS.get(base, base)} (λ = {name.split(LAMBDA_ROW)[1]})"
 
 
-def _ablation(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
-    """Each PINN against itself without physics: paired RMSE difference (with − off)."""
-    pairs = [(n[: -len(NO_PHYSICS)], n) for n in names if n.endswith(NO_PHYSICS)]
+def _verdict(pair: dict[str, Any], row: pd.Series | None) -> str:
+    if not pair["tested"]:
+        return "physics off by tuning" if pair["lambda_source"] == "tuned" else "physics off"
+    if not bool(row["significant"]):
+        return "no significant difference"
+    return "physics helps" if row["rmse_diff_mgdl"] < 0 else "physics hurts"
+
+
+def _ablation(preds, names, pairs, rmse, *, n_boot, alpha, seed) -> pd.DataFrame:
+    """Each PINN against itself without physics: paired RMSE difference (with − off).
+
+    ``pairs`` (the plan's, in ``meta["ablation_pairs"]``) say which pairs are tested:
+    a PINN whose own λ is 0 is its no-physics fit, so that pair gets no difference, no
+    p-value and no verdict (its RMSEs from ``rmse``, the metrics table's); Holm runs
+    over the tested pairs only. Without ``pairs``
+    (an older run) every ``<pinn>/no-physics`` row is paired with its PINN.
+    """
+    if pairs is None:
+        pairs = [
+            {"model": n[: -len(NO_PHYSICS)], "ablated_model": n, "lambda_phys": np.nan,
+             "lambda_source": "unknown", "tested": True}
+            for n in names if n.endswith(NO_PHYSICS)
+        ]
+    pairs = [p for p in pairs if p["model"] in names and p["ablated_model"] in names]
     if not pairs:
         return pd.DataFrame(columns=list(ABLATION_COLUMNS))
-    c = compare_models(
-        preds, pairs=pairs, pred_col="scored_mgdl", n_boot=n_boot, seed=seed, alpha=alpha
-    )
-    c = c.rename(
-        columns={"reference_model": "ablated_model", "reference_rmse_mgdl": "ablated_rmse_mgdl"}
-    )
-    c["physics_helps"] = c["rmse_diff_mgdl"] < 0
-    return c[list(ABLATION_COLUMNS)].reset_index(drop=True)
+    tested = [(p["model"], p["ablated_model"]) for p in pairs if p["tested"]]
+    c = pd.DataFrame()
+    if tested:
+        c = compare_models(
+            preds, pairs=tested, pred_col="scored_mgdl", n_boot=n_boot, seed=seed, alpha=alpha
+        ).set_index(["model", "reference_model"])
+    rows = []
+    for p in pairs:
+        key = (p["model"], p["ablated_model"])
+        r = c.loc[key] if p["tested"] else None
+        rows.append({
+            **p,
+            "rmse_mgdl": r["rmse_mgdl"] if p["tested"] else rmse[p["model"]],
+            "ablated_rmse_mgdl": (
+                r["reference_rmse_mgdl"] if p["tested"] else rmse[p["ablated_model"]]
+            ),
+            **{k: (r[k] if p["tested"] else np.nan)
+               for k in ("rmse_diff_mgdl", "ci_low", "ci_high", "p_value", "p_holm",
+                         "p_wilcoxon")},
+            "significant": bool(r["significant"]) if p["tested"] else False,
+            "physics_helps": bool(r["rmse_diff_mgdl"] < 0) if p["tested"] else None,
+            "verdict": _verdict(p, r),
+        })
+    return pd.DataFrame(rows)[list(ABLATION_COLUMNS)].reset_index(drop=True)
 
 
 def _study_orderings(comparisons: pd.DataFrame) -> dict[str, Any]:

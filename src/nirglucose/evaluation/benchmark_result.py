@@ -19,6 +19,7 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from .calibration import CALIBRATION_COLUMNS
+from .inverse import INVERSE_COLUMNS
 from .reference import STUDY_TABLE
 from .stats import PAIRED_COLUMNS
 from .tasks import prepare_out
@@ -34,7 +35,10 @@ __all__ = [
     "REFERENCE_MODELS",
     "PINN_MODELS",
     "NO_PHYSICS",
+    "LAMBDA_ROW",
     "ABLATION_COLUMNS",
+    "lambda_row",
+    "ablation_base",
 ]
 
 #: Registry name of the oracle bound.
@@ -45,10 +49,22 @@ REFERENCE_MODELS = ("mean", "gp", "gbr")
 PINN_MODELS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
 #: Suffix of a PINN's row with its physics term off.
 NO_PHYSICS = "/no-physics"
-#: Columns of ``ablation.csv``: one row per PINN, with physics minus without.
+#: Infix of a PINN's row refitted at another physics weight (``<pinn>/lambda=0.1``):
+#: where tuning chose ``lambda_phys = 0`` the ablation also runs the best weight > 0
+#: of the tuning's validation curve.
+LAMBDA_ROW = "/lambda="
+#: Columns of ``ablation.csv``: one row per compared pair, with physics minus without.
+#: ``tested`` is False where the PINN's own weight is 0 (it *is* its no-physics fit:
+#: no comparison, no verdict, ``verdict`` "physics off by tuning" or "physics off");
+#: ``lambda_phys`` is the with-physics row's weight; ``lambda_source`` says where it
+#: came from ("tuned", "best > 0 on the tuning curve", "given").
 ABLATION_COLUMNS = (
     "model",
     "ablated_model",
+    "lambda_phys",
+    "lambda_source",
+    "tested",
+    "verdict",
     "rmse_mgdl",
     "ablated_rmse_mgdl",
     "rmse_diff_mgdl",
@@ -60,6 +76,31 @@ ABLATION_COLUMNS = (
     "significant",
     "physics_helps",
 )
+
+
+
+def lambda_row(name: str, lambda_phys: float) -> str:
+    """The row name of PINN ``name`` refitted at physics weight ``lambda_phys``.
+
+    >>> lambda_row("rte-pinn", 0.1)
+    'rte-pinn/lambda=0.1'
+    """
+    return f"{name}{LAMBDA_ROW}{lambda_phys:g}"
+
+
+def ablation_base(row: str) -> str | None:
+    """The PINN an ablation row (``/no-physics`` or ``/lambda=``) belongs to; None for
+    any other row.
+
+    >>> ablation_base("rte-pinn/lambda=0.1"), ablation_base("rte-pinn")
+    ('rte-pinn', None)
+    """
+    if row.endswith(NO_PHYSICS):
+        return row[: -len(NO_PHYSICS)]
+    if LAMBDA_ROW in row:
+        return row.split(LAMBDA_ROW)[0]
+    return None
+
 
 #: Columns of ``BenchmarkResult.metrics`` / ``metrics.csv``, in order.
 METRIC_COLUMNS = (
@@ -139,6 +180,7 @@ OUTPUT_FILES = (
     "importance.csv",
     "ablation.csv",
     "calibration.csv",
+    "inverse.csv",
     "dataset.parquet",
     "meta.json",
 )
@@ -174,6 +216,10 @@ class BenchmarkResult:
     calibration : pandas.DataFrame
         Personal calibration (:data:`~nirglucose.evaluation.calibration.CALIBRATION_COLUMNS`);
         empty without ``calibration=k``.
+    inverse : pandas.DataFrame
+        The inverse task (:data:`~nirglucose.evaluation.inverse.INVERSE_COLUMNS`): each
+        state-predicting model's tissue-state error against the truth; empty when no
+        model predicts state or the data has no ``true_*`` columns.
     """
 
     metrics: pd.DataFrame
@@ -187,6 +233,7 @@ class BenchmarkResult:
     calibration: pd.DataFrame = field(
         default_factory=lambda: pd.DataFrame(columns=CALIBRATION_COLUMNS)
     )
+    inverse: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=INVERSE_COLUMNS))
 
     def table_markdown(self) -> str:
         """The study's Table 1 layout with our values (95 % CIs) beside the study's."""
@@ -216,6 +263,7 @@ class BenchmarkResult:
         _write_csv(out / "importance.csv", self.importance)
         _write_csv(out / "ablation.csv", self.ablation)
         _write_csv(out / "calibration.csv", self.calibration)
+        _write_csv(out / "inverse.csv", self.inverse)
         if self.dataset is not None:
             self.dataset.save(out / "dataset.parquet")
         _write_text(out / "meta.json", _dumps(self.meta))
@@ -341,6 +389,7 @@ def _ablation_lines(res: BenchmarkResult) -> list[str]:
     if a is None or not len(a):
         return []
     label = {r["model"]: r["label"] for _, r in res.metrics.iterrows()}
+    tested = a["tested"].astype(bool) if "tested" in a else np.ones(len(a), bool)
     out = [
         "",
         "## Physics ablation",
@@ -348,20 +397,24 @@ def _ablation_lines(res: BenchmarkResult) -> list[str]:
         "Each PINN refitted with its physics term off (`lambda_phys = 0`), everything else "
         "identical (same splits, seeds and parameters). Δ RMSE = with physics − without "
         "(negative: the physics term helps); paired cluster bootstrap over subjects, "
-        f"Holm over the {len(a)} PINNs, α = {res.meta['alpha']}.",
+        f"Holm over the {int(tested.sum())} tested pairs, α = {res.meta['alpha']}. Where "
+        "tuning chose λ = 0 the PINN *is* its no-physics fit: no verdict; it is also "
+        "refitted at the best λ > 0 of the tuning's validation curve (`/lambda=` rows).",
         "",
-        "| PINN | RMSE with physics | RMSE without | Δ RMSE mg/dL [95 % CI] | p_holm | verdict |",
-        "|---|---|---|---|---|---|",
+        "| PINN | λ | RMSE with physics | RMSE without | Δ RMSE mg/dL [95 % CI] | p_holm "
+        "| verdict |",
+        "|---|---|---|---|---|---|---|",
     ]
-    for _, r in a.iterrows():
-        if r["significant"]:
-            verdict = "physics helps" if r["physics_helps"] else "physics hurts"
-        else:
-            verdict = "no significant difference"
+    for (_, r), t in zip(a.iterrows(), tested, strict=True):
+        verdict = r["verdict"] if "verdict" in r else ""
+        diff = (
+            f"{r['rmse_diff_mgdl']:+.2f} [{r['ci_low']:+.2f}, {r['ci_high']:+.2f}]" if t else "—"
+        )
+        p = f"{r['p_holm']:.3g}" if t else "—"
+        lam = r.get("lambda_phys", float("nan"))
         out.append(
-            f"| {label.get(r['model'], r['model'])} | {_fmt(r['rmse_mgdl'])} "
-            f"| {_fmt(r['ablated_rmse_mgdl'])} | {r['rmse_diff_mgdl']:+.2f} "
-            f"[{r['ci_low']:+.2f}, {r['ci_high']:+.2f}] | {r['p_holm']:.3g} | {verdict} |"
+            f"| {label.get(r['model'], r['model'])} | {lam:g} | {_fmt(r['rmse_mgdl'])} "
+            f"| {_fmt(r['ablated_rmse_mgdl'])} | {diff} | {p} | {verdict} |"
         )
     return out
 

@@ -36,6 +36,9 @@ __all__ = [
     "DATA_SIZE_SUBJECTS",
     "DATA_SIZE_TEST_SUBJECTS",
     "DATA_SIZE_PRESETS",
+    "MISMATCH_FORWARD_MODELS",
+    "MISMATCH_SUBJECT",
+    "STUDY_MODELS",
     "Scenario",
     "parse_vary",
     "grid_scenarios",
@@ -44,7 +47,7 @@ __all__ = [
 ]
 
 #: Built-in studies (``--study``).
-STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device", "data-size")
+STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device", "data-size", "mismatch")
 #: The varied key and default values of the one-key studies.
 STUDY_GRIDS: dict[str, tuple[str, tuple[float, ...]]] = {
     "noise-scale": ("noise_scale", (0.25, 0.5, 1.0, 2.0, 4.0)),
@@ -72,6 +75,18 @@ DATA_SIZE_SUBJECTS = (80, 320, 1280)
 DATA_SIZE_TEST_SUBJECTS = 200
 #: Presets of the ``data-size`` study when none are named.
 DATA_SIZE_PRESETS = ("paper", "wearable")
+#: Forward models of the ``mismatch`` study: every one makes data, and the estimator
+#: assumes every one (``optics.model``; the ``rte-lut`` table is filled by the
+#: three-layer diffusion solver, ``optics.lut_solver = "diffusion"``, about 40 s per
+#: geometry and cached, instead of the 2-CPU-hour Monte Carlo).
+MISMATCH_FORWARD_MODELS = ("beer-lambert", "diffusion", "rte-lut")
+#: The estimator whose assumed forward model the ``mismatch`` study varies (its
+#: ``forward_model`` parameter); the study always runs it.
+MISMATCH_SUBJECT = "physics-inversion"
+#: Default models of a study when none are given (others: the sweep's defaults).
+STUDY_MODELS: dict[str, tuple[str, ...]] = {
+    "mismatch": (MISMATCH_SUBJECT, "ebl", "gp", "oracle"),
+}
 
 
 # --------------------------------------------------------------------------- scenarios
@@ -97,6 +112,9 @@ class Scenario:
         Preset of this scenario (None: the sweep's).
     n_subjects, n_test_subjects : int or None
         Subjects of the training and of the test draw (None: the sweep's).
+    model_params : dict or None
+        Model name -> constructor arguments of this scenario only, over the sweep's
+        (the ``mismatch`` study's assumed forward model).
     """
 
     name: str
@@ -108,6 +126,7 @@ class Scenario:
     preset: str | None = None
     n_subjects: int | None = None
     n_test_subjects: int | None = None
+    model_params: dict[str, dict[str, Any]] | None = None
 
     @property
     def kind(self) -> str:
@@ -298,7 +317,30 @@ def study_scenarios(
         return _ablation_scenarios()
     if study == "device":
         return _device_scenarios()
+    if study == "mismatch":
+        return _mismatch_scenarios()
     return _cohort_scenarios()
+
+
+def _mismatch_scenarios() -> list[Scenario]:
+    """Data from each forward model x the estimator assuming each one (every pair).
+
+    Scenarios with the same data share their other models' tasks (a task is named by
+    its specification, which the assumed model changes only for
+    :data:`MISMATCH_SUBJECT`), so EBL, the GP and the oracle run once per data model.
+    """
+    out = []
+    for made in MISMATCH_FORWARD_MODELS:
+        for assumed in MISMATCH_FORWARD_MODELS:
+            out.append(
+                Scenario(
+                    f"data={made}:assumed={assumed}",
+                    {"data_model": made, "assumed_model": assumed, "mismatched": made != assumed},
+                    {"optics.model": made, "optics.lut_solver": "diffusion"},
+                    model_params={MISMATCH_SUBJECT: {"forward_model": assumed}},
+                )
+            )
+    return out
 
 
 def _ablation_scenarios() -> list[Scenario]:

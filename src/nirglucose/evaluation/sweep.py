@@ -37,6 +37,14 @@ Studies (:data:`STUDIES`)
         :data:`DATA_SIZE_TEST_SUBJECTS` subjects (another seed, derived from the
         task's). :func:`ranking_crossings` says between which sizes two models swap
         places.
+    ``mismatch``
+        Model mismatch, the honest test of a physics model: data made by each forward
+        model of :data:`~nirglucose.evaluation.studies.MISMATCH_FORWARD_MODELS`
+        (``optics.model``) and the forward-model estimator
+        (:data:`~nirglucose.evaluation.studies.MISMATCH_SUBJECT`) assuming each one
+        (its ``forward_model``), every pair; EBL, the GP and the oracle (default
+        models, :data:`~nirglucose.evaluation.studies.STUDY_MODELS`) for reference,
+        once per data model. The estimator always runs, besides ``models``.
 
     Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
     Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
@@ -115,8 +123,10 @@ from .studies import (
     DATA_SIZE_PRESETS,
     DATA_SIZE_SUBJECTS,
     DATA_SIZE_TEST_SUBJECTS,
+    MISMATCH_SUBJECT,
     STUDIES,
     STUDY_GRIDS,
+    STUDY_MODELS,
     Scenario,
     grid_scenarios,
     parse_vary,
@@ -280,6 +290,7 @@ def plan_sweep(
         fields = _scenario_fields(sc, preset, n_subjects, base, layout)
         if calibration and sc.kind == "cv":
             fields["calibration"] = calibration
+        own = sc.model_params or {}
         for seed in seeds:
             for model in models:
                 spec = {
@@ -287,7 +298,9 @@ def plan_sweep(
                     "per_subject": int(per_subject),
                     "seed": int(seed),
                     "model": model,
-                    "model_params": tasks.canonical(dict(params.get(model, {}))),
+                    "model_params": tasks.canonical(
+                        {**params.get(model, {}), **own.get(model, {})}
+                    ),
                     "n_boot": int(n_boot),
                 }
                 specs.append(tasks.stamp(spec))
@@ -314,7 +327,7 @@ def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
         model_params={spec["model"]: spec["model_params"]} if spec["model_params"] else None,
         n_boot=spec["n_boot"],
         timing=dict(_FAST_TIMING),
-        importance_repeats=1,
+        importance_repeats=0,  # the sweep reads metrics only
         oracle_reference=False,
         calibration=int(spec.get("calibration", 0)),
     )
@@ -679,7 +692,8 @@ def run_sweep(
     seeds : int or sequence of int
         Number of seeds (0, 1, ...) or the seeds themselves.
     models : sequence of str or comma-separated str, optional
-        Registry names (default :data:`DEFAULT_MODELS`).
+        Registry names (default :data:`DEFAULT_MODELS`; a study of
+        :data:`~nirglucose.evaluation.studies.STUDY_MODELS`: its own).
     overrides : mapping, optional
         Dotted overrides shared by every scenario (``--set``).
     protocol, n_splits, repeats : str, int, int
@@ -720,7 +734,9 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    models = resolve_models(models, DEFAULT_MODELS)
+    models = resolve_models(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
+    if study == "mismatch" and MISMATCH_SUBJECT not in models:
+        models = [MISMATCH_SUBJECT, *models]  # the study's subject always runs
     check_protocol(protocol)
     for name in ("n_splits", "repeats", "n_subjects", "per_subject", "n_boot"):
         check_positive_int(name, locals()[name])

@@ -218,3 +218,12 @@ class PhysicsInversionGP(_ResidualHybrid):
     """
 
     backbone_name = "physics-inversion"
+
+    def estimate_state(self, X):
+        """The backbone's tissue-state estimates, with this model's glucose (the
+        residual GP corrects glucose only). See
+        :meth:`~nirglucose.models.inversion.PhysicsInversion.estimate_state`."""
+        self._require_fitted()
+        state = self.backbone_.estimate_state(X)
+        state["glucose_mgdl"] = self.predict(X)
+        return state

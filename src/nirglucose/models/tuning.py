@@ -39,6 +39,8 @@ __all__ = [
     "N_FOLDS",
     "TUNED_PRESETS",
     "LAMBDA_PHYS_GRID",
+    "lambda_curve",
+    "best_positive_lambda",
 ]
 
 #: Simulation seeds of the tuning data: disjoint from the reported seeds 0-4.
@@ -79,6 +81,32 @@ _GBR_SPACE: dict[str, tuple] = {
     "max_depth": (2, 3),
     "subsample": (0.5, 0.8, 1.0),
 }
+#: The forward-model estimator's grid (4 x 3 = 12 points): how far to trust the
+#: learned nuisance priors at prediction (``prior_scale`` widens them) and how many
+#: empirical-Bayes rounds learn them (``n_em``; Dempster, Laird & Rubin 1977, J. R.
+#: Stat. Soc. B 39, 1: each round cannot lower the marginal likelihood, fewer rounds
+#: stop early, a form of regularisation).
+_INVERSION_SPACE: dict[str, tuple] = {
+    "prior_scale": (0.5, 1.0, 2.0, 4.0),
+    "n_em": (5, 10, 30),
+}
+#: The hybrids' grids (12 points each): the backbone's own knob and whether the
+#: residual GP learns from out-of-fold (``cv`` 3 grouped folds) or in-sample (0)
+#: backbone predictions. EBL's ridge penalties: every other value of its default grid
+#: from 1e-2 up (6 values); the inversion's prior widths x EM rounds (3 x 2).
+_EBL_GP_ALPHAS = (0.01, 0.1, 1.0, 10.0, 100.0, 1000.0)
+_HYBRID_SPACE: dict[str, dict[str, tuple]] = {
+    "ebl+gp": {
+        "backbone_params": tuple({"alphas": (a,)} for a in _EBL_GP_ALPHAS),
+        "cv": (0, 3),
+    },
+    "physics-inversion+gp": {
+        "backbone_params": tuple(
+            {"prior_scale": s, "n_em": n} for s in (0.5, 1.0, 2.0) for n in (10, 30)
+        ),
+        "cv": (0, 3),
+    },
+}
 #: Families tuned elsewhere or not at all, with the reason search_space gives.
 _NO_GRID = {
     "gp": "it fits its kernel's hyper-parameters by marginal likelihood inside each fit",
@@ -95,8 +123,11 @@ def search_space(name: str) -> dict[str, tuple]:
     :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty (one value per
     configuration, so its own inner CV is bypassed), PLS its number of components,
     gradient boosting (``gbr``) its stages, shrinkage, tree depth and row
-    fraction. The Gaussian process (``gp``) has none: its kernel's hyper-parameters
-    are fitted by marginal likelihood inside each ``fit``.
+    fraction, the forward-model estimator (``physics-inversion``) its prior widths and
+    empirical-Bayes rounds, the hybrids their backbone's knob and the residual GP's
+    out-of-fold folds (``cv``). The new families' grids have :data:`N_CONFIGS` points.
+    The Gaussian process (``gp``) has none: its kernel's hyper-parameters are fitted
+    by marginal likelihood inside each ``fit``.
 
     Raises
     ------
@@ -117,8 +148,12 @@ def search_space(name: str) -> dict[str, tuple]:
         return {"n_components": tuple(range(1, N_CONFIGS + 1))}
     if name == "gbr":
         return dict(_GBR_SPACE)
+    if name == "physics-inversion":
+        return dict(_INVERSION_SPACE)
+    if name in _HYBRID_SPACE:
+        return dict(_HYBRID_SPACE[name])
     why = f" ({_NO_GRID[name]})" if name in _NO_GRID else ""
-    tuned = "ebl, pls, gbr and every network"
+    tuned = "ebl, pls, gbr, physics-inversion, ebl+gp, physics-inversion+gp, every network"
     raise ConfigError(f"no tuning search space for model {name!r}{why}; tuned: {tuned}")
 
 
@@ -167,3 +202,46 @@ def tuned_params(name: str, preset: str) -> dict:
     if isinstance(out.get("alphas"), list):  # JSON has no tuples; EBL's grid is one
         out["alphas"] = tuple(out["alphas"])
     return out
+
+
+def lambda_curve(name: str, preset: str) -> dict | None:
+    """The tuning's validation curve of PINN ``name`` on ``preset``: CV RMSE against λ.
+
+    Two curves, both on the tuning seeds and folds (never the reported seeds):
+
+    * ``slice``: the tuned training parameters with each value of
+      :data:`LAMBDA_PHYS_GRID` (the same random states; only ``lambda_phys`` changes),
+      so the difference between two points is the physics weight's alone;
+    * ``profile``: for each λ, the best of the tuning's own draws with that λ (what the
+      search saw; the training parameters differ between points).
+
+    Returns
+    -------
+    dict or None
+        ``{"lambda_phys": [...], "slice_cv_rmse_mgdl": [...],
+        "profile_cv_rmse_mgdl": [...], "tuned_lambda_phys": float,
+        "no_skill_rmse_mgdl": float}``; None where the tuning file has no curve for
+        ``name`` on ``preset`` (not a PINN, or not tuned there).
+    """
+    score = _document().get("scores", {}).get(preset, {}).get(name, {})
+    curve = score.get("lambda_curve")
+    if not curve:
+        return None
+    out = json.loads(json.dumps(curve))
+    out["tuned_lambda_phys"] = _document()["params"][preset][name]["lambda_phys"]
+    out["no_skill_rmse_mgdl"] = score.get("no_skill_rmse_mgdl")
+    return out
+
+
+def best_positive_lambda(name: str, preset: str) -> float | None:
+    """The physics weight > 0 with the lowest tuning-CV RMSE at the tuned training
+    parameters (the ``slice`` of :func:`lambda_curve`); None without a curve."""
+    curve = lambda_curve(name, preset)
+    if curve is None:
+        return None
+    pts = [
+        (r, lam)
+        for lam, r in zip(curve["lambda_phys"], curve["slice_cv_rmse_mgdl"], strict=True)
+        if lam > 0 and r is not None
+    ]
+    return float(min(pts)[1]) if pts else None

@@ -681,6 +681,8 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     from .params import hyperparameter_section
 
     middle.append(hyperparameter_section(runs))
+    from .inverse import inverse_section  # lazy, as subgroups: it imports html
+    middle.append(inverse_section(runs))
     top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:])
