@@ -241,6 +241,12 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
     vals = _numeric(frame, col, csv)
     notes = []
     if unit == "mmol/L":
+        if np.median(vals) > MMOLL_SUSPECT_MEDIAN_MGDL:
+            raise DataError(
+                f"reference glucose {col!r} is declared mmol/L but looks like mg/dL (median "
+                f"{np.median(vals):g}; a mmol/L median is below {MMOLL_SUSPECT_MEDIAN_MGDL:g}); "
+                "declare mg/dL (--glucose-unit mg/dL; Python glucose_unit='mg/dL')"
+            )
         vals = vals * MGDL_PER_MMOLL_GLUCOSE
         notes.append(f"reference glucose {col!r} read in mmol/L and converted to mg/dL "
                      f"(x {MGDL_PER_MMOLL_GLUCOSE} mg/dL per mmol/L)")
