@@ -50,6 +50,7 @@ __all__ = [
     "sniff_csv",
     "read_frame",
     "validate_frame",
+    "check_codes",
     "glucose_to_unit",
 ]
 
@@ -269,6 +270,22 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
         frame[col] = vals  # in place, so the columns keep their order
         frame.rename(columns={col: "glucose_mgdl"}, inplace=True)
     return notes
+
+
+def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool) -> None:
+    """Refuse ADC and reference codes above the full scale 2^bits - 1, with the file's
+    rows (codes of 0 or below are refused by :func:`validate_frame`)."""
+    full = 2**bits - 1
+    for col in [c for c in frame.columns if isinstance(c, str) and _ADC_NAME.match(c)]:
+        vals = np.asarray(frame[col], dtype=float)
+        bad = vals > full
+        if bad.any():
+            need = int(np.ceil(np.log2(vals.max() + 1)))
+            raise DataError(
+                f"column {col!r} has ADC codes above {full} (the {bits}-bit full scale) at "
+                f"{_rows(bad, csv)}: codes up to {vals.max():g} need a {need}-bit ADC; "
+                "declare the device's resolution (--adc-bits N; Python adc_bits=N)"
+            )
 
 
 def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None = None

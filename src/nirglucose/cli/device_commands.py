@@ -179,6 +179,7 @@ def predict_glucose(
     _check_out_file(out)
     estimator = load_model(model)
     ds = load_dataset(data, glucose_unit=glucose_unit)
+    _check_model_codes(estimator, ds, data)
     pred = np.asarray(check_predictions(estimator.predict(ds), model), dtype=float)
     calibrated = None
     if calibration is not None:
@@ -188,6 +189,15 @@ def predict_glucose(
     atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
     say_notes(ds)
     _say(_prediction_summary(table, calibrated, has_intervals, out), err=False)
+
+
+def _check_model_codes(estimator, ds, data: Path) -> None:
+    """Codes above the model's full scale refused with the file's rows."""
+    from ..io_files import check_codes
+
+    schema = getattr(estimator, "schema_", None)
+    if schema is not None and not schema.is_plain:
+        check_codes(ds.frame, schema.adc_bits, csv=Path(data).suffix == ".csv")
 
 
 def _in_unit_columns(table, unit: str | None):

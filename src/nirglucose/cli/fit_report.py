@@ -21,6 +21,7 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None,
     import warnings
 
     from ..dataset import load_dataset
+    from ..io_files import check_codes
     from ..schema import DeviceSchema
 
     ds = load_dataset(data, glucose_unit=glucose_unit, adc_bits=adc_bits)
@@ -31,6 +32,7 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None,
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         schema = DeviceSchema.infer(ds)
+    check_codes(ds.frame, schema.adc_bits, csv=Path(data).suffix == ".csv")
     for w in caught:
         _say(f"warning: {w.message}")
     ds.metadata["adc_bits"] = schema.adc_bits  # one resolution from here on, recorded
