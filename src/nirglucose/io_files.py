@@ -51,6 +51,7 @@ __all__ = [
     "read_frame",
     "validate_frame",
     "check_codes",
+    "file_rows",
     "glucose_to_unit",
 ]
 
@@ -170,7 +171,7 @@ def read_frame(path: Path) -> tuple[pd.DataFrame, dict[bytes, bytes], list[str]]
 
 
 # ------------------------------------------------------------------------ validation
-def _rows(mask: np.ndarray, csv: bool, limit: int = 5) -> str:
+def file_rows(mask: np.ndarray, csv: bool, limit: int = 5) -> str:
     """The flagged rows as the file numbers them (CSV: its lines, header = line 1)."""
     idx = np.flatnonzero(mask)
     first = 2 if csv else 1
@@ -181,7 +182,8 @@ def _rows(mask: np.ndarray, csv: bool, limit: int = 5) -> str:
     return f"{where} {shown}{more}{how}"
 
 
-def _numeric(frame: pd.DataFrame, col: str, csv: bool) -> np.ndarray:
+def _numeric(frame: pd.DataFrame, col: str, csv: bool, allow_empty: bool = False
+             ) -> np.ndarray:
     """Column ``col`` as floats; text, empty and infinite cells refused with their rows."""
     raw = frame[col]
     if pd.api.types.is_numeric_dtype(raw):
@@ -200,18 +202,18 @@ def _numeric(frame: pd.DataFrame, col: str, csv: bool) -> np.ndarray:
             shown = "/".join(dict.fromkeys(cells[flags].str.upper()))
             raise DataError(
                 f"column {col!r} holds the meter's out-of-range flag {shown} at "
-                f"{_rows(text & _flag_mask(raw), csv)}: the meter read beyond its range, "
+                f"{file_rows(text & _flag_mask(raw), csv)}: the meter read beyond its range, "
                 "so the reading has no value; drop those rows or give a laboratory value"
             )
         shown = ", ".join(repr(v) for v in dict.fromkeys(cells.tolist()[:3]))
-        raise DataError(f"column {col!r} has text cells ({shown}) at {_rows(text, csv)}; "
+        raise DataError(f"column {col!r} has text cells ({shown}) at {file_rows(text, csv)}; "
                         "give numbers")
     missing = raw.isna().to_numpy()
-    if missing.any():
-        raise DataError(f"column {col!r} has empty or NaN cells at {_rows(missing, csv)}")
-    if not np.isfinite(vals).all():
-        raise DataError(f"column {col!r} has infinite values at "
-                        f"{_rows(~np.isfinite(vals), csv)}")
+    if missing.any() and not allow_empty:
+        raise DataError(f"column {col!r} has empty or NaN cells at {file_rows(missing, csv)}")
+    inf = np.isinf(vals)
+    if inf.any():
+        raise DataError(f"column {col!r} has infinite values at {file_rows(inf, csv)}")
     return vals
 
 
@@ -239,22 +241,25 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
         raise DataError(f"column 'glucose_mmoll' is declared {unit}; rename it "
                         "'glucose_mgdl' if its values are mg/dL")
     unit = unit or named
-    vals = _numeric(frame, col, csv)
+    vals = _numeric(frame, col, csv, allow_empty=True)  # needed at fit only: checked there
+    known = vals[np.isfinite(vals)]
+    if not len(known):
+        return []
     notes = []
     if unit == "mmol/L":
-        if np.median(vals) > MMOLL_SUSPECT_MEDIAN_MGDL:
+        if np.median(known) > MMOLL_SUSPECT_MEDIAN_MGDL:
             raise DataError(
                 f"reference glucose {col!r} is declared mmol/L but looks like mg/dL (median "
-                f"{np.median(vals):g}; a mmol/L median is below {MMOLL_SUSPECT_MEDIAN_MGDL:g}); "
+                f"{np.median(known):g}; a mmol/L median is below {MMOLL_SUSPECT_MEDIAN_MGDL:g}); "
                 "declare mg/dL (--glucose-unit mg/dL; Python glucose_unit='mg/dL')"
             )
         vals = vals * MGDL_PER_MMOLL_GLUCOSE
         notes.append(f"reference glucose {col!r} read in mmol/L and converted to mg/dL "
                      f"(x {MGDL_PER_MMOLL_GLUCOSE} mg/dL per mmol/L)")
-    elif np.median(vals) < MMOLL_SUSPECT_MEDIAN_MGDL:
+    elif np.median(known) < MMOLL_SUSPECT_MEDIAN_MGDL:
         raise DataError(
-            f"reference glucose {col!r} looks like mmol/L (values {vals.min():g}-"
-            f"{vals.max():g}, median {np.median(vals):g}; a mg/dL median is above "
+            f"reference glucose {col!r} looks like mmol/L (values {known.min():g}-"
+            f"{known.max():g}, median {np.median(known):g}; a mg/dL median is above "
             f"{MMOLL_SUSPECT_MEDIAN_MGDL:g}); declare the unit mmol/L "
             "(--glucose-unit mmol/L; Python glucose_unit='mmol/L') or name it 'glucose_mmoll'"
         )
@@ -262,13 +267,13 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
     bad = (vals < lo) | (vals > hi)
     if bad.any():
         raise DataError(
-            f"reference glucose {col!r} outside what a meter reports, {lo:g}-{hi:g} mg/dL "
+            f"reference glucose {col!r} outside what a meter reports, {lo:g}-{hi:g} [mg/dL] "
             f"({lo / MGDL_PER_MMOLL_GLUCOSE:.1f}-{hi / MGDL_PER_MMOLL_GLUCOSE:.1f} mmol/L), "
-            f"at {_rows(bad, csv)}"
+            f"at {file_rows(bad, csv)}"
         )
     if col != "glucose_mgdl" or unit != "mg/dL" or not pd.api.types.is_numeric_dtype(frame[col]):
         frame[col] = vals  # in place, so the columns keep their order
-        frame.rename(columns={col: "glucose_mgdl"}, inplace=True)
+        frame.columns = ["glucose_mgdl" if c == col else c for c in frame.columns]
     return notes
 
 
@@ -283,7 +288,7 @@ def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool) -> None:
             need = int(np.ceil(np.log2(vals.max() + 1)))
             raise DataError(
                 f"column {col!r} has ADC codes above {full} (the {bits}-bit full scale) at "
-                f"{_rows(bad, csv)}: codes up to {vals.max():g} need a {need}-bit ADC; "
+                f"{file_rows(bad, csv)}: codes up to {vals.max():g} need a {need}-bit ADC; "
                 "declare the device's resolution (--adc-bits N; Python adc_bits=N)"
             )
 
@@ -307,7 +312,7 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
         vals = _numeric(frame, col, csv)
         if (vals <= 0).any():
             raise DataError(f"column {col!r} has ADC codes of 0 or below at "
-                            f"{_rows(vals <= 0, csv)}: a dead or disconnected channel")
+                            f"{file_rows(vals <= 0, csv)}: a dead or disconnected channel")
         if not pd.api.types.is_numeric_dtype(frame[col]):  # numeric ones keep dtype and hash
             frame[col] = vals
     for col in [c for c in KNOWN_PHYSIOLOGY if c in frame.columns]:
@@ -316,7 +321,7 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
         bad = (vals < lo) | (vals > hi)
         if bad.any():
             raise DataError(f"column {col!r} has values outside the physiological range "
-                            f"{lo:g}-{hi:g} at {_rows(bad, csv)} (docs/user_data.md)")
+                            f"{lo:g}-{hi:g} at {file_rows(bad, csv)} (docs/user_data.md)")
         if not pd.api.types.is_numeric_dtype(frame[col]):
             frame[col] = vals
     return _glucose(frame, unit, csv)

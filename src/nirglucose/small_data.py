@@ -25,8 +25,8 @@ grouped folds need two subjects each for a fold's error to be more than one pers
 
 Examples
 --------
->>> significance_withheld(5)[:44]
-'no significance or best model claimed: only 5'
+>>> significance_withheld(5)[:47]
+'no significance or best model claimed: only 5 t'
 >>> significance_withheld(25) is None
 True
 """

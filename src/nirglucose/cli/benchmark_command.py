@@ -14,7 +14,9 @@ from ._app import app, out_console
 from ._common import (
     _PRESET_NAMES,
     DEFAULT_RESAMPLES,
+    AdcBitsOption,
     FoldsOption,
+    GlucoseUnitOption,
     JobsOption,
     OutDirOption,
     PerSubjectOption,
@@ -35,6 +37,7 @@ from ._common import (
     _tidy_out,
     _warnings_as_lines,
 )
+from .fit_report import say_notes
 
 
 @app.command()
@@ -77,43 +80,39 @@ def benchmark(
         ),
     ] = 0,
     set_: SetOption = None,
-    adc_bits: Annotated[
-        int | None,
-        typer.Option(help="The ADC resolution [bit]: of the --data device (needed when every "
-                     "code fits 10 bits), or of the simulated one (hardware.adc_bits)."),
-    ] = None,
-    glucose_unit: Annotated[
-        str | None,
-        typer.Option(help="Unit of the --data file's reference glucose and of the printed "
-                     "errors: mg/dL or mmol/L (files keep mg/dL, as their column names say)."),
-    ] = None,
+    adc_bits: AdcBitsOption = None,
+    glucose_unit: GlucoseUnitOption = None,
 ) -> None:
-    """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
-    from ..io_files import check_glucose_unit
+    """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
 
+    Files written keep mg/dL (their column names say so); --glucose-unit sets the unit
+    of the --data file and of the printed table."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
-    check_glucose_unit(glucose_unit)
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
-                                  models, out)
-    if adc_bits is not None and data is None:
+                                  models, out, glucose_unit)
+    if adc_bits is not None and data is None:  # the simulated device's resolution
         set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
     runs, overrides = _benchmark_runs(preset, data, set_, out)
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
         _check_calibration_readings(ds, calibration)
+        if p is None:
+            say_notes(ds)  # after the checks: an error stays one line
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
                        references, ablation, calibration, glucose_unit)
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
-                          out) -> list[str] | None:
+                          out, glucose_unit=None) -> list[str] | None:
     """The checks of ``benchmark`` after the counts, in order; the --models names."""
     from ..evaluation.splits import check_protocol
+    from ..io_files import check_glucose_unit
     from ..models.registry import get_model_class
 
+    check_glucose_unit(glucose_unit)
     _check_seed(seed)
     check_protocol(protocol)
     _check_calibration(calibration, None if data is not None else per_subject)
@@ -156,13 +155,12 @@ def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bi
     """The dataset of one run: the --data file (``preset`` None: read, validated whole
     and its ADC resolution resolved before any split) or a simulated one."""
     if preset is None:
-        from .fit_report import load_device_file, say_notes
+        from .fit_report import load_device_file
 
         ds, _ = load_device_file(data, glucose_unit, adc_bits, need_glucose=True)
         if "subject_id" not in ds.frame.columns:
             raise UserError(f"{str(data)!r} has no subject_id column: the benchmark splits "
                             "by subject; add one (one id per person)")
-        say_notes(ds)
         return ds
     from ..api import simulate as _simulate
 

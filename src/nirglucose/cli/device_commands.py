@@ -9,16 +9,8 @@ import typer
 
 from ..small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
 from ._app import app
-from ._common import UserError, _check_out_file, _check_seed, _say
-from .fit_report import check_zero_variance, load_device_file, report_cv, say_notes
-
-#: --glucose-unit of every command that reads or writes glucose.
-GlucoseUnitOption = Annotated[
-    str | None,
-    typer.Option(help="Unit of the file's reference glucose and of the glucose printed or "
-                 "written: mg/dL or mmol/L (default: the column's, glucose_mgdl mg/dL, "
-                 "glucose_mmoll mmol/L)."),
-]
+from ._common import GlucoseUnitOption, UserError, _check_out_file, _check_seed, _say
+from .fit_report import load_device_file, report_cv, say_notes
 
 
 @app.command("fit")
@@ -103,7 +95,6 @@ def _load_device_data(model: str, data: Path, adc_bits: int | None, unit: str | 
 
         return load_dataset(data, glucose_unit=unit, adc_bits=adc_bits), None
     ds, schema = load_device_file(data, unit, adc_bits, need_glucose=True)
-    check_zero_variance(ds, schema)
     n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else 0
     if "subject_id" not in ds.frame:
         _say("warning: no subject_id column: every row is taken as its own subject, so "

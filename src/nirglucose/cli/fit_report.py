@@ -29,6 +29,12 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None,
         cols = ", ".join(repr(str(c)) for c in ds.frame.columns[:12])
         raise UserError(f"{str(data)!r} has no reference glucose: add a 'glucose_mgdl' "
                         f"(mg/dL) or 'glucose_mmoll' (mmol/L) column; columns read: {cols}")
+    if need_glucose and ds.frame["glucose_mgdl"].isna().any():
+        from ..io_files import file_rows
+
+        rows = file_rows(ds.frame["glucose_mgdl"].isna().to_numpy(), Path(data).suffix == ".csv")
+        raise UserError(f"column 'glucose_mgdl' (the reference glucose) has empty cells at "
+                        f"{rows}; every reading fitted needs its meter value")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         schema = DeviceSchema.infer(ds)
@@ -36,6 +42,8 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None,
     for w in caught:
         _say(f"warning: {w.message}")
     ds.metadata["adc_bits"] = schema.adc_bits  # one resolution from here on, recorded
+    if need_glucose:
+        check_zero_variance(ds, schema)
     return ds, schema
 
 
