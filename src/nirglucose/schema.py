@@ -115,8 +115,9 @@ class DeviceSchema:
     adc_bits: int = DEFAULT_ADC_BITS
     physiology: tuple[str, ...] = field(default_factory=lambda: tuple(KNOWN_PHYSIOLOGY[:12]))
     n_plain: int = 0
-    train_min: tuple[float, ...] = ()
-    train_max: tuple[float, ...] = ()
+    # the training range describes a fit, not the device: not part of equality
+    train_min: tuple[float, ...] = field(default=(), compare=False)
+    train_max: tuple[float, ...] = field(default=(), compare=False)
 
     # ------------------------------------------------------------------ construction
 
