@@ -281,9 +281,11 @@ class DeviceSchema:
         if self.is_plain:
             return f"a plain array of {self.n_plain} columns"
         ref = "with" if self.reference else "without"
+        physio = (f"physiology [{', '.join(self.physiology)}]" if self.physiology
+                  else "no physiological columns")
         return (
             f"LEDs {', '.join(self.labels)} nm at {self.adc_bits} bits {ref} reference codes, "
-            f"physiology [{', '.join(self.physiology)}]"
+            f"{physio}"
         )
 
     # ------------------------------------------------------------------ reading

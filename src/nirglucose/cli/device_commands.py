@@ -109,7 +109,9 @@ def _choose_intervals(ds, intervals: str, share: float) -> tuple[str, str]:
     """``auto`` resolved: ``split`` when enough subjects are held out, else ``none`` (noted)."""
     if intervals != "auto":
         return intervals, ""
-    n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else 0
+    if "subject_id" not in ds.frame:
+        return "none", "; no intervals (no subject_id column to hold out people)"
+    n_sub = ds.frame["subject_id"].nunique()
     n_cal = round(share * n_sub)
     if _MIN_CALIBRATION_SUBJECTS <= n_cal < n_sub:
         return "split", ""
