@@ -186,9 +186,13 @@ def test_benchmark_refusals_come_before_any_task(cli, device, tmp_path):
          ("no reference glucose", "glucose_mmoll")),
         (lambda f: f.assign(**{"ADC_940 ": 600.0}),
          ("'adc_940' holds one value",)),
+        (lambda f: f.assign(**{"ADC_940 ": f["ADC_940 "].where(f.index != 3)}),
+         ("'adc_940' has empty or NaN cells at line 5",)),
+        (lambda f: f.assign(Glucose_mmoll=f["Glucose_mmoll"].where(f.index != 0)),
+         ("empty cells at line 2",)),
     ],
     ids=["hyper-mmol-as-mgdl", "mmol-as-mgdl", "meter-HI", "text-cell", "no-adc",
-         "no-glucose", "zero-variance"],
+         "no-glucose", "zero-variance", "nan-adc", "blank-glucose"],
 )
 def test_bad_files_end_in_one_line(cli, tmp_path, edit, contains):
     path = tmp_path / "bad.csv"
