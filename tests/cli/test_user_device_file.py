@@ -245,3 +245,18 @@ int main(void) {{
     assert status[2] & 2  # code 1: far below the training range
     assert status[3] == 1  # above 1023: invalid
     assert all(np.isfinite(values))
+
+
+def test_fit_warns_when_the_pooled_skill_is_a_cohort_offset(cli, tmp_path):
+    """Within each cohort the ADC falls as glucose rises; pooled, it rises (an offset)."""
+    f = _device_frame()
+    t2d = (f["Cohort"] == "t2d").to_numpy()
+    g = f["Glucose_mmoll"].to_numpy()
+    f["ADC_940 "] = np.round(np.where(t2d, 800.0, 550.0) - 4.0 * (g - np.where(t2d, 15, 6)), 2)
+    path = tmp_path / "offset.csv"
+    _write_semicolon(f, path)
+    code, out, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json",
+                         "--adc-bits", "10")
+    assert code == 0, err
+    assert "opposite sign of the pooled one" in err and "t2d" in err
+    assert "warning: the model has" not in err  # pls: fewer parameters than readings

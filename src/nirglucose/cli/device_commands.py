@@ -10,7 +10,7 @@ import typer
 from ..small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
 from ._app import app
 from ._common import GlucoseUnitOption, UserError, _check_out_file, _check_seed, _say
-from .fit_report import load_device_file, report_cv, say_notes
+from .fit_report import load_device_file, report_cv, say_notes, warn_overparameterised
 
 
 @app.command("fit")
@@ -70,6 +70,7 @@ def fit_model(
     say_notes(ds)
     device = estimator.schema_.describe() if hasattr(estimator, "schema_") else "simulated"
     _say(f"fitted {model!r} on {n_fit} measurements ({device}){note}; wrote {out}", err=False)
+    warn_overparameterised(estimator, n_fit)
     if schema is not None and cv_folds:
         report_cv(estimator, ds, schema, cv_folds, glucose_unit)
 

@@ -124,6 +124,18 @@ def report_cv(estimator, ds, schema, folds: int, unit: str | None) -> None:
              "glucose")
 
 
+def warn_overparameterised(estimator, n_rows: int) -> None:
+    """One warning when the fitted model has more parameters than readings."""
+    n_par = getattr(estimator, "n_parameters", None)
+    try:
+        n_par = int(n_par() if callable(n_par) else n_par)
+    except (TypeError, ValueError, AttributeError):
+        return
+    if n_par > n_rows:
+        _say(f"warning: the model has {n_par:,} parameters for {n_rows} readings: its "
+             "in-sample fit says nothing; judge it by the grouped CV error")
+
+
 def check_zero_variance(ds, schema) -> None:
     """Refuse a fit whose ADC channels or reference glucose never change."""
     frame = ds.frame
