@@ -186,9 +186,13 @@ class DeviceSchema:
         try:
             lo, hi = tuple(float(v) for v in lo), tuple(float(v) for v in hi)
         except (TypeError, ValueError):
-            raise DataError("model file has a malformed 'schema' training range") from None
+            raise DataError(
+                "model file has a malformed 'schema' training range; refit the model"
+            ) from None
         if len(lo) != len(hi) or (lo and len(lo) != len(s.raw_columns)):
-            raise DataError("model file's schema training range does not match its columns")
+            raise DataError(
+                "model file's schema training range does not match its columns; refit the model"
+            )
         s = replace(s, train_min=lo, train_max=hi)
         unknown = [c for c in s.physiology if c not in KNOWN_PHYSIOLOGY]
         if unknown or (s.n_plain == 0 and not s.wavelengths_nm):
