@@ -53,6 +53,7 @@ def test_fit_predict_export_happy_path(files, capsys, tmp_path):
         "glucose_lower_mgdl",
         "glucose_upper_mgdl",
         "flag",
+        "outside_training",
     ]
     np.testing.assert_allclose(
         table["predicted_glucose_mgdl"], load_model(model).predict(new.frame), rtol=1e-12
@@ -130,7 +131,7 @@ def test_user_errors_exit_2_with_one_line(files, capsys, tmp_path):
         ],
         capsys,
         "heart_rate_bpm",
-        "rows 1, 3",
+        "empty or NaN cells at lines 3, 5 (line 1 is the header)",
     )
     text = base.astype(object)
     text.loc[2, "bmi_kgm2"] = "tall"
@@ -146,8 +147,8 @@ def test_user_errors_exit_2_with_one_line(files, capsys, tmp_path):
         ],
         capsys,
         "bmi_kgm2",
-        "non-numeric",
-        "rows 2",
+        "text cells ('tall')",
+        "line 4 (line 1 is the header)",
     )
     codes = base.copy()
     codes.loc[0, "adc_850"] = 5000
@@ -163,8 +164,8 @@ def test_user_errors_exit_2_with_one_line(files, capsys, tmp_path):
         ],
         capsys,
         "adc_850",
-        "1-4095",
-        "rows 0",
+        "above 4095",
+        "line 2 (line 1 is the header)",
     )
     _one_line_exit_2(
         [

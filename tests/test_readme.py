@@ -73,12 +73,15 @@ def test_user_data_doc_runs_end_to_end(tmp_path, monkeypatch, capsys):
     assert claimed and claimed.group(1) + ";" in header
     pred = pd.read_csv(tmp_path / "three_led_pred.csv")
     assert list(pred.columns) == ["measurement_id", "subject_id", "predicted_glucose_mgdl",
-                                  "glucose_lower_mgdl", "glucose_upper_mgdl", "flag"]  # fmt: skip
+                                  "glucose_lower_mgdl", "glucose_upper_mgdl", "flag",
+                                  "outside_training"]  # fmt: skip
     assert (tmp_path / "three_led_fw" / "nirglucose_model.c").exists()
     # the documented refusal without the declared resolution
+    capsys.readouterr()
     code = main(["fit", "--model", "pls", "--data", "three_led.csv", "--out", "x.json"])
     err = capsys.readouterr().err
-    assert code == 2 and "outside 1-4095 (12-bit ADC)" in err and len(err.strip().splitlines()) == 1
+    assert code == 2 and "above 4095 (the 12-bit full scale)" in err
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_user_data_doc_lists_the_physiological_ranges():

@@ -58,6 +58,11 @@ def simulate(
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
     check_simulation_size(n_subjects, per_subject)  # refuse up front, not by OOM (issue 20)
+    if overrides is not None and not isinstance(overrides, dict):
+        raise ConfigError(
+            f"overrides must be a dict of dotted keys to values, e.g. "
+            f"{{'hardware.adc_bits': 14}}, got a {type(overrides).__name__}: {overrides!r}"
+        )
     all_overrides = dict(overrides or {})
     all_overrides.update({k.replace("__", "."): v for k, v in dotted.items()})
     cfg = resolve_config(preset, all_overrides)

@@ -422,42 +422,65 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
                               {**extra, "source": str(path)}, n_rows)
 
 
-def load_dataset(path: str | os.PathLike) -> Dataset:
+def load_dataset(
+    path: str | os.PathLike, *, glucose_unit: str | None = None, adc_bits: int | None = None
+) -> Dataset:
     """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
+
+    A user's file is read as a prototype team writes it
+    (:mod:`~nirglucose.io_files`): the CSV delimiter (``,``, ``;`` or tab) and a decimal
+    comma are detected; headers are matched after stripping and case-folding
+    (``ADC_940`` is ``adc_940``); the reference glucose may be ``glucose_mgdl`` or
+    ``glucose_mmoll`` and is converted to ``glucose_mgdl``; the whole file is validated
+    once, with the file's own row numbers. ``metadata["read_notes"]`` lists what was
+    read differently from the schema's spelling (renames, delimiter, unit).
 
     A directory is opened as a partitioned Parquet dataset (the parts its
     ``manifest.json`` lists, else all ``*.parquet`` files in name order) without reading
     its rows: a :class:`PartitionedDataset`, whose
     ``frame`` is read on first access.
 
+    Parameters
+    ----------
+    path : str or path-like
+        The file or directory.
+    glucose_unit : {"mg/dL", "mmol/L"}, optional
+        Unit of the file's reference glucose (default: the column's, ``glucose_mgdl``
+        mg/dL and ``glucose_mmoll`` mmol/L); the dataset holds mg/dL.
+    adc_bits : int, optional
+        The device's ADC resolution, recorded as ``metadata["adc_bits"]``. [bit]
+
     Raises
     ------
     DataError
-        Missing file, unknown suffix, unreadable content or malformed metadata.
+        Missing file, unknown suffix, unreadable content, malformed metadata, or a bad
+        cell (one line naming the column and the file's rows).
     """
+    from .io_files import check_glucose_unit, read_frame, validate_frame
+
     path = Path(path)
+    check_glucose_unit(glucose_unit)
     if not path.exists():
         raise DataError(f"no such file {str(path)!r}")
-    meta: dict[str, Any] = {}
     try:
         if path.is_dir():
             return open_partitioned(path)
-        if path.suffix == ".parquet":
-            table = pq.read_table(path)
-            raw = table.schema.metadata or {}
-            frame = table.to_pandas()
-        elif path.suffix == ".csv":
-            raw = {}
-            frame = pd.read_csv(path)
-        else:
+        if path.suffix not in SUFFIXES:
             raise DataError(f"unknown file type {path.suffix!r}; use one of {SUFFIXES}")
+        frame, raw, notes = read_frame(path)
     except DataError:
         raise
     except (OSError, ValueError, pa.ArrowException) as exc:
         raise DataError(f"cannot read {str(path)!r}: {exc}") from None
     meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
+    notes += validate_frame(frame, csv=path.suffix == ".csv", glucose_unit=glucose_unit)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
-    return Dataset(frame, config=config, seed=seed, metadata={**extra, "source": str(path)})
+    extra.update(source=str(path), read_notes=notes)
+    if adc_bits is not None:
+        from .adc_resolution import check_adc_bits
+
+        extra["adc_bits"] = check_adc_bits(adc_bits)
+    return Dataset(frame, config=config, seed=seed, metadata=extra)
 
 
 def scan_dataset(path: str | os.PathLike):

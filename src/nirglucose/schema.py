@@ -33,7 +33,7 @@ References
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -104,6 +104,10 @@ class DeviceSchema:
         The known physiological columns the device records, in canonical order.
     n_plain : int
         Width of a plain schema (0 for a device).
+    train_min, train_max : tuple of float
+        Per raw column, the smallest and largest value the model was fitted on (empty
+        before a fit, or for a model file written before they were recorded); values
+        outside are extrapolation (:meth:`outside_training`). [column units]
     """
 
     wavelengths_nm: tuple[float, ...] = tuple(DEFAULT_LED_WAVELENGTHS_NM)
@@ -111,6 +115,9 @@ class DeviceSchema:
     adc_bits: int = DEFAULT_ADC_BITS
     physiology: tuple[str, ...] = field(default_factory=lambda: tuple(KNOWN_PHYSIOLOGY[:12]))
     n_plain: int = 0
+    # the training range describes a fit, not the device: not part of equality
+    train_min: tuple[float, ...] = field(default=(), compare=False)
+    train_max: tuple[float, ...] = field(default=(), compare=False)
 
     # ------------------------------------------------------------------ construction
 
@@ -130,7 +137,7 @@ class DeviceSchema:
         adc_bits : int, optional
             Declared ADC resolution; else the Dataset's ``metadata["adc_bits"]`` (what
             ``nirglucose fit --adc-bits`` sets), the scenario's ``hardware.adc_bits``,
-            or 12. [bit]
+            else the policy of :mod:`~nirglucose.adc_resolution`. [bit]
 
         Raises
         ------
@@ -138,25 +145,19 @@ class DeviceSchema:
             No ``adc_<nm>`` column, reference codes for some LEDs only, or a bad
             resolution.
         """
-        bits = adc_bits
-        frame = X
+        from .adc_resolution import resolve_adc_bits
+
+        frame = X.frame if isinstance(X, Dataset) else X
+        meta_bits = None
         if isinstance(X, Dataset):
-            frame = X.frame
-            if bits is None and X.metadata.get("adc_bits") is not None:
-                bits = X.metadata["adc_bits"]
-            if bits is None and X.config is not None:
-                bits = int(X.config.hardware.adc_bits)
-        if bits is None:
-            bits = DEFAULT_ADC_BITS
-        if isinstance(bits, bool) or not isinstance(bits, int | np.integer) or not 1 <= bits <= 32:
-            raise DataError(f"adc_bits must be an integer from 1 to 32, got {bits!r}")
+            meta_bits = X.metadata.get("adc_bits")
+            if meta_bits is None and X.config is not None:
+                meta_bits = int(X.config.hardware.adc_bits)
         cols = [c for c in frame.columns if isinstance(c, str)]
         wl = sorted(float(m.group(1)) for c in cols if (m := _ADC_RE.match(c)))
         if not wl:
-            raise DataError(
-                "no ADC columns: a device file needs at least one 'adc_<nm>' column "
-                "(e.g. adc_940); see docs/user_data.md"
-            )
+            raise DataError(_no_adc_message(frame.columns))
+        bits, _ = resolve_adc_bits(frame, adc_bits, meta_bits)
         labels = [f"{w:g}" for w in wl]
         refs = [f"adc_ref_{w}" in frame.columns for w in labels]
         if any(refs) and not all(refs):
@@ -181,6 +182,18 @@ class DeviceSchema:
             )
         except (KeyError, TypeError, ValueError):
             raise DataError("model file has a malformed 'schema' entry") from None
+        lo, hi = doc.get("train_min") or (), doc.get("train_max") or ()
+        try:
+            lo, hi = tuple(float(v) for v in lo), tuple(float(v) for v in hi)
+        except (TypeError, ValueError):
+            raise DataError(
+                "model file has a malformed 'schema' training range; refit the model"
+            ) from None
+        if len(lo) != len(hi) or (lo and len(lo) != len(s.raw_columns)):
+            raise DataError(
+                "model file's schema training range does not match its columns; refit the model"
+            )
+        s = replace(s, train_min=lo, train_max=hi)
         unknown = [c for c in s.physiology if c not in KNOWN_PHYSIOLOGY]
         if unknown or (s.n_plain == 0 and not s.wavelengths_nm):
             raise DataError(f"model file's schema names unknown columns {unknown}")
@@ -194,7 +207,35 @@ class DeviceSchema:
             "adc_bits": self.adc_bits,
             "physiology": list(self.physiology),
             "n_plain": self.n_plain,
+            **({"train_min": list(self.train_min), "train_max": list(self.train_max)}
+               if self.train_min else {}),
         }
+
+    def with_training_range(self, Xa: np.ndarray) -> DeviceSchema:
+        """This schema with the per-column range of validated raw columns ``Xa``."""
+        if not len(Xa) or self.is_plain:
+            return self
+        return replace(self, train_min=tuple(float(v) for v in Xa.min(axis=0)),
+                       train_max=tuple(float(v) for v in Xa.max(axis=0)))
+
+    def outside_training(self, Xa: np.ndarray) -> list[str]:
+        """Per row of validated raw columns, the columns outside the training range
+        (``'adc_940>'`` above it, ``'adc_940<'`` below), ``';'``-joined; ``''`` inside.
+
+        Examples
+        --------
+        >>> s = DeviceSchema((940.0,), reference=False, adc_bits=10, physiology=())
+        >>> s.with_training_range(np.array([[500.0], [600.0]])).outside_training(
+        ...     np.array([[550.0], [900.0]]))
+        ['', 'adc_940>']
+        """
+        if not self.train_min:
+            return [""] * len(Xa)
+        lo, hi = np.asarray(self.train_min), np.asarray(self.train_max)
+        cols = np.asarray(self.raw_columns, dtype=object)
+        below, above = Xa < lo, Xa > hi
+        return [";".join([f"{c}<" for c in cols[b]] + [f"{c}>" for c in cols[a]])
+                for b, a in zip(below, above, strict=True)]
 
     # ------------------------------------------------------------------ description
 
@@ -244,9 +285,11 @@ class DeviceSchema:
         if self.is_plain:
             return f"a plain array of {self.n_plain} columns"
         ref = "with" if self.reference else "without"
+        physio = (f"physiology [{', '.join(self.physiology)}]" if self.physiology
+                  else "no physiological columns")
         return (
             f"LEDs {', '.join(self.labels)} nm at {self.adc_bits} bits {ref} reference codes, "
-            f"physiology [{', '.join(self.physiology)}]"
+            f"{physio}"
         )
 
     # ------------------------------------------------------------------ reading
@@ -317,8 +360,7 @@ class DeviceSchema:
             top = float(codes[:, j].max())
             why = (
                 f"codes up to {top:.0f} need a {int(np.ceil(np.log2(top + 1)))}-bit ADC; "
-                "declare the device's resolution (fit --adc-bits, or adc_bits in the "
-                "file's metadata)"
+                "declare the device's resolution (--adc-bits N; Python adc_bits=N)"
                 if top > self.full_scale
                 else "a code of 0 or below is a dead or disconnected channel"
             )
@@ -369,6 +411,20 @@ class DeviceSchema:
     def stacked_names(self) -> tuple[str, ...]:
         """Names of :meth:`stacked`'s columns: ``A_<nm>`` per LED, then the physiology."""
         return tuple(f"A_{w}" for w in self.labels) + tuple(self.physiology)
+
+
+def _no_adc_message(columns) -> str:
+    """No ``adc_<nm>`` column: the columns read and the nearest names."""
+    import difflib
+
+    read = [str(c) for c in columns]
+    near = [c for c in read if difflib.get_close_matches(c.strip().casefold(), ["adc_940",
+            "adc_850", "adc_660", "adc_1050"], n=1, cutoff=0.6)
+            or c.strip().casefold().startswith(("adc", "led", "ch", "ir", "nir"))]
+    shown = ", ".join(repr(c) for c in read[:12]) + (" ..." if len(read) > 12 else "")
+    hint = f"; nearest: {', '.join(repr(c) for c in near[:4])}" if near else ""
+    return (f"no ADC columns: a device file needs at least one 'adc_<nm>' column (e.g. "
+            f"adc_940 for a 940 nm LED); columns read: {shown or 'none'}{hint}")
 
 
 def check_fit_size(n_rows: int, groups: Any = None) -> None:
@@ -500,6 +556,7 @@ def fit_schema(est: Any, X: Any, adc_bits: int | None = None) -> DeviceSchema:
     frame = X.frame if isinstance(X, Dataset) else X
     if isinstance(frame, pd.DataFrame) and (isinstance(X, Dataset) or _is_device_frame(frame)):
         schema = DeviceSchema.infer(X, adc_bits)
+        schema = schema.with_training_range(schema.raw(X))
         est.n_features_in_ = len(schema.raw_columns)
         est.feature_names_in_ = np.asarray(schema.raw_columns, dtype=object)
         return schema

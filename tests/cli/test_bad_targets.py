@@ -21,7 +21,7 @@ def test_blank_reference_glucose_at_fit_is_one_line(cli, workdir, frame):
     f.loc[4, "glucose_mgdl"] = np.nan
     f.to_csv("blank.csv", index=False)
     code, _, err = cli("fit", "--model", "ebl", "--data", "blank.csv", "--out", "m.json")
-    assert_one_line_error(code, err, contains=["glucose_mgdl", "rows 4"])
+    assert_one_line_error(code, err, contains=["glucose_mgdl", "line 6 (line 1 is the header)"])
     with pytest.raises(DataError, match="Input y contains NaN"):  # scikit-learn's words kept
         EnhancedBeerLambert().fit(f)
 

@@ -23,7 +23,7 @@ def _device_frame() -> pd.DataFrame:
 
 def test_user_data_table_has_no_study_columns(tmp_path):
     run_benchmark(
-        Dataset(_device_frame()),
+        Dataset(_device_frame(), metadata={"adc_bits": 10}),  # codes <= 1023: declared
         ["ebl", "mean"],
         n_splits=3,
         repeats=1,

@@ -8,6 +8,7 @@ import pytest
 
 import nirglucose as ng
 from device_data import LED_SETS, simulate_device
+from nirglucose.dataset import Dataset
 from nirglucose.exceptions import DataError
 from nirglucose.models import available_models, get_model_class, load_model, make_model
 from nirglucose.schema import DeviceSchema, MeasurementTransformer, meter_flags
@@ -99,13 +100,14 @@ def test_device_without_reference_or_physiology(tmp_path):
     """A one-LED, 10-bit device that records neither reference codes nor physiology."""
     ds = simulate_device(1, 10)
     frame = ds.frame[["subject_id", "adc_940", "glucose_mgdl"]]
+    # codes that fit 10 bits fit 12, 14, 16 alike: the resolution must be declared (issue 28)
+    with pytest.raises(DataError, match="fit a 10-, 12-, 14- or 16-bit ADC alike"):
+        _make("ebl").fit(frame)
+    declared = Dataset(frame, metadata={"adc_bits": 10})
     for name in ("ebl", "pls", "sdnn", "original-pinn", "rte-pinn", *REFERENCES):
-        m = _make(name).fit(
-            frame,
-        )
+        m = _make(name).fit(declared)
         assert not m.schema_.reference and m.schema_.physiology == ()
-        # without a declared resolution the file is read at the default 12 bits
-        assert m.schema_.adc_bits == 12
+        assert m.schema_.adc_bits == 10
         p = m.predict(frame)
         np.testing.assert_allclose(
             load_model(m.save(tmp_path / "m.json")).predict(frame), p, rtol=1e-6

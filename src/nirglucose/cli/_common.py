@@ -50,6 +50,19 @@ DEFAULT_RESAMPLES = DEFAULT_N_BOOT
 OutDirOption = Annotated[
     Path, typer.Option(help="Output directory (created if its parent exists).")
 ]
+#: --glucose-unit of every command that reads or writes glucose.
+GlucoseUnitOption = Annotated[
+    str | None,
+    typer.Option(help="Unit of the file's reference glucose and of the glucose printed or "
+                 "written: mg/dL or mmol/L (default: the column's, glucose_mgdl mg/dL, "
+                 "glucose_mmoll mmol/L)."),
+]
+#: --adc-bits of benchmark (fit has its own help text).
+AdcBitsOption = Annotated[
+    int | None,
+    typer.Option(help="The ADC resolution [bit]: of the --data device (needed when every "
+                 "code fits 10 bits), or of the simulated one (hardware.adc_bits)."),
+]
 PerSubjectOption = Annotated[int, typer.Option(help="Measurements per subject.")]
 ProtocolOption = Annotated[str, typer.Option(help="grouped-cv or paper-split.")]
 FoldsOption = Annotated[int, typer.Option(help="Folds of grouped-cv.")]

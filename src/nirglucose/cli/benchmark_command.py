@@ -14,7 +14,9 @@ from ._app import app, out_console
 from ._common import (
     _PRESET_NAMES,
     DEFAULT_RESAMPLES,
+    AdcBitsOption,
     FoldsOption,
+    GlucoseUnitOption,
     JobsOption,
     OutDirOption,
     PerSubjectOption,
@@ -35,6 +37,7 @@ from ._common import (
     _tidy_out,
     _warnings_as_lines,
 )
+from .fit_report import say_notes
 
 
 @app.command()
@@ -77,26 +80,39 @@ def benchmark(
         ),
     ] = 0,
     set_: SetOption = None,
+    adc_bits: AdcBitsOption = None,
+    glucose_unit: GlucoseUnitOption = None,
 ) -> None:
-    """Fit and score every model on subject-grouped splits; resumable (out/.tasks)."""
+    """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
+
+    Files written keep mg/dL (their column names say so); --glucose-unit sets the unit
+    of the --data file and of the printed table."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
-                                  models, out)
+                                  models, out, glucose_unit)
+    if adc_bits is not None and data is None:  # the simulated device's resolution
+        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
     runs, overrides = _benchmark_runs(preset, data, set_, out)
     for p, run_out in runs:
-        ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides)
+        ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
+                             glucose_unit)
+        _check_calibration_readings(ds, calibration)
+        if p is None:
+            say_notes(ds)  # after the checks: an error stays one line
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation, calibration)
+                       references, ablation, calibration, glucose_unit)
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
-                          out) -> list[str] | None:
+                          out, glucose_unit=None) -> list[str] | None:
     """The checks of ``benchmark`` after the counts, in order; the --models names."""
     from ..evaluation.splits import check_protocol
+    from ..io_files import check_glucose_unit
     from ..models.registry import get_model_class
 
+    check_glucose_unit(glucose_unit)
     _check_seed(seed)
     check_protocol(protocol)
     _check_calibration(calibration, None if data is not None else per_subject)
@@ -134,19 +150,39 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
     return [(p, out / p if len(presets) > 1 else out) for p in presets], overrides
 
 
-def _benchmark_data(preset, data, subjects, per_subject, seed, overrides):
-    """The dataset of one run: the --data file (``preset`` None) or a simulated one."""
+def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bits=None,
+                    glucose_unit=None):
+    """The dataset of one run: the --data file (``preset`` None: read, validated whole
+    and its ADC resolution resolved before any split) or a simulated one."""
     if preset is None:
-        from ..dataset import load_dataset
+        from .fit_report import load_device_file
 
-        return load_dataset(data)
+        ds, _ = load_device_file(data, glucose_unit, adc_bits, need_glucose=True)
+        if "subject_id" not in ds.frame.columns:
+            raise UserError(f"{str(data)!r} has no subject_id column: the benchmark splits "
+                            "by subject; add one (one id per person)")
+        return ds
     from ..api import simulate as _simulate
 
     return _simulate(preset, subjects, per_subject, seed, overrides=overrides)
 
 
+def _check_calibration_readings(ds, k: int) -> None:
+    """Refuse --calibration K when no subject has a reading left to score, before any
+    task runs."""
+    if not k:
+        return
+    counts = ds.frame.groupby("subject_id").size()
+    if int(counts.max()) <= k:
+        raise UserError(
+            f"--calibration {k} uses each person's first {k} reading(s), but no subject has "
+            f"more than {int(counts.max())}: nothing is left to score; give --calibration 0 "
+            f"or data with at least {k + 1} readings per person"
+        )
+
+
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
-                   references, ablation, calibration=0) -> None:
+                   references, ablation, calibration=0, unit=None) -> None:
     """Run the benchmark of one dataset, then print its table and summary lines."""
     from ..evaluation.benchmark import run_benchmark
 
@@ -165,27 +201,37 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             references=references,
             ablation=ablation,
             calibration=calibration,
+            # the oracle bound needs the simulator's true_* columns: not asked of user data
+            oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
         )
-    _print_benchmark(res, ds, out)
+    _print_benchmark(res, ds, out, unit)
 
 
-def _print_benchmark(res, ds, out: Path) -> None:
+def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
     """The metrics table, one line per calibration method, and where the results are."""
     import numpy as np
     from rich import box
 
     table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
                   box=box.SIMPLE_HEAD)
-    for col in ("model", "RMSE mg/dL (95% CI)", "MARD %", "Clarke A %", "90% PI cover/width",
+    from ..io_files import glucose_to_unit
+
+    u = unit or "mg/dL"
+    d = 2 if u == "mmol/L" else 1
+
+    def g(v):
+        return f"{float(glucose_to_unit(v, u)):.{d}f}"
+
+    for col in ("model", f"RMSE {u} (95% CI)", "MARD %", "Clarke A %", "90% PI cover/width",
                 "params", "ms"):
         table.add_column(col, justify="left" if col == "model" else "right", no_wrap=True)
     for _, r in res.metrics.iterrows():
         table.add_row(
             escape(str(r["model"])),
-            f"{r['rmse_mgdl']:.1f} ({r['rmse_ci_low']:.1f}-{r['rmse_ci_high']:.1f})",
+            f"{g(r['rmse_mgdl'])} ({g(r['rmse_ci_low'])}-{g(r['rmse_ci_high'])})",
             f"{r['mard_pct']:.1f}",
             f"{r['clarke_a_pct']:.1f}",
-            (f"{r['coverage90_pct']:.0f}% / {r['width90_mgdl']:.0f}"
+            (f"{r['coverage90_pct']:.0f}% / {g(r['width90_mgdl'])}"
              if np.isfinite(r["width90_mgdl"]) else "– (too few subjects)"),
             f"{int(r['n_parameters']):,}",
             f"{r['latency_single_ms']:.3f}",
@@ -201,6 +247,8 @@ def _print_benchmark(res, ds, out: Path) -> None:
             err=False,
         )
     m = res.meta
+    if m.get("significance_withheld"):
+        _say(f"note: {m['significance_withheld']}", err=False)
     _say(
         f"wrote results to {out}/ ({m['tasks_computed']} tasks computed, "
         f"{m['tasks_cached']} reused, {m['wall_time_s']:.0f} s)",

@@ -519,6 +519,8 @@ def _meta(
         "dataset_seed": dataset.seed,
         "n_subjects": int(pd.unique(dataset.frame["subject_id"].to_numpy()).size),
         "n_snapshots": int(len(dataset.frame)),
+        "adc_bits": dataset.metadata.get("adc_bits", getattr(
+            getattr(dataset.config, "hardware", None), "adc_bits", None)),  # issue 28
         "version": __version__,
         "config": None if dataset.config is None else json.loads(dataset.config.to_json()),
         "models": plan.names,

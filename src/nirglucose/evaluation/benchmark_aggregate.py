@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ..metrics import summary
+from ..small_data import significance_withheld
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
@@ -87,7 +88,10 @@ def aggregate(
     preds = preds_all[preds_all["model"].isin(names)].reset_index(drop=True)
     preds = preds[list(PREDICTION_COLUMNS)]
     comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
-    meta["best_model"] = (
+    meta["significance_withheld"] = significance_withheld(int(preds["subject_id"].nunique()))
+    if meta["significance_withheld"]:  # small-data policy: no ranking from few subjects
+        comparisons = comparisons.iloc[:0]
+    meta["best_model"] = None if meta["significance_withheld"] else (
         comparisons.loc[comparisons["family"] == "vs_best", "reference_model"].iloc[0]
         if (comparisons["family"] == "vs_best").any()
         else (metrics["model"].iloc[0] if len(metrics) else None)

@@ -422,7 +422,8 @@ def _ablation_lines(res: BenchmarkResult) -> list[str]:
 def _significance_lines(res: BenchmarkResult) -> list[str]:
     c = res.comparisons
     label = {r["model"]: r["label"] for _, r in res.metrics.iterrows()}
-    out = []
+    out = [f"Note: {res.meta['significance_withheld']}."] if res.meta.get(
+        "significance_withheld") else []
     vb = c[c["family"] == "vs_best"]
     if len(vb):
         best = vb["reference_model"].iloc[0]

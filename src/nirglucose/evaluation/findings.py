@@ -291,10 +291,13 @@ def no_skill_comparisons(run: RunData, *, n_boot: int = 2000, seed: int = 0,
     :func:`~nirglucose.evaluation.stats.compare_models` with the pairs
     ``(model, "mean")`` on the run's scored predictions (empty without a no-skill row).
     """
+    from ..small_data import significance_withheld
     from .stats import compare_models
 
     p = run.predictions
     models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m)]
+    if significance_withheld(int(p["subject_id"].nunique())):  # small-data policy
+        return pd.DataFrame()
     if NO_SKILL not in set(p["model"]) or not models:
         return pd.DataFrame()
     col = "scored_mgdl" if "scored_mgdl" in p.columns else "predicted_mgdl"

@@ -47,6 +47,7 @@ from ..features import (
     feature_table,
 )
 from ..schema import DeviceSchema
+from .c_guard import estimate_body, estimate_decl
 
 __all__ = [
     "EXPORTABLE_MODELS",
@@ -203,9 +204,10 @@ extern "C" {{
 #endif
 
 /* adc: ADC codes (positive); {ref}; {pmf}.
- * Returns glucose [mg/dL]. */
+ * Returns glucose [mg/dL], unchecked: prefer nirglucose_estimate, which checks the
+ * codes and the training range and returns a status. */
 {prototype(schema)};
-{_interval_decl(schema, half)}
+{estimate_decl(schema)}{_interval_decl(schema, half)}
 #ifdef __cplusplus
 }}
 #endif
@@ -371,6 +373,7 @@ def generate_c(model) -> dict[str, str]:
         + _array("MEAN", mean)
         + f"static const float INTERCEPT = {c_float(intercept)};\n\n"
         f"{prototype(model.schema_)}\n{{\n" + body + "}\n"
+        + estimate_body(model.schema_, _array)
         + _interval_body(model.schema_, half)
     )
     return {

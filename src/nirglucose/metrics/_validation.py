@@ -17,6 +17,9 @@ from nirglucose.exceptions import DataError
 
 __all__ = ["MGDL_PER_MMOLL", "VALID_UNITS"]
 
+#: Below this median a mg/dL reference reads as mmol/L (as nirglucose.io_files). [mg/dL]
+_MMOLL_SUSPECT_MEDIAN_MGDL = 35.0
+
 #: mg/dL per mmol/L of glucose (molar mass 180.16 g/mol / 10 dL/L). [mg/dL per mmol/L]
 MGDL_PER_MMOLL: Final[float] = MGDL_PER_MMOLL_GLUCOSE
 
@@ -129,5 +132,12 @@ def _to_mgdl(
     """Convert already-validated arrays from ``units`` to mg/dL (no copy for mg/dL)."""
     factor = _unit_factor(units)
     if factor == 1.0:
+        if ref.size and float(np.median(ref)) < _MMOLL_SUSPECT_MEDIAN_MGDL:
+            import warnings
+
+            warnings.warn(
+                f"reference glucose (median {float(np.median(ref)):g}) looks like mmol/L, "
+                "not mg/dL; pass units='mmol/L' or the zones are those of mg/dL values",
+                UserWarning, stacklevel=3)
         return ref, pred
     return ref * factor, pred * factor

@@ -21,6 +21,10 @@ from numpy.typing import ArrayLike, NDArray
 from nirglucose.metrics._validation import _to_mgdl, _unit_factor, _validate_pairs
 from nirglucose.metrics.error_grids import _parkes_codes
 
+#: Results of an ISO 15197:2013 system-accuracy evaluation: 100 subjects x 3 reagent lots
+#: x 2 measurements (clause 6.3). [-]
+ISO_MIN_RESULTS: Final[int] = 600
+
 __all__ = [
     "ISO15197_2013_THRESHOLD_MGDL",
     "ISO15197_2013_LIMIT_MGDL",
@@ -201,6 +205,13 @@ def iso15197_2013_passes(y_true: ArrayLike, y_pred: ArrayLike, *, units: str = "
     """
     ref, pred = _prepare(y_true, y_pred, units, allow_negative_pred=False)
     n = ref.shape[0]
+    if n < ISO_MIN_RESULTS:
+        import warnings
+
+        warnings.warn(
+            f"ISO 15197:2013 system accuracy is evaluated on at least {ISO_MIN_RESULTS} "
+            f"results (100 subjects, 3 reagent lots, clause 6.3); a verdict on {n} "
+            "pairs is not the standard's", UserWarning, stacklevel=2)
     n_within = _iso_within_count(np.abs(pred - ref), ref)
     within_ok = 100 * n_within >= ISO15197_2013_REQUIRED_WITHIN_PCT * n
     zone_ok = 100 * _zone_ab_count(ref, pred) >= ISO15197_2013_REQUIRED_ZONE_AB_PCT * n

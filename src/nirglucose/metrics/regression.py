@@ -42,7 +42,11 @@ class BlandAltmanResult(NamedTuple):
 
 
 def _rmse(diff: NDArray[np.float64]) -> float:
-    return float(np.sqrt(np.dot(diff, diff) / diff.shape[0]))
+    scale = float(np.max(np.abs(diff))) if diff.size else 0.0
+    if not scale or scale < 1e150:  # the plain sum cannot overflow
+        return float(np.sqrt(np.dot(diff, diff) / diff.shape[0]))
+    d = diff / scale  # scaled first: values near 1e200 would square to inf
+    return scale * float(np.sqrt(np.dot(d, d) / diff.shape[0]))
 
 
 def _mard(absdiff: NDArray[np.float64], ref: NDArray[np.float64]) -> float:
