@@ -284,3 +284,14 @@ def test_every_preset_gets_its_training_and_pipeline_figures(preset_report):
     i = text.index('<figure id="fig-training_wearable">')
     cap = text[i:text.index("</figure>", i)]
     assert "validation (dashed)" in cap and "no validation split" not in cap
+
+
+def test_ablation_rows_never_compete_and_are_named():
+    """``<pinn>/lambda=<v>`` and ``<pinn>/no-physics`` rows are ablations, not models."""
+    from nirglucose.evaluation.findings import _is_competitor, label
+
+    assert not _is_competitor("rte-pinn/lambda=0.1")
+    assert not _is_competitor("rte-pinn/no-physics")
+    assert _is_competitor("rte-pinn")
+    assert label("rte-pinn/lambda=0.1").endswith("(λ = 0.1)")
+    assert label("rte-pinn/no-physics").endswith("(no physics)")

@@ -35,7 +35,7 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-from .benchmark_result import NO_PHYSICS, ORACLE
+from .benchmark_result import LAMBDA_ROW, NO_PHYSICS, ORACLE, ablation_base
 from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_TABLE
 
 __all__ = [
@@ -198,15 +198,18 @@ class RunData:
 
 
 def label(model: str) -> str:
-    """Display name of a model (the study's names; ``(no physics)`` for ablation rows)."""
+    """Display name of a model (the study's names; ``(no physics)`` or ``(λ = …)`` for
+    ablation rows)."""
+    base = ablation_base(model)
+    if base is None:
+        return MODEL_LABELS.get(model, model)
     if model.endswith(NO_PHYSICS):
-        base = model[: -len(NO_PHYSICS)]
         return f"{MODEL_LABELS.get(base, base)} (no physics)"
-    return MODEL_LABELS.get(model, model)
+    return f"{MODEL_LABELS.get(base, base)} (λ = {model.split(LAMBDA_ROW)[1]})"
 
 
 def _is_competitor(model: str) -> bool:
-    return model not in (ORACLE, NO_SKILL) and not model.endswith(NO_PHYSICS)
+    return model not in (ORACLE, NO_SKILL) and ablation_base(model) is None
 
 
 def _ref_anchor(preset: str) -> str:
