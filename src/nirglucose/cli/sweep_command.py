@@ -144,10 +144,14 @@ def _sweep_grid(vary: list[str] | None) -> dict:
 
 
 def _sweep_models(models: str | None, study: str | None) -> list[str]:
-    """--models, else every registered model (data-size) or the registered defaults."""
+    """--models, else the study's own models (:data:`~nirglucose.evaluation.studies.STUDY_MODELS`),
+    every registered model (data-size) or the registered defaults."""
+    from ..evaluation.studies import STUDY_MODELS
     from ..evaluation.sweep import DEFAULT_MODELS
     from ..models.registry import available_models
 
+    if models is None and study in STUDY_MODELS:
+        return [m for m in STUDY_MODELS[study] if m in available_models()]
     if models is None and study == "data-size":
         return available_models()
     if models is None:
