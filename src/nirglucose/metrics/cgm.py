@@ -234,8 +234,14 @@ def _within(ref, pred, codes, limit: float, absolute_low: bool) -> NDArray[np.bo
     return np.where(codes == 0, absdiff <= limit, rel)
 
 
-def _wilson_cc_lower(hits: NDArray, n: NDArray, alpha: float) -> float:
-    """Clustered, continuity-corrected Wilson lower bound (Short et al. 2020)."""
+def _wilson_cc_lower(hits: NDArray, n: NDArray, alpha: float, rho_degenerate: float = 1.0
+                     ) -> float:
+    """Clustered, continuity-corrected Wilson lower bound (Short et al. 2020).
+
+    The intraclass correlation is undefined at a rate of 0 or 1; ``rho_degenerate`` is
+    used there (1, the most conservative, as the reference implementation of Stephan et
+    al. 2022 does).
+    """
     keep = n > 0
     x, m = hits[keep].astype(np.float64), n[keep].astype(np.float64)
     k = x.shape[0]
@@ -243,7 +249,7 @@ def _wilson_cc_lower(hits: NDArray, n: NDArray, alpha: float) -> float:
     p = x.sum() / big_m
     m2 = float(np.sum(m * m))
     if k < 2 or p in (0.0, 1.0):
-        rho = 1.0 if p in (0.0, 1.0) else 0.0
+        rho = rho_degenerate if p in (0.0, 1.0) else 0.0
     else:
         bms = (np.sum(x * x / m) - x.sum() ** 2 / big_m) / (k - 1)
         dof_w = np.sum(m - 1.0)
@@ -267,14 +273,18 @@ def _bca_lower(boot: NDArray, theta: float, jack: NDArray, alpha: float) -> floa
     jack = jack[np.isfinite(jack)]
     if boot.shape[0] == 0:
         return float("nan")
+    if np.ptp(boot) == 0.0:
+        return float("nan")  # no spread (e.g. a rate of 0 or 100 %): no bootstrap bound
     z_a = stats.norm.ppf(alpha)
     z0 = stats.norm.ppf(np.mean(boot < theta))
     u = jack.mean() - jack
     den = 6.0 * np.sum(u * u) ** 1.5
     a = np.sum(u**3) / den if den > 0 else 0.0
-    level = stats.norm.cdf(z0 + (z0 + z_a) / (1.0 - a * (z0 + z_a)))
-    if not np.isfinite(level):
-        level = alpha
+    level = alpha
+    if np.isfinite(z0):
+        shifted = z0 + (z0 + z_a) / (1.0 - a * (z0 + z_a))
+        if np.isfinite(shifted):
+            level = float(stats.norm.cdf(shifted))
     return float(np.quantile(boot, level))
 
 
@@ -304,8 +314,9 @@ def _rate_table(ref, pred, subj, n_subjects, range_codes, *, method, n_boot, see
     if method == "bootstrap":
         rng = np.random.default_rng(seed)
         draws = rng.integers(0, n_subjects, size=(n_boot, n_subjects))
-        weights = np.zeros((n_boot, n_subjects))
-        np.add.at(weights, (np.repeat(np.arange(n_boot), n_subjects), draws.ravel()), 1.0)
+        flat = (np.arange(n_boot)[:, None] * n_subjects + draws).ravel()
+        weights = np.bincount(flat, minlength=n_boot * n_subjects).reshape(
+            n_boot, n_subjects).astype(np.float64)  # times each subject was drawn
         with np.errstate(invalid="ignore", divide="ignore"):
             boot = 100.0 * (weights @ h_sub) / (weights @ n_sub)
             jack = 100.0 * (h_tot - h_sub) / (n_tot - n_sub)  # leave one subject out
@@ -316,6 +327,8 @@ def _rate_table(ref, pred, subj, n_subjects, range_codes, *, method, n_boot, see
         elif method == "bootstrap":
             present = n_sub[:, t] > 0
             lower = _bca_lower(boot[:, t], float(est[t]), jack[present, t], alpha)
+            if not np.isfinite(lower):
+                lower = 100.0 * _wilson_cc_lower(h_sub[:, t], n_sub[:, t], alpha, 0.0)
         else:
             lower = 100.0 * _wilson_cc_lower(h_sub[:, t], n_sub[:, t], alpha)
         unit = "mg/dL" if label == "<70" else "%"
@@ -374,11 +387,16 @@ def agreement_rates(
       are resampled with replacement ``n_boot`` times with a fixed ``seed`` (a cluster
       bootstrap) and the bound is the bias-corrected and accelerated (BCa) percentile
       (DiCiccio & Efron 1996, the acceleration from a leave-one-subject-out jackknife),
-      falling back to the plain percentile where BCa is undefined (e.g. a rate of 100 %);
+      falling back to the plain percentile where the BCa correction is undefined, and
+      to the continuity-corrected Wilson bound of the readings taken as independent
+      where the resamples do not vary at all (a rate of 0 or 100 %, where a bootstrap
+      bound would equal the estimate whatever the number of readings);
     * ``method="wilson"``: the continuity-corrected Wilson bound with the variance
       inflated by the design effect ``1 + rho (sum m_i^2 - M) / M`` of the intraclass
       correlation ``rho`` (Short et al. 2020); deterministic. With ``rho = 0`` it is
-      Newcombe's (1998) continuity-corrected Wilson bound.
+      Newcombe's (1998) continuity-corrected Wilson bound. At a rate of 0 or 100 % the
+      intraclass correlation is undefined and ``rho = 1`` is used (each subject counts
+      once), as in the reference implementation of Stephan et al. (2022).
 
     Parameters
     ----------
