@@ -668,13 +668,15 @@ def rate_of_change(
 
 
 class TrendAgreement(NamedTuple):
-    """Result of :func:`trend_agreement`."""
+    """Result of :func:`trend_agreement`: ``(matrix, agreement_pct, n_pairs)``.
 
-    #: Counts, rows = reference category, columns = device category. [-]
+    ``matrix`` holds the counts, rows the reference category, columns the device
+    category [-]; ``agreement_pct`` is the share of rate pairs in the same category [%];
+    ``n_pairs`` the number of rate pairs compared [-].
+    """
+
     matrix: pd.DataFrame
-    #: Share of rate pairs in the same category. [%]
     agreement_pct: float
-    #: Rate pairs compared. [-]
     n_pairs: int
 
 
@@ -769,13 +771,16 @@ def trend_agreement(
 
 
 class LagEstimate(NamedTuple):
-    """Result of :func:`estimated_lag`."""
+    """Result of :func:`estimated_lag`: ``(per_subject, median_min, q25_min, q75_min)``.
 
-    #: Per subject: ``subject_id``, ``lag_min`` [min], ``correlation`` [-], ``n_readings``.
+    ``per_subject`` has one row per subject with ``subject_id``, ``lag_min`` [min],
+    ``correlation`` (at that lag) [-] and ``n_readings`` [-]; ``median_min``,
+    ``q25_min`` and ``q75_min`` are the median and the 25th / 75th percentiles of the
+    lag over subjects [min].
+    """
+
     per_subject: pd.DataFrame
-    #: Median lag over subjects. [min]
     median_min: float
-    #: 25th and 75th percentiles of the lag over subjects. [min]
     q25_min: float
     q75_min: float
 
