@@ -249,6 +249,18 @@ def test_rate_of_change_per_subject_in_time_order() -> None:
     np.testing.assert_allclose(got, [-2.0, np.nan, 2.0, -3.0, np.nan])
 
 
+def test_rate_of_change_max_gap_drops_rates_across_dropouts() -> None:
+    got = rate_of_change([100, 110, 130, 140], [1, 1, 1, 1], [0, 5, 60, 65], max_gap_min=15)
+    np.testing.assert_allclose(got, [np.nan, 2.0, np.nan, 2.0])
+    with pytest.raises(DataError, match="max_gap_min must be"):
+        rate_of_change([100, 110], [1, 1], [0, 5], max_gap_min=0)
+
+
+def test_mixed_subject_id_types_are_one_clear_error() -> None:
+    with pytest.raises(DataError, match="subject_id values must be of one sortable type"):
+        time_in_ranges([100, 110], np.array([1, "a"], dtype=object))
+
+
 def test_rate_of_change_rejects_repeated_time() -> None:
     with pytest.raises(DataError, match="time_min repeats within a subject"):
         rate_of_change([100, 110], [1, 1], [0, 0])

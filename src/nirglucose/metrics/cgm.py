@@ -114,7 +114,10 @@ def _times(time_min: ArrayLike, n: int) -> NDArray[np.float64]:
 
 def _subject_codes(subject_id: ArrayLike, n: int) -> tuple[NDArray[np.intp], NDArray]:
     ids = _labels(subject_id, n, "subject_id")
-    uniq, codes = np.unique(ids, return_inverse=True)
+    try:
+        uniq, codes = np.unique(ids, return_inverse=True)
+    except TypeError as exc:  # e.g. ints mixed with strings in an object array
+        raise DataError(f"subject_id values must be of one sortable type: {exc}") from exc
     return codes.astype(np.intp), uniq
 
 
@@ -605,10 +608,19 @@ def _order(subj: NDArray[np.intp], t: NDArray[np.float64]) -> NDArray[np.intp]:
     return order
 
 
-def _rates(glucose, subj, t, order) -> NDArray[np.float64]:
+def _check_gap(max_gap_min: float | None) -> float:
+    if max_gap_min is None:
+        return np.inf
+    if isinstance(max_gap_min, bool) or not (
+            isinstance(max_gap_min, (int, float, np.number)) and max_gap_min > 0):
+        raise DataError(f"max_gap_min must be a positive number or None, got {max_gap_min!r}")
+    return float(max_gap_min)
+
+
+def _rates(glucose, subj, t, order, max_gap_min: float = np.inf) -> NDArray[np.float64]:
     g, s, tt = glucose[order], subj[order], t[order]
     out_sorted = np.full(g.shape[0], np.nan)
-    same = s[1:] == s[:-1]
+    same = (s[1:] == s[:-1]) & (tt[1:] - tt[:-1] <= max_gap_min)
     out_sorted[1:][same] = (g[1:] - g[:-1])[same] / (tt[1:] - tt[:-1])[same]
     out = np.empty_like(out_sorted)
     out[order] = out_sorted
@@ -616,13 +628,18 @@ def _rates(glucose, subj, t, order) -> NDArray[np.float64]:
 
 
 def rate_of_change(
-    glucose_mgdl: ArrayLike, subject_id: ArrayLike, time_min: ArrayLike
+    glucose_mgdl: ArrayLike,
+    subject_id: ArrayLike,
+    time_min: ArrayLike,
+    *,
+    max_gap_min: float | None = None,
 ) -> NDArray[np.float64]:
     """Rate of change of glucose from consecutive readings of each subject.
 
     The rate at a reading is ``(g_i - g_(i-1)) / (t_i - t_(i-1))`` with the previous
     reading of the same subject in time order (the readings need not be sorted); the
-    first reading of each subject has no rate (NaN). This is the rate of the CG-EGA
+    first reading of each subject, and a reading more than ``max_gap_min`` after the
+    previous one (a dropout), has no rate (NaN). This is the rate of the CG-EGA
     (Kovatchev et al. 2004) and of the trend categories of CGM accuracy studies.
 
     Parameters
@@ -633,6 +650,8 @@ def rate_of_change(
         Subject of each reading. [-]
     time_min : array_like
         Time of each reading; distinct within a subject. [min]
+    max_gap_min : float or None, optional
+        Longest interval a rate may span; None for no limit. [min]
 
     Returns
     -------
@@ -664,7 +683,7 @@ def rate_of_change(
         raise DataError(f"glucose_mgdl contains NaN or infinite values: {_describe_bad(bad)}")
     subj, _ = _subject_codes(subject_id, g.shape[0])
     t = _times(time_min, g.shape[0])
-    return _rates(g, subj, t, _order(subj, t))
+    return _rates(g, subj, t, _order(subj, t), _check_gap(max_gap_min))
 
 
 class TrendAgreement(NamedTuple):
@@ -693,6 +712,7 @@ def trend_agreement(
     time_min: ArrayLike,
     *,
     edges_mgdl_per_min: tuple[float, ...] = TREND_EDGES_MGDL_PER_MIN,
+    max_gap_min: float | None = None,
 ) -> TrendAgreement:
     """Agreement of rate-of-change categories between reference and device.
 
@@ -715,6 +735,9 @@ def trend_agreement(
         Time of each reading; distinct within a subject. [min]
     edges_mgdl_per_min : tuple of float, optional
         Strictly increasing category edges. [mg/dL/min]
+    max_gap_min : float or None, optional
+        Longest interval a rate may span (longer gaps give no rate pair); None for no
+        limit. [min]
 
     Returns
     -------
@@ -752,7 +775,8 @@ def trend_agreement(
     subj, _ = _subject_codes(subject_id, ref.shape[0])
     t = _times(time_min, ref.shape[0])
     order = _order(subj, t)
-    rr, rp = _rates(ref, subj, t, order), _rates(pred, subj, t, order)
+    gap = _check_gap(max_gap_min)
+    rr, rp = _rates(ref, subj, t, order, gap), _rates(pred, subj, t, order, gap)
     keep = np.isfinite(rr)
     if not keep.any():
         raise DataError("no subject has two readings; a rate of change needs two")
