@@ -280,7 +280,7 @@ def _bca_lower(boot: NDArray, theta: float, jack: NDArray, alpha: float) -> floa
         return float("nan")  # no spread (e.g. a rate of 0 or 100 %): no bootstrap bound
     z_a = stats.norm.ppf(alpha)
     z0 = stats.norm.ppf(np.mean(boot < theta))
-    u = jack.mean() - jack
+    u = jack.mean() - jack if jack.shape[0] else jack
     den = 6.0 * np.sum(u * u) ** 1.5
     a = np.sum(u**3) / den if den > 0 else 0.0
     level = alpha
