@@ -17,8 +17,8 @@ class LED(_Model):
     wavelength_nm: float = Field(
         ...,
         ge=700,
-        le=1300,
-        description="Centre wavelength, within the optics tables' 700-1300 nm grid "
+        le=1700,
+        description="Centre wavelength, within the optics tables' 700-1700 nm range "
         "(data/optics/SOURCES.md). [nm]",
     )
     fwhm_nm: float = Field(
@@ -27,7 +27,7 @@ class LED(_Model):
         le=150,
         description="Emission full width at half maximum, typical of IR LEDs "
         "(e.g. Vishay VSLY5850 30 nm, TSAL6200 40 nm at 940 nm; longer wavelengths wider); "
-        "at most 150 nm, a quarter of the optics tables' span. [nm]",
+        "at most 150 nm, a quarter of the optics tables' first 700-1300 nm span. [nm]",
     )
     power_mw: float = Field(
         ...,
@@ -40,10 +40,10 @@ class LED(_Model):
     responsivity_a_per_w: float = Field(
         ...,
         gt=0,
-        le=1.05,
+        le=1.38,
         description="Photodiode responsivity at this LED (the study's set: Hamamatsu S1336 "
-        "typical spectral response read at 850/940/1050/1150 nm); at most 1.05, quantum "
-        "efficiency 1 at 1300 nm (lambda / 1239.8 nm A/W). [A/W]",
+        "typical spectral response read at 850/940/1050/1150 nm); at most 1.38, quantum "
+        "efficiency 1 at 1700 nm (lambda / 1239.8 nm A/W = 1.371). [A/W]",
     )
 
 
