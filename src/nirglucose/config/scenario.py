@@ -143,6 +143,11 @@ def _apply_detector(data: dict) -> dict:
                 )
             values[key] = want
             data[section] = values
+    return _fill_responsivities(data, det)
+
+
+def _fill_responsivities(data: dict, det: Detector | None) -> dict:
+    """LEDs without ``responsivity_a_per_w``: the detector's curve over their band."""
     leds = data.get("leds")
     if leds is None:
         return data
