@@ -120,3 +120,15 @@ def test_a_small_detector_collects_less_light():
                         overrides={"noise_scale": 0.0, "detector": "G17190-005K"}).frame
     cols = [c for c in base.columns if c.startswith("true_signal_v_")]
     assert (small[cols].to_numpy() < base[cols].to_numpy()).all()
+
+
+def test_parts_command_lists_the_catalogue():
+    from typer.testing import CliRunner
+
+    from nirglucose.cli import app
+
+    out = CliRunner().invoke(app, ["parts"])
+    assert out.exit_code == 0
+    for name in (*DETECTOR_PARTS, *LED_PARTS):
+        assert name in out.stdout
+    assert out.stdout.count("UNCERTAIN") == sum(p.uncertain for p in LED_PARTS.values())

@@ -131,5 +131,7 @@ def test_bad_arguments_are_one_config_error():
         design_bound("paper", detector="G1719")
     with pytest.raises(ConfigError, match="preset name or a ScenarioConfig"):
         design_bound(42)
+    with pytest.raises(ConfigError, match="n_states"):
+        design_bound("paper", n_states=0)
     with pytest.raises(ConfigError, match="must index"):
         design_terms("paper").bound([7])

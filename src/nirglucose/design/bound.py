@@ -69,7 +69,7 @@ from ..constants import (
     PHYSIOLOGICAL_RANGES,
     ZERO_CELSIUS_K,
 )
-from ..exceptions import ConfigError, unknown_name
+from ..exceptions import ConfigError, check_positive_int, unknown_name
 
 __all__ = ["CONDITIONS", "DesignBound", "DesignTerms", "design_bound", "design_terms",
            "noise_covariance"]
@@ -372,11 +372,10 @@ def design_terms(config="paper", leds=None, detector=None, *, overrides=None,
     """
     from ..models._inversion_solver import ForwardModel
 
+    n_states = check_positive_int("n_states", n_states)
     cfg = _resolve(config, leds, detector, overrides)
     pilot = _pilot(_population_key(cfg))
-    n = min(int(n_states), len(pilot.glucose_mgdl))
-    if n < 1:
-        raise ConfigError(f"n_states must be a positive integer, got {n_states!r}")
+    n = min(n_states, len(pilot.glucose_mgdl))
     # an evenly spaced subsample of the pilot: deterministic, spread over subjects
     rows = np.linspace(0, len(pilot.glucose_mgdl) - 1, n).round().astype(int)
     g, theta, board_c = pilot.glucose_mgdl[rows], pilot.theta[rows], pilot.board_c[rows]
