@@ -9,10 +9,14 @@ per population):
   ``design_terms`` call over the 10 and one ``DesignTerms.bound`` per subset, for both
   conditions; and the best subset found.
 
+With ``--oracle`` it also measures bound / oracle RMSE on every preset (the oracle
+fitted on 75 simulated subjects x 3, scored on 75 others, seed 1; the table of
+docs/user_guide/design_a_device.md), under ``"vs_oracle"``.
+
 Prints a JSON object on its last line (times in seconds, bounds in mg/dL).
 Goal: milliseconds per design.
 
-Usage: ``python benchmarks/design_bound.py [--repeats 20]``
+Usage: ``python benchmarks/design_bound.py [--repeats 20] [--oracle]``
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ def _leds(wavelengths):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=20, help="timed repeats")
+    parser.add_argument("--oracle", action="store_true", help="also bound / oracle per preset")
     args = parser.parse_args()
 
     design = {"leds": _leds((800, 900, 1000, 1100)), "overrides": None}
@@ -66,6 +71,7 @@ def main() -> None:
     rank_s = time.perf_counter() - start
     best = {cond: {"rmse_mgdl": r[0][0], "wavelengths_nm": [CANDIDATES_NM[i] for i in r[0][1]]}
             for cond, r in ranked.items()}
+    vs_oracle = _vs_oracle() if args.oracle else None
     print(json.dumps({
         "benchmark": "design_bound",
         "python": platform.python_version(),
@@ -77,7 +83,30 @@ def main() -> None:
         "rank_all_subsets_both_conditions_s": rank_s,
         "per_subset_s": rank_s / (2 * len(subsets)),
         "best_subset": best,
+        "vs_oracle": vs_oracle,
     }))
+
+
+def _vs_oracle() -> dict:
+    import numpy as np
+
+    import nirglucose as ng
+    from nirglucose.config import PRESETS
+    from nirglucose.models.oracle import Oracle
+
+    out = {}
+    for preset in PRESETS:
+        ds = ng.simulate(preset, 150, 3, seed=1)
+        fr = ds.frame
+        train = fr["subject_id"] < 75
+        model = Oracle().fit(ng.Dataset(fr[train].reset_index(drop=True), config=ds.config))
+        test = fr[~train].reset_index(drop=True)
+        pred = model.predict(ng.Dataset(test, config=ds.config))
+        rmse = float(np.sqrt(np.mean((pred - test["glucose_mgdl"]) ** 2)))
+        bound = design_bound(preset, condition="oracle").rmse_mgdl
+        out[preset] = {"bound_mgdl": bound, "oracle_mgdl": rmse, "ratio": bound / rmse,
+                       "device_bound_mgdl": design_bound(preset).rmse_mgdl}
+    return out
 
 
 if __name__ == "__main__":
