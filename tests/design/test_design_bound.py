@@ -34,13 +34,15 @@ DESIGNS = {
 CASES = {**{p: (p, None) for p in PRESETS}, **DESIGNS}
 
 
-def _oracle_rmse_and_upper(preset, overrides, seed=1):
-    """The oracle's test RMSE (half the subjects held out) and its 99 % upper bound by a
-    subject bootstrap (the bound is an expectation; the RMSE an estimate of it)."""
+def _oracle_rmse_and_upper(preset, overrides, seed=1, model=None):
+    """The oracle's (or ``model``'s) test RMSE (half the subjects held out) and its 99 %
+    upper bound by a subject bootstrap (the bound is an expectation; the RMSE an
+    estimate of it)."""
     ds = ng.simulate(preset, 150, 3, seed=seed, overrides=overrides)
     fr = ds.frame
     train = fr["subject_id"] < 75
-    model = Oracle().fit(ng.Dataset(fr[train].reset_index(drop=True), config=ds.config))
+    model = (model or Oracle()).fit(ng.Dataset(fr[train].reset_index(drop=True),
+                                               config=ds.config))
     test = fr[~train].reset_index(drop=True)
     err2 = (model.predict(ng.Dataset(test, config=ds.config)) - test["glucose_mgdl"]) ** 2
     per_subject = err2.groupby(test["subject_id"]).agg(["sum", "count"]).to_numpy()
@@ -61,6 +63,17 @@ def test_bound_does_not_exceed_the_oracle(case):
     assert bound.rmse_mgdl <= upper, (case, bound.rmse_mgdl, rmse)
     # informative, not a vacuous zero: the analytic noise is most of the oracle's error
     assert ratio > 0.4, (case, ratio)
+
+
+@pytest.mark.parametrize("preset", ["lab", "wearable"])
+def test_device_bound_does_not_exceed_a_device_estimator(preset):
+    """The device bound (nuisances unknown) bounds an estimator that reads only the
+    device's columns: the Enhanced Beer-Lambert ridge."""
+    from nirglucose.models import EnhancedBeerLambert
+
+    bound = design_bound(preset).rmse_mgdl
+    rmse, upper = _oracle_rmse_and_upper(preset, None, model=EnhancedBeerLambert())
+    assert bound <= upper, (preset, bound, rmse)
 
 
 def test_not_knowing_the_nuisances_costs():
