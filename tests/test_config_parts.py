@@ -132,3 +132,13 @@ def test_parts_command_lists_the_catalogue():
     for name in (*DETECTOR_PARTS, *LED_PARTS):
         assert name in out.stdout
     assert out.stdout.count("UNCERTAIN") == sum(p.uncertain for p in LED_PARTS.values())
+
+
+def test_a_detector_record_by_value():
+    record = {"part": "my-pd", "material": "Si", "active_area_mm2": 5.0,
+              "responsivity_table": "responsivity_si_vishay_bpw34.csv",
+              "dark_current_25c_na": 1.0, "dark_current_per_c": 0.07}
+    cfg = resolve_config("paper", {"detector": record})
+    assert cfg.detector.part == "my-pd" and cfg.optics.detector_area_mm2 == 5.0
+    with pytest.raises(ConfigError, match="detector.material"):
+        resolve_config("paper", {"detector": {**record, "material": "Ge"}})

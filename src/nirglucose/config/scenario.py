@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from ..exceptions import ConfigError
 from ._base import _Model
@@ -126,7 +126,16 @@ def _apply_detector(data: dict) -> dict:
     if isinstance(det, str):
         det = detector_part(det)
     elif isinstance(det, dict):
-        det = Detector.model_validate(det)
+        try:
+            det = Detector.model_validate(det)
+        except ValidationError as exc:
+            err = exc.errors()[0]
+            loc = ".".join(str(p) for p in err["loc"])
+            raise ConfigError(
+                f"invalid value for detector.{loc}: {err['msg']} (got {err.get('input')!r})"
+            ) from None
+    elif det is not None and not isinstance(det, Detector):
+        return data  # pydantic reports the wrong type, with the key
     if det is not None:
         data["detector"] = det
         sections = {"hardware": HardwareConfig, "optics": OpticsConfig}
