@@ -138,11 +138,11 @@ def _apply_detector(data: dict) -> dict:
         return data  # pydantic reports the wrong type, with the key
     if det is not None:
         data["detector"] = det
-        sections = {"hardware": HardwareConfig, "optics": OpticsConfig}
+        sections: dict[str, type[_Model]] = {"hardware": HardwareConfig, "optics": OpticsConfig}
         for section, key, field in DETECTOR_KEYS:
             values = _section_dict(data.get(section))
             want = getattr(det, field)
-            default = sections[section].model_fields[key].default
+            default = sections[section].model_fields[key].default  # a class attribute
             have = values.get(key, default)
             if have != default and have != want:
                 raise ConfigError(
@@ -178,7 +178,7 @@ def _fill_responsivities(data: dict, det: Detector | None) -> dict:
             f"LED {missing[0]} ({e.get('wavelength_nm')} nm) has no responsivity_a_per_w: "
             'give one, or name a detector (detector="G17190-005K"; see `nirglucose parts`)'
         )
-    if missing:
+    if missing and det is not None:
         curve = responsivity_curve(det)
         for i in missing:
             e = dict(emitters[i])

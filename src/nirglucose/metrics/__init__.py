@@ -3,9 +3,10 @@
 Point accuracy (RMSE, MARD, bias, share within a percentage), Bland–Altman agreement,
 the Clarke, Parkes (consensus) and DTS error grids, the ISO 15197:2013 accuracy criteria,
 a one-call :func:`summary`, and the standards of a worn monitor (:mod:`.cgm`: MARD by
-range and day, agreement rates with clustered lower bounds and the iCGM criteria, trend
-accuracy, lag, time in ranges). Every metric takes ``(y_true, y_pred, *, options)`` with the
-reference first; glucose is in mg/dL unless ``units="mmol/L"`` is given.
+range and day, agreement rates with clustered lower bounds and the iCGM criteria;
+:mod:`.trend`: trend accuracy and lag; :mod:`.time_in_range`). Every metric takes
+``(y_true, y_pred, *, options)`` with the reference first; glucose is in mg/dL unless
+``units="mmol/L"`` is given.
 """
 
 from __future__ import annotations
@@ -16,19 +17,10 @@ from nirglucose.metrics.cgm import (
     CI_METHODS,
     GLUCOSE_RANGE_LABELS,
     ICGM_CRITERIA,
-    TIME_IN_RANGE_TARGETS_PCT,
-    TREND_EDGES_MGDL_PER_MIN,
-    LagEstimate,
-    TrendAgreement,
     agreement_rates,
-    estimated_lag,
     icgm_criteria,
     mard_by_day,
     mard_by_range,
-    rate_of_change,
-    time_in_range_agreement,
-    time_in_ranges,
-    trend_agreement,
 )
 from nirglucose.metrics.error_grids import (
     DTS_LINES,
@@ -55,6 +47,19 @@ from nirglucose.metrics.regression import (
     within_percent,
 )
 from nirglucose.metrics.summary import SUMMARY_KEYS, summary
+from nirglucose.metrics.time_in_range import (
+    TIME_IN_RANGE_TARGETS_PCT,
+    time_in_range_agreement,
+    time_in_ranges,
+)
+from nirglucose.metrics.trend import (
+    TREND_EDGES_MGDL_PER_MIN,
+    LagEstimate,
+    TrendAgreement,
+    estimated_lag,
+    rate_of_change,
+    trend_agreement,
+)
 
 __all__ = [
     "MGDL_PER_MMOLL",

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Final
 
 import numpy as np
+import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.constants import MGDL_PER_MMOLL_GLUCOSE
@@ -141,3 +142,43 @@ def _to_mgdl(
                 UserWarning, stacklevel=3)
         return ref, pred
     return ref * factor, pred * factor
+
+
+# --- labelled series of a worn monitor (metrics.cgm, .trend, .time_in_range) ---------
+
+
+def label_array(values: ArrayLike, n: int, name: str) -> NDArray:
+    """Validate a 1-D label array (subject ids, days) of length ``n``."""
+    arr = np.asarray(values)
+    if arr.ndim != 1:
+        raise DataError(f"{name} must be one-dimensional, got shape {arr.shape}")
+    if arr.shape[0] != n:
+        raise DataError(f"{name} has {arr.shape[0]} values but there are {n} readings")
+    if arr.dtype.kind == "f":
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            raise DataError(f"{name} contains NaN or infinite values: {_describe_bad(bad)}")
+    elif arr.dtype.kind == "O":
+        bad = pd.isna(arr)
+        if bad.any():
+            raise DataError(f"{name} contains missing values: {_describe_bad(bad)}")
+    return arr
+
+
+def time_array(time_min: ArrayLike, n: int) -> NDArray[np.float64]:
+    t = _as_1d_float(time_min, "time_min")
+    if t.shape[0] != n:
+        raise DataError(f"time_min has {t.shape[0]} values but there are {n} readings")
+    bad = ~np.isfinite(t)
+    if bad.any():
+        raise DataError(f"time_min contains NaN or infinite values: {_describe_bad(bad)}")
+    return t
+
+
+def subject_codes(subject_id: ArrayLike, n: int) -> tuple[NDArray[np.intp], NDArray]:
+    ids = label_array(subject_id, n, "subject_id")
+    try:
+        uniq, codes = np.unique(ids, return_inverse=True)
+    except TypeError as exc:  # e.g. ints mixed with strings in an object array
+        raise DataError(f"subject_id values must be of one sortable type: {exc}") from exc
+    return codes.astype(np.intp), uniq

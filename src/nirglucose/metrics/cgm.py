@@ -13,12 +13,9 @@ minutes, day of wear), so they work on any data:
   mg/dL or %) per range with a one-sided 95 % lower confidence bound that accounts for
   clustering by subject, next to the integrated-CGM (iCGM) accuracy criteria of the FDA
   special controls, 21 CFR 862.1355;
-* :func:`rate_of_change`, :func:`trend_agreement` -- rates of change from consecutive
-  readings and the agreement of their categories (a confusion matrix);
-* :func:`estimated_lag` -- the time shift that best aligns the sensor to the reference,
-  per subject;
-* :func:`time_in_ranges`, :func:`time_in_range_agreement` -- TIR / TBR / TAR of the
-  international consensus (Battelino et al. 2019) from reference and from prediction.
+* rates of change, trend agreement and the sensor's lag in :mod:`nirglucose.metrics.trend`;
+* TIR / TBR / TAR of the international consensus (Battelino et al. 2019) in
+  :mod:`nirglucose.metrics.time_in_range`.
 
 The DTS error grid sits with the other grids in
 :mod:`nirglucose.metrics.error_grids` (:func:`~nirglucose.metrics.error_grids.dts_zones`).
@@ -35,35 +32,30 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from nirglucose.exceptions import DataError
-from nirglucose.metrics._validation import _as_1d_float, _describe_bad, _validate_pairs
+from nirglucose.metrics._validation import (
+    _validate_pairs,
+    label_array,
+    subject_codes,
+)
 
 __all__ = [
     "GLUCOSE_RANGE_LABELS",
     "AGREEMENT_LIMITS",
     "ICGM_CRITERIA",
-    "TREND_EDGES_MGDL_PER_MIN",
-    "TIME_IN_RANGE_TARGETS_PCT",
     "CI_METHODS",
-    "TrendAgreement",
-    "LagEstimate",
     "mard_by_range",
     "mard_by_day",
     "agreement_rates",
     "icgm_criteria",
-    "rate_of_change",
-    "trend_agreement",
-    "estimated_lag",
-    "time_in_ranges",
-    "time_in_range_agreement",
 ]
 
 # --- glucose ranges -----------------------------------------------------------------
 
 #: Lower edge of the euglycaemic range (iCGM special controls; Battelino et al. 2019,
 #: Table 1). [mg/dL]
-_LOW_MGDL: Final[float] = 70.0
+EUGLYCAEMIC_LOW_MGDL: Final[float] = 70.0
 #: Upper edge of the euglycaemic range (same sources). [mg/dL]
-_HIGH_MGDL: Final[float] = 180.0
+EUGLYCAEMIC_HIGH_MGDL: Final[float] = 180.0
 
 #: Labels of the three glucose ranges: < 70, 70-180 (both edges included), > 180 mg/dL.
 GLUCOSE_RANGE_LABELS: Final[tuple[str, ...]] = ("<70", "70-180", ">180")
@@ -78,47 +70,8 @@ CI_METHODS: Final[tuple[str, ...]] = ("bootstrap", "wilson")
 
 def _range_codes(glucose_mgdl: NDArray[np.float64]) -> NDArray[np.intp]:
     """0 for < 70, 1 for 70-180 (inclusive), 2 for > 180 mg/dL."""
-    return (glucose_mgdl >= _LOW_MGDL).astype(np.intp) + (glucose_mgdl > _HIGH_MGDL)
-
-
-# --- validation helpers ---------------------------------------------------------------
-
-
-def _labels(values: ArrayLike, n: int, name: str) -> NDArray:
-    """Validate a 1-D label array (subject ids, days) of length ``n``."""
-    arr = np.asarray(values)
-    if arr.ndim != 1:
-        raise DataError(f"{name} must be one-dimensional, got shape {arr.shape}")
-    if arr.shape[0] != n:
-        raise DataError(f"{name} has {arr.shape[0]} values but there are {n} readings")
-    if arr.dtype.kind == "f":
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            raise DataError(f"{name} contains NaN or infinite values: {_describe_bad(bad)}")
-    elif arr.dtype.kind == "O":
-        bad = pd.isna(arr)
-        if bad.any():
-            raise DataError(f"{name} contains missing values: {_describe_bad(bad)}")
-    return arr
-
-
-def _times(time_min: ArrayLike, n: int) -> NDArray[np.float64]:
-    t = _as_1d_float(time_min, "time_min")
-    if t.shape[0] != n:
-        raise DataError(f"time_min has {t.shape[0]} values but there are {n} readings")
-    bad = ~np.isfinite(t)
-    if bad.any():
-        raise DataError(f"time_min contains NaN or infinite values: {_describe_bad(bad)}")
-    return t
-
-
-def _subject_codes(subject_id: ArrayLike, n: int) -> tuple[NDArray[np.intp], NDArray]:
-    ids = _labels(subject_id, n, "subject_id")
-    try:
-        uniq, codes = np.unique(ids, return_inverse=True)
-    except TypeError as exc:  # e.g. ints mixed with strings in an object array
-        raise DataError(f"subject_id values must be of one sortable type: {exc}") from exc
-    return codes.astype(np.intp), uniq
+    low, high = EUGLYCAEMIC_LOW_MGDL, EUGLYCAEMIC_HIGH_MGDL
+    return (glucose_mgdl >= low).astype(np.intp) + (glucose_mgdl > high)
 
 
 # --- MARD -------------------------------------------------------------------------------
@@ -219,7 +172,7 @@ def mard_by_day(
     [15.0, 5.0]
     """
     ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
-    days = _labels(day, ref.shape[0], "day")
+    days = label_array(day, ref.shape[0], "day")
     uniq, codes = np.unique(days, return_inverse=True)
     rows = _mard_rows(ref, pred, codes.astype(np.intp), uniq.tolist())
     return pd.DataFrame(rows, columns=["day", "n_readings", "mard_pct"])
@@ -349,7 +302,7 @@ def _rate_table(ref, pred, subj, n_subjects, range_codes, *, method, n_boot, see
 def _prepare_agreement(reference_mgdl, predicted_mgdl, subject_id, range_by, method, n_boot,
                        confidence):
     ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
-    subj, uniq = _subject_codes(subject_id, ref.shape[0])
+    subj, uniq = subject_codes(subject_id, ref.shape[0])
     if range_by not in ("device", "reference"):
         raise DataError(f"range_by must be 'device' or 'reference', got {range_by!r}")
     if method not in CI_METHODS:
@@ -574,8 +527,8 @@ def icgm_criteria(
             "passes": bool(np.isfinite(lower) and lower > crit.required_pct),
         })
     for letter, device_mask, ref_mask, rng_label, ref_label in (
-        ("H", codes == 0, ref > _HIGH_MGDL, "<70", "reference >180"),
-        ("I", codes == 2, ref < _LOW_MGDL, ">180", "reference <70"),
+        ("H", codes == 0, ref > EUGLYCAEMIC_HIGH_MGDL, "<70", "reference >180"),
+        ("I", codes == 2, ref < EUGLYCAEMIC_LOW_MGDL, ">180", "reference <70"),
     ):
         bad = device_mask & ref_mask
         rows.append({
@@ -590,478 +543,3 @@ def icgm_criteria(
 
 # --- rate of change and trend accuracy --------------------------------------------------
 
-#: Edges of the rate-of-change categories < -2, -2..-1, -1..1, 1..2, >= 2 mg/dL/min: the
-#: bands of the usual CGM trend arrows (steady within 1 mg/dL/min, single arrow 1-2,
-#: double arrow beyond 2). A default, not a standard: the DTS Trend Accuracy Matrix
-#: (Klonoff et al. 2024) defines its own categories, not reproduced here. [mg/dL/min]
-TREND_EDGES_MGDL_PER_MIN: Final[tuple[float, ...]] = (-2.0, -1.0, 1.0, 2.0)
-
-
-def _order(subj: NDArray[np.intp], t: NDArray[np.float64]) -> NDArray[np.intp]:
-    order = np.lexsort((t, subj))
-    s, tt = subj[order], t[order]
-    dup = (s[1:] == s[:-1]) & (tt[1:] == tt[:-1])
-    if dup.any():
-        i = int(order[1:][np.argmax(dup)])
-        raise DataError(f"time_min repeats within a subject (first at index {i}); "
-                        "each subject needs one reading per time")
-    return order
-
-
-def _check_gap(max_gap_min: float | None) -> float:
-    if max_gap_min is None:
-        return np.inf
-    if isinstance(max_gap_min, bool) or not (
-            isinstance(max_gap_min, (int, float, np.number)) and max_gap_min > 0):
-        raise DataError(f"max_gap_min must be a positive number or None, got {max_gap_min!r}")
-    return float(max_gap_min)
-
-
-def _rates(glucose, subj, t, order, max_gap_min: float = np.inf) -> NDArray[np.float64]:
-    g, s, tt = glucose[order], subj[order], t[order]
-    out_sorted = np.full(g.shape[0], np.nan)
-    same = (s[1:] == s[:-1]) & (tt[1:] - tt[:-1] <= max_gap_min)
-    out_sorted[1:][same] = (g[1:] - g[:-1])[same] / (tt[1:] - tt[:-1])[same]
-    out = np.empty_like(out_sorted)
-    out[order] = out_sorted
-    return out
-
-
-def rate_of_change(
-    glucose_mgdl: ArrayLike,
-    subject_id: ArrayLike,
-    time_min: ArrayLike,
-    *,
-    max_gap_min: float | None = None,
-) -> NDArray[np.float64]:
-    """Rate of change of glucose from consecutive readings of each subject.
-
-    The rate at a reading is ``(g_i - g_(i-1)) / (t_i - t_(i-1))`` with the previous
-    reading of the same subject in time order (the readings need not be sorted); the
-    first reading of each subject, and a reading more than ``max_gap_min`` after the
-    previous one (a dropout), has no rate (NaN). This is the rate of the CG-EGA
-    (Kovatchev et al. 2004) and of the trend categories of CGM accuracy studies.
-
-    Parameters
-    ----------
-    glucose_mgdl : array_like
-        Glucose readings, finite. [mg/dL]
-    subject_id : array_like
-        Subject of each reading. [-]
-    time_min : array_like
-        Time of each reading; distinct within a subject. [min]
-    max_gap_min : float or None, optional
-        Longest interval a rate may span; None for no limit. [min]
-
-    Returns
-    -------
-    numpy.ndarray
-        Rate at each reading, aligned with the input, NaN at each subject's first
-        reading. [mg/dL/min]
-
-    Raises
-    ------
-    DataError
-        On non-finite glucose or time, arrays of different lengths, or a time repeated
-        within a subject.
-
-    References
-    ----------
-    .. [1] Kovatchev BP, Gonder-Frederick LA, Cox DJ, Clarke WL. Evaluating the accuracy
-       of continuous glucose-monitoring sensors: continuous glucose-error grid analysis
-       illustrated by TheraSense Freestyle Navigator data. Diabetes Care
-       27(8):1922-1928, 2004. doi:10.2337/diacare.27.8.1922
-
-    Examples
-    --------
-    >>> rate_of_change([100, 110, 90], [1, 1, 1], [0, 5, 15]).tolist()
-    [nan, 2.0, -2.0]
-    """
-    g = _as_1d_float(glucose_mgdl, "glucose_mgdl")
-    bad = ~np.isfinite(g)
-    if bad.any():
-        raise DataError(f"glucose_mgdl contains NaN or infinite values: {_describe_bad(bad)}")
-    subj, _ = _subject_codes(subject_id, g.shape[0])
-    t = _times(time_min, g.shape[0])
-    return _rates(g, subj, t, _order(subj, t), _check_gap(max_gap_min))
-
-
-class TrendAgreement(NamedTuple):
-    """Result of :func:`trend_agreement`: ``(matrix, agreement_pct, n_pairs)``.
-
-    ``matrix`` holds the counts, rows the reference category, columns the device
-    category [-]; ``agreement_pct`` is the share of rate pairs in the same category [%];
-    ``n_pairs`` the number of rate pairs compared [-].
-    """
-
-    matrix: pd.DataFrame
-    agreement_pct: float
-    n_pairs: int
-
-
-def _category_labels(edges: tuple[float, ...]) -> list[str]:
-    labels = [f"<{edges[0]:g}"]
-    labels += [f"{lo:g}..{hi:g}" for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
-    return labels + [f">={edges[-1]:g}"]
-
-
-def trend_agreement(
-    reference_mgdl: ArrayLike,
-    predicted_mgdl: ArrayLike,
-    subject_id: ArrayLike,
-    time_min: ArrayLike,
-    *,
-    edges_mgdl_per_min: tuple[float, ...] = TREND_EDGES_MGDL_PER_MIN,
-    max_gap_min: float | None = None,
-) -> TrendAgreement:
-    """Agreement of rate-of-change categories between reference and device.
-
-    Rates come from consecutive readings of each subject (:func:`rate_of_change`), for
-    the reference and the device series at the same times; each rate falls in a
-    category bounded by ``edges_mgdl_per_min`` (category ``lo..hi`` holds
-    ``lo <= rate < hi``; by default < -2, -2..-1, -1..1, 1..2, >= 2 mg/dL/min). The
-    result is the confusion matrix of the categories (rows: reference, columns:
-    device) and the share on its diagonal.
-
-    Parameters
-    ----------
-    reference_mgdl : array_like
-        Reference glucose, strictly positive. [mg/dL]
-    predicted_mgdl : array_like
-        Device / predicted glucose, same length. [mg/dL]
-    subject_id : array_like
-        Subject of each reading. [-]
-    time_min : array_like
-        Time of each reading; distinct within a subject. [min]
-    edges_mgdl_per_min : tuple of float, optional
-        Strictly increasing category edges. [mg/dL/min]
-    max_gap_min : float or None, optional
-        Longest interval a rate may span (longer gaps give no rate pair); None for no
-        limit. [min]
-
-    Returns
-    -------
-    TrendAgreement
-        ``(matrix, agreement_pct, n_pairs)``.
-
-    Raises
-    ------
-    DataError
-        On bad pairs, arrays of different lengths, a repeated time within a subject,
-        edges that are not strictly increasing, or no subject with two readings.
-
-    References
-    ----------
-    .. [1] Kovatchev BP, Gonder-Frederick LA, Cox DJ, Clarke WL. Evaluating the accuracy
-       of continuous glucose-monitoring sensors: continuous glucose-error grid analysis
-       illustrated by TheraSense Freestyle Navigator data. Diabetes Care
-       27(8):1922-1928, 2004. doi:10.2337/diacare.27.8.1922
-    .. [2] Klonoff DC, Freckmann G, Pleus S, et al. The Diabetes Technology Society Error
-       Grid and Trend Accuracy Matrix for glucose monitors. J Diabetes Sci Technol
-       18(6):1346-1361, 2024. doi:10.1177/19322968241275701
-
-    Examples
-    --------
-    >>> r = trend_agreement([100, 110, 100], [100, 111, 100], [1, 1, 1], [0, 5, 10])
-    >>> r.agreement_pct, r.n_pairs
-    (50.0, 2)
-    """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
-    edges = np.asarray(edges_mgdl_per_min, dtype=np.float64)
-    if edges.ndim != 1 or edges.shape[0] == 0 or np.any(np.diff(edges) <= 0) or not np.all(
-            np.isfinite(edges)):
-        raise DataError(f"edges_mgdl_per_min must be finite and strictly increasing, got "
-                        f"{tuple(edges_mgdl_per_min)!r}")
-    subj, _ = _subject_codes(subject_id, ref.shape[0])
-    t = _times(time_min, ref.shape[0])
-    order = _order(subj, t)
-    gap = _check_gap(max_gap_min)
-    rr, rp = _rates(ref, subj, t, order, gap), _rates(pred, subj, t, order, gap)
-    keep = np.isfinite(rr)
-    if not keep.any():
-        raise DataError("no subject has two readings; a rate of change needs two")
-    cr = np.searchsorted(edges, rr[keep], side="right")
-    cp = np.searchsorted(edges, rp[keep], side="right")
-    k = edges.shape[0] + 1
-    counts = np.bincount(cr * k + cp, minlength=k * k).reshape(k, k)
-    labels = _category_labels(tuple(edges.tolist()))
-    matrix = pd.DataFrame(counts, index=pd.Index(labels, name="reference"),
-                          columns=pd.Index(labels, name="device"))
-    n = int(keep.sum())
-    return TrendAgreement(matrix, float(100.0 * np.trace(counts) / n), n)
-
-
-# --- lag --------------------------------------------------------------------------------
-
-
-class LagEstimate(NamedTuple):
-    """Result of :func:`estimated_lag`: ``(per_subject, median_min, q25_min, q75_min)``.
-
-    ``per_subject`` has one row per subject with ``subject_id``, ``lag_min`` [min],
-    ``correlation`` (at that lag) [-] and ``n_readings`` [-]; ``median_min``,
-    ``q25_min`` and ``q75_min`` are the median and the 25th / 75th percentiles of the
-    lag over subjects [min].
-    """
-
-    per_subject: pd.DataFrame
-    median_min: float
-    q25_min: float
-    q75_min: float
-
-
-def _best_shift(r: NDArray[np.float64], p: NDArray[np.float64], max_shift: int,
-                min_overlap: int) -> tuple[float, float]:
-    shifts = np.arange(-max_shift, max_shift + 1)
-    corr = np.full(shifts.shape[0], -np.inf)
-    for i, k in enumerate(shifts):
-        # shift k > 0: the device at time t + k dt matches the reference at time t.
-        a, b = (r[: r.shape[0] - k], p[k:]) if k >= 0 else (r[-k:], p[: p.shape[0] + k])
-        if a.shape[0] < min_overlap or np.ptp(a) == 0 or np.ptp(b) == 0:
-            continue
-        corr[i] = float(np.corrcoef(a, b)[0, 1])
-    i = int(np.argmax(corr))
-    best, best_c = float(shifts[i]), float(corr[i])
-    if 0 < i < shifts.shape[0] - 1 and np.isfinite(corr[i - 1]) and np.isfinite(corr[i + 1]):
-        # Parabola through the peak and its two neighbours: sub-interval resolution.
-        curv = corr[i - 1] - 2.0 * corr[i] + corr[i + 1]
-        if curv < 0:
-            best += 0.5 * (corr[i - 1] - corr[i + 1]) / curv
-    return best, best_c
-
-
-def estimated_lag(
-    reference_mgdl: ArrayLike,
-    predicted_mgdl: ArrayLike,
-    subject_id: ArrayLike,
-    time_min: ArrayLike,
-    *,
-    max_lag_min: float = 30.0,
-) -> LagEstimate:
-    """Time lag of the device behind the reference, per subject, by cross-correlation.
-
-    For each subject the two series (uniformly sampled, interval ``dt``) are shifted
-    against each other by ``k dt`` for ``|k dt| <= max_lag_min``; the lag is the shift
-    that maximises the Pearson correlation of the overlapping parts (positive: the
-    device follows the reference), refined below the sampling interval by the vertex
-    of the parabola through the best shift and its two neighbours. This is the
-    cross-correlation (time-shift) method of CGM time-delay studies
-    (Schmelzeisen-Redeker et al. 2015). Subjects with fewer than three overlapping readings at
-    every shift, or a constant series, get NaN and are left out of the median and IQR.
-
-    Parameters
-    ----------
-    reference_mgdl : array_like
-        Reference glucose, strictly positive. [mg/dL]
-    predicted_mgdl : array_like
-        Device / predicted glucose, same length. [mg/dL]
-    subject_id : array_like
-        Subject of each reading. [-]
-    time_min : array_like
-        Time of each reading; within a subject uniformly spaced (any order). [min]
-    max_lag_min : float, optional
-        Largest shift tried, each way. [min]
-
-    Returns
-    -------
-    LagEstimate
-        ``(per_subject, median_min, q25_min, q75_min)``.
-
-    Raises
-    ------
-    DataError
-        On bad pairs or times, a subject whose readings are not uniformly spaced, or a
-        ``max_lag_min`` that is not positive.
-
-    References
-    ----------
-    .. [1] Schmelzeisen-Redeker G, Schoemaker M, Kirchsteiger H, Freckmann G, Heinemann
-       L, del Re L. Time delay of CGM sensors: relevance, causes, and countermeasures.
-       J Diabetes Sci Technol 9(5):1006-1015, 2015. doi:10.1177/1932296815590154
-
-    Examples
-    --------
-    >>> t = np.arange(0.0, 1440.0, 5.0)
-    >>> ref = 120 + 40 * np.sin(t / 30)
-    >>> dev = 120 + 40 * np.sin((t - 10) / 30)
-    >>> round(estimated_lag(ref, dev, np.zeros(t.size), t).median_min, 1)
-    10.0
-    """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
-    if not (np.isfinite(max_lag_min) and max_lag_min > 0):
-        raise DataError(f"max_lag_min must be positive, got {max_lag_min!r}")
-    subj, uniq = _subject_codes(subject_id, ref.shape[0])
-    t = _times(time_min, ref.shape[0])
-    order = _order(subj, t)
-    s_sorted = subj[order]
-    starts = np.flatnonzero(np.r_[True, s_sorted[1:] != s_sorted[:-1]])
-    stops = np.r_[starts[1:], s_sorted.shape[0]]
-    rows = []
-    for a, b in zip(starts, stops, strict=True):  # one iteration per subject
-        idx = order[a:b]
-        tt = t[idx]
-        lag, corr = float("nan"), float("nan")
-        if idx.shape[0] >= 3:
-            dts = np.diff(tt)
-            if not np.allclose(dts, dts[0], rtol=1e-6, atol=1e-9):
-                raise DataError(
-                    f"subject {uniq[s_sorted[a]]!r}: readings are not uniformly spaced in "
-                    "time (intervals from {:g} to {:g} min); resample first".format(
-                        dts.min(), dts.max()))
-            dt = float(dts[0])
-            k, c = _best_shift(ref[idx], pred[idx], int(np.floor(max_lag_min / dt + 1e-9)), 3)
-            if np.isfinite(c):
-                lag, corr = k * dt, c
-        rows.append((uniq[s_sorted[a]], lag, corr, int(b - a)))
-    per = pd.DataFrame(rows, columns=["subject_id", "lag_min", "correlation", "n_readings"])
-    lags = per["lag_min"].to_numpy(dtype=np.float64)
-    lags = lags[np.isfinite(lags)]
-    if lags.shape[0] == 0:
-        return LagEstimate(per, float("nan"), float("nan"), float("nan"))
-    q25, med, q75 = np.percentile(lags, [25, 50, 75])
-    return LagEstimate(per, float(med), float(q25), float(q75))
-
-
-# --- time in ranges ------------------------------------------------------------------
-
-#: Consensus targets for most adults with type 1 or type 2 diabetes (Battelino et al.
-#: 2019, Table 2 / Figure 2): ('>' or '<', value). [%]
-TIME_IN_RANGE_TARGETS_PCT: Final = MappingProxyType({
-    "tbr_lt54_pct": ("<", 1.0),
-    "tbr_lt70_pct": ("<", 4.0),
-    "tir_70_180_pct": (">", 70.0),
-    "tar_gt180_pct": ("<", 25.0),
-    "tar_gt250_pct": ("<", 5.0),
-})
-
-#: Range edges of the consensus (Battelino et al. 2019, Table 1). [mg/dL]
-_VERY_LOW_MGDL: Final[float] = 54.0
-_VERY_HIGH_MGDL: Final[float] = 250.0
-
-
-def _tir_table(glucose, subj, uniq) -> pd.DataFrame:
-    k = uniq.shape[0]
-    n = np.bincount(subj, minlength=k).astype(np.float64)
-    masks = {
-        "tbr_lt54_pct": glucose < _VERY_LOW_MGDL,
-        "tbr_lt70_pct": glucose < _LOW_MGDL,
-        "tir_70_180_pct": (glucose >= _LOW_MGDL) & (glucose <= _HIGH_MGDL),
-        "tar_gt180_pct": glucose > _HIGH_MGDL,
-        "tar_gt250_pct": glucose > _VERY_HIGH_MGDL,
-    }
-    data = {"subject_id": uniq, "n_readings": n.astype(np.int64)}
-    for key, mask in masks.items():
-        data[key] = 100.0 * np.bincount(subj, weights=mask.astype(np.float64), minlength=k) / n
-    return pd.DataFrame(data)
-
-
-def time_in_ranges(glucose_mgdl: ArrayLike, subject_id: ArrayLike) -> pd.DataFrame:
-    """Time below, in and above range per subject (international consensus, 2019).
-
-    The share of each subject's readings in the consensus ranges: below 54 mg/dL
-    (TBR level 2), below 70 mg/dL (TBR, level 1 and 2 together), 70-180 mg/dL (TIR,
-    both edges included), above 180 mg/dL (TAR, level 1 and 2) and above 250 mg/dL
-    (TAR level 2). With uniform sampling the share of readings is the share of time;
-    resample unevenly spaced readings first. The targets for most adults with type 1
-    or type 2 diabetes are in :data:`TIME_IN_RANGE_TARGETS_PCT` (TIR > 70 %, TBR < 4 %,
-    < 54 mg/dL < 1 %, TAR < 25 %, > 250 mg/dL < 5 %).
-
-    Parameters
-    ----------
-    glucose_mgdl : array_like
-        Glucose readings, finite. [mg/dL]
-    subject_id : array_like
-        Subject of each reading. [-]
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per subject (sorted): ``subject_id``, ``n_readings`` [-],
-        ``tbr_lt54_pct``, ``tbr_lt70_pct``, ``tir_70_180_pct``, ``tar_gt180_pct``,
-        ``tar_gt250_pct`` [%].
-
-    Raises
-    ------
-    DataError
-        On non-finite glucose or a ``subject_id`` of the wrong length.
-
-    References
-    ----------
-    .. [1] Battelino T, Danne T, Bergenstal RM, et al. Clinical targets for continuous
-       glucose monitoring data interpretation: recommendations from the international
-       consensus on time in range. Diabetes Care 42(8):1593-1603, 2019.
-       doi:10.2337/dci19-0028
-
-    Examples
-    --------
-    >>> time_in_ranges([50, 100, 150, 300], [1, 1, 1, 1])["tir_70_180_pct"].tolist()
-    [50.0]
-    """
-    g = _as_1d_float(glucose_mgdl, "glucose_mgdl")
-    if g.shape[0] == 0:
-        raise DataError("glucose_mgdl is empty; at least one reading is needed")
-    bad = ~np.isfinite(g)
-    if bad.any():
-        raise DataError(f"glucose_mgdl contains NaN or infinite values: {_describe_bad(bad)}")
-    subj, uniq = _subject_codes(subject_id, g.shape[0])
-    return _tir_table(g, subj, uniq)
-
-
-def time_in_range_agreement(
-    reference_mgdl: ArrayLike, predicted_mgdl: ArrayLike, subject_id: ArrayLike
-) -> pd.DataFrame:
-    """Time in ranges from the reference and from the device, per subject, and the gap.
-
-    Each metric of :func:`time_in_ranges` is computed from the reference series and
-    from the predicted series of each subject; the difference is predicted minus
-    reference (a device that over-reads shows positive TAR differences). The consensus
-    target of each metric (Battelino et al. 2019) is listed beside it, with whether the
-    reference and the device each meet it -- a device that changes the verdict is
-    clinically wrong even where its point accuracy looks fine.
-
-    Parameters
-    ----------
-    reference_mgdl : array_like
-        Reference glucose, strictly positive. [mg/dL]
-    predicted_mgdl : array_like
-        Device / predicted glucose, same length. [mg/dL]
-    subject_id : array_like
-        Subject of each reading. [-]
-
-    Returns
-    -------
-    pandas.DataFrame
-        Long format, one row per (subject, metric): ``subject_id``, ``metric``,
-        ``reference_pct``, ``predicted_pct``, ``difference_pct`` [%], ``target`` (e.g.
-        '> 70 %'), ``reference_meets``, ``predicted_meets`` (bool).
-
-    Raises
-    ------
-    DataError
-        As :func:`time_in_ranges`, and on bad pairs.
-
-    References
-    ----------
-    .. [1] Battelino T, Danne T, Bergenstal RM, et al. Clinical targets for continuous
-       glucose monitoring data interpretation: recommendations from the international
-       consensus on time in range. Diabetes Care 42(8):1593-1603, 2019.
-       doi:10.2337/dci19-0028
-
-    Examples
-    --------
-    >>> t = time_in_range_agreement([100, 200], [100, 170], [1, 1])
-    >>> t.loc[t["metric"] == "tir_70_180_pct", "difference_pct"].tolist()
-    [50.0]
-    """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
-    subj, uniq = _subject_codes(subject_id, ref.shape[0])
-    a, b = _tir_table(ref, subj, uniq), _tir_table(pred, subj, uniq)
-    frames = []
-    for metric, (sign, value) in TIME_IN_RANGE_TARGETS_PCT.items():
-        r, p = a[metric].to_numpy(), b[metric].to_numpy()
-        meets = np.greater if sign == ">" else np.less
-        frames.append(pd.DataFrame({
-            "subject_id": uniq, "metric": metric, "reference_pct": r, "predicted_pct": p,
-            "difference_pct": p - r, "target": f"{sign} {value:g} %",
-            "reference_meets": meets(r, value), "predicted_meets": meets(p, value),
-        }))
-    return pd.concat(frames, ignore_index=True)
