@@ -7,7 +7,7 @@ from html.parser import HTMLParser
 
 import pandas as pd
 
-from nirglucose.evaluation.findings import RunData, led_verdicts
+from nirglucose.evaluation.drop_one import led_verdicts
 from nirglucose.report import build_report, load_results
 
 
@@ -76,7 +76,7 @@ def _run(rows, n_subjects=20):
                                     "ci_low", "ci_high"])
     t["rmse_all_mgdl"] = 14.0
     t["n_test_subjects"] = n_subjects
-    return RunData("paper", pd.DataFrame({"model": []}), {}, pd.DataFrame(), drop_one=t)
+    return t
 
 
 def test_an_led_is_named_only_where_its_ci_lies_above_zero():

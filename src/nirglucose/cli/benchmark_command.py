@@ -39,6 +39,17 @@ from ._common import (
 )
 from .fit_report import say_notes
 
+#: ``--drop-one``: the models refitted without each LED.
+_DropOneOption = Annotated[
+    str | None,
+    typer.Option(
+        "--drop-one",
+        help="Models refitted without each LED (drop_one.csv: RMSE lost per LED, first "
+        "repeat): comma-separated names among --models, 'all' or 'none' (default: ebl, pls "
+        "and oracle where benchmarked).",
+    ),
+]
+
 
 @app.command()
 @_tidy_out
@@ -79,15 +90,7 @@ def benchmark(
             "Needs --per-subject > K."
         ),
     ] = 0,
-    drop_one: Annotated[
-        str | None,
-        typer.Option(
-            "--drop-one",
-            help="Models refitted without each LED (drop_one.csv: RMSE lost per LED, "
-            "first repeat): comma-separated names among --models, 'all' or 'none' "
-            "(default: ebl, pls, gp and oracle where benchmarked).",
-        ),
-    ] = None,
+    drop_one: _DropOneOption = None,
     set_: SetOption = None,
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,

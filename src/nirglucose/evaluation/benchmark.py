@@ -109,6 +109,7 @@ from .drop_one import (
     DROP_ONE_REPEATS,
     drop_one_table,
     led_wavelengths,
+    refit_predictions,
     resolve_drop_one_models,
     without_led,
 )
@@ -668,29 +669,6 @@ def _interval_method(protocol: str) -> str:
     )
 
 
-def _drop_predictions(dataset: Dataset, plan: _Plan, cache: tasks.TaskCache) -> pd.DataFrame:
-    """The drop-one refits' scored held-out predictions (``model`` is the model refitted)."""
-    from .benchmark_aggregate import scored
-
-    frame = dataset.frame
-    sid = frame["subject_id"].to_numpy()
-    yref = frame["glucose_mgdl"].to_numpy(float)
-    parts = []
-    for t in plan.drop_tasks:
-        res = cache.results[t.key]
-        raw = np.asarray(res["predicted_mgdl"], dtype=float)
-        parts.append(pd.DataFrame({
-            "model": t.spec["model"],
-            "dropped_wavelength_nm": float(t.spec["drop_nm"]),
-            "subject_id": sid[t.split.test],
-            "repeat": t.split.repeat,
-            "fold": t.split.fold,
-            "reference_mgdl": yref[t.split.test],
-            "scored_mgdl": scored(raw, res["fallback_mgdl"]),
-        }))
-    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
-
-
 def _checked_options(opts: dict[str, Any]) -> dict[str, Any]:
     """The options of :func:`run_benchmark`, counts and protocol checked."""
     check_protocol(opts["protocol"])
@@ -805,8 +783,9 @@ def run_benchmark(
     result.inverse = inverse_table(
         dataset.frame, runs, plan.names, n_boot=opts["n_boot"], seed=seed
     )
+    drops = [(t.spec, t.split, cache.results[t.key]) for t in plan.drop_tasks]
     result.drop_one = drop_one_table(
-        result.predictions, _drop_predictions(dataset, plan, cache),
+        result.predictions, refit_predictions(dataset.frame, drops),
         n_boot=opts["n_boot"], seed=seed, alpha=alpha,
     )
     result.meta["wall_time_s"] = time.perf_counter() - t_start

@@ -36,8 +36,9 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from typing import Final
+from typing import Any, Final
 
+import numpy as np
 import pandas as pd
 
 from ..dataset import Dataset
@@ -48,9 +49,12 @@ __all__ = [
     "DEFAULT_DROP_ONE_MODELS",
     "DROP_ONE_COLUMNS",
     "DROP_ONE_REPEATS",
+    "drop_one_findings",
     "drop_one_row",
     "drop_one_table",
+    "led_verdicts",
     "led_wavelengths",
+    "refit_predictions",
     "resolve_drop_one_models",
     "without_led",
 ]
@@ -191,6 +195,35 @@ def without_led(dataset: Dataset, wavelength_nm: float) -> Dataset:
     return Dataset(frame, config=config, seed=dataset.seed, metadata=dict(dataset.metadata))
 
 
+def refit_predictions(frame: pd.DataFrame, runs: Sequence[tuple[Any, Any, Any]]) -> pd.DataFrame:
+    """The refits' scored held-out predictions, the input of :func:`drop_one_table`.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The benchmarked data (``subject_id``, ``glucose_mgdl``).
+    runs : sequence of (spec, Split, result)
+        The refit tasks: ``spec["model"]`` and ``spec["drop_nm"]``, the split, and the
+        result's ``predicted_mgdl`` and ``fallback_mgdl`` (scored as the benchmark
+        scores, :func:`~nirglucose.evaluation.benchmark_aggregate.scored`).
+    """
+    from .benchmark_aggregate import scored
+
+    sid = frame["subject_id"].to_numpy()
+    yref = frame["glucose_mgdl"].to_numpy(float)
+    parts = [pd.DataFrame({
+        "model": spec["model"],
+        "dropped_wavelength_nm": float(spec["drop_nm"]),
+        "subject_id": sid[split.test],
+        "repeat": split.repeat,
+        "fold": split.fold,
+        "reference_mgdl": yref[split.test],
+        "scored_mgdl": scored(np.asarray(res["predicted_mgdl"], dtype=float),
+                              res["fallback_mgdl"]),
+    }) for spec, split, res in runs]
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+
+
 def drop_one_table(
     predictions: pd.DataFrame,
     refits: pd.DataFrame,
@@ -258,3 +291,68 @@ def drop_one_table(
     out["dropped_wavelength_nm"] = out["dropped_wavelength_nm"].astype(float)
     return out.reset_index(drop=True)
 
+
+
+def led_verdicts(table: pd.DataFrame | None) -> list[dict[str, Any]]:
+    """Per model of ``drop_one.csv``: the LED whose removal costs most, where it is shown.
+
+    One dict per model: ``model``, ``n_subjects`` (held-out subjects), ``withheld``
+    (fewer than :data:`~nirglucose.small_data.MIN_SIGNIFICANCE_SUBJECTS`: nothing is
+    claimed), ``row`` (the LED with the largest Δ RMSE among those whose 95 % CI lies
+    above 0; None when no CI does, or when withheld). An LED whose CI includes 0 is
+    never named as the one that matters.
+    """
+    from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
+
+    if table is None or not len(table):
+        return []
+    out = []
+    for model, part in table.groupby("model", sort=False):
+        n_sub = int(part["n_test_subjects"].min()) if "n_test_subjects" in part else 0
+        withheld = n_sub < MIN_SIGNIFICANCE_SUBJECTS
+        shown = part[part["ci_low"].astype(float) > 0]
+        row = None if withheld or not len(shown) else shown.loc[
+            shown["delta_rmse_mgdl"].astype(float).idxmax()]
+        out.append({"model": str(model), "n_subjects": n_sub, "withheld": withheld,
+                    "row": row})
+    return out
+
+
+def drop_one_findings(preset: str, table: pd.DataFrame | None, anchor: str) -> list:
+    """Findings on one preset's drop-one refits: per model, the LED that costs most.
+
+    An LED is named only where its 95 % CI lies above 0 and the run held out enough
+    subjects (:func:`led_verdicts`); the sources name
+    ``<preset>/drop_one.csv:<model>:<wavelength>:<column>``.
+    """
+    from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
+    from .findings import Finding, Value, label
+
+    verdicts = led_verdicts(table)
+    out = []
+    for v in (v for v in verdicts if v["row"] is not None):
+        r, m = v["row"], v["model"]
+        wl = float(r["dropped_wavelength_nm"])
+        src = f"{preset}/drop_one.csv:{m}:{wl:g}"
+        vals = (Value(float(r["delta_rmse_mgdl"]), 2, (f"{src}:delta_rmse_mgdl",), sign=True),
+                Value(float(r["ci_low"]), 2, (f"{src}:ci_low",), sign=True),
+                Value(float(r["ci_high"]), 2, (f"{src}:ci_high",), sign=True),
+                Value(float(r["rmse_all_mgdl"]), 1, (f"{src}:rmse_all_mgdl",)))
+        out.append(Finding("leds", preset, (
+            f"LEDs on {preset}, {label(m)}: leaving out the {wl:g} nm LED costs most, Δ RMSE "
+            "{} mg/dL [95 % CI {}, {}] over {} mg/dL with every LED (refitted without it "
+            "on the same folds and subjects)."), vals, anchor))
+    none = [v["model"] for v in verdicts if v["row"] is None and not v["withheld"]]
+    if none:
+        out.append(Finding("leds", preset, (
+            f"LEDs on {preset}: for {', '.join(label(m) for m in none)}, no single LED's "
+            "removal raises the RMSE with a 95 % CI above 0: the other LEDs make up for any "
+            "one."), (), anchor))
+    withheld = [v for v in verdicts if v["withheld"]]
+    if withheld:
+        out.append(Finding("leds", preset, (
+            f"LEDs on {preset}: no LED is named as mattering most: only "
+            f"{min(v['n_subjects'] for v in withheld)} held-out subjects, fewer than the "
+            f"{MIN_SIGNIFICANCE_SUBJECTS} a paired comparison needs (small-data policy)."),
+            (), anchor))
+    return out

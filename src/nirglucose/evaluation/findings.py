@@ -38,8 +38,8 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
 from .benchmark_result import LAMBDA_ROW, NO_PHYSICS, ORACLE, ablation_base
+from .drop_one import drop_one_findings
 from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_TABLE
 
 __all__ = [
@@ -52,7 +52,6 @@ __all__ = [
     "distance_table",
     "no_skill_comparisons",
     "physics_verdicts",
-    "led_verdicts",
     "study_claims",
     "preset_separation",
     "subject_floor",
@@ -478,65 +477,6 @@ def _physics_findings(run: RunData) -> list[Finding]:
     return out
 
 
-# --------------------------------------------------------------------------- LEDs
-
-
-def led_verdicts(run: RunData) -> list[dict[str, Any]]:
-    """Per model of ``drop_one.csv``: the LED whose removal costs most, where it is shown.
-
-    One dict per model: ``model``, ``n_subjects`` (held-out subjects), ``withheld``
-    (fewer than :data:`~nirglucose.small_data.MIN_SIGNIFICANCE_SUBJECTS`: nothing is
-    claimed), ``row`` (the LED with the largest Δ RMSE among those whose 95 % CI lies
-    above 0; None when no CI does, or when withheld). An LED whose CI includes 0 is
-    never named as the one that matters.
-    """
-    t = run.drop_one
-    if t is None or not len(t):
-        return []
-    out = []
-    for model, part in t.groupby("model", sort=False):
-        n_sub = int(part["n_test_subjects"].min()) if "n_test_subjects" in part else 0
-        withheld = n_sub < MIN_SIGNIFICANCE_SUBJECTS
-        shown = part[part["ci_low"].astype(float) > 0]
-        row = None if withheld or not len(shown) else shown.loc[
-            shown["delta_rmse_mgdl"].astype(float).idxmax()]
-        out.append({"model": str(model), "n_subjects": n_sub, "withheld": withheld,
-                    "row": row})
-    return out
-
-
-def _led_findings(run: RunData, anchor: str) -> list[Finding]:
-    p = run.preset
-    verdicts = led_verdicts(run)
-    out = []
-    for v in (v for v in verdicts if v["row"] is not None):
-        r, m = v["row"], v["model"]
-        wl = float(r["dropped_wavelength_nm"])
-        src = f"{p}/drop_one.csv:{m}:{wl:g}"
-        vals = (Value(float(r["delta_rmse_mgdl"]), 2, (f"{src}:delta_rmse_mgdl",), sign=True),
-                Value(float(r["ci_low"]), 2, (f"{src}:ci_low",), sign=True),
-                Value(float(r["ci_high"]), 2, (f"{src}:ci_high",), sign=True),
-                Value(float(r["rmse_all_mgdl"]), 1, (f"{src}:rmse_all_mgdl",)))
-        out.append(Finding("leds", p, (
-            f"LEDs on {p}, {label(m)}: leaving out the {wl:g} nm LED costs most, Δ RMSE "
-            "{} mg/dL [95 % CI {}, {}] over {} mg/dL with every LED (refitted without it "
-            "on the same folds and subjects)."), vals, anchor))
-    none = [v["model"] for v in verdicts if v["row"] is None and not v["withheld"]]
-    if none:
-        out.append(Finding("leds", p, (
-            f"LEDs on {p}: for {', '.join(label(m) for m in none)}, no single LED's removal "
-            "raises the RMSE with a 95 % CI above 0: the other LEDs make up for any one."),
-            (), anchor))
-    withheld = [v for v in verdicts if v["withheld"]]
-    if withheld:
-        out.append(Finding("leds", p, (
-            f"LEDs on {p}: no LED is named as mattering most: only "
-            f"{min(v['n_subjects'] for v in withheld)} held-out subjects, fewer than the "
-            f"{MIN_SIGNIFICANCE_SUBJECTS} a paired comparison needs (small-data policy)."),
-            (), anchor))
-    return out
-
-
 # --------------------------------------------------------------------------- the study
 
 
@@ -818,8 +758,8 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
             out.extend(got if isinstance(got, list) else [got] if got else [])
         if step is _physics_findings:
             for k, run in enumerate(runs):
-                out.extend(_led_findings(run, ANCHOR_LEDS + ("" if k == 0 else
-                                                              f"_{run.preset}")))
+                anchor = ANCHOR_LEDS + ("" if k == 0 else f"_{run.preset}")
+                out.extend(drop_one_findings(run.preset, run.drop_one, anchor))
     if len(runs) > 1:
         sep = preset_separation(runs[0], runs[1])
         if sep is not None:
