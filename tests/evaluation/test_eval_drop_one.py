@@ -161,3 +161,13 @@ def test_cli_bad_drop_one_is_one_line(tmp_path, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "sdnn" in err[0] and "Traceback" not in err[0]
+
+
+def test_paper_split_refits_its_one_split_on_its_test_subjects():
+    ds = ng.Dataset(_one_led_carries_glucose(n_subjects=20, per_subject=3),
+                    metadata={"adc_bits": 12})
+    res = run_benchmark(ds, ["pls"], protocol="paper-split", drop_one_models="pls", **FAST)
+    t = res.drop_one
+    assert t["dropped_wavelength_nm"].tolist() == list(WAVELENGTHS)
+    assert (t["n_test_subjects"] == res.predictions["subject_id"].nunique()).all()
+    assert res.meta["tasks_total"] == 1 + 4

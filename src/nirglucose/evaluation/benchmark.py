@@ -46,7 +46,7 @@ Reference rows and the physics ablation
 Drop-one-LED refits
     Each model of ``drop_one_models`` (by default
     :data:`~nirglucose.evaluation.drop_one.DEFAULT_DROP_ONE_MODELS` among the models:
-    EBL, PLS, the Gaussian process and the oracle, each a fraction of a second per fit)
+    EBL, PLS and the oracle, each a fraction of a second per fit)
     is refitted once per LED on the data without that LED's columns
     (:func:`~nirglucose.evaluation.drop_one.without_led`): one task per model × fold ×
     LED, on the folds of the first repeat only

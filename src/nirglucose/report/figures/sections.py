@@ -478,7 +478,8 @@ def _section_wavelengths(page: _Page) -> None:
              "removed: a device with one LED fewer), on the same folds with the same seeds, "
              "and scored on the same held-out subjects"
              + (f" ({n_sub} subjects" if n_sub else " (")
-             + f", the first {reps} repeat{'s' if reps > 1 else ''} of the protocol). Each "
+             + (f", the first {reps} repeats" if reps > 1 else ", the first repeat")
+             + " of the protocol). Each "
              "dot is the paired RMSE difference, without the LED minus with every LED, in "
              "mg/dL, with its 95 % cluster-bootstrap CI over subjects: above 0, leaving the "
              "LED out costs accuracy (the LED carries information the others do not); at "
