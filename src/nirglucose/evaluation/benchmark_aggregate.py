@@ -1,12 +1,12 @@
-"""The benchmark's aggregation: task results -> metrics, comparisons, importance.
+"""The benchmark's aggregation: task results -> metrics, comparisons, ablation.
 
 :func:`aggregate` turns the per-task results of
 :func:`~nirglucose.evaluation.benchmark.run_benchmark` into a
 :class:`~nirglucose.evaluation.benchmark_result.BenchmarkResult`: the scored
 out-of-fold predictions with their conformal intervals, one metrics row per model
 (point values per repeat averaged over repeats, cluster-bootstrap CIs), the paired
-comparisons (``vs_best`` and the study's orderings), the physics ablation and the
-permutation importance.
+comparisons (``vs_best`` and the study's orderings) and the physics ablation. (The
+drop-one-LED refits are scored by :mod:`~nirglucose.evaluation.drop_one`.)
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ from ..small_data import significance_withheld
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
-    IMPORTANCE_COLUMNS,
     LAMBDA_ROW,
     METRIC_COLUMNS,
     NO_PHYSICS,
@@ -120,7 +119,6 @@ def aggregate(
         predictions=preds,
         comparisons=comparisons,
         histories={name: _timed(by_model[name])["history"] for name in names},
-        importance=_importance(names, by_model),
         meta=meta,
         dataset=dataset,
         ablation=ablation,
@@ -249,24 +247,6 @@ def _metric_row(
         "coverage80_pct": cov[0.8]["coverage"],
         "width80_mgdl": cov[0.8]["width"],
     }
-
-
-def _importance(names: list[str], by_model: dict[str, list]) -> pd.DataFrame:
-    """Permutation importance per model and wavelength, averaged over the model's tasks."""
-    imp_rows = []
-    for name in names:
-        for _spec, res in by_model[name]:
-            imp_rows.append(pd.DataFrame({"model": name, **res["importance"]}))
-    imp_all = pd.concat(imp_rows, ignore_index=True)
-    return (
-        imp_all.groupby(["model", "wavelength_nm"], sort=False)
-        .agg(
-            rmse_increase_mgdl=("rmse_increase_mgdl", "mean"),
-            rmse_increase_sd_mgdl=("rmse_increase_sd_mgdl", "mean"),
-            n_tasks=("rmse_increase_mgdl", "size"),
-        )
-        .reset_index()
-    )[list(IMPORTANCE_COLUMNS)]
 
 
 def _label(name: str) -> str:

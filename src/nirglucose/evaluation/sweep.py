@@ -328,7 +328,7 @@ def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
         model_params={spec["model"]: spec["model_params"]} if spec["model_params"] else None,
         n_boot=spec["n_boot"],
         timing=dict(_FAST_TIMING),
-        importance_repeats=0,  # the sweep reads metrics only
+        drop_one_models="none",  # the sweep reads metrics only
         oracle_reference=False,
         calibration=int(spec.get("calibration", 0)),
     )
