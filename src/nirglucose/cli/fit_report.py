@@ -101,7 +101,9 @@ def report_cv(estimator, ds, schema, folds: int, unit: str | None) -> None:
         return
     y, pred, base, k = grouped_cv(estimator, ds, folds)
     cv_rmse, no_skill = _rmse(y, pred), _rmse(y, base)
-    _say(f"grouped {k}-fold CV over {n_sub} subjects: RMSE {in_unit(cv_rmse, unit)}; "
+    who = (f"{n_sub} subjects" if "subject_id" in ds.frame
+           else f"{n_sub} readings (no subject_id: each taken as a subject)")
+    _say(f"grouped {k}-fold CV over {who}: RMSE {in_unit(cv_rmse, unit)}; "
          f"no skill (the training mean) {in_unit(no_skill, unit)}", err=False)
     if cv_rmse > no_skill:
         _say("warning: the grouped-CV error is above no skill: on new people this model "
