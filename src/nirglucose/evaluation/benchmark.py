@@ -400,9 +400,11 @@ def _oracle_rows(
                 "drop 'oracle' from the models"
             )
         return [], None
-    if not oracle_reference:  # not requested: nothing to explain
+    if not oracle_reference and dataset.config is None:  # user data, not requested: no note
         return [], None
-    if not has_truth:
+    if not oracle_reference:
+        note = "the oracle was not run (oracle_reference=False); rmse_vs_oracle is NaN"
+    elif not has_truth:
         note = "no true_* columns in the data: the oracle cannot run; rmse_vs_oracle is NaN"
     elif dataset.config is None:
         note = (
@@ -413,7 +415,8 @@ def _oracle_rows(
         note = "the oracle model is not registered; rmse_vs_oracle is NaN"
     else:
         return [ORACLE], None
-    warnings.warn(note, stacklevel=4)
+    if oracle_reference:
+        warnings.warn(note, stacklevel=4)
     return [], note
 
 
