@@ -153,6 +153,12 @@ def test_benchmark_report_claim_no_significance_from_5_test_subjects(cli, device
     html = (out_dir / "report.html").read_text()
     assert "significantly better" not in html and "significantly worse" not in html
     assert "no significance or best model claimed" in html
+    # user-data wording: nothing reproduced, no study claims, no oracle note unasked
+    for text in (table, html):
+        assert "Study orderings" not in text and "oracle was not run" not in text
+    assert "Reproduced table" not in html and "Results table" in html
+    assert "Tuned hyper-parameters" not in html
+    assert meta["study_orderings"]["n_pairs"] == 0 and meta["oracle_note"] is None
 
 
 def test_benchmark_refusals_come_before_any_task(cli, device, tmp_path):
