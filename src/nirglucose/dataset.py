@@ -235,10 +235,9 @@ class Dataset:
 
     def __repr__(self) -> str:
         preset = self.config.preset if self.config is not None else "user data"
-        n_sub = self.frame["subject_id"].nunique() if "subject_id" in self.frame else "?"
-        return (
-            f"Dataset({len(self)} snapshots, {n_sub} subjects, preset={preset!r}, seed={self.seed})"
-        )
+        who = (f"{self.frame['subject_id'].nunique()} subjects" if "subject_id" in self.frame
+               else "no subject_id")
+        return f"Dataset({len(self)} snapshots, {who}, preset={preset!r}, seed={self.seed})"
 
     @property
     def wavelengths_nm(self) -> tuple[float, ...]:

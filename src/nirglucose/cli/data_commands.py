@@ -93,13 +93,21 @@ def keys() -> None:
 
 
 @app.command("models")
-def list_models() -> None:
-    """List the registered model names, one line each."""
-    from ..models.registry import available_models, get_model_class
+def list_models(
+    model: Annotated[
+        Path | None,
+        typer.Option(help="A model file written by `nirglucose fit`: describe it on the "
+                     "device it was fitted on (its inputs and parameters)."),
+    ] = None,
+) -> None:
+    """List the registered model names, one line each (or describe one fitted model)."""
+    from ..models.registry import available_models, describe_model, load_model
 
+    if model is not None:
+        _say(describe_model(load_model(model)), err=False)
+        return
     for name in available_models():
-        doc = (get_model_class(name).__doc__ or "").strip().splitlines()
-        _say(f"{name:<20} {doc[0] if doc else ''}".rstrip(), err=False)
+        _say(f"{name:<20} {describe_model(name)}".rstrip(), err=False)
 
 
 @app.command("parts")

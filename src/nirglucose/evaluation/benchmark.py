@@ -311,15 +311,17 @@ def resolve_models(models: Sequence[str] | str | None, default: Sequence[str]) -
 
 
 def _model_params(name: str, preset: str | None) -> dict[str, Any]:
-    """Tuned constructor arguments of model ``name`` on ``preset`` ({} when none).
+    """Tuned constructor arguments of model ``name`` on ``preset``; without a preset
+    (user data) :func:`~nirglucose.models.tuning.untuned_params`.
 
     The one place the benchmark asks for tuned hyper-parameters
     (:func:`nirglucose.models.tuned_params`).
     """
     from ..models import tuned_params
+    from ..models.tuning import untuned_params
 
-    if preset is None:
-        return {}
+    if preset is None:  # user data: networks early-stop on held-out subjects
+        return untuned_params(name)
     return dict(tuned_params(name, preset))
 
 
@@ -439,6 +441,8 @@ def _oracle_rows(
                 "the oracle needs the true_* columns, which this data lacks; "
                 "drop 'oracle' from the models"
             )
+        return [], None
+    if not oracle_reference and dataset.config is None:  # user data, not requested: no note
         return [], None
     if not oracle_reference:
         note = "the oracle was not run (oracle_reference=False); rmse_vs_oracle is NaN"

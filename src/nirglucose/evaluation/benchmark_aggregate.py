@@ -103,7 +103,8 @@ def aggregate(
 
     preds = preds_all[preds_all["model"].isin(names)].reset_index(drop=True)
     preds = preds[list(PREDICTION_COLUMNS)]
-    comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
+    comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed,
+                               study=dataset.config is not None)
     comparisons = _rank(preds, comparisons, metrics, meta)
     ablation = _ablation(
         preds, names, meta.get("ablation_pairs"), metrics.set_index("model")["rmse_mgdl"],
@@ -336,7 +337,9 @@ def _study_orderings(comparisons: pd.DataFrame) -> dict[str, Any]:
     }
 
 
-def _comparisons(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
+def _comparisons(preds, names, *, n_boot, alpha, seed, study: bool = True) -> pd.DataFrame:
+    """Every model against the best; with ``study``, the study's orderings (simulated
+    data only: on a user's device the study's claims were measured elsewhere)."""
     frames = []
     if len(names) > 1:
         vs_best = compare_models(
@@ -350,7 +353,7 @@ def _comparisons(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
         vs_best.insert(0, "family", "vs_best")
         vs_best["study_holds"] = None
         frames.append(vs_best)
-    in_study = [m for m in STUDY_ORDER if m in names]
+    in_study = [m for m in STUDY_ORDER if m in names] if study else []
     pairs = [(worse, better) for k, better in enumerate(in_study) for worse in in_study[k + 1 :]]
     if pairs:
         so = compare_models(

@@ -114,7 +114,7 @@ from .benchmark import (
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
 from .calibration import check_k
-from .executors import resolve_backend, run_unordered
+from .executors import check_scheduler, resolve_backend, run_unordered
 from .progress import task_hooks
 from .splits import check_protocol, effective_layout
 from .stats import cluster_bootstrap_metrics
@@ -543,6 +543,7 @@ def _execute(
     on_task: Callable[[dict[str, Any], bool], None] | None,
 ) -> None:
     """Run the pending tasks (here, on local processes or on Dask) into ``cache``."""
+    check_scheduler(scheduler)  # one line, before the progress starts
     hooks = task_hooks(
         "sweep", len(specs), len(cache.results), "reused", show=progress,
         describe=lambda spec: f"{spec['model']} seed {spec['seed']}", on_task=on_task,
