@@ -11,7 +11,10 @@ Type 1 therapy (basal-bolus): the patient's basal insulin is the delivery that h
 its fasting steady state (``u2ss`` of the virtual patient [2]_); each meal gets a
 bolus of carbohydrate / carbohydrate-ratio units at the meal's start (standard carb
 counting, ADA Standards of Care 2024, section 9 [3]_), the ratio the virtual patient's
-own (``carb_ratio_g_per_u``). 1 U of insulin = 6.00 nmol (Vølund 1993 [4]_).
+own (``carb_ratio_g_per_u``), the carbohydrate as the patient estimates it: adults with
+type 1 diabetes misjudge a meal's carbohydrate by about 20 % on average (Brazeau et al.
+2013 [5]_), taken here as a log-normal factor of log-SD :data:`CARB_COUNT_LOG_SD`.
+1 U of insulin = 6.00 nmol (Vølund 1993 [4]_).
 
 References
 ----------
@@ -22,6 +25,9 @@ References
    Care 47 (Suppl. 1), S158-S178, section 9 (insulin dosing by carbohydrate counting).
 .. [4] A. Vølund, "Conversion of insulin units to SI units", Am. J. Clin. Nutr. 58,
    714-715 (1993).
+.. [5] A. S. Brazeau, H. Mircescu, K. Desjardins, C. Leroux, I. Strychar, J. M. Ekoé,
+   R. Rabasa-Lhoret, "Carbohydrate counting accuracy and blood glucose variability in
+   adults with type 1 diabetes", Diabetes Res. Clin. Pract. 99(1), 19-23 (2013).
 """
 
 from __future__ import annotations
@@ -37,7 +43,9 @@ __all__ = [
     "MEAL_TIME_LIMIT_MIN",
     "MEAL_SIZE_LOG_SD",
     "INSULIN_PMOL_PER_UNIT",
+    "CARB_COUNT_LOG_SD",
     "draw_meals",
+    "estimated_carbs_g",
     "bolus_units",
     "meal_grid_mg",
 ]
@@ -52,6 +60,9 @@ MEAL_TIME_LIMIT_MIN = 90.0
 MEAL_SIZE_LOG_SD = 0.2
 #: Insulin per unit [4]_. [pmol/U]
 INSULIN_PMOL_PER_UNIT = 6000.0
+#: SD of ln(estimated / true carbohydrate) of a type 1 patient's carb count: about the
+#: 20 % mean error of Brazeau et al. [5]_. [-]
+CARB_COUNT_LOG_SD = 0.2
 
 
 def draw_meals(rng, n_days: int) -> tuple[np.ndarray, np.ndarray]:
@@ -72,6 +83,12 @@ def draw_meals(rng, n_days: int) -> tuple[np.ndarray, np.ndarray]:
     minute = np.rint(day * 1440.0 + np.tile(clock_min, n_days) + offset).astype(np.int64)
     carbs = np.tile(size_g, n_days) * pm.exp(MEAL_SIZE_LOG_SD * rng.normal(size=n))
     return minute, carbs
+
+
+def estimated_carbs_g(rng, carbs_g) -> np.ndarray:
+    """The patient's estimate of each meal's carbohydrate, true x exp(s z) [5]_. [g]"""
+    carbs = np.asarray(carbs_g, dtype=float)
+    return carbs * pm.exp(CARB_COUNT_LOG_SD * rng.normal(size=carbs.shape))
 
 
 def bolus_units(carbs_g, carb_ratio_g_per_u) -> np.ndarray:

@@ -283,7 +283,8 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
         Initial state, (12, n).
     meals_mg : numpy.ndarray
         Carbohydrate eaten at the start of each minute, (n, n_min); it enters the
-        stomach (Qsto1) and becomes the dose D of gastric emptying. [mg]
+        stomach (Qsto1) and becomes the dose D of gastric emptying (the total of a meal
+        eaten over consecutive minutes). [mg]
     bolus_pmol_per_kg : numpy.ndarray, optional
         Insulin bolus at the start of each minute (type 1), (n, n_min); it enters
         Isc1. [pmol/kg]
@@ -310,14 +311,17 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
         vg, gp_row, isc1_row = p["VG"], STATES_2007.index("gp"), None
     x = np.array(x0, dtype=float).reshape(len(x0), n)
     dose = np.zeros(n)
+    eating = np.zeros(n, dtype=bool)
     out = np.empty((n, n_min))
     h = STEP_MIN
     for k in range(n_min):
         out[:, k] = x[gp_row] / vg
         meal = meals_mg[:, k]
-        if meal.any():
+        if meal.any() or eating.any():
             x[0] += meal
-            dose = np.where(meal > 0, meal, dose)
+            # a meal eaten over consecutive minutes is one dose D, its total so far
+            dose = np.where(meal > 0, np.where(eating, dose + meal, meal), dose)
+            eating = meal > 0
         if isc1_row is not None and bolus_pmol_per_kg is not None:
             x[isc1_row] += bolus_pmol_per_kg[:, k]
         k1 = f(x, dose)

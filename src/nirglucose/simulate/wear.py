@@ -174,7 +174,8 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
     """Plasma glucose every minute of the wear and the meals behind it.
 
     Each subject's meals (stream ``wear.meals``) and, for type 1, virtual patient
-    (stream ``wear.patient``, uniform over the adults) come from its own streams;
+    (stream ``wear.patient``, uniform over the adults) and carb-count errors (stream
+    ``wear.carb_count``) come from its own streams;
     subjects of one model kind are integrated together, element-wise
     (:func:`.uva_padova.integrate`).
 
@@ -197,7 +198,8 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
         k = int(streams("wear.patient").integers(len(patient_names)))
         if names[status_codes[i]] == "type1":
             patient[i] = patient_names[k]
-            units = meals.bolus_units(carbs, pcols["carb_ratio_g_per_u"][k])
+            counted = meals.estimated_carbs_g(streams("wear.carb_count"), carbs)
+            units = meals.bolus_units(counted, pcols["carb_ratio_g_per_u"][k])
             bolus[i] = meals.meal_grid_mg(
                 minute, units * meals.INSULIN_PMOL_PER_UNIT / pcols["BW"][k], n_min)
     blood = np.empty((n, n_min))
