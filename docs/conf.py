@@ -103,7 +103,8 @@ html_show_sourcelink = False
 
 # -- CLI reference: the help of each command, generated at build time
 CLI_COMMANDS = [
-    "simulate", "keys", "models", "benchmark", "sweep", "fit", "predict", "export-c", "report",
+    "simulate", "keys", "models", "parts", "benchmark", "sweep", "fit", "predict", "export-c",
+    "report",
 ]
 _HELP = """
 import sys

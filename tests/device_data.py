@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import nirglucose as ng
 
-#: LED sets: one LED, three, six (all inside the optics tables' 700-1300 nm).
+#: LED sets: one LED, three, six (all inside the first optics tables' 700-1300 nm).
 LED_SETS = {
     1: (940.0,),
     3: (850.0, 940.0, 1150.0),

@@ -321,7 +321,7 @@ def test_presets_lie_within_the_bounds(preset):
         ("environment.temperature_c", (-40.0, 30.0),
          ["environment.temperature_c[0]=-40.0", "between -20 and 50", "[degC]"]),
         ("optics.source_detector_mm", 0.2, ["> 0.5 and <= 20", "[mm]"]),
-        ("leds.emitters.1.wavelength_nm", 1400, ["between 700 and 1300", "[nm]"]),
+        ("leds.emitters.1.wavelength_nm", 1800, ["between 700 and 1700", "[nm]"]),
         ("glucose.meal_peak_mgdl", {"normal": 35.0, "prediabetes": 60.0, "type1": 900.0,
                                     "type2": 95.0},
          ["glucose.meal_peak_mgdl[type1]=900.0", "between 0 and 500", "[mg/dL]"]),
@@ -344,5 +344,5 @@ def test_bounds_text():
     assert str(Bounds(100, 1e9)) == "between 100 and 1e9"
     assert key_range("hardware.adc_bits") == "between 8 and 24"
     assert key_range("glucose.fasting_mgdl") == "0: between 20 and 600; 1: between 0 and 200"
-    assert "wavelength_nm: between 700 and 1300" in key_range("leds")
+    assert "wavelength_nm: between 700 and 1700" in key_range("leds")
     assert key_range("device.physiology") == ""

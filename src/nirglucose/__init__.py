@@ -42,8 +42,8 @@ __all__ = [
 #: Subpackages reachable as attributes (``ng.models``, ``ng.metrics``, ...), imported on
 #: first access so that ``import nirglucose`` stays light (torch, numba and matplotlib
 #: load only when a model, kernel or figure asks for them).
-SUBPACKAGES = ("config", "evaluation", "export", "features", "metrics", "models", "optics",
-               "plots", "portable", "report")
+SUBPACKAGES = ("config", "design", "evaluation", "export", "features", "metrics", "models",
+               "optics", "plots", "portable", "report")
 
 
 def __getattr__(name: str):

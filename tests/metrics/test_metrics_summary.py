@@ -29,6 +29,7 @@ EXPECTED_KEYS = [
     "iso15197_zone_ab_pct",
     "loa_low_mgdl",
     "loa_high_mgdl",
+    "dts_a_pct",
 ]
 
 # Five pairs, every value worked out by hand from the definitions:
@@ -72,6 +73,10 @@ def test_hand_computed_values() -> None:
         "iso15197_zone_ab_pct": 80.0,
         "loa_low_mgdl": bias - 1.96 * sd,
         "loa_high_mgdl": bias + 1.96 * sd,
+        # DTS (Table A1): (200, 180) left of the A/B lower line (x = 225 at y = 180);
+        # (300, 240) exactly on it (x = 62.5 + 190 * 537.5 / 430 = 300) -> A;
+        # (250, 50) right of the vertical D/E lower run at x = 238 -> E.
+        "dts_a_pct": 80.0,
     }
     assert result == pytest.approx(expected, rel=1e-12, abs=1e-12)
 

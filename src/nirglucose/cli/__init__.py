@@ -23,7 +23,7 @@ from ._main import main
 
 # isort: off
 # importing a command module registers its commands: this order is the order of --help
-from .data_commands import keys, list_models, simulate
+from .data_commands import keys, list_models, list_parts, simulate
 from .benchmark_command import benchmark
 from .sweep_command import sweep
 from .device_commands import export_c_source, fit_model, predict_glucose
@@ -44,6 +44,7 @@ __all__ += [  # also importable, as before the split into a package
     "fit_model",
     "keys",
     "list_models",
+    "list_parts",
     "out_console",
     "predict_glucose",
     "report",

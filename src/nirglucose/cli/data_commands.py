@@ -150,6 +150,27 @@ def list_models() -> None:
         _say(f"{name:<20} {doc[0] if doc else ''}".rstrip(), err=False)
 
 
+@app.command("parts")
+def list_parts() -> None:
+    """List the parts catalogue: photodiodes (detector=NAME) and NIR LEDs (leds=[NAME, ...])."""
+    from ..config.parts import DETECTOR_PARTS, LED_PARTS
+
+    _say("photodiodes (--set detector=NAME): material, area [mm^2], dark current at 25 degC "
+         "[nA], shunt [MOhm]", err=False)
+    for name, d in DETECTOR_PARTS.items():
+        shunt = "-" if d.shunt_resistance_mohm is None else f"{d.shunt_resistance_mohm:g}"
+        _say(f"  {name:<12} {d.vendor:<10} {d.material:<7} {d.active_area_mm2:<7g} "
+             f"{d.dark_current_25c_na:<6g} {shunt}", err=False)
+    _say("LEDs (--set 'leds=[\"NAME\", ...]'): centre (bin) [nm], FWHM [nm], power [mW]",
+         err=False)
+    for name, p in LED_PARTS.items():
+        bin_nm = (f"({p.wavelength_min_nm:g}-{p.wavelength_max_nm:g})"
+                  if p.wavelength_min_nm is not None else "(no bin)")
+        flag = "  UNCERTAIN: verify the datasheet" if p.uncertain else ""
+        _say(f"  {name:<12} {p.wavelength_nm:g} {bin_nm:<11} {p.fwhm_nm:<4g} "
+             f"{p.power_mw:g}{flag}", err=False)
+
+
 def _print_summary(ds) -> None:
     import numpy as np
 

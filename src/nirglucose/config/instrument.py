@@ -71,7 +71,9 @@ class OpticsConfig(_Model):
         description="Photodiode active area (Hamamatsu S1223: 2.4 x 2.8 mm). At most 100 mm^2 "
         "(10 x 10 mm, e.g. Hamamatsu S1337-1010BR). [mm^2]",
     )
-    water_source: Literal["kou1993", "segelstein1981", "hale_querry1973"] = "kou1993"
+    water_source: Literal[
+        "kou1993", "segelstein1981", "hale_querry1973", "palmer_williams1974"
+    ] = "kou1993"
     epidermis_thickness_mm: float = Field(
         0.08, gt=0, le=0.3, description="Living epidermis 50-100 um (SOURCES.md). [mm]"
     )

@@ -18,7 +18,8 @@ import difflib
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
-from typing import Annotated, Any, get_args, get_origin
+from types import UnionType
+from typing import Annotated, Any, Union, get_args, get_origin
 
 import annotated_types as at
 from pydantic import BaseModel
@@ -188,12 +189,20 @@ class Bounds:
 
 def _unwrap(ann: Any, metadata: list[Any]) -> tuple[Any, list[Any]]:
     """The bare type of ``Annotated[...]`` and the constraints collected on the way."""
-    while get_origin(ann) is Annotated:
-        base, *extra = get_args(ann)
-        for e in extra:
-            metadata = [*metadata, *(e.metadata if isinstance(e, FieldInfo) else [e])]
-        ann = base
-    return ann, metadata
+    while True:
+        if get_origin(ann) is Annotated:
+            base, *extra = get_args(ann)
+            for e in extra:
+                metadata = [*metadata, *(e.metadata if isinstance(e, FieldInfo) else [e])]
+            ann = base
+        elif get_origin(ann) in (Union, UnionType) and type(None) in get_args(ann):
+            # an optional value (``float | None``): the bounds of the value when given
+            rest = [a for a in get_args(ann) if a is not type(None)]
+            if len(rest) != 1:
+                return ann, metadata
+            ann = rest[0]
+        else:
+            return ann, metadata
 
 
 def _children(ann: Any) -> Iterator[tuple[str, Any, list[Any]]]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..exceptions import ConfigError
@@ -17,8 +17,8 @@ class LED(_Model):
     wavelength_nm: float = Field(
         ...,
         ge=700,
-        le=1300,
-        description="Centre wavelength, within the optics tables' 700-1300 nm grid "
+        le=1700,
+        description="Centre wavelength, within the optics tables' 700-1700 nm range "
         "(data/optics/SOURCES.md). [nm]",
     )
     fwhm_nm: float = Field(
@@ -27,7 +27,7 @@ class LED(_Model):
         le=150,
         description="Emission full width at half maximum, typical of IR LEDs "
         "(e.g. Vishay VSLY5850 30 nm, TSAL6200 40 nm at 940 nm; longer wavelengths wider); "
-        "at most 150 nm, a quarter of the optics tables' span. [nm]",
+        "at most 150 nm, a quarter of the optics tables' first 700-1300 nm span. [nm]",
     )
     power_mw: float = Field(
         ...,
@@ -37,13 +37,19 @@ class LED(_Model):
         "chosen per channel so tissue codes sit mid-scale); at most 1 W, the class of "
         "high-power IR emitters. [mW]",
     )
-    responsivity_a_per_w: float = Field(
-        ...,
+    responsivity_a_per_w: float | None = Field(
+        None,
         gt=0,
-        le=1.05,
+        le=1.38,
         description="Photodiode responsivity at this LED (the study's set: Hamamatsu S1336 "
-        "typical spectral response read at 850/940/1050/1150 nm); at most 1.05, quantum "
-        "efficiency 1 at 1300 nm (lambda / 1239.8 nm A/W). [A/W]",
+        "typical spectral response read at 850/940/1050/1150 nm); at most 1.38, quantum "
+        "efficiency 1 at 1700 nm (lambda / 1239.8 nm A/W = 1.371). None: the scenario's "
+        "detector's curve averaged over this LED's band (config.detector). [A/W]",
+    )
+    part: str | None = Field(
+        None,
+        description="Catalogue part this record came from (data/parts/leds.csv), None for "
+        "a record given by value. [-]",
     )
 
 
@@ -103,6 +109,14 @@ class LEDConfig(_Model):
             return {"emitters": data}
         return data
 
+    @field_validator("emitters", mode="before")
+    @classmethod
+    def _parts(cls, data: Any) -> Any:
+        # catalogue LEDs by name: "L8957" or {"part": "L8957", "power_mw": 3.0}
+        if isinstance(data, list | tuple):
+            return tuple(expand_led_part(e) for e in data)
+        return data
+
     @model_validator(mode="after")
     def _unique(self) -> LEDConfig:
         if len(set(self.wavelengths_nm)) != len(self.wavelengths_nm):
@@ -115,6 +129,26 @@ class LEDConfig(_Model):
     responsivity_a_per_w = property(
         lambda self: tuple(e.responsivity_a_per_w for e in self.emitters)
     )
+
+
+def expand_led_part(record: Any) -> Any:
+    """An LED record with a catalogue part filled in (``"L8957"`` or ``{"part": ...}``).
+
+    Fields given beside ``part`` override the catalogue's; anything else passes through.
+
+    Raises
+    ------
+    ConfigError
+        Unknown part name (the message lists the catalogue).
+    """
+    from .parts import led_part
+
+    if isinstance(record, str):
+        return led_part(record).led_record()
+    if isinstance(record, dict) and record.get("part") is not None:
+        given = {k: v for k, v in record.items() if v is not None}
+        return {**led_part(str(record["part"])).led_record(), **given}
+    return record
 
 
 def _merge_legacy_leds(emitters: list[dict], old: dict[str, Any]) -> list[dict]:

@@ -82,6 +82,20 @@ def _set_per_led(out: dict[str, Any], dotted: str, value: Any) -> None:
     emitters[i][m.group(2)] = value
 
 
+def _clear_detector_values(out: dict[str, Any]) -> None:
+    """Before a new detector: the values a detector decides back to their defaults and
+    the LED set's responsivities cleared, so the new detector sets them (values given in
+    the same overrides still win: they are applied after)."""
+    from .scenario import DETECTOR_KEYS
+
+    defaults = ScenarioConfig.model_construct()
+    for section, key, _ in DETECTOR_KEYS:
+        out.setdefault(section, {})[key] = getattr(getattr(defaults, section), key)
+    for e in out.get("leds", {}).get("emitters", []):
+        if isinstance(e, dict):
+            e["responsivity_a_per_w"] = None
+
+
 def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
     """Return a copy of a config dict with dotted overrides set; unknown keys raise.
 
@@ -90,6 +104,8 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
     values (``leds.emitters.<i>.<field>``).
     """
     out = json.loads(json.dumps(data))
+    if overrides.get("detector") is not None:
+        _clear_detector_values(out)
     keys = set(valid_keys())
     legacy: dict[str, Any] = {}
     per_led: dict[str, Any] = {}
@@ -159,6 +175,9 @@ def resolve_config(
         return ScenarioConfig.model_validate(data)
     except ValidationError as exc:
         err = exc.errors()[0]
+        cause = (err.get("ctx") or {}).get("error")
+        if isinstance(cause, ConfigError):  # a validator's own one-line message
+            raise ConfigError(str(cause)) from None
         loc = ".".join(str(p) for p in err["loc"]) or "config"
         if err["type"] in _RANGE_ERRORS:
             msg = out_of_range_message(loc, err.get("input"))

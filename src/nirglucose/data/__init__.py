@@ -15,6 +15,7 @@ OPTICS_TABLES = {
     "water_kou1993": ("water_mua_kou1993.csv", "1/cm"),
     "water_segelstein1981": ("water_mua_segelstein1981.csv", "1/cm"),
     "water_hale_querry1973": ("water_mua_hale_querry1973.csv", "1/cm"),
+    "water_palmer_williams1974": ("water_mua_palmer_williams1974.csv", "1/cm"),
     "hbo2_eps_prahl": ("hbo2_molar_extinction_prahl.csv", "cm^-1/M"),
     "hb_eps_prahl": ("hb_molar_extinction_prahl.csv", "cm^-1/M"),
     "blood_oxy_bosschaart2014": ("blood_oxy_mua_bosschaart2014.csv", "1/cm"),
@@ -44,7 +45,7 @@ def load_spectrum(name: str) -> tuple[np.ndarray, np.ndarray]:
     Examples
     --------
     >>> wl, mua = load_spectrum("water_kou1993")
-    >>> bool(wl[0] < 700 < 1300 < wl[-1])
+    >>> bool(wl[0] < 700 < 1700 < wl[-1])
     True
     """
     if name not in OPTICS_TABLES:

@@ -37,6 +37,23 @@ from .stats import cluster_bootstrap_metrics, compare_models
 __all__ = ["aggregate", "count_invalid", "fallback_mgdl", "scored"]
 
 
+def _rank(preds: pd.DataFrame, comparisons: pd.DataFrame, metrics: pd.DataFrame,
+          meta: dict[str, Any]) -> pd.DataFrame:
+    """``meta``'s ``significance_withheld`` and ``best_model``; the comparisons kept.
+
+    The small-data policy: from too few test subjects no comparison and no best model.
+    """
+    meta["significance_withheld"] = significance_withheld(int(preds["subject_id"].nunique()))
+    if meta["significance_withheld"]:
+        comparisons = comparisons.iloc[:0]
+    meta["best_model"] = None if meta["significance_withheld"] else (
+        comparisons.loc[comparisons["family"] == "vs_best", "reference_model"].iloc[0]
+        if (comparisons["family"] == "vs_best").any()
+        else (metrics["model"].iloc[0] if len(metrics) else None)
+    )
+    return comparisons
+
+
 def aggregate(
     dataset: Any,
     runs: list[tuple[dict[str, Any], Any, dict[str, Any]]],
@@ -88,14 +105,7 @@ def aggregate(
     preds = preds_all[preds_all["model"].isin(names)].reset_index(drop=True)
     preds = preds[list(PREDICTION_COLUMNS)]
     comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
-    meta["significance_withheld"] = significance_withheld(int(preds["subject_id"].nunique()))
-    if meta["significance_withheld"]:  # small-data policy: no ranking from few subjects
-        comparisons = comparisons.iloc[:0]
-    meta["best_model"] = None if meta["significance_withheld"] else (
-        comparisons.loc[comparisons["family"] == "vs_best", "reference_model"].iloc[0]
-        if (comparisons["family"] == "vs_best").any()
-        else (metrics["model"].iloc[0] if len(metrics) else None)
-    )
+    comparisons = _rank(preds, comparisons, metrics, meta)
     ablation = _ablation(
         preds, names, meta.get("ablation_pairs"), metrics.set_index("model")["rmse_mgdl"],
         n_boot=n_boot, alpha=alpha, seed=seed,

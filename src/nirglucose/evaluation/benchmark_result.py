@@ -118,6 +118,7 @@ METRIC_COLUMNS = (
     "clarke_ab_pct",
     "parkes_a_pct",
     "parkes_ab_pct",
+    "dts_a_pct",
     "within15_pct",
     "within15_ci_low",
     "within15_ci_high",

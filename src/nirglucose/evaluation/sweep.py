@@ -198,6 +198,7 @@ SWEEP_METRICS = tuple(
         "throughput_per_s",
         "latency_input",
         "rmse_vs_oracle",
+        "macs_counted",  # text: how the MACs were counted
         "fit_time_s",
     )
 )
@@ -412,9 +413,9 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
             metrics = _shift_metrics(
                 spec, _filtered(ds, spec["train_filter"]), _filtered(test, spec["test_filter"])
             )
-    clean = {
+    clean = {  # numbers only: text columns (e.g. how MACs were counted) are not swept
         k: (None if v is None or (isinstance(v, float) and not math.isfinite(v)) else float(v))
-        for k, v in metrics.items()
+        for k, v in metrics.items() if not isinstance(v, str)
     }
     return {
         "metrics": clean,

@@ -295,6 +295,23 @@ def ebl_feature_matrix(X, out: np.ndarray | None = None) -> np.ndarray:
     return out.T
 
 
+#: The closing paragraph of :func:`features_markdown`: what a richer device adds.
+_DEVICE_EXTRAS = (
+    "A device that records more of the physiology adds its columns as direct entries after",
+    "the study's twelve, and a PPG front end's perfusion and saturation modulate the",
+    "absorbances as temperature, hydration and pressure do. The `paper` preset's device gives",
+    "`blood_volume_pct` (perfusion: blood dominates 850 and 940 nm) and `spo2_pct` (the",
+    "Hb/HbO2 balance of the blood's spectrum), so EBL there has **66** features: the 56, the",
+    "two direct entries, blood volume × A_k (`dB_x_A_850`, `dB_x_A_940`, `dB_x_A_1050`,",
+    "`dB_x_A_1150`, dB = (blood_volume_pct − 2) / 2) and saturation × A_k (`dS_x_A_850`,",
+    "`dS_x_A_940`, `dS_x_A_1050`, `dS_x_A_1150`, dS = (spo2_pct − 70) / 70, relative to the",
+    "nominal blood of α_perf: 2 %, SO2 0.7). The measured blood volume also replaces the",
+    "temperature/pressure proxy as the perfusion P of w_k. On another LED set the same blocks",
+    "are built from that set's channels (`features.feature_table`).",
+    "",
+)
+
+
 def features_markdown() -> str:
     """The feature table as Markdown (the content of ``docs/features.md``)."""
     lines = [
@@ -346,6 +363,7 @@ def features_markdown() -> str:
         "temperature, hydration and pressure modulate absorbances multiplicatively (× A_k)",
         "and act directly (PMF entries and their second-order terms).",
         "",
+        *_DEVICE_EXTRAS,
         "Reference: R. Gani, *Physics-Informed Neural Networks vs. Physics Models for",
         "Non-Invasive Glucose Monitoring*, UCL (the Enhanced Beer–Lambert model).",
         "",

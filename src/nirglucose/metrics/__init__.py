@@ -1,20 +1,43 @@
 """Clinical accuracy metrics for glucose estimates.
 
 Point accuracy (RMSE, MARD, bias, share within a percentage), Bland–Altman agreement,
-the Clarke and Parkes (consensus) error grids, the ISO 15197:2013 accuracy criteria and
-a one-call :func:`summary`. Every metric takes ``(y_true, y_pred, *, options)`` with the
+the Clarke, Parkes (consensus) and DTS error grids, the ISO 15197:2013 accuracy criteria,
+a one-call :func:`summary`, and the standards of a worn monitor (:mod:`.cgm`: MARD by
+range and day, agreement rates with clustered lower bounds and the iCGM criteria, trend
+accuracy, lag, time in ranges). Every metric takes ``(y_true, y_pred, *, options)`` with the
 reference first; glucose is in mg/dL unless ``units="mmol/L"`` is given.
 """
 
 from __future__ import annotations
 
 from nirglucose.metrics._validation import MGDL_PER_MMOLL, VALID_UNITS
+from nirglucose.metrics.cgm import (
+    AGREEMENT_LIMITS,
+    CI_METHODS,
+    GLUCOSE_RANGE_LABELS,
+    ICGM_CRITERIA,
+    TIME_IN_RANGE_TARGETS_PCT,
+    TREND_EDGES_MGDL_PER_MIN,
+    LagEstimate,
+    TrendAgreement,
+    agreement_rates,
+    estimated_lag,
+    icgm_criteria,
+    mard_by_day,
+    mard_by_range,
+    rate_of_change,
+    time_in_range_agreement,
+    time_in_ranges,
+    trend_agreement,
+)
 from nirglucose.metrics.error_grids import (
+    DTS_LINES,
     PARKES_LINES,
     PARKES_TYPE1_LINES,
     PARKES_TYPE2_LINES,
     ZONE_LABELS,
     clarke_zones,
+    dts_zones,
     parkes_zones,
     zone_percentages,
 )
@@ -40,8 +63,17 @@ __all__ = [
     "PARKES_LINES",
     "PARKES_TYPE1_LINES",
     "PARKES_TYPE2_LINES",
+    "DTS_LINES",
     "SUMMARY_KEYS",
+    "GLUCOSE_RANGE_LABELS",
+    "AGREEMENT_LIMITS",
+    "CI_METHODS",
+    "ICGM_CRITERIA",
+    "TREND_EDGES_MGDL_PER_MIN",
+    "TIME_IN_RANGE_TARGETS_PCT",
     "BlandAltmanResult",
+    "TrendAgreement",
+    "LagEstimate",
     "rmse",
     "mard",
     "mean_bias",
@@ -52,6 +84,16 @@ __all__ = [
     "iso15197_2013_passes",
     "clarke_zones",
     "parkes_zones",
+    "dts_zones",
     "zone_percentages",
     "summary",
+    "mard_by_range",
+    "mard_by_day",
+    "agreement_rates",
+    "icgm_criteria",
+    "rate_of_change",
+    "trend_agreement",
+    "estimated_lag",
+    "time_in_ranges",
+    "time_in_range_agreement",
 ]

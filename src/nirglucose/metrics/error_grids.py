@@ -1,11 +1,11 @@
-"""Clinical error grids: Clarke (1987) and Parkes / consensus (2000), zone percentages.
+"""Clinical error grids: Clarke (1987), Parkes / consensus (2000), DTS (2024), zone shares.
 
-Both grids place each (reference, predicted) pair, in mg/dL, into a risk zone 'A'
+All three grids place each (reference, predicted) pair, in mg/dL, into a risk zone 'A'
 (clinically accurate) to 'E' (dangerous). Grids are evaluated without a Python loop:
 the Clarke zones are a handful of vectorised inequalities and the Parkes boundary lines
 are piecewise-linear curves evaluated with :func:`numpy.interp`.
 
-Boundary convention (both grids): a pair lying exactly on a boundary line belongs to
+Boundary convention (every grid): a pair lying exactly on a boundary line belongs to
 the *less severe* (alphabetically earlier) of the zones that meet there. For example
 Clarke ``(100, 120)`` (exactly +20 %) is 'A', and a Parkes pair exactly on the A/B line
 is 'A'.
@@ -30,8 +30,10 @@ __all__ = [
     "PARKES_TYPE1_LINES",
     "PARKES_TYPE2_LINES",
     "PARKES_LINES",
+    "DTS_LINES",
     "clarke_zones",
     "parkes_zones",
+    "dts_zones",
     "zone_percentages",
 ]
 
@@ -83,6 +85,38 @@ PARKES_TYPE2_LINES: Final = MappingProxyType(
 PARKES_LINES: Final = MappingProxyType({1: PARKES_TYPE1_LINES, 2: PARKES_TYPE2_LINES})
 
 
+# --- Diabetes Technology Society (DTS) error grid vertex lists ------------------------
+#
+# Vertices are (reference, monitor) in mg/dL, from Table A1 ("Coordinates (Reference/
+# Monitor) of the lines defining the zones of the DTS Error Grid"), Supplemental
+# Appendix 2 of Klonoff DC, Freckmann G, Pleus S, et al., "The Diabetes Technology Society
+# Error Grid and Trend Accuracy Matrix for glucose monitors", J Diabetes Sci Technol
+# 18(6):1346-1361, 2024, doi:10.1177/19322968241275701. The grid is drawn on 0-600 mg/dL;
+# each border is a flat (upper) or vertical (lower) run up to the 50 mg/dL corner and then
+# a straight line to the edge of the plot, continued along that line beyond 600 mg/dL.
+# The supplement labels the two outermost borders "D lower"/"D upper"; they separate D
+# from E (they lie outside the D/C borders in the paper's Figure A1), so they are the
+# "D/E" lines here. The coordinates were read from the stored transcriptions of Table A1
+# (two independent public transcriptions agree on all 16 numbers), which also agree
+# with the paper's closed-form risk function (borders at |risk| 0.5, 1.5, 2.5, 3.5 with
+# coefficients 2.75 above and 2.25 below the identity line, both glucose values clamped
+# to 50 mg/dL) to 1.2 mg/dL; the paper itself was not in the stored corpus.
+
+#: DTS error grid: boundary polylines (the grid is the same for BGMs and CGMs). [mg/dL]
+DTS_LINES: Final = MappingProxyType(
+    {
+        "A/B upper": ((0, 60), (50, 60), (500, 600)),
+        "A/B lower": ((62.5, 0), (62.5, 50), (600, 480)),
+        "B/C upper": ((0, 86.5), (50, 86.5), (347, 600)),
+        "B/C lower": ((97.5, 0), (97.5, 50), (600, 307)),
+        "C/D upper": ((0, 124), (50, 124), (241, 600)),
+        "C/D lower": ((153, 0), (153, 50), (600, 197)),
+        "D/E upper": ((0, 179), (50, 179), (167, 600)),
+        "D/E lower": ((238, 0), (238, 50), (600, 126)),
+    }
+)
+
+
 class _Polyline:
     """A monotone boundary line evaluated as a function of one coordinate.
 
@@ -128,6 +162,10 @@ def _compile_parkes(
 
 
 _PARKES_COMPILED: Final = {k: _compile_parkes(v) for k, v in PARKES_LINES.items()}
+_DTS_COMPILED: Final = (
+    tuple(_Polyline(DTS_LINES[f"{z}/{n} upper"], True) for z, n in ("AB", "BC", "CD", "DE")),
+    tuple(_Polyline(DTS_LINES[f"{z}/{n} lower"], False) for z, n in ("AB", "BC", "CD", "DE")),
+)
 
 
 # --- kernels on validated mg/dL arrays: return int8 codes 0..4 = A..E ---------------
@@ -186,6 +224,18 @@ def _parkes_codes(
     # The zone index is the number of lines the pair lies strictly beyond: above the
     # upper lines (pred > f(ref)) or right of the lower lines (ref > g(pred)). A pair
     # cannot be both: the upper A/B line lies above the diagonal, the lower one below.
+    codes = np.zeros(ref.shape[0], dtype=np.int8)
+    _add_crossings(uppers, ref, pred, codes)
+    _add_crossings(lowers, pred, ref, codes)
+    return codes
+
+
+def _dts_codes(ref: NDArray[np.float64], pred: NDArray[np.float64]) -> NDArray[np.int8]:
+    # As the Parkes grid: the zone is the number of nested borders the pair lies strictly
+    # beyond, above the upper borders (pred > f(ref)) or right of the lower ones
+    # (ref > g(pred)); the upper A/B border lies above the identity line and the lower
+    # one below it, so no pair crosses borders on both sides.
+    uppers, lowers = _DTS_COMPILED
     codes = np.zeros(ref.shape[0], dtype=np.int8)
     _add_crossings(uppers, ref, pred, codes)
     _add_crossings(lowers, pred, ref, codes)
@@ -335,17 +385,72 @@ def parkes_zones(
     return _LABEL_ARRAY[_parkes_codes(ref, pred, dtype)]
 
 
+def dts_zones(y_true: ArrayLike, y_pred: ArrayLike, *, units: str = "mg/dL") -> NDArray[np.str_]:
+    """Diabetes Technology Society (DTS) error grid zone of each pair.
+
+    The DTS error grid (Klonoff et al. 2024) has five risk zones, A (no risk) to E
+    (extreme risk), the same for blood-glucose monitors and continuous glucose monitors,
+    with straight-line borders. Each border runs flat (above the identity line) or
+    vertical (below it) up to the 50 mg/dL corner and then straight to the edge of the
+    published 0-600 mg/dL grid; the vertices are those of the paper's Table A1
+    (Supplemental Appendix 2), stored in :data:`DTS_LINES`. Beyond 600 mg/dL each border
+    continues along its last segment. The paper reports the share in zone A as the
+    measure of clinical point accuracy and advises against pooling A + B.
+
+    Boundary convention: a pair exactly on a border gets the less severe zone (e.g.
+    ``(50, 60)`` and ``(500, 600)`` on the A/B upper border are 'A').
+
+    Parameters
+    ----------
+    y_true : array_like
+        Reference glucose, strictly positive. [mg/dL, or ``units``]
+    y_pred : array_like
+        Monitor / predicted glucose, non-negative, same length. [mg/dL, or ``units``]
+    units : {"mg/dL", "mmol/L"}, optional
+        Unit of both inputs; mmol/L values are converted with 18.016 mg/dL per mmol/L
+        before zoning. [-]
+
+    Returns
+    -------
+    numpy.ndarray
+        Array of one-letter strings 'A'..'E', one per pair. [-]
+
+    Raises
+    ------
+    DataError
+        On a length mismatch, empty input, NaN or infinite values, a reference value
+        <= 0, a negative prediction, or unknown ``units``.
+
+    References
+    ----------
+    .. [1] Klonoff DC, Freckmann G, Pleus S, Kovatchev BP, Kerr D, et al. The Diabetes
+       Technology Society Error Grid and Trend Accuracy Matrix for glucose monitors.
+       J Diabetes Sci Technol 18(6):1346-1361, 2024. doi:10.1177/19322968241275701
+       (Supplemental Appendix 2, Table A1: border coordinates).
+
+    Examples
+    --------
+    >>> dts_zones([100, 100, 100, 100, 100], [110, 150, 190, 250, 400]).tolist()
+    ['A', 'B', 'C', 'D', 'E']
+    """
+    _unit_factor(units)
+    ref, pred = _validate_pairs(y_true, y_pred, allow_negative_pred=False)
+    ref, pred = _to_mgdl(ref, pred, units)
+    return _LABEL_ARRAY[_dts_codes(ref, pred)]
+
+
 def zone_percentages(zones: ArrayLike) -> dict[str, float]:
     """Percentage of pairs in each error-grid zone.
 
-    ``100 * count(zone) / total`` for each of the five zones of a Clarke or Parkes grid
+    ``100 * count(zone) / total`` for each of the five zones of a Clarke, Parkes or DTS
+    grid
     (the usual way error-grid results are reported, e.g. Clarke et al. 1987, Table 1).
 
     Parameters
     ----------
     zones : array_like of str
         One-dimensional, non-empty sequence of zone letters 'A'..'E' (upper case), as
-        returned by :func:`clarke_zones` or :func:`parkes_zones`. [-]
+        returned by :func:`clarke_zones`, :func:`parkes_zones` or :func:`dts_zones`. [-]
 
     Returns
     -------

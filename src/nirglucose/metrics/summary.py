@@ -9,6 +9,7 @@ from nirglucose.metrics._validation import _to_mgdl, _unit_factor, _validate_pai
 from nirglucose.metrics.error_grids import (
     _check_diabetes_type,
     _clarke_codes,
+    _dts_codes,
     _parkes_codes,
     _percentages_from_codes,
 )
@@ -43,6 +44,7 @@ SUMMARY_KEYS: tuple[str, ...] = (
     "iso15197_zone_ab_pct",
     "loa_low_mgdl",
     "loa_high_mgdl",
+    "dts_a_pct",
 )
 
 
@@ -63,7 +65,8 @@ def summary(
     ±15 % / ±20 % (:func:`within_percent`), both ISO 15197:2013 6.3.3 criteria (the
     zone A + B criterion always uses the type 1 grid, as the standard prescribes) and
     the Bland–Altman 95 % limits of agreement (:func:`bland_altman`, absolute
-    differences).
+    differences) and the share in zone A of the DTS error grid (Klonoff et al. 2024,
+    :func:`dts_zones`).
 
     Parameters
     ----------
@@ -86,8 +89,9 @@ def summary(
         ``bias_mgdl``, ``loa_low_mgdl``, ``loa_high_mgdl`` [mg/dL], the ``*_pct`` keys
         [%]. ``clarke_ab_pct`` is A + B; ``within15_pct`` / ``within20_pct`` are the
         shares within ±15 % / ±20 % of the reference; ``iso15197_pct`` and
-        ``iso15197_zone_ab_pct`` are ISO 15197:2013 criteria a) and b). With a single
-        pair the limits of agreement are undefined and reported as NaN.
+        ``iso15197_zone_ab_pct`` are ISO 15197:2013 criteria a) and b); ``dts_a_pct``
+        the share in DTS zone A (the paper's measure; it advises against pooling A + B).
+        With a single pair the limits of agreement are undefined and reported as NaN.
 
     Raises
     ------
@@ -112,6 +116,9 @@ def summary(
     .. [5] Bland JM, Altman DG. Statistical methods for assessing agreement between two
        methods of clinical measurement. Lancet 327(8476):307-310, 1986.
        doi:10.1016/S0140-6736(86)90837-8
+    .. [6] Klonoff DC, Freckmann G, Pleus S, et al. The Diabetes Technology Society Error
+       Grid and Trend Accuracy Matrix for glucose monitors. J Diabetes Sci Technol
+       18(6):1346-1361, 2024. doi:10.1177/19322968241275701
 
     Examples
     --------
@@ -154,5 +161,6 @@ def summary(
         zone_ab_type1,
         ba.lower_loa,
         ba.upper_loa,
+        100.0 * np.count_nonzero(_dts_codes(ref, pred) == 0) / n,
     )
     return {key: float(value) for key, value in zip(SUMMARY_KEYS, values, strict=True)}

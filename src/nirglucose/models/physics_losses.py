@@ -62,7 +62,7 @@ def glucose_absorptivity_per_cm_per_mgdl(
     Parameters
     ----------
     wavelength_nm : array_like
-        Wavelengths, 700-1300. [nm]
+        Wavelengths, 700-1700. [nm]
     peak_per_cm_per_mm : float
         Natural-log absorption at the 2nd C-H overtone peak per mM
         (``glucose.absorptivity_per_cm_per_mm`` of the scenario). [1/(cm mM)]

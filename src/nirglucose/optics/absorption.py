@@ -18,9 +18,19 @@ References
 .. [4] S. L. Jacques, "Skin optics", Oregon Medical Laser Center News (1998).
 .. [5] S. L. Jacques, "Optical properties of biological tissues: a review",
    Phys. Med. Biol. 58, R37-R61 (2013), doi:10.1088/0031-9155/58/11/R37
+.. [6] K. B. Bec, J. Grabska, C. W. Huck, "Near-infrared spectroscopy in
+   bio-applications", Molecules 25, 2948 (2020), doi:10.3390/molecules25122948, Table 1
+.. [7] M. Golic, K. Walsh, P. Lawson, "Short-wavelength near-infrared spectra of
+   sucrose, glucose, and fructose with respect to sugar concentration and temperature",
+   Appl. Spectrosc. 57, 139-145 (2003)
+.. [8] R. Nachabe et al., "Estimation of biological chromophores using diffuse optical
+   spectroscopy: benefit of extending the UV-VIS wavelength range to include 1000 to
+   1600 nm", Biomed. Opt. Express 1, 1432-1442 (2010), doi:10.1364/BOE.1.001432
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -38,6 +48,8 @@ __all__ = [
     "melanosome_mua_per_cm",
     "skin_baseline_mua_per_cm",
     "glucose_mua_per_cm_per_mm",
+    "GLUCOSE_BANDS_NM",
+    "LIPID_TABLE_END_NM",
 ]
 
 #: Valid ``source`` names of :func:`water_mua_per_cm` -> packaged table.
@@ -45,13 +57,19 @@ WATER_SOURCES = {
     "kou1993": "water_kou1993",
     "segelstein1981": "water_segelstein1981",
     "hale_querry1973": "water_hale_querry1973",
+    "palmer_williams1974": "water_palmer_williams1974",
 }
 
-#: Wavelength range every table covers. [nm]
-WAVELENGTH_RANGE_NM = (700.0, 1300.0)
+#: Wavelength range the chromophore functions accept (every table covers it, except
+#: the lipid table above :data:`LIPID_TABLE_END_NM`). [nm]
+WAVELENGTH_RANGE_NM = (700.0, 1700.0)
 
 #: van Veen's fat table ends here; above it the provisional digitised curve is used. [nm]
 _LIPID_SWITCH_NM = 1098.0
+
+#: The provisional lipid curve, the only lipid table above 1098 nm, ends here; above it
+#: lipid mua is held at its value here (:func:`lipid_mua_per_cm`). [nm]
+LIPID_TABLE_END_NM = 1597.85
 
 
 def _check_wavelength(wavelength_nm: ArrayLike) -> np.ndarray:
@@ -77,9 +95,11 @@ def water_mua_per_cm(wavelength_nm: ArrayLike, source: str = "kou1993") -> np.nd
     Parameters
     ----------
     wavelength_nm : array_like
-        Wavelength, 700-1300. [nm]
-    source : {'kou1993', 'segelstein1981', 'hale_querry1973'}
-        Which published table to use (they differ by up to 40 % at 940 nm).
+        Wavelength, 700-1700. [nm]
+    source : {'kou1993', 'segelstein1981', 'hale_querry1973', 'palmer_williams1974'}
+        Which published table to use (they differ by up to 40 % at 940 nm; at
+        1450-1650 nm Kou, Segelstein and Palmer-Williams agree within about 10 % and
+        Hale-Querry is up to 23 % lower).
 
     Returns
     -------
@@ -89,12 +109,15 @@ def water_mua_per_cm(wavelength_nm: ArrayLike, source: str = "kou1993") -> np.nd
     References
     ----------
     Kou et al. 1993 [1]_, tabulated by S. Prahl (OMLC); Segelstein 1981; Hale & Querry
-    1973 (Appl. Opt. 12, 555, doi:10.1364/AO.12.000555).
+    1973 (Appl. Opt. 12, 555, doi:10.1364/AO.12.000555); Palmer & Williams 1974
+    (J. Opt. Soc. Am. 64, 1107, doi:10.1364/JOSA.64.001107).
 
     Examples
     --------
     >>> round(float(water_mua_per_cm(1150.0)), 2)
     0.98
+    >>> round(float(water_mua_per_cm(1550.0)), 1)
+    11.9
     """
     if source not in WATER_SOURCES:
         raise ConfigError(f"unknown water source {source!r}; valid: {', '.join(WATER_SOURCES)}")
@@ -119,12 +142,18 @@ def blood_mua_per_cm(wavelength_nm: ArrayLike, saturation: ArrayLike) -> np.ndar
     Notes
     -----
     Bosschaart et al. 2014 [2]_ compiled whole-blood values, used over the whole range
-    for consistency (SOURCES.md). Linear mixing in S follows Jacques 2013 [5]_, Eq. 12.
+    for consistency (SOURCES.md); they need no molar extinction of haemoglobin (Prahl's
+    compilation stops at 1000 nm). Above about 1400 nm whole blood absorbs like water
+    (0.74-1.02 x pure water's mua at 1450-1700 nm; oxy and deoxy within 10 %); above
+    1200 nm the compilation rests mainly on one data set (Friebel et al.; SOURCES.md).
+    Linear mixing in S follows Jacques 2013 [5]_, Eq. 12.
 
     Examples
     --------
     >>> round(float(blood_mua_per_cm(850.0, 1.0)), 1)
     4.9
+    >>> round(float(blood_mua_per_cm(1450.0, 1.0)), 1)
+    24.1
     """
     wl = _check_wavelength(wavelength_nm)
     s = np.asarray(saturation, dtype=float)
@@ -139,7 +168,19 @@ def lipid_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     """Absorption coefficient of pure fat.
 
     van Veen et al. [3]_ up to 1098 nm; above it the provisional digitised curve (the
-    only table that covers the 1210 nm lipid band; see SOURCES.md).
+    only table that covers the 1210 nm lipid band; probably from Nachabe et al. [8]_,
+    not verified; see SOURCES.md) up to its end at 1597.85 nm
+    (:data:`LIPID_TABLE_END_NM`).
+
+    Above 1597.85 nm no lipid table was found. There lipid mua is **held at the curve's
+    last value, 0.165 /cm** -- a stated assumption and a known underestimate: fat's
+    absorption rises towards its CH2 first-overtone band at about 1720 nm (Bec et al.
+    [6]_, Table 1: first C-H overtone of lipids 1610-1725 nm). Lipid enters the model
+    only through the subcutis, under a dermis absorbing about 4 /cm (water) at
+    1600-1700 nm, yet it still matters for thin skin: were fat's true mua at 1650 nm
+    10 x the held value, the three-layer diffusion model's R at 3 mm would be 11 % lower
+    for 1.58 mm skin and 31 % lower for 0.8 mm (SOURCES.md). A call that reaches above
+    1597.85 nm warns (UserWarning).
 
     Parameters
     ----------
@@ -155,8 +196,24 @@ def lipid_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     --------
     >>> round(float(lipid_mua_per_cm(940.0)), 3)
     0.088
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     float(lipid_mua_per_cm(1650.0)) == float(lipid_mua_per_cm(1597.85))
+    True
     """
     wl = _check_wavelength(wavelength_nm)
+    if np.any(wl > LIPID_TABLE_END_NM):
+        warnings.warn(
+            f"lipid absorption above {LIPID_TABLE_END_NM:g} nm is not tabulated; it is held "
+            f"at its {LIPID_TABLE_END_NM:g} nm value, "
+            f"{float(load_spectrum('lipid_provisional')[1][-1]):.3g} /cm, an underestimate "
+            "near the 1720 nm fat band (nirglucose/data/optics/SOURCES.md)",
+            UserWarning,
+            stacklevel=2,
+        )
+    # np.interp holds the last tabulated value beyond the table's end (the stated
+    # assumption above LIPID_TABLE_END_NM)
     return np.where(
         wl <= _LIPID_SWITCH_NM,
         _interp("lipid_vanveen2004", wl),
@@ -166,6 +223,9 @@ def lipid_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
 
 def melanosome_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     """Absorption coefficient inside a melanosome, 6.6e11 lambda^-3.33 (Jacques 1998 [4]_).
+
+    Above about 1100 nm the power law is an extrapolation of a fit to shorter
+    wavelengths (no melanin table beyond it was found).
 
     Parameters
     ----------
@@ -190,7 +250,8 @@ def skin_baseline_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     """Baseline absorption of bloodless, melanin-free skin (Jacques 1998 [4]_).
 
     mua = 0.244 + 85.3 exp(-(lambda - 154) / 66.2) [1/cm]; in the NIR it is the constant
-    0.244 /cm.
+    0.244 /cm, held up to 1700 nm (an extrapolation; collagen's own NIR absorption was
+    not found as a table, SOURCES.md).
 
     Parameters
     ----------
@@ -206,24 +267,31 @@ def skin_baseline_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     return 0.244 + 85.3 * pm.exp(-(wl - 154.0) / 66.2)  # [4]
 
 
-#: Glucose C-H overtone bands in the 700-1300 nm window: (centre nm, 1/e half-width nm,
-#: peak relative to the 2nd-overtone peak). 2nd C-H overtone about 1100-1200 nm and a
-#: weaker 3rd overtone about 900-950 nm (SOURCES.md, Glucose section). The shapes are
-#: an assumption: no public table covers this window.
-GLUCOSE_BANDS_NM = ((1150.0, 45.0, 1.0), (920.0, 30.0, 0.1))
+#: Glucose C-H overtone bands: (centre nm, 1/e half-width nm, peak relative to the
+#: 2nd-overtone peak, C-H overtone order). Below 1300 nm (unchanged since the first
+#: model): the 2nd C-H overtone about 1100-1200 nm and a weaker 3rd overtone about
+#: 900-950 nm (SOURCES.md, Glucose section; Golic et al. [7]_ place the sugar C-H bands
+#: at 910 nm). Added with the 1700 nm range: the 1st C-H overtone at 1670 nm, the middle
+#: of the published 1610-1725 nm first-overtone C-H range of carbohydrates (Bec et al.
+#: [6]_, Table 1), with the 2nd overtone's width. Positions are published
+#: (``data/optics/glucose_band_positions.csv``; a test holds each centre within one
+#: FWHM of one of them); shapes and magnitudes are assumptions: no public table of
+#: glucose absorptivity was found. The relative peaks assume a factor of 10 per overtone
+#: order (3rd : 2nd : 1st = 0.1 : 1 : 10), the factor the first model chose for 3rd : 2nd.
+GLUCOSE_BANDS_NM = ((1150.0, 45.0, 1.0, 2), (920.0, 30.0, 0.1, 3), (1670.0, 45.0, 10.0, 1))
 
 
 def glucose_mua_per_cm_per_mm(
     wavelength_nm: ArrayLike, peak_per_cm_per_mm: float = 1.0e-4
 ) -> np.ndarray:
-    """Glucose's own absorption per mM, as Gaussian overtone bands.
+    """Glucose's own absorption per mM, as Gaussian C-H overtone bands.
 
     Parameters
     ----------
     wavelength_nm : array_like
-        Wavelength. [nm]
+        Wavelength, 700-1700. [nm]
     peak_per_cm_per_mm : float
-        Absorption at the 2nd C-H overtone peak per mM. [1/(cm mM)]
+        Absorption at the 2nd C-H overtone peak (1150 nm) per mM. [1/(cm mM)]
 
     Returns
     -------
@@ -234,10 +302,20 @@ def glucose_mua_per_cm_per_mm(
     -----
     Order-of-magnitude model only (SOURCES.md: in the 1050-1150 nm window glucose's
     absorption per mM is of order 1e-4 of water's mua or smaller); the magnitude is a
-    config parameter (``glucose.absorptivity_per_cm_per_mm``).
+    config parameter (``glucose.absorptivity_per_cm_per_mm``). The band positions are
+    published (:data:`GLUCOSE_BANDS_NM`, [6]_, [7]_); the 1st-overtone band at 1670 nm,
+    10 x the 2nd-overtone peak, is an assumption (a factor of 10 per overtone order),
+    not a measured absorptivity. Glucose's O-H overtones (about 1480-1540 nm, [6]_)
+    are not modelled as bands: in water they act mainly through water displacement,
+    which the tissue model carries separately.
+
+    Examples
+    --------
+    >>> round(float(glucose_mua_per_cm_per_mm(1670.0, 1e-4)), 6)
+    0.001
     """
     wl = _check_wavelength(wavelength_nm)
     out = np.zeros_like(wl)
-    for centre, width, rel in GLUCOSE_BANDS_NM:
+    for centre, width, rel, _order in GLUCOSE_BANDS_NM:
         out = out + rel * pm.exp(-(((wl - centre) / width) ** 2))
     return peak_per_cm_per_mm * out

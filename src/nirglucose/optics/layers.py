@@ -133,7 +133,7 @@ def skin_layer_optics(
     Parameters
     ----------
     wavelength_nm : array_like
-        Wavelengths, 1-D, within 700-1300 nm. [nm]
+        Wavelengths, 1-D, within 700-1700 nm. [nm]
     melanin_fraction : array_like
         Epidermal melanosome volume fraction per sample, scalar or (n,). [-]
     blood_fraction, saturation, water_fraction : array_like, optional

@@ -55,6 +55,7 @@ __all__ = [
     "johnson_noise_sd_a",
     "adc_inl_lsb",
     "adc_convert",
+    "johnson_resistance_ohm",
 ]
 
 
@@ -431,10 +432,32 @@ def _front_end_noise_a(cfg, shot_current_a, board_c, stream_names, streams):
     shot = shot * streams(stream_names[0]).normal(size=size)
     johnson = (
         cfg.noise_factor("johnson")
-        * johnson_noise_sd_a(board_c[:, None], hw.bandwidth_hz, hw.tia_gain_ohm)
+        * johnson_noise_sd_a(board_c[:, None], hw.bandwidth_hz, johnson_resistance_ohm(cfg))
         * streams(stream_names[1]).normal(size=size)
     )
     return shot, johnson
+
+
+def johnson_resistance_ohm(cfg) -> float:
+    """Resistance whose Johnson noise the front end adds: the feedback resistor R_f, in
+    parallel with the detector's shunt resistance R_sh where ``cfg.detector`` states one,
+    R_f R_sh / (R_f + R_sh) (the noise currents of the two add in power, Hamamatsu
+    "Si photodiodes" technical note [1]_; Horowitz & Hill [2]_). [Ohm]
+
+    Examples
+    --------
+    >>> from nirglucose.config import resolve_config
+    >>> johnson_resistance_ohm(resolve_config("paper"))
+    100000.0
+    >>> round(johnson_resistance_ohm(resolve_config("paper", {"detector": "G17190-010K"})))
+    99920
+    """
+    r_f = cfg.hardware.tia_gain_ohm
+    det = cfg.detector
+    if det is None or det.shunt_resistance_mohm is None:
+        return r_f
+    r_sh = det.shunt_resistance_mohm * 1e6
+    return r_f * r_sh / (r_f + r_sh)
 
 
 def _offset_lsb(cfg, board_c) -> np.ndarray:

@@ -26,7 +26,10 @@ Thickness is counted in transport mean free paths (tau = mus'_dermis x skin thic
 because that is the Monte Carlo's own unit; the grid keeps a node line on tau = 1 (where
 the diffusion model, kept as an independent comparison, has a kink). The default box
 covers LEDs anywhere in 700-1300 nm, Fitzpatrick I-VI, every preset's physiology and
-skin 0.4-4 mm.
+skin 0.4-4 mm. It stops at a dermal mua of 2 /cm, which nominal skin reaches at about
+1343 nm (water), and at a subcutis/dermis mus' ratio of 0.85, which the fat and skin
+power laws reach at 1368 nm: LED bands above about 1340 nm fall outside it and raise a
+ConfigError naming the axis (``data/optics/SOURCES.md``, "Above 1300 nm").
 
 Where the table comes from: a white Monte Carlo solution of the radiative transport
 equation (:mod:`nirglucose.optics.kernels.mc_white`, MCML physics with Henyey-Greenstein g = 0.9

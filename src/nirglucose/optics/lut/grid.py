@@ -60,7 +60,9 @@ LUT_AXES: dict[str, tuple[str, str]] = {
 #: tau = 1) and the ratio axis are not splined (:data:`_SOLVED_AXES`): the diffusion
 #: model is solved at each of their refined nodes, and the Monte Carlo correction
 #: (:func:`_residual_fit`) evaluated there. The
-#: ``default`` box covers every LED in 700-1300 nm, Fitzpatrick I-VI, the physiology
+#: ``default`` box covers every LED in 700-1300 nm (not bands above about 1340 nm, where
+#: the dermis absorbs more than 2 /cm and fat scatters more than 0.85 x skin),
+#: Fitzpatrick I-VI, the physiology
 #: presets and skin 0.4-4.2 mm; ``tiny`` covers the same box coarsely, for tests.
 LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
     "default": {

@@ -1,0 +1,192 @@
+"""The benchmark of a worn device: every model on the series, smoothed, calibrated in time.
+
+One engine for a worn run (data from :func:`nirglucose.simulate` with ``wear_days``, or a
+user's own series with a time column):
+
+1. **Subject-grouped K-fold** (one repeat; :func:`~.splits.grouped_kfold`): each model
+   is fitted on the training subjects and predicts every reading of the held-out ones.
+   A worn run has thousands of readings per subject, which say little more about a
+   person than a few dozen do and would cost the slower models minutes; each training
+   subject therefore contributes ``train_readings_per_subject`` readings evenly spread
+   over the wear (all of them when it has fewer). Test readings are never thinned.
+2. **The causal smoother** (:class:`~nirglucose.models.smoothing.CausalKalmanSmoother`)
+   is tuned per fold with the budget of every family (its 12 configurations), on
+   training subjects only: the model is fitted on four fifths of them and predicts the
+   other fifth's full series, on which the smoother's grid is scored; the tuned
+   smoother then filters the held-out predictions. ``smoothed`` rows show what it buys.
+3. **Calibration schedules** (:mod:`~.wear_calibration`) on the held-out predictions,
+   raw and smoothed, paired on the same readings.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..dataset import Dataset, atomic_write
+from ..exceptions import ConfigError, DataError
+from .splits import grouped_kfold
+from .wear_calibration import SCHEDULES, schedule_table
+
+__all__ = ["WEAR_MODELS", "WearResult", "run_wear_benchmark"]
+
+#: Models a worn benchmark runs by default: the physics baseline, the linear and
+#: off-the-shelf references, no skill and the oracle bound.
+WEAR_MODELS = ("ebl", "pls", "gp", "mean", "oracle")
+#: Output files of :meth:`WearResult.save`.
+WEAR_FILES = ("wear_predictions.csv", "wear_schedules.csv", "wear_by_day.csv",
+              "wear_smoothers.csv", "wear_meta.json")
+
+
+@dataclass
+class WearResult:
+    """Held-out predictions and tables of a worn benchmark (files: :data:`WEAR_FILES`)."""
+
+    predictions: pd.DataFrame
+    schedules: pd.DataFrame
+    by_day: pd.DataFrame
+    smoothers: pd.DataFrame
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def save(self, out: str | Path) -> Path:
+        """Write every table atomically into the existing directory ``out``."""
+        out = Path(out)
+        for name, frame in (("wear_predictions.csv", self.predictions),
+                            ("wear_schedules.csv", self.schedules),
+                            ("wear_by_day.csv", self.by_day),
+                            ("wear_smoothers.csv", self.smoothers)):
+            atomic_write(out / name, lambda tmp, f=frame: f.to_csv(tmp, index=False))
+        atomic_write(out / "wear_meta.json",
+                     lambda tmp: Path(tmp).write_text(json.dumps(self.meta, indent=2,
+                                                                 sort_keys=True)))
+        return out
+
+
+def _thin(frame: pd.DataFrame, rows: np.ndarray, per_subject: int, time: str) -> np.ndarray:
+    """Row positions of ``rows``: at most ``per_subject`` per subject, evenly over time."""
+    sub = frame.iloc[rows]
+    keep = []
+    for _, g in sub.groupby("subject_id", sort=True):
+        pos = frame.index.get_indexer(g.sort_values(time, kind="stable").index)
+        if pos.size > per_subject:
+            pos = pos[np.linspace(0, pos.size - 1, per_subject).round().astype(int)]
+        keep.append(pos)
+    return np.sort(np.concatenate(keep))
+
+
+def _fit_predict(name: str, params: dict, data: Dataset, train: np.ndarray,
+                 test: np.ndarray, seed: int) -> np.ndarray:
+    """Fit on rows ``train`` of ``data`` (a Dataset keeps the ADC resolution), predict ``test``."""
+    from ..models import make_model
+
+    model = make_model(name, **params)
+    if "random_state" in model.get_params():
+        model.set_params(random_state=seed)
+    model.fit(data.rows(train))
+    return np.asarray(model.predict(data.rows(test)), dtype=float)
+
+
+def _tuned_smoother(name, params, data, train, per_subject, time, seed):
+    """The smoother's grid scored on a fifth of the training subjects (module docstring)."""
+    from ..models.smoothing import tune_smoother
+
+    frame = data.frame
+    subjects = np.unique(frame["subject_id"].to_numpy()[train])
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 17]))
+    val_subjects = rng.choice(subjects, size=max(1, subjects.size // 5), replace=False)
+    in_val = np.isin(frame["subject_id"].to_numpy()[train], val_subjects)
+    fit_rows = _thin(frame, train[~in_val], per_subject, time)
+    val_rows = train[in_val]
+    pred = _fit_predict(name, params, data, fit_rows, val_rows, seed)
+    val = frame.iloc[val_rows][["subject_id", time, "glucose_mgdl"]].copy()
+    val["predicted_glucose_mgdl"] = pred
+    return tune_smoother(val, time=time)
+
+
+def run_wear_benchmark(
+    data: Dataset | pd.DataFrame,
+    models: Sequence[str] = WEAR_MODELS,
+    *,
+    preset: str | None = None,
+    n_splits: int = 5,
+    seed: int = 0,
+    schedules: Sequence[str] = tuple(SCHEDULES),
+    train_readings_per_subject: int = 48,
+    n_boot: int = 1000,
+    time: str = "time_min",
+) -> WearResult:
+    """Every model on a worn run's series, smoothed and calibrated (module docstring).
+
+    Parameters
+    ----------
+    data : Dataset or DataFrame
+        A worn run: ``subject_id``, ``time`` [min], ``glucose_mgdl`` (the reference) and
+        the device's measured columns.
+    models : sequence of str
+        Registered model names (:data:`WEAR_MODELS` by default).
+    preset : str, optional
+        Tuned hyper-parameters of this preset where the package has them.
+    n_splits, seed : int
+        Subject-grouped folds and the seed of splits, fits and the bootstrap.
+    schedules : sequence of str
+        Calibration schedules (:data:`~.wear_calibration.SCHEDULES`).
+    train_readings_per_subject : int
+        Readings each training subject contributes (step 1 of the module docstring).
+    n_boot : int
+        Subject-bootstrap resamples of the schedules' CIs.
+
+    Returns
+    -------
+    WearResult
+    """
+    from ..models.registry import get_model_class
+    from .benchmark import _model_params
+
+    data = data if isinstance(data, Dataset) else Dataset(data)
+    data = data.rows(np.arange(len(data)))  # renumbered from 0
+    frame = data.frame
+    missing = [c for c in ("subject_id", time, "glucose_mgdl") if c not in frame.columns]
+    if missing:
+        raise DataError(f"a worn benchmark needs the columns {missing}; simulate with "
+                        "wear_days (nirglucose simulate --wear-days D) or add them")
+    if int(train_readings_per_subject) < 2:
+        raise ConfigError(f"train_readings_per_subject = {train_readings_per_subject!r} is "
+                          "invalid; expected an integer >= 2")
+    for name in models:
+        get_model_class(name)  # unknown names: one ConfigError listing the valid ones
+    splits = grouped_kfold(frame["subject_id"].to_numpy(), n_splits=n_splits, repeats=1,
+                           seed=seed)
+    preds, smoothers = [], []
+    for name in models:
+        params = _model_params(name, preset)
+        for sp in splits:
+            fold_seed = seed * 1000 + sp.fold
+            train = _thin(frame, sp.train, int(train_readings_per_subject), time)
+            raw = _fit_predict(name, params, data, train, sp.test, fold_seed)
+            smoother, scores = _tuned_smoother(name, params, data, sp.train,
+                                               int(train_readings_per_subject), time, fold_seed)
+            test = frame.iloc[sp.test][["subject_id", time, "glucose_mgdl"]].copy()
+            smooth = smoother.smooth(raw, test[time], test["subject_id"])
+            for variant, values in (("raw", raw), ("smoothed", smooth)):
+                preds.append(test.assign(model=name, variant=variant, fold=sp.fold,
+                                         predicted_glucose_mgdl=values))
+            smoothers.append({"model": name, "fold": sp.fold,
+                              **{k: float(scores.loc[0, k]) for k in scores.columns}})
+    predictions = pd.concat(preds, ignore_index=True)
+    tables, days = [], []
+    for (name, variant), g in predictions.groupby(["model", "variant"], sort=False):
+        summary, by_day = schedule_table(g, schedules, time=time, n_boot=n_boot, seed=seed)
+        tables.append(summary.assign(model=name, variant=variant))
+        days.append(by_day.assign(model=name, variant=variant))
+    meta = {"models": list(models), "preset": preset, "n_splits": n_splits, "seed": seed,
+            "schedules": list(schedules), "n_subjects": int(frame["subject_id"].nunique()),
+            "n_readings": len(frame), "train_readings_per_subject": train_readings_per_subject,
+            "n_boot": n_boot}
+    return WearResult(predictions, pd.concat(tables, ignore_index=True),
+                      pd.concat(days, ignore_index=True), pd.DataFrame(smoothers), meta)
