@@ -18,6 +18,8 @@ def simulate(
     seed: int = 0,
     *,
     n_jobs: int = 1,
+    wear_days: int | None = None,
+    every_min: int | None = None,
     overrides: dict[str, Any] | None = None,
     **dotted: Any,
 ) -> Dataset:
@@ -35,6 +37,10 @@ def simulate(
         Seed of every random stream. [-]
     n_jobs : int
         Worker processes; the result does not depend on it.
+    wear_days, every_min : int, optional
+        Simulate a device worn ``wear_days`` days with a reading every ``every_min``
+        minutes (default 5) instead of snapshots: :func:`simulate_wear` (``per_subject``
+        must then stay at its default). [d], [min]
     overrides : dict, optional
         Dotted config keys to values, e.g. ``{"hardware.adc_bits": 14}``.
     **dotted
@@ -53,6 +59,14 @@ def simulate(
     from .resources import check_simulation_size
     from .simulate.simulator import simulate_frame
 
+    if wear_days is not None or every_min is not None:
+        if wear_days is None:
+            raise ConfigError("every_min applies to a worn device; give wear_days too")
+        if per_subject != 3:
+            raise ConfigError("per_subject does not apply with wear_days: each subject has "
+                              "wear_days x 1440 / every_min readings")
+        return simulate_wear(preset, n_subjects, wear_days, 5 if every_min is None else every_min,
+                             seed, n_jobs=n_jobs, overrides=overrides, **dotted)
     for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
         check_positive_int(name, value)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:

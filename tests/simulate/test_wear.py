@@ -110,6 +110,17 @@ def test_bad_arguments_give_one_line(days, every, match):
     assert "\n" not in str(err.value)
 
 
+def test_simulate_with_wear_days_is_simulate_wear():
+    a = ng.simulate("paper", 2, seed=5, wear_days=1, every_min=240)
+    b = ng.simulate_wear("paper", 2, 1, 240, seed=5)
+    assert len(a) == 12 and a.content_hash() == b.content_hash()
+    assert a.metadata["wear"] == b.metadata["wear"]
+    with pytest.raises(ConfigError, match="per_subject does not apply"):
+        ng.simulate("paper", 2, 4, wear_days=1)
+    with pytest.raises(ConfigError, match="give wear_days too"):
+        ng.simulate("paper", 2, every_min=5)
+
+
 def test_too_many_rows_without_an_output_path_is_refused_up_front():
     with pytest.raises(ConfigError, match="write a directory"):
         ng.simulate_wear("paper", 10**8, 14, 1)
