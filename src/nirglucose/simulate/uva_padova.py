@@ -183,14 +183,26 @@ def gastric_emptying_per_min(qsto, dose_mg, kmax, kmin, b, d) -> np.ndarray:
     >>> bool(k[1] < k[0])  # emptying slows once part of the meal has left the stomach
     True
     """
+    terms = _emptying_terms(dose_mg, b, d)
+    return _kempt(np.asarray(qsto, dtype=float), terms, kmax, kmin)
+
+
+def _emptying_terms(dose_mg, b, d) -> tuple:
+    """The dose-dependent terms of :func:`gastric_emptying_per_min`: (D > 0, b D, d D, a,
+    c), computed once per meal rather than at every evaluation."""
     dose = np.asarray(dose_mg, dtype=float)
-    safe = np.where(dose > 0, dose, 1.0)
-    a = 5.0 / (2.0 * safe * (1.0 - b))
-    c = 5.0 / (2.0 * safe * d)
+    has = dose > 0
+    safe = np.where(has, dose, 1.0)
+    return has, b * safe, d * safe, 5.0 / (2.0 * safe * (1.0 - b)), 5.0 / (2.0 * safe * d)
+
+
+def _kempt(qsto, terms: tuple, kmax, kmin) -> np.ndarray:
+    """:func:`gastric_emptying_per_min` from :func:`_emptying_terms`. [1/min]"""
+    has, b_dose, d_dose, a, c = terms
     k = kmin + 0.5 * (kmax - kmin) * (
-        pm.tanh(a * (qsto - b * safe)) - pm.tanh(c * (qsto - d * safe)) + 2.0
+        pm.tanh(a * (qsto - b_dose)) - pm.tanh(c * (qsto - d_dose)) + 2.0
     )
-    return np.where(dose > 0, k, kmax + 0.0 * k)
+    return np.where(has, k, kmax + 0.0 * k)
 
 
 def _glucose_flows(p: dict, gp, gt, xx, egp, ra, fcns):
@@ -204,8 +216,8 @@ def _glucose_flows(p: dict, gp, gt, xx, egp, ra, fcns):
 
 def _gut(p: dict, qsto1, qsto2, qgut, dose_mg):
     """Stomach and gut derivatives [mg/min] and the rate of appearance [mg/kg/min] [1]_."""
-    kempt = gastric_emptying_per_min(qsto1 + qsto2, dose_mg, p["kmax"], p["kmin"], p["b"],
-                                     p["d"])
+    terms = dose_mg if isinstance(dose_mg, tuple) else _emptying_terms(dose_mg, p["b"], p["d"])
+    kempt = _kempt(qsto1 + qsto2, terms, p["kmax"], p["kmin"])
     kgri = p["kgri"] if "kgri" in p else p["kmax"]  # type 1 sets: kgri = kmax [3]
     ra = p["f"] * p["kabs"] * qgut / p["BW"]
     return (-kgri * qsto1, kgri * qsto1 - kempt * qsto2, kempt * qsto2 - p["kabs"] * qgut), ra
@@ -312,6 +324,7 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     x = np.array(x0, dtype=float).reshape(len(x0), n)
     dose = np.zeros(n)
     eating = np.zeros(n, dtype=bool)
+    terms = _emptying_terms(dose, p["b"], p["d"])
     out = np.empty((n, n_min))
     h = STEP_MIN
     for k in range(n_min):
@@ -322,11 +335,12 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
             # a meal eaten over consecutive minutes is one dose D, its total so far
             dose = np.where(meal > 0, np.where(eating, dose + meal, meal), dose)
             eating = meal > 0
+            terms = _emptying_terms(dose, p["b"], p["d"])
         if isc1_row is not None and bolus_pmol_per_kg is not None:
             x[isc1_row] += bolus_pmol_per_kg[:, k]
-        k1 = f(x, dose)
-        k2 = f(x + (0.5 * h) * k1, dose)
-        k3 = f(x + (0.5 * h) * k2, dose)
-        k4 = f(x + h * k3, dose)
+        k1 = f(x, terms)
+        k2 = f(x + (0.5 * h) * k1, terms)
+        k3 = f(x + (0.5 * h) * k2, terms)
+        k4 = f(x + h * k3, terms)
         x = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     return out
