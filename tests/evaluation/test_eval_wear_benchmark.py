@@ -53,3 +53,14 @@ def test_bad_inputs_are_one_line(series):
         run_wear_benchmark(series, ["no-such-model"])
     with pytest.raises(ConfigError, match="train_readings_per_subject"):
         run_wear_benchmark(series, ["mean"], train_readings_per_subject=1)
+
+
+def test_the_standards_of_a_worn_monitor_are_computed_per_schedule(result):
+    st = result.standards
+    assert len(st) == 2 * 2 * 5
+    assert {"mard_pct", "icgm_passed", "trend_agreement_pct", "lag_median_min",
+            "dts_a_pct", "n_below_70"} <= set(st.columns)
+    assert (st["icgm_passed"] <= st["icgm_criteria"]).all()
+    assert set(result.icgm["criterion"]) >= {"A", "B", "C"}
+    day1 = st[(st["schedule"] == "day1-1") & (st["variant"] == "raw")].set_index("model")
+    assert day1.loc["ebl", "mard_pct"] < day1.loc["mean", "mard_pct"]

@@ -16,6 +16,11 @@ user's own series with a time column):
    smoother then filters the held-out predictions. ``smoothed`` rows show what it buys.
 3. **Calibration schedules** (:mod:`~.wear_calibration`) on the held-out predictions,
    raw and smoothed, paired on the same readings.
+4. **The standards a worn monitor is judged by** (:mod:`nirglucose.metrics.cgm`,
+   :mod:`~nirglucose.metrics.trend`, :mod:`~nirglucose.metrics.time_in_range`, the DTS
+   grid) for every model, variant and schedule, on the readings the schedules are
+   scored on: ``wear_standards.csv`` (one row each) and ``wear_icgm.csv`` (every iCGM
+   criterion with its clustered lower bound).
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ import pandas as pd
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
 from .splits import grouped_kfold
-from .wear_calibration import SCHEDULES, schedule_table
+from .wear_calibration import SCHEDULES, apply_schedule, schedule_table
 
 __all__ = ["WEAR_MODELS", "WearResult", "run_wear_benchmark"]
 
@@ -41,7 +46,7 @@ __all__ = ["WEAR_MODELS", "WearResult", "run_wear_benchmark"]
 WEAR_MODELS = ("ebl", "pls", "gp", "mean", "oracle")
 #: Output files of :meth:`WearResult.save`.
 WEAR_FILES = ("wear_predictions.csv", "wear_schedules.csv", "wear_by_day.csv",
-              "wear_smoothers.csv", "wear_meta.json")
+              "wear_smoothers.csv", "wear_standards.csv", "wear_icgm.csv", "wear_meta.json")
 
 
 @dataclass
@@ -52,6 +57,8 @@ class WearResult:
     schedules: pd.DataFrame
     by_day: pd.DataFrame
     smoothers: pd.DataFrame
+    standards: pd.DataFrame
+    icgm: pd.DataFrame
     meta: dict[str, Any] = field(default_factory=dict)
 
     def save(self, out: str | Path) -> Path:
@@ -60,7 +67,9 @@ class WearResult:
         for name, frame in (("wear_predictions.csv", self.predictions),
                             ("wear_schedules.csv", self.schedules),
                             ("wear_by_day.csv", self.by_day),
-                            ("wear_smoothers.csv", self.smoothers)):
+                            ("wear_smoothers.csv", self.smoothers),
+                            ("wear_standards.csv", self.standards),
+                            ("wear_icgm.csv", self.icgm)):
             atomic_write(out / name, lambda tmp, f=frame: f.to_csv(tmp, index=False))
         atomic_write(out / "wear_meta.json",
                      lambda tmp: Path(tmp).write_text(json.dumps(self.meta, indent=2,
@@ -78,6 +87,49 @@ def _thin(frame: pd.DataFrame, rows: np.ndarray, per_subject: int, time: str) ->
             pos = pos[np.linspace(0, pos.size - 1, per_subject).round().astype(int)]
         keep.append(pos)
     return np.sort(np.concatenate(keep))
+
+
+def _standards(g: pd.DataFrame, schedule: str, time: str, n_boot: int,
+               seed: int) -> tuple[dict, pd.DataFrame]:
+    """One model, variant and schedule: a row of ``wear_standards.csv`` and its iCGM table.
+
+    Scored on every held-out reading after the subject's first that is not one of this
+    schedule's fingersticks.
+    """
+    from ..metrics import (
+        dts_zones,
+        estimated_lag,
+        icgm_criteria,
+        mard_by_range,
+        time_in_range_agreement,
+        trend_agreement,
+        zone_percentages,
+    )
+
+    a = apply_schedule(g, schedule, time=time)
+    first = g.groupby("subject_id")[time].transform("min")
+    keep = ((g[time] > first) & ~a["is_calibration"]).to_numpy()
+    ref = g["glucose_mgdl"].to_numpy(float)[keep]
+    est = np.clip(a["calibrated_mgdl"].to_numpy(float)[keep], 1.0, None)  # a meter's floor
+    sid, t = g["subject_id"].to_numpy()[keep], g[time].to_numpy(float)[keep]
+    icgm = icgm_criteria(ref, est, sid, n_boot=n_boot, seed=seed)
+    mard = mard_by_range(ref, est).set_index("range")["mard_pct"]
+    tir = time_in_range_agreement(ref, est, sid)
+    tir_diff = tir[tir["metric"] == "tir_70_180_pct"]["difference_pct"]
+    row = {
+        "schedule": schedule,
+        "mard_pct": float(mard["overall"]),
+        **{f"mard_{k}_pct": float(mard.get(k, np.nan)) for k in ("<70", "70-180", ">180")},
+        "icgm_passed": int(icgm["passes"].sum()),
+        "icgm_criteria": len(icgm),
+        "trend_agreement_pct": float(trend_agreement(ref, est, sid, t).agreement_pct),
+        "lag_median_min": float(estimated_lag(ref, est, sid, t).median_min),
+        "tir_difference_pct_median": float(np.median(tir_diff)) if len(tir_diff) else np.nan,
+        "dts_a_pct": float(zone_percentages(dts_zones(ref, est)).get("A", 0.0)),
+        "n_scored": int(keep.sum()),
+        "n_below_70": int((ref < 70).sum()),
+    }
+    return row, icgm.assign(schedule=schedule)
 
 
 def _fit_predict(name: str, params: dict, data: Dataset, train: np.ndarray,
@@ -179,14 +231,20 @@ def run_wear_benchmark(
             smoothers.append({"model": name, "fold": sp.fold,
                               **{k: float(scores.loc[0, k]) for k in scores.columns}})
     predictions = pd.concat(preds, ignore_index=True)
-    tables, days = [], []
+    tables, days, standards, icgm = [], [], [], []
     for (name, variant), g in predictions.groupby(["model", "variant"], sort=False):
+        g = g.reset_index(drop=True)
         summary, by_day = schedule_table(g, schedules, time=time, n_boot=n_boot, seed=seed)
         tables.append(summary.assign(model=name, variant=variant))
         days.append(by_day.assign(model=name, variant=variant))
+        for sched in schedules:
+            row, crit = _standards(g, sched, time, n_boot, seed)
+            standards.append({"model": name, "variant": variant, **row})
+            icgm.append(crit.assign(model=name, variant=variant))
     meta = {"models": list(models), "preset": preset, "n_splits": n_splits, "seed": seed,
             "schedules": list(schedules), "n_subjects": int(frame["subject_id"].nunique()),
             "n_readings": len(frame), "train_readings_per_subject": train_readings_per_subject,
             "n_boot": n_boot}
     return WearResult(predictions, pd.concat(tables, ignore_index=True),
-                      pd.concat(days, ignore_index=True), pd.DataFrame(smoothers), meta)
+                      pd.concat(days, ignore_index=True), pd.DataFrame(smoothers),
+                      pd.DataFrame(standards), pd.concat(icgm, ignore_index=True), meta)
