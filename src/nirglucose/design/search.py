@@ -191,8 +191,9 @@ def drive_powers_mw(
     return [float(p) for p in np.minimum(power, cap)]
 
 
-def subset_bounds(terms: DesignTerms, subsets: np.ndarray, *, prior: bool = True) -> np.ndarray:
-    """Device (van Trees) bound of many LED subsets at once.
+def subset_bounds(terms: DesignTerms, subsets: np.ndarray, *, condition: str = "device",
+                  prior: bool = True) -> np.ndarray:
+    """The bound of many LED subsets at once.
 
     Parameters
     ----------
@@ -200,13 +201,16 @@ def subset_bounds(terms: DesignTerms, subsets: np.ndarray, *, prior: bool = True
         Jacobians and noise of the candidate set (:func:`~nirglucose.design.design_terms`).
     subsets : numpy.ndarray
         (n_subsets, k) indices into the candidate set, each row one design.
+    condition : {'device', 'oracle'}
+        What the bound knows (:data:`~nirglucose.design.bound.CONDITIONS`).
     prior : bool
         Include the Gaussian glucose prior.
 
     Returns
     -------
     numpy.ndarray
-        (n_subsets,) bound on glucose RMSE, as ``terms.bound(row).rmse_mgdl``. [mg/dL]
+        (n_subsets,) bound on glucose RMSE, as
+        ``terms.bound(row, condition=condition).rmse_mgdl``. [mg/dL]
 
     Notes
     -----
@@ -217,6 +221,8 @@ def subset_bounds(terms: DesignTerms, subsets: np.ndarray, *, prior: bool = True
     saturated channels keep their variance in S with a zero Jacobian row, as in
     :meth:`~nirglucose.design.bound.DesignTerms.bound`.
     """
+    if condition not in CONDITIONS:
+        raise ConfigError(unknown_name("condition", condition, CONDITIONS))
     subsets = np.atleast_2d(np.asarray(subsets, dtype=int))
     n_led = terms.jacobian.shape[1]
     if subsets.size == 0 or subsets.min() < 0 or subsets.max() >= n_led:
@@ -224,15 +230,27 @@ def subset_bounds(terms: DesignTerms, subsets: np.ndarray, *, prior: bool = True
     jac = np.where(terms.saturated[:, :, None], 0.0, terms.jacobian)  # (n, L, p)
     with np.errstate(divide="ignore"):
         w = np.where(np.isfinite(terms.noise_var), 1.0 / terms.noise_var, 0.0)  # (n, L)
+    if condition == "oracle":
+        jac = jac[:, :, :1]  # the oracle knows the nuisances: glucose's information only
     n, _, p = jac.shape
     wj = w[:, :, None] * jac
+    c = terms.common_var
+    lam = 1.0 / terms.glucose_var if prior else 0.0
+    out = np.empty(len(subsets))
+    if condition == "oracle":
+        for start in range(0, len(subsets), _BATCH):
+            idx = subsets[start:start + _BATCH]
+            f_gg = (wj[:, idx, 0] * jac[:, idx, 0]).sum(axis=2)  # (n, B)
+            if c > 0:
+                f_gg = f_gg - c * wj[:, idx, 0].sum(axis=2) ** 2 / (1.0 + c * w[:, idx].sum(axis=2))
+            with np.errstate(divide="ignore"):
+                out[start:start + len(idx)] = np.sqrt(np.mean(1.0 / (f_gg + lam), axis=0))
+        return out
     # per-LED state-mean of w J J^T: the additive part
     a_led = np.einsum("nlp,nlq->lpq", wj, jac) / n
     prior_info = np.zeros((p, p))
-    prior_info[0, 0] = 1.0 / terms.glucose_var if prior else 0.0
+    prior_info[0, 0] = lam
     prior_info[1:, 1:] = np.linalg.inv(terms.nuisance_cov)
-    c = terms.common_var
-    out = np.empty(len(subsets))
     for start in range(0, len(subsets), _BATCH):
         idx = subsets[start:start + _BATCH]
         info = a_led[idx].sum(axis=1) + prior_info
@@ -299,8 +317,10 @@ def rank_designs(
         One row per design, sorted by detector (given order), k, rank: ``preset``,
         ``detector``, ``n_leds``, ``rank`` (1 = best bound for that detector and k),
         ``wavelengths_nm`` (comma-separated), ``bound_rmse_mgdl`` [mg/dL],
-        ``condition``, ``study_leds_kept`` (which of the study's 850/940/1050/1150 nm
-        LEDs the design keeps, ``"none"``), ``n_study_leds_kept``, ``leds`` (the
+        ``condition``, ``oracle_bound_rmse_mgdl`` (the bound of what the oracle
+        knows, to compare with the oracle's RMSE) [mg/dL], ``study_leds_kept``
+        (which of the study's 850/940/1050/1150 nm LEDs the design keeps,
+        ``"none"``), ``n_study_leds_kept``, ``leds`` (the
         design's LED records as JSON, for ``leds=`` overrides).
         ``attrs["candidates"]``: detector -> the usable candidates with their powers.
 
@@ -346,10 +366,8 @@ def rank_designs(
         terms = design_terms(preset, leds=usable, detector=det, overrides=extra or None)
         for k in range(1, min(k_max, len(usable)) + 1):
             subsets = np.array(list(itertools.combinations(range(len(usable)), k)), dtype=int)
-            if condition == "device":
-                rmse = subset_bounds(terms, subsets)
-            else:
-                rmse = np.array([terms.bound(s, condition=condition).rmse_mgdl for s in subsets])
+            rmse = subset_bounds(terms, subsets, condition=condition)
+            oracle = subset_bounds(terms, subsets, condition="oracle")
             wl = [[usable[i]["wavelength_nm"] for i in s] for s in subsets]
             # deterministic order: bound, then the wavelengths themselves
             order = sorted(range(len(subsets)), key=lambda i: (round(rmse[i], 9), wl[i]))
@@ -363,6 +381,7 @@ def rank_designs(
                 "wavelengths_nm": [",".join(f"{w:g}" for w in wl[i]) for i in order],
                 "bound_rmse_mgdl": rmse[order],
                 "condition": condition,
+                "oracle_bound_rmse_mgdl": oracle[order],
                 "study_leds_kept": [_study_kept(wl[i]) for i in order],
                 "n_study_leds_kept": [
                     sum(float(w) in set(wl[i]) for w in DEFAULT_LED_WAVELENGTHS_NM) for i in order
