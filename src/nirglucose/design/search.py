@@ -272,6 +272,34 @@ def _study_kept(wavelengths: Sequence[float]) -> str:
     return ",".join(f"{w:g}" for w in kept) if kept else "none"
 
 
+_COLUMNS = ["preset", "detector", "n_leds", "rank", "wavelengths_nm", "bound_rmse_mgdl",
+            "condition", "oracle_bound_rmse_mgdl", "study_leds_kept", "n_study_leds_kept",
+            "leds"]
+
+
+def _rank_k(terms: DesignTerms, usable: list[dict[str, float]], k: int, condition: str,
+            top: int | None) -> pd.DataFrame:
+    """Every k-subset of ``usable`` ranked (bound, then wavelengths: deterministic)."""
+    subsets = np.array(list(itertools.combinations(range(len(usable)), k)), dtype=int)
+    rmse = subset_bounds(terms, subsets, condition=condition)
+    oracle = subset_bounds(terms, subsets, condition="oracle")
+    wl = [[usable[i]["wavelength_nm"] for i in s] for s in subsets]
+    order = sorted(range(len(subsets)), key=lambda i: (round(rmse[i], 9), wl[i]))[:top]
+    study = {float(w) for w in DEFAULT_LED_WAVELENGTHS_NM}
+    return pd.DataFrame({
+        "n_leds": k,
+        "rank": np.arange(1, len(order) + 1),
+        "wavelengths_nm": [",".join(f"{w:g}" for w in wl[i]) for i in order],
+        "bound_rmse_mgdl": rmse[order],
+        "condition": condition,
+        "oracle_bound_rmse_mgdl": oracle[order],
+        "study_leds_kept": [_study_kept(wl[i]) for i in order],
+        "n_study_leds_kept": [len(study & set(wl[i])) for i in order],
+        "leds": [json.dumps([usable[j] for j in subsets[i]], separators=(",", ":"))
+                 for i in order],
+    })
+
+
 def rank_designs(
     preset: str = "wearable",
     candidates: Sequence[float] | None = None,
@@ -344,7 +372,7 @@ def rank_designs(
     for key in ("leds", "detector"):
         if key in extra:
             raise ConfigError(f"rank_designs sets {key!r} itself; drop it from the overrides")
-    detectors = list(dict.fromkeys(detectors))
+    detectors = list(dict.fromkeys([detectors] if isinstance(detectors, str) else detectors))
     if not detectors:
         raise ConfigError("give at least one detector (nirglucose parts lists them)")
     for det in detectors:
@@ -365,30 +393,8 @@ def rank_designs(
         used[det] = usable
         terms = design_terms(preset, leds=usable, detector=det, overrides=extra or None)
         for k in range(1, min(k_max, len(usable)) + 1):
-            subsets = np.array(list(itertools.combinations(range(len(usable)), k)), dtype=int)
-            rmse = subset_bounds(terms, subsets, condition=condition)
-            oracle = subset_bounds(terms, subsets, condition="oracle")
-            wl = [[usable[i]["wavelength_nm"] for i in s] for s in subsets]
-            # deterministic order: bound, then the wavelengths themselves
-            order = sorted(range(len(subsets)), key=lambda i: (round(rmse[i], 9), wl[i]))
-            if top is not None:
-                order = order[:top]
-            frames.append(pd.DataFrame({
-                "preset": preset,
-                "detector": det,
-                "n_leds": k,
-                "rank": np.arange(1, len(order) + 1),
-                "wavelengths_nm": [",".join(f"{w:g}" for w in wl[i]) for i in order],
-                "bound_rmse_mgdl": rmse[order],
-                "condition": condition,
-                "oracle_bound_rmse_mgdl": oracle[order],
-                "study_leds_kept": [_study_kept(wl[i]) for i in order],
-                "n_study_leds_kept": [
-                    sum(float(w) in set(wl[i]) for w in DEFAULT_LED_WAVELENGTHS_NM) for i in order
-                ],
-                "leds": [json.dumps([usable[j] for j in subsets[i]], separators=(",", ":"))
-                         for i in order],
-            }))
-    out = pd.concat(frames, ignore_index=True)
+            frames.append(_rank_k(terms, usable, k, condition, top).assign(
+                preset=preset, detector=det))
+    out = pd.concat(frames, ignore_index=True)[_COLUMNS]
     out.attrs["candidates"] = used
     return out
