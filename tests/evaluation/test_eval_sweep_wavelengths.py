@@ -70,3 +70,31 @@ def test_cli_bad_option_is_one_line(tmp_path, capsys):
                "--out", str(tmp_path / "s")])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1 and "unknown detector" in err
+
+
+def _frame(rmse_by_seed):
+    rows = []
+    for seed, (oracle, ebl) in enumerate(rmse_by_seed):
+        for model, v in (("oracle", oracle), ("ebl", ebl)):
+            rows.append({"scenario": "BPW34:k=1:#1:900", "detector": "BPW34", "n_leds": 1,
+                         "rank": 1, "wavelengths_nm": "900", "study_leds_kept": "none",
+                         "bound_rmse_mgdl": 20.0, "oracle_bound_rmse_mgdl": 9.0,
+                         "seed": seed, "model": model, "rmse_mgdl": v,
+                         "rmse_ci_low": v - 1, "rmse_ci_high": v + 2})
+    return pd.DataFrame(rows)
+
+
+def test_design_table_interval_over_seeds_and_for_one_seed():
+    from nirglucose.evaluation.wavelength_study import wavelength_designs
+
+    two = wavelength_designs(_frame([(10.0, 30.0), (12.0, 34.0)]))
+    o = two[two["model"] == "oracle"].iloc[0]
+    # mean 11, SD sqrt(2), n 2: half-width t(0.975, 1) x SD / sqrt(2) = 12.7062
+    assert o["rmse_mgdl"] == pytest.approx(11.0)
+    assert o["rmse_ci_high"] - 11.0 == pytest.approx(12.7062, abs=1e-4)
+    assert o["ci"] == "t over seeds" and o["n_seeds"] == 2
+    one = wavelength_designs(_frame([(10.0, 30.0)]))
+    e = one[one["model"] == "ebl"].iloc[0]
+    assert (e["rmse_ci_low"], e["rmse_mgdl"], e["rmse_ci_high"]) == (29.0, 30.0, 32.0)
+    assert e["ci"] == "subject bootstrap"
+

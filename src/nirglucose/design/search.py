@@ -103,7 +103,7 @@ def candidate_leds(wavelengths_nm: Sequence[float] | None = None) -> list[dict[s
     Examples
     --------
     >>> [round(c["fwhm_nm"], 1) for c in candidate_leds([850, 1650])]
-    [41.5, 80.5]
+    [41.4, 80.3]
     """
     wl = list(CANDIDATE_WAVELENGTHS_NM if wavelengths_nm is None else wavelengths_nm)
     if not wl:
@@ -359,8 +359,8 @@ def rank_designs(
 
     Examples
     --------
-    >>> r = rank_designs("wearable", [850, 940, 1050], ["BPW34"], k_max=2)  # doctest: +SKIP
-    >>> r.groupby("n_leds")["bound_rmse_mgdl"].min().is_monotonic_decreasing  # doctest: +SKIP
+    >>> r = rank_designs("wearable", [850, 940, 1050], ["BPW34"], k_max=2)
+    >>> bool(r.groupby("n_leds")["bound_rmse_mgdl"].min().is_monotonic_decreasing)
     True
     """
     k_max = check_positive_int("k_max", k_max)
