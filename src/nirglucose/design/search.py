@@ -284,7 +284,7 @@ def _rank_k(terms: DesignTerms, usable: list[dict[str, float]], k: int, conditio
     rmse = subset_bounds(terms, subsets, condition=condition)
     oracle = subset_bounds(terms, subsets, condition="oracle")
     wl = [[usable[i]["wavelength_nm"] for i in s] for s in subsets]
-    order = sorted(range(len(subsets)), key=lambda i: (round(rmse[i], 9), wl[i]))[:top]
+    order = sorted(range(len(subsets)), key=lambda i: (round(float(rmse[i]), 9), wl[i]))[:top]
     study = {float(w) for w in DEFAULT_LED_WAVELENGTHS_NM}
     return pd.DataFrame({
         "n_leds": k,
