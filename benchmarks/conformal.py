@@ -57,7 +57,7 @@ def _bench(preset, seed, models, subjects, per_subject, folds, repeats, k):
             seed=seed,
             n_boot=500,
             timing=dict(_TIMING),
-            importance_repeats=1,
+            drop_one_models="none",
             oracle_reference=False,
             calibration=k,
         )

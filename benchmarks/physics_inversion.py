@@ -38,7 +38,7 @@ def _one(preset: str, seed: int, jobs: int, params: dict) -> tuple[dict, list]:
     ds = ng.simulate(preset, n_subjects=80, per_subject=3, seed=seed)
     res = run_benchmark(
         ds, list(MODELS), n_splits=5, repeats=1, seed=seed, jobs=jobs,
-        model_params=params, timing=TIMING, importance_repeats=1,
+        model_params=params, timing=TIMING, drop_one_models="none",
     )
     m = res.metrics.set_index("model")
     return {

@@ -36,7 +36,7 @@ def _one(preset: str, seed: int, jobs: int) -> list[dict]:
     ds = ng.simulate(preset, n_subjects=80, per_subject=3, seed=seed)
     res = run_benchmark(
         ds, list(PINNS), n_splits=5, repeats=1, seed=seed, jobs=jobs, ablation=True,
-        oracle_reference=False, importance_repeats=1,
+        oracle_reference=False, drop_one_models="none",
         timing={"n_single": 2, "min_single": 1, "batch_rows": 50, "batch_repeats": 1},
     )
     keep = ("model", "ablated_model", "lambda_phys", "lambda_source", "tested", "verdict",

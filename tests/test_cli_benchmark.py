@@ -82,7 +82,7 @@ def test_benchmark_writes_every_output(tmp_path, capsys):
         "predictions.parquet",
         "comparisons.csv",
         "histories.json",
-        "importance.csv",
+        "drop_one.csv",
         "dataset.parquet",
         "meta.json",
     ):

@@ -19,7 +19,7 @@ except PackageNotFoundError:  # running from a source tree without installation
 # The simulator subpackage first: importing it later would rebind the package attribute
 # ``simulate`` from the function below to the subpackage (nothing else imports it now).
 from . import simulate as _simulate_package  # noqa: F401
-from .api import simulate
+from .api import simulate, simulate_wear
 from .config import PRESETS, ScenarioConfig, resolve_config
 from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, DataError, NirGlucoseError, NotFittedError
@@ -27,6 +27,7 @@ from .exceptions import ConfigError, DataError, NirGlucoseError, NotFittedError
 __all__ = [
     "__version__",
     "simulate",
+    "simulate_wear",
     "load_dataset",
     "Dataset",
     "ScenarioConfig",

@@ -8,7 +8,7 @@ from .config import ScenarioConfig, resolve_config
 from .dataset import Dataset
 from .exceptions import ConfigError, check_positive_int
 
-__all__ = ["simulate"]
+__all__ = ["simulate", "simulate_wear"]
 
 
 def simulate(
@@ -18,6 +18,8 @@ def simulate(
     seed: int = 0,
     *,
     n_jobs: int = 1,
+    wear_days: int | None = None,
+    every_min: int | None = None,
     overrides: dict[str, Any] | None = None,
     **dotted: Any,
 ) -> Dataset:
@@ -35,6 +37,10 @@ def simulate(
         Seed of every random stream. [-]
     n_jobs : int
         Worker processes; the result does not depend on it.
+    wear_days, every_min : int, optional
+        Simulate a device worn ``wear_days`` days with a reading every ``every_min``
+        minutes (default 5) instead of snapshots: :func:`simulate_wear` (``per_subject``
+        must then stay at its default). [d], [min]
     overrides : dict, optional
         Dotted config keys to values, e.g. ``{"hardware.adc_bits": 14}``.
     **dotted
@@ -53,11 +59,26 @@ def simulate(
     from .resources import check_simulation_size
     from .simulate.simulator import simulate_frame
 
+    if wear_days is not None or every_min is not None:
+        if wear_days is None:
+            raise ConfigError("every_min applies to a worn device; give wear_days too")
+        if per_subject != 3:
+            raise ConfigError("per_subject does not apply with wear_days: each subject has "
+                              "wear_days x 1440 / every_min readings")
+        return simulate_wear(preset, n_subjects, wear_days, 5 if every_min is None else every_min,
+                             seed, n_jobs=n_jobs, overrides=overrides, **dotted)
     for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
         check_positive_int(name, value)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
     check_simulation_size(n_subjects, per_subject)  # refuse up front, not by OOM (issue 20)
+    cfg = _resolve(preset, overrides, dotted)
+    frame = simulate_frame(cfg, int(n_subjects), int(per_subject), int(seed), n_jobs=n_jobs)
+    return Dataset(frame, config=cfg, seed=int(seed))
+
+
+def _resolve(preset, overrides, dotted) -> ScenarioConfig:
+    """The scenario of a preset (or config) with dict and keyword overrides."""
     if overrides is not None and not isinstance(overrides, dict):
         raise ConfigError(
             f"overrides must be a dict of dotted keys to values, e.g. "
@@ -65,6 +86,78 @@ def simulate(
         )
     all_overrides = dict(overrides or {})
     all_overrides.update({k.replace("__", "."): v for k, v in dotted.items()})
-    cfg = resolve_config(preset, all_overrides)
-    frame = simulate_frame(cfg, int(n_subjects), int(per_subject), int(seed), n_jobs=n_jobs)
-    return Dataset(frame, config=cfg, seed=int(seed))
+    return resolve_config(preset, all_overrides)
+
+
+def simulate_wear(
+    preset: str | ScenarioConfig = "paper",
+    n_subjects: int = 10,
+    wear_days: int = 14,
+    every_min: int = 5,
+    seed: int = 0,
+    *,
+    out: str | None = None,
+    n_jobs: int = 1,
+    overrides: dict[str, Any] | None = None,
+    **dotted: Any,
+) -> Dataset:
+    """Simulate each subject wearing one device for days, a reading every few minutes.
+
+    Glucose follows the UVA/Padova meal model (plasma glucose in ``glucose_mgdl``, the
+    optics seeing the interstitial glucose), the device drifts and is re-seated daily,
+    the environment and heart rate follow the day (:mod:`nirglucose.simulate.wear`).
+    Each row carries ``time_min``, ``wear_day`` and ``seating_id``.
+
+    Parameters
+    ----------
+    preset : str or ScenarioConfig
+        'paper', 'physical', 'lab', 'field', or a resolved config.
+    n_subjects : int
+        Number of subjects (each wears one device). [-]
+    wear_days : int
+        Days of wear. [d]
+    every_min : int
+        Minutes between readings; must divide a day (1440 min). [min]
+    seed : int
+        Seed of every random stream. [-]
+    out : str or path-like, optional
+        A directory to write partitioned Parquet to, chunk by chunk in bounded memory
+        (then the returned dataset reads its rows on first use). Without it the rows are
+        simulated in memory, refused up front when they cannot fit.
+    n_jobs : int
+        Worker processes; the result does not depend on it.
+    overrides : dict, optional
+        Dotted config keys to values.
+    **dotted
+        Overrides as keywords, with ``__`` for dots.
+
+    Returns
+    -------
+    Dataset
+        ``metadata["wear"]`` records the wear's settings.
+
+    Examples
+    --------
+    >>> ds = simulate_wear("paper", n_subjects=1, wear_days=1, every_min=60, seed=0)
+    >>> len(ds), list(ds.frame.columns[2:5])
+    (24, ['time_min', 'wear_day', 'seating_id'])
+    """
+    from .resources import check_simulation_size
+    from .simulate import wear
+
+    check_positive_int("n_subjects", n_subjects)
+    n_t = wear.readings_per_subject(wear_days, every_min)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    cfg = _resolve(preset, overrides, dotted)
+    meta = {"wear": wear.wear_metadata(wear_days, every_min, None)}
+    if out is not None:
+        from .dataset import load_dataset
+
+        wear.write_wear_partitioned(cfg, out, int(n_subjects), wear_days, every_min, seed,
+                                    n_jobs=n_jobs)
+        return load_dataset(out)
+    check_simulation_size(n_subjects, n_t)  # refuse up front: give `out` (issue 31)
+    frame = wear.simulate_wear_frame(cfg, int(n_subjects), wear_days, every_min, seed,
+                                     n_jobs=n_jobs)
+    return Dataset(frame, config=cfg, seed=int(seed), metadata=meta)

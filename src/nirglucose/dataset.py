@@ -2,7 +2,8 @@
 
 One row per snapshot measurement (DESIGN.md, "Dataset schema"):
 
-* identity: ``subject_id``, ``measurement_id``
+* identity: ``subject_id``, ``measurement_id``; a wear simulation's readings also carry
+  their time (:data:`WEAR_COLUMNS`: ``time_min``, ``wear_day``, ``seating_id``)
 * reference: ``glucose_mgdl``
 * sensor: ``adc_<nm>`` and the start-up reference ``adc_ref_<nm>`` (integer codes)
 * the measured physiological vector (:data:`PMF_COLUMNS`), ``ambient_lux``
@@ -43,6 +44,7 @@ __all__ = [
     "MANIFEST",
     "PART_PATTERN",
     "COLUMN_UNITS",
+    "WEAR_COLUMNS",
     "adc_columns",
     "ref_columns",
     "measured_columns",
@@ -132,10 +134,18 @@ MIN_FIT_ROWS = 5
 #: validation holds out at least one subject). [-]
 MIN_FIT_SUBJECTS = 2
 
+#: Time columns of a wear simulation (:mod:`nirglucose.simulate.wear`): minutes since
+#: 00:00 of the wear's first day, the day of the wear (0 first) and the device's
+#: placement (0 first, +1 at each re-seating).
+WEAR_COLUMNS = ("time_min", "wear_day", "seating_id")
+
 #: Units of the schema's named columns (``true_*`` columns carry theirs in the name).
 COLUMN_UNITS = {
     "subject_id": "-",
     "measurement_id": "-",
+    "time_min": "min since 00:00 of the wear's first day",
+    "wear_day": "day of the wear, 0 first",
+    "seating_id": "placement of the device, 0 first",
     "glucose_mgdl": "mg/dL",
     "diabetes_status": "-",
     "age_yr": "yr",
@@ -235,10 +245,9 @@ class Dataset:
 
     def __repr__(self) -> str:
         preset = self.config.preset if self.config is not None else "user data"
-        n_sub = self.frame["subject_id"].nunique() if "subject_id" in self.frame else "?"
-        return (
-            f"Dataset({len(self)} snapshots, {n_sub} subjects, preset={preset!r}, seed={self.seed})"
-        )
+        who = (f"{self.frame['subject_id'].nunique()} subjects" if "subject_id" in self.frame
+               else "no subject_id")
+        return f"Dataset({len(self)} snapshots, {who}, preset={preset!r}, seed={self.seed})"
 
     @property
     def wavelengths_nm(self) -> tuple[float, ...]:

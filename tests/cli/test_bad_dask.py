@@ -134,3 +134,41 @@ def test_sigterm_on_a_remote_cluster_cancels_and_keeps_its_workers(tmp_path, rem
         time.sleep(0.05)
     assert _n_tasks(client) == 0
     assert len(cluster.workers) == 1 and client.status == "running"
+
+
+@pytest.fixture
+def deaf_scheduler():
+    """A TCP address that accepts connections and never answers (distributed.Client
+    waits forever on it)."""
+    import socket
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    server.close()
+
+
+def test_a_scheduler_that_does_not_answer_is_one_line_before_any_task(
+        cli, tmp_path, deaf_scheduler, monkeypatch):
+    from cli_helpers import assert_one_line_error
+
+    from nirglucose.evaluation import executors
+
+    monkeypatch.setattr(executors, "SCHEDULER_TIMEOUT_S", 1.0)
+    t0 = time.monotonic()
+    code, _, err = cli("sweep", "--study", "noise-scale", "--seeds", "1", "--subjects", "10",
+                       "--models", "ebl", "--scheduler", deaf_scheduler, "--out",
+                       tmp_path / "r")
+    assert time.monotonic() - t0 < 20
+    line = assert_one_line_error(code, err, contains=("cannot connect to the Dask scheduler",
+                                                     "no answer within 1 s"))
+    assert deaf_scheduler in line and "sweep:" not in err  # refused before the progress
+
+
+def test_a_live_scheduler_passes_the_check(remote):
+    from nirglucose.evaluation.executors import check_scheduler
+
+    cluster, _ = remote
+    check_scheduler(cluster.scheduler_address, timeout_s=5)
+    check_scheduler("local")  # started by the run itself: nothing to check

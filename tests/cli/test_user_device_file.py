@@ -153,6 +153,12 @@ def test_benchmark_report_claim_no_significance_from_5_test_subjects(cli, device
     html = (out_dir / "report.html").read_text()
     assert "significantly better" not in html and "significantly worse" not in html
     assert "no significance or best model claimed" in html
+    # user-data wording: nothing reproduced, no study claims, no oracle note unasked
+    for text in (table, html):
+        assert "Study orderings" not in text and "oracle was not run" not in text
+    assert "Reproduced table" not in html and "Results table" in html
+    assert "Tuned hyper-parameters" not in html
+    assert meta["study_orderings"]["n_pairs"] == 0 and meta["oracle_note"] is None
 
 
 def test_benchmark_refusals_come_before_any_task(cli, device, tmp_path):
@@ -260,3 +266,39 @@ def test_fit_warns_when_the_pooled_skill_is_a_cohort_offset(cli, tmp_path):
     assert code == 0, err
     assert "opposite sign of the pooled one" in err and "t2d" in err
     assert "warning: the model has" not in err  # pls: fewer parameters than readings
+
+
+@pytest.mark.parametrize("name", ["ebl", "sdnn", "gbr"])
+def test_export_onnx_records_10_bits_and_flags_codes(cli, device, tmp_path, name):
+    """A linear model, a network and the trees: fitted on the file, exported to ONNX,
+    run by onnxruntime: what `predict` answers, 10 bits in the metadata, codes outside
+    (0, 1023] flagged."""
+    ort = pytest.importorskip("onnxruntime")
+    onnx = pytest.importorskip("onnx")
+    from nirglucose.dataset import load_dataset
+
+    model = tmp_path / "m.json"
+    code, out, err = cli("fit", "--model", name, "--data", device, "--out", model,
+                         "--adc-bits", "10", "--cv-folds", "0")
+    assert code == 0, err
+    _no_traceback(out, err)
+    code, out, err = cli("models", "--model", model)
+    assert code == 0 and "LEDs 940 nm at 10 bits" in out and "2 input columns" in out
+    assert "56" not in out  # the study's feature count is not this device's
+    pred = tmp_path / "p.csv"
+    assert cli("predict", "--model", model, "--data", device, "--out", pred)[0] == 0
+    onnx_file = tmp_path / "m.onnx"
+    code, out, err = cli("export-onnx", "--model", model, "--out", onnx_file)
+    assert code == 0, err
+    _no_traceback(out, err)
+    meta = {p.key: p.value for p in onnx.load(str(onnx_file)).metadata_props}
+    assert meta["adc_bits"] == "10" and json.loads(meta["raw_columns"]) == ["adc_940", "age_yr"]
+    raw = load_dataset(device, adc_bits=10).frame[["adc_940", "age_yr"]].to_numpy(np.float32)
+    session = ort.InferenceSession(str(onnx_file))
+    glucose, status = session.run(None, {"raw": raw})
+    expect = pd.read_csv(pred)["predicted_glucose_mgdl"].to_numpy(float)
+    np.testing.assert_allclose(glucose, expect, atol=0.05)
+    assert not status.any()
+    bad = raw[:3].copy()
+    bad[0, 0], bad[1, 0] = 0.0, 1023.5
+    assert session.run(None, {"raw": bad})[1].tolist() == [1, 1, 0]

@@ -25,7 +25,7 @@ def data():
 
 def _run(data, tmp_path, **kw):
     kw.setdefault("n_boot", 50)
-    kw.setdefault("importance_repeats", 1)
+    kw.setdefault("drop_one_models", "none")
     kw.setdefault("oracle_reference", False)
     return run_benchmark(data, protocol="grouped-cv", n_splits=2, repeats=1, seed=3,
                          out=tmp_path / "r", **kw)
@@ -194,6 +194,9 @@ def test_no_physics_row_of_a_pinn_at_lambda_zero_shares_its_fit(data, tmp_path):
     assert res.meta["tasks_total"] == len(seen)  # (a /lambda= row, if any, is its own fit)
 
 
-def test_importance_repeats_zero_computes_no_importance(data, tmp_path):
-    res = _run(data, tmp_path, models=["ebl"], importance_repeats=0)
-    assert res.importance.empty and len(res.metrics) == 1
+def test_drop_one_none_runs_no_refit(data, tmp_path):
+    seen = []
+    res = _run(data, tmp_path, models=["ebl"], drop_one_models="none",
+               on_task=lambda spec, cached: seen.append(spec))
+    assert res.drop_one.empty and len(res.metrics) == 1
+    assert len(seen) == 2 and not any("drop_nm" in s for s in seen)

@@ -11,7 +11,7 @@ import pytest
 import nirglucose as ng
 from nirglucose.evaluation.benchmark import (
     COMPARISON_COLUMNS,
-    IMPORTANCE_COLUMNS,
+    DROP_ONE_COLUMNS,
     METRIC_COLUMNS,
     OUTPUT_FILES,
     PREDICTION_COLUMNS,
@@ -101,7 +101,7 @@ def test_result_frames_have_the_documented_columns(result):
     assert list(res.metrics.columns) == list(METRIC_COLUMNS)
     assert list(res.predictions.columns) == list(PREDICTION_COLUMNS)
     assert list(res.comparisons.columns) == list(COMPARISON_COLUMNS)
-    assert list(res.importance.columns) == list(IMPORTANCE_COLUMNS)
+    assert list(res.drop_one.columns) == list(DROP_ONE_COLUMNS)
     assert sorted(res.metrics["model"]) == sorted(MODELS)
     assert len(res.predictions) == 2 * 2 * 60  # models x repeats x snapshots
     assert res.metrics["rmse_mgdl"].is_monotonic_increasing
@@ -111,7 +111,8 @@ def test_result_frames_have_the_documented_columns(result):
     ).all()
     assert (m["n_parameters"] == 17).all() and (m["latency_input"] == "array").all()
     assert set(res.histories) == set(MODELS) and res.histories["test-ridge"][0]["epoch"] == 0
-    assert res.importance.groupby("model").size().to_dict() == {m: 4 for m in MODELS}
+    # no default drop-one model among these test models: no refit
+    assert res.drop_one.empty and res.meta["drop_one_models"] == []
     assert res.meta["tasks_total"] == 16 and res.meta["tasks_computed"] == 16
     assert res.meta["best_model"] == "test-ridge"
     vs_best = res.comparisons[res.comparisons["family"] == "vs_best"]

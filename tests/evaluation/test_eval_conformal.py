@@ -95,7 +95,7 @@ def bench():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return run_benchmark(
-            ds, ["pls", "mean"], repeats=1, n_boot=200, importance_repeats=1, calibration=1
+            ds, ["pls", "mean"], repeats=1, n_boot=200, drop_one_models="none", calibration=1
         )
 
 

@@ -60,7 +60,7 @@ def test_hand_computed_errors():
 def test_benchmark_writes_the_inversion_state_error(tmp_path):
     ds = ng.simulate("paper", n_subjects=12, per_subject=2, seed=0)
     res = run_benchmark(ds, ["physics-inversion", "ebl"], protocol="grouped-cv", n_splits=2,
-                        repeats=1, seed=0, n_boot=50, importance_repeats=1,
+                        repeats=1, seed=0, n_boot=50, drop_one_models="none",
                         oracle_reference=False, out=tmp_path / "r",
                         model_params={"physics-inversion": {"n_em": 3}})
     inv = pd.read_csv(tmp_path / "r" / "inverse.csv")
@@ -85,7 +85,7 @@ def test_report_section_renders_the_csv(tmp_path):
 
     ds = ng.simulate("paper", n_subjects=8, per_subject=2, seed=1)
     run_benchmark(ds, ["physics-inversion"], protocol="grouped-cv", n_splits=2, repeats=1,
-                  seed=0, n_boot=20, importance_repeats=1, oracle_reference=False,
+                  seed=0, n_boot=20, drop_one_models="none", oracle_reference=False,
                   out=tmp_path / "r", model_params={"physics-inversion": {"n_em": 2}})
     html = inverse_section([load_results(tmp_path / "r")])
     assert 'id="inverse-paper"' in html and "skin thickness under the probe" in html

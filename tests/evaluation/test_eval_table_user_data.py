@@ -29,7 +29,7 @@ def test_user_data_table_has_no_study_columns(tmp_path):
         repeats=1,
         n_boot=50,
         out=tmp_path / "r",
-        importance_repeats=1,
+        drop_one_models="none",
         timing={"n_single": 5, "min_single": 2, "batch_rows": 100, "batch_repeats": 1},
     )
     table = (tmp_path / "r" / "table.md").read_text()

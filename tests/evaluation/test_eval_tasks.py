@@ -11,7 +11,7 @@ from nirglucose.evaluation import tasks
 from nirglucose.evaluation.benchmark import run_benchmark
 from nirglucose.evaluation.sweep import run_sweep
 
-BENCH = dict(n_splits=2, repeats=1, seed=0, n_boot=20, importance_repeats=1,
+BENCH = dict(n_splits=2, repeats=1, seed=0, n_boot=20, drop_one_models="none",
              oracle_reference=False,
              timing={"n_single": 1, "min_single": 1, "warmup": 0, "batch_rows": 8,
                      "batch_repeats": 1})

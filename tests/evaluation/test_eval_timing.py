@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import nirglucose as ng
-from nirglucose.evaluation.importance import permutation_importance
 from nirglucose.evaluation.timing import measure_latency, tile_rows, timing_inputs
-from nirglucose.models._base import MEASURED_COLUMNS, as_measurements
+from nirglucose.models._base import MEASURED_COLUMNS
 
 
 class _Counting:
@@ -85,24 +84,6 @@ def test_tile_rows_keeps_the_type(small):
     assert tile_rows(np.arange(3), 7).tolist() == [0, 1, 2, 0, 1, 2, 0]
 
 
-class _OneChannel:
-    """Uses only the 1050 nm absorbance."""
-
-    def predict(self, X):
-        Xa, _, _ = as_measurements(X)
-        k = MEASURED_COLUMNS.index("adc_1050")
-        r = MEASURED_COLUMNS.index("adc_ref_1050")
-        return 100.0 + 500.0 * np.log(Xa[:, r] / Xa[:, k])
-
-
-def test_permutation_importance_finds_the_only_channel_used(small):
-    imp = permutation_importance(_OneChannel(), small, n_repeats=3, seed=0)
-    assert imp["wavelength_nm"].tolist() == [850.0, 940.0, 1050.0, 1150.0]
-    by_wl = imp.set_index("wavelength_nm")["rmse_increase_mgdl"]
-    assert by_wl[1050.0] > 1.0
-    assert by_wl.drop(1050.0).abs().max() == 0.0
-
-
 @pytest.mark.parametrize("name", ["ebl", "pls", "gp", "gbr", "mean", "oracle", "sdnn"])
 def test_macs_are_counted_from_the_fitted_model(small, name):
     from nirglucose.evaluation.timing import count_macs
@@ -136,7 +117,7 @@ def test_benchmark_records_macs_and_the_timing_machine(small, tmp_path):
     from nirglucose.evaluation import run_benchmark
 
     res = run_benchmark(small, ["ebl", "mean"], n_splits=3, repeats=1, n_boot=20,
-                        out=tmp_path / "r", importance_repeats=1, seed=0,
+                        out=tmp_path / "r", drop_one_models="none", seed=0,
                         timing={"n_single": 5, "min_single": 2, "batch_rows": 50,
                                 "batch_repeats": 1})
     m = res.metrics.set_index("model")

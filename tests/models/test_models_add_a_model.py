@@ -69,7 +69,7 @@ def test_a_new_module_and_one_registry_line_make_a_benchmarked_model(toy_models)
         repeats=1,
         n_boot=50,
         ablation=True,
-        importance_repeats=1,
+        drop_one_models="none",
         oracle_reference=False,
         timing={"n_single": 5, "min_single": 2, "batch_rows": 100, "batch_repeats": 1},
     )

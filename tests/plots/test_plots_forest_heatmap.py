@@ -1,14 +1,13 @@
-"""Forest plot of RMSE (figure 12) and the wavelength heatmap (figure 11)."""
+"""Forest plot of RMSE and the drop-one-LED dot plot (wavelength utilisation)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
-from matplotlib.image import AxesImage
 
 from nirglucose.plots.forest import plot_rmse_forest
-from nirglucose.plots.wavelengths import plot_wavelength_heatmap
+from nirglucose.plots.wavelengths import figure_drop_one, plot_drop_one
 
 
 def test_forest_one_errorbar_per_model_and_study_marks():
@@ -30,16 +29,35 @@ def test_forest_without_study_values():
     assert len(ax.containers) == 1 and len(ax.get_legend().get_texts()) == 1
 
 
-def test_heatmap_cells_and_annotations():
-    mat = pd.DataFrame([[1.0, 2.0, 3.0, 4.0], [0.5, np.nan, 1.5, 2.5]],
-                       index=["ebl", "pls"], columns=[850.0, 940.0, 1050.0, 1150.0])
+def _drop_table():
+    return pd.DataFrame({
+        "model": ["ebl"] * 4 + ["pls"] * 2,
+        "dropped_wavelength_nm": [1150.0, 850.0, 940.0, 1050.0, 850.0, 940.0],
+        "rmse_all_mgdl": [14.0] * 4 + [20.0] * 2,
+        "delta_rmse_mgdl": [0.5, 3.0, -0.2, 9.0, 1.0, 2.0],
+        "ci_low": [-0.5, 1.0, -1.0, 6.0, -2.0, 0.5],
+        "ci_high": [1.5, 5.0, 0.6, 12.0, 4.0, 3.5],
+    })
+
+
+def test_drop_one_dots_with_cis_filled_where_the_ci_excludes_zero():
     ax = Figure().add_subplot()
-    assert plot_wavelength_heatmap(mat, ax=ax) is ax
-    images = [a for a in ax.get_children() if isinstance(a, AxesImage)]
-    assert len(images) == 1 and images[0].get_array().shape == (2, 4)
-    assert len(ax.texts) == 7  # finite cells only
+    assert plot_drop_one(_drop_table(), "ebl", ax=ax) is ax
+    assert len(ax.containers) == 4  # one error bar per LED
     assert [t.get_text() for t in ax.get_xticklabels()] == ["850", "940", "1050", "1150"]
-    assert ax.get_xlabel() == "LED wavelength [nm]"
+    # sorted by wavelength: 850 (CI 1..5) and 1050 (6..12) exclude 0, filled
+    faces = [c.lines[0].get_markerfacecolor() for c in ax.containers]
+    filled = [f != "white" for f in faces]
+    assert filled == [True, False, True, False]
+    ys = [float(c.lines[0].get_ydata()[0]) for c in ax.containers]
+    assert ys == [3.0, -0.2, 9.0, 0.5]
+    assert "14.0 mg/dL" in ax.get_title() and ax.get_xlabel() == "LED left out [nm]"
+
+
+def test_drop_one_figure_one_panel_per_model():
+    fig = figure_drop_one(_drop_table(), ["pls", "ebl", "absent"])
+    shown = [a for a in fig.axes if a.get_visible()]
+    assert len(shown) == 2 and [len(a.containers) for a in shown] == [2, 4]
 
 
 def test_forest_every_row_has_a_visible_marker():

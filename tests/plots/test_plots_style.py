@@ -41,3 +41,15 @@ def test_save_figure_writes_png_and_svg(tmp_path):
 def test_figure_bytes_png():
     fig = Figure(figsize=(1, 1))
     assert style.figure_bytes(fig, "png").startswith(b"\x89PNG")
+
+
+def test_every_registered_model_has_its_own_label_colour_and_marker():
+    """No registered model falls back to a colour another model owns (issue 32)."""
+    from nirglucose.evaluation.reference import MODEL_LABELS
+    from nirglucose.models.registry import available_models
+    from nirglucose.plots.style import MODEL_COLORS, MODEL_MARKERS
+
+    names = available_models()
+    assert set(names) <= set(MODEL_LABELS) & set(MODEL_COLORS) & set(MODEL_MARKERS)
+    colours = [MODEL_COLORS[m] for m in names]
+    assert len(set(colours)) == len(colours)

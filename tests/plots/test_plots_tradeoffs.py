@@ -133,3 +133,13 @@ def test_physics_depth_axis_runs_from_most_physics_to_none():
     ax = plot_physics_depth(t)
     x = {m: ax.transData.transform((d, 0))[0] for m, d in (("ebl", 4), ("sdnn", 0))}
     assert x["ebl"] < x["sdnn"]  # the study's direction: physics on the left
+
+
+def test_radar_grid_says_which_axis_was_not_counted():
+    from nirglucose.plots.tradeoffs import figure_radar_grid
+
+    scores = pd.DataFrame({"RMSE": [1.0, 0.5], "MACs": [1.0, np.nan]}, index=["ebl", "gp"])
+    fig = figure_radar_grid(scores)
+    labels = [[t.get_text() for t in ax.get_xticklabels()] for ax in fig.axes]
+    assert labels[0] == ["RMSE", "MACs"]
+    assert labels[1] == ["RMSE", "MACs\n(not counted)"]

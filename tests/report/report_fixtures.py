@@ -3,7 +3,7 @@
 It does not run the benchmark: predictions are the reference plus noise, metrics are
 computed from them with :mod:`nirglucose.metrics`, and the other files follow the
 contract of ``nirglucose benchmark --out`` (metrics.csv/json, meta.json, table.md,
-comparisons.csv, predictions.parquet, histories.json, importance.csv, dataset.parquet).
+comparisons.csv, predictions.parquet, histories.json, drop_one.csv, dataset.parquet).
 """
 
 from __future__ import annotations
@@ -104,11 +104,14 @@ def write_synthetic_results(out: Path, *, models=SYNTHETIC_MODELS, networks=_NET
         else:
             hist[m] = []
     (out / "histories.json").write_text(json.dumps(hist))
-    imp = pd.DataFrame([{"model": m, "wavelength_nm": w,
-                         "rmse_increase_mgdl": float(rng.uniform(0, 10)),
-                         "rmse_increase_sd_mgdl": 1.0, "n_tasks": 10}
-                        for m in models for w in ds.wavelengths_nm])
-    imp.to_csv(out / "importance.csv", index=False)
+    drop = pd.DataFrame([{"model": m, "dropped_wavelength_nm": w,
+                          "rmse_all_mgdl": _NOISE_SD.get(m, 20.0),
+                          "delta_rmse_mgdl": (d := float(rng.uniform(-1, 10))),
+                          "ci_low": d - 2.0, "ci_high": d + 2.0, "n_test_subjects": n_subjects,
+                          "n_repeats": 1}
+                         for m in models if m in ("ebl", "pls", "oracle")
+                         for w in ds.wavelengths_nm])
+    drop.to_csv(out / "drop_one.csv", index=False)
     ds.save(out / "dataset.parquet")
     return out
 

@@ -11,9 +11,9 @@ from nirglucose.metrics import bland_altman, clarke_zones, zone_percentages
 from nirglucose.report.figures import (
     bland_altman_inputs,
     channel_correlations,
+    drop_one_models,
     efficiency_table,
     error_grid_inputs,
-    importance_matrix,
     linearity_inputs,
     model_order,
     pareto_front,
@@ -131,12 +131,10 @@ def test_efficiency_and_depth_tables():
     assert list(d["model"]) == ["ebl", "sdnn"] and left_out == ["mine"]  # oracle: a line
 
 
-def test_importance_matrix_and_order():
-    imp = pd.DataFrame({"model": ["pls", "ebl", "ebl"], "wavelength_nm": [940.0, 850.0, 940.0],
-                        "rmse_increase_mgdl": [1.0, 2.0, 3.0]})
-    mat = importance_matrix(imp, model_order(imp["model"]))
-    assert list(mat.index) == ["ebl", "pls"] and list(mat.columns) == [850.0, 940.0]
-    assert np.isnan(mat.loc["pls", 850.0])
+def test_drop_one_models_in_display_order():
+    t = pd.DataFrame({"model": ["pls", "ebl", "ebl", "mine", "original-pinn/no-physics"],
+                      "dropped_wavelength_nm": [940.0, 850.0, 940.0, 850.0, 850.0]})
+    assert drop_one_models(t, model_order(["pls", "ebl"])) == ["ebl", "pls", "mine"]
 
 
 def test_pipeline_reflects_the_config():

@@ -105,6 +105,11 @@ class _Files:
             model, col = key.rsplit(":", 1)
             a = pd.read_csv(self.root / preset / "ablation.csv").set_index("model")
             return float(a.at[model, col]) if col in a.columns else None
+        if file == "drop_one.csv":
+            model, wl, col = key.rsplit(":", 2)
+            t = pd.read_csv(self.root / preset / "drop_one.csv")
+            row = t[(t["model"] == model) & (t["dropped_wavelength_nm"] == float(wl))]
+            return float(row[col].iloc[0])
         if file == "meta.json" and key != "config":
             node = json.loads((self.root / preset / "meta.json").read_text())
             for part in key.split("."):  # model names hold no dots
@@ -152,6 +157,7 @@ def test_every_number_equals_the_file_it_names(preset_report, preset_results):
             checked[span["data-src"].split("/", 1)[1].split(":", 1)[0]] += 1
     # the numbers of metrics.json, ablation.csv and meta.json were all re-derived
     assert checked["metrics.json"] >= 20 and checked["ablation.csv"] >= 4
+    assert checked["drop_one.csv"] >= 4  # each named LED's Δ RMSE, its CI and the RMSE
     assert checked["meta.json"] >= 3
 
 

@@ -137,7 +137,7 @@ def test_cli_report_with_missing_optional_inputs(minimal_results, tmp_path, caps
     assert main(["report", str(minimal_results), "--out", str(out)]) == 0
     text, page = _parse(out)
     assert set(page.figures) == {f"fig-{k}" for k in FIGURES} | {"fig-headline"}
-    for name in ("histories.json", "importance.csv", "dataset.parquet", "comparisons.csv"):
+    for name in ("histories.json", "drop_one.csv", "dataset.parquet", "comparisons.csv"):
         assert f"No {name}" in text
     assert page.figures["fig-training"]["imgs"] == []
     assert page.figures["fig-scatter"]["imgs"]  # required inputs still give figures

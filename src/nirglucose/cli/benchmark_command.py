@@ -39,6 +39,17 @@ from ._common import (
 )
 from .fit_report import say_notes
 
+#: ``--drop-one``: the models refitted without each LED.
+_DropOneOption = Annotated[
+    str | None,
+    typer.Option(
+        "--drop-one",
+        help="Models refitted without each LED (drop_one.csv: RMSE lost per LED, first "
+        "repeat): comma-separated names among --models, 'all' or 'none' (default: ebl, pls "
+        "and oracle where benchmarked).",
+    ),
+]
+
 
 @app.command()
 @_tidy_out
@@ -79,6 +90,7 @@ def benchmark(
             "Needs --per-subject > K."
         ),
     ] = 0,
+    drop_one: _DropOneOption = None,
     set_: SetOption = None,
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,
@@ -102,7 +114,7 @@ def benchmark(
         if p is None:
             say_notes(ds)  # after the checks: an error stays one line
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation, calibration, glucose_unit)
+                       references, ablation, calibration, glucose_unit, drop_one)
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
@@ -182,7 +194,7 @@ def _check_calibration_readings(ds, k: int) -> None:
 
 
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
-                   references, ablation, calibration=0, unit=None) -> None:
+                   references, ablation, calibration=0, unit=None, drop_one=None) -> None:
     """Run the benchmark of one dataset, then print its table and summary lines."""
     from ..evaluation.benchmark import run_benchmark
 
@@ -201,6 +213,7 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             references=references,
             ablation=ablation,
             calibration=calibration,
+            drop_one_models=drop_one,
             # the oracle bound needs the simulator's true_* columns: not asked of user data
             oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
         )

@@ -38,6 +38,18 @@ def simulate(
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
     jobs: JobsOption = None,
     set_: SetOption = None,
+    wear_days: Annotated[
+        int | None,
+        typer.Option(help="Simulate a device worn this many days by each subject (a reading "
+                     "every --every-min minutes; glucose from the UVA/Padova meal model) "
+                     "instead of independent snapshots; rows get time_min, wear_day and "
+                     "seating_id."),
+    ] = None,
+    every_min: Annotated[
+        int | None,
+        typer.Option(help="Minutes between the readings of a --wear-days run (default 5); "
+                     "must divide a day (1440 min)."),
+    ] = None,
 ) -> None:
     """Generate a dataset and print a summary of it."""
     from ..config import resolve_config
@@ -47,6 +59,9 @@ def simulate(
     jobs = _jobs(jobs)
     _check_seed(seed)
     cfg = resolve_config(preset, _parse_sets(set_))
+    if wear_days is not None or every_min is not None:
+        _simulate_wear(cfg, out, subjects, per_subject, seed, jobs, wear_days, every_min)
+        return
     _check_simulate_out(out, subjects, per_subject)
     if not out.suffix:
         from ..simulate.partitioned import write_partitioned
@@ -61,6 +76,39 @@ def simulate(
     ds.save(out)
     _print_summary(ds)
     _say(f"wrote {len(ds)} snapshots to {out}", err=False)
+
+
+def _simulate_wear(cfg, out: Path, subjects: int, per_subject: int, seed: int, jobs: int,
+                   wear_days: int | None, every_min: int | None) -> None:
+    """``simulate --wear-days D --every-min M``: the wear simulation, written chunk by chunk
+    to a directory, or in memory to a file."""
+    from ..dataset import Dataset
+    from ..simulate import wear
+
+    if wear_days is None:
+        raise UserError("--every-min applies to a wear simulation; give --wear-days too")
+    if per_subject != 3:
+        raise UserError("--per-subject does not apply with --wear-days: each subject has "
+                        "wear-days x 1440 / every-min readings")
+    every_min = 5 if every_min is None else every_min
+    try:
+        n_t = wear.readings_per_subject(wear_days, every_min)
+    except ValueError as exc:
+        raise UserError(str(exc).replace("wear_days", "--wear-days")
+                        .replace("every_min", "--every-min")) from None
+    _check_simulate_out(out, subjects, n_t)
+    if not out.suffix:
+        n = wear.write_wear_partitioned(cfg, out, subjects, wear_days, every_min, seed,
+                                        n_jobs=jobs)
+        _say(f"wrote {n} readings ({subjects} subjects x {wear_days} d, every {every_min} min) "
+             f"to {out}/ (partitioned Parquet)", err=False)
+        return
+    frame = wear.simulate_wear_frame(cfg, subjects, wear_days, every_min, seed, n_jobs=jobs)
+    ds = Dataset(frame, config=cfg, seed=seed,
+                 metadata={"wear": wear.wear_metadata(wear_days, every_min, None)})
+    ds.save(out)
+    _print_summary(ds)
+    _say(f"wrote {len(ds)} readings to {out}", err=False)
 
 
 def _check_simulate_out(out: Path, subjects: int, per_subject: int) -> None:
@@ -93,13 +141,21 @@ def keys() -> None:
 
 
 @app.command("models")
-def list_models() -> None:
-    """List the registered model names, one line each."""
-    from ..models.registry import available_models, get_model_class
+def list_models(
+    model: Annotated[
+        Path | None,
+        typer.Option(help="A model file written by `nirglucose fit`: describe it on the "
+                     "device it was fitted on (its inputs and parameters)."),
+    ] = None,
+) -> None:
+    """List the registered model names, one line each (or describe one fitted model)."""
+    from ..models.registry import available_models, describe_model, load_model
 
+    if model is not None:
+        _say(describe_model(load_model(model)), err=False)
+        return
     for name in available_models():
-        doc = (get_model_class(name).__doc__ or "").strip().splitlines()
-        _say(f"{name:<20} {doc[0] if doc else ''}".rstrip(), err=False)
+        _say(f"{name:<20} {describe_model(name)}".rstrip(), err=False)
 
 
 @app.command("parts")

@@ -54,11 +54,13 @@ def fit_model(
     """
     from ..evaluation.benchmark import seeded_params
     from ..models.registry import get_model_class
+    from ..models.tuning import untuned_params
 
     _check_seed(seed)
     _check_fit_args(out, intervals, calibration_share)
     cls = get_model_class(model)  # unknown names raise with the valid ones
-    estimator = cls(**seeded_params(cls, {}, seed))  # random_state=seed where it has one
+    # nothing is tuned for a team's device: networks early-stop on held-out subjects
+    estimator = cls(**seeded_params(cls, untuned_params(model), seed))
     ds, schema = _load_device_data(model, data, adc_bits, glucose_unit)
     intervals, note = _choose_intervals(ds, intervals, calibration_share)
     if intervals == "split":

@@ -100,8 +100,14 @@ def report_cv(estimator, ds, schema, folds: int, unit: str | None) -> None:
     if folds < 2 or n_sub < 2:
         return
     y, pred, base, k = grouped_cv(estimator, ds, folds)
-    _say(f"grouped {k}-fold CV over {n_sub} subjects: RMSE {in_unit(_rmse(y, pred), unit)}; "
-         f"no skill (the training mean) {in_unit(_rmse(y, base), unit)}", err=False)
+    cv_rmse, no_skill = _rmse(y, pred), _rmse(y, base)
+    who = (f"{n_sub} subjects" if "subject_id" in ds.frame
+           else f"{n_sub} readings (no subject_id: each taken as a subject)")
+    _say(f"grouped {k}-fold CV over {who}: RMSE {in_unit(cv_rmse, unit)}; "
+         f"no skill (the training mean) {in_unit(no_skill, unit)}", err=False)
+    if cv_rmse > no_skill:
+        _say("warning: the grouped-CV error is above no skill: on new people this model "
+             "does worse than predicting the training mean")
     if n_sub < MIN_CV_SUBJECTS:
         _say(f"warning: a CV estimate from {n_sub} subjects (< {MIN_CV_SUBJECTS}) is "
              "unstable; quote it only with that number")
@@ -125,15 +131,21 @@ def report_cv(estimator, ds, schema, folds: int, unit: str | None) -> None:
 
 
 def warn_overparameterised(estimator, n_rows: int) -> None:
-    """One warning when the fitted model has more parameters than readings."""
+    """One warning when the fitted model has more parameters than readings (with the
+    epochs early stopping chose, for a network that held out subjects)."""
     n_par = getattr(estimator, "n_parameters", None)
+    stopped = ""
+    if getattr(estimator, "start_val_mse_", None) is not None:
+        n_ep = int(estimator.best_epoch_)
+        stopped = (f"; early stopping on held-out subjects chose {n_ep} epochs"
+                   + (" (the training mean: no epoch beat it)" if n_ep == 0 else ""))
     try:
         n_par = int(n_par() if callable(n_par) else n_par)
     except (TypeError, ValueError, AttributeError):
         return
     if n_par > n_rows:
         _say(f"warning: the model has {n_par:,} parameters for {n_rows} readings: its "
-             "in-sample fit says nothing; judge it by the grouped CV error")
+             f"in-sample fit says nothing; judge it by the grouped CV error{stopped}")
 
 
 def check_zero_variance(ds, schema) -> None:

@@ -1,4 +1,4 @@
-"""Evaluation: subject-grouped splits, the benchmark, statistics, timing, importance.
+"""Evaluation: subject-grouped splits, the benchmark, statistics, timing, drop-one LEDs.
 
 The benchmark computes and returns tidy DataFrames; plotting and reporting read them.
 Submodules are imported on first attribute access so that ``import nirglucose`` stays
@@ -18,7 +18,8 @@ __all__ = [
     "cluster_bootstrap_metrics",
     "compare_models",
     "measure_latency",
-    "permutation_importance",
+    "drop_one_table",
+    "without_led",
 ]
 
 _LAZY = {
@@ -30,7 +31,8 @@ _LAZY = {
     "cluster_bootstrap_metrics": "nirglucose.evaluation.stats",
     "compare_models": "nirglucose.evaluation.stats",
     "measure_latency": "nirglucose.evaluation.timing",
-    "permutation_importance": "nirglucose.evaluation.importance",
+    "drop_one_table": "nirglucose.evaluation.drop_one",
+    "without_led": "nirglucose.evaluation.drop_one",
 }
 
 

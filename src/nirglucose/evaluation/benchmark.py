@@ -3,8 +3,8 @@
 :func:`run_benchmark` fits each model on each split of the protocol
 (:mod:`~nirglucose.evaluation.splits`), scores the held-out predictions with cluster
 bootstrap intervals and paired comparisons (:mod:`~nirglucose.evaluation.stats`),
-times every model the same way (:mod:`~nirglucose.evaluation.timing`) and measures
-per-wavelength permutation importance (:mod:`~nirglucose.evaluation.importance`).
+times every model the same way (:mod:`~nirglucose.evaluation.timing`) and refits
+chosen models without each LED (:mod:`~nirglucose.evaluation.drop_one`).
 It computes only; figures and the report read the :class:`BenchmarkResult`.
 
 Tasks
@@ -43,6 +43,20 @@ Reference rows and the physics ablation
     (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
     paired against ``<name>/no-physics``.
 
+Drop-one-LED refits
+    Each model of ``drop_one_models`` (by default
+    :data:`~nirglucose.evaluation.drop_one.DEFAULT_DROP_ONE_MODELS` among the models:
+    EBL, PLS and the oracle, each a fraction of a second per fit)
+    is refitted once per LED on the data without that LED's columns
+    (:func:`~nirglucose.evaluation.drop_one.without_led`): one task per model × fold ×
+    LED, on the folds of the first repeat only
+    (:data:`~nirglucose.evaluation.drop_one.DROP_ONE_REPEATS`; all repeats would triple
+    the cost for little), with the seeds and parameters of the model's own task of that
+    fold, cached and run like every other task (tag ``r<repeat>-f<fold>-no<nm>``).
+    ``drop_one.csv`` holds the paired RMSE difference (without the LED − with every LED,
+    the latter from the same repeat's predictions) with its cluster-bootstrap CI.
+    ``drop_one_models="none"`` runs none (what a sweep asks for), ``"all"`` every row.
+
 Scoring
     Predictions below 0 mg/dL are scored as 0 and non-finite ones as the median
     training target of their fold (the error grids need a non-negative number); both
@@ -77,7 +91,6 @@ from .benchmark_aggregate import aggregate, fallback_mgdl
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
-    IMPORTANCE_COLUMNS,
     METRIC_COLUMNS,
     NO_PHYSICS,
     ORACLE,
@@ -91,7 +104,15 @@ from .benchmark_result import (
 )
 from .calibration import check_k, personal_calibration
 from .conformal import LEVELS
-from .importance import permutation_importance
+from .drop_one import (
+    DROP_ONE_COLUMNS,
+    DROP_ONE_REPEATS,
+    drop_one_table,
+    led_wavelengths,
+    refit_predictions,
+    resolve_drop_one_models,
+    without_led,
+)
 from .inverse import inverse_table, task_state
 from .progress import task_hooks
 from .reference import STUDY_PROTOCOL
@@ -106,7 +127,7 @@ __all__ = [
     "METRIC_COLUMNS",
     "PREDICTION_COLUMNS",
     "COMPARISON_COLUMNS",
-    "IMPORTANCE_COLUMNS",
+    "DROP_ONE_COLUMNS",
     "OUTPUT_FILES",
     "TASK_FORMAT",
     "ORACLE",
@@ -115,9 +136,6 @@ __all__ = [
     "NO_PHYSICS",
     "ABLATION_COLUMNS",
 ]
-
-_IMPORTANCE_REPEATS = 3
-
 
 # --------------------------------------------------------------------------- tasks
 def _history(model: Any) -> list[dict[str, Any]]:
@@ -182,7 +200,9 @@ def _run_task(
     timing: dict[str, Any],
 ) -> dict[str, Any]:
     """Fit one model on one split and score it; the JSON-able task result."""
-    params, task_seed = _constructor_params(cls, spec)
+    if spec.get("drop_nm") is not None:
+        return _run_drop_task(cls, spec, dataset, split)
+    params, _ = _constructor_params(cls, spec)
     train, test = dataset.rows(split.train), dataset.rows(split.test)
     fit_kwargs: dict[str, Any] = {}
     if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
@@ -207,13 +227,6 @@ def _run_task(
         if spec["timed"]:
             form, data = timing_inputs(model, test)
             latency = {**measure_latency(model, data, **timing), "latency_input": form}
-        imp = (
-            permutation_importance(
-                model, test, n_repeats=spec["importance_repeats"], seed=task_seed
-            )
-            if spec["importance_repeats"] > 0
-            else _NO_IMPORTANCE
-        )
         state = task_state(model, test)
     return {
         "predicted_mgdl": [float(v) for v in pred],
@@ -226,17 +239,42 @@ def _run_task(
         "history": _history(model),
         "state": state,
         "timing": latency,
-        "importance": {
-            "wavelength_nm": imp["wavelength_nm"].tolist(),
-            "rmse_increase_mgdl": imp["rmse_increase_mgdl"].tolist(),
-            "rmse_increase_sd_mgdl": imp["rmse_increase_sd_mgdl"].tolist(),
-        },
     }
 
 
-#: The importance of a task run with ``importance_repeats=0`` (none computed).
-_NO_IMPORTANCE = {"wavelength_nm": np.array([]), "rmse_increase_mgdl": np.array([]),
-                  "rmse_increase_sd_mgdl": np.array([])}
+def _run_drop_task(
+    cls: type, spec: dict[str, Any], dataset: Dataset, split: Split
+) -> dict[str, Any]:
+    """Refit one model on one split without the LED ``spec["drop_nm"]``; score it.
+
+    The seeds and parameters are those of the model's own task of that split
+    (``seed_model``, ``repeat``, ``fold``), the validation part (``paper-split``) goes
+    without the LED too, and the held-out rows are the same: a paired comparison.
+    """
+    params, _ = _constructor_params(cls, spec)
+    data = without_led(dataset, spec["drop_nm"])
+    train, test = data.rows(split.train), data.rows(split.test)
+    fit_kwargs: dict[str, Any] = {}
+    if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
+        val = data.rows(split.val)
+        fit_kwargs = {"X_val": val, "y_val": val.frame["glucose_mgdl"].to_numpy(float)}
+    cpu0, wall0 = time.process_time(), time.perf_counter()
+    with _one_thread_torch():
+        model = cls(**params).fit(train, **fit_kwargs)
+        fit_time = time.perf_counter() - wall0
+        pred = np.asarray(model.predict(test), dtype=float).ravel()
+    if pred.shape != (len(split.test),):
+        raise DataError(
+            f"model {spec['model']!r} without the {spec['drop_nm']:g} nm LED returned "
+            f"{pred.shape} predictions for {len(split.test)} rows"
+        )
+    return {
+        "predicted_mgdl": [float(v) for v in pred],
+        "fallback_mgdl": fallback_mgdl(train),
+        "fit_time_s": fit_time,
+        "task_wall_s": time.perf_counter() - wall0,
+        "task_cpu_s": time.process_time() - cpu0,
+    }
 
 
 def _run_task_of(args: tuple[Any, ...]) -> dict[str, Any]:
@@ -245,7 +283,8 @@ def _run_task_of(args: tuple[Any, ...]) -> dict[str, Any]:
 
 
 def _task_tag(spec: Mapping[str, Any]) -> str:
-    return f"r{spec['repeat']}-f{spec['fold']}"
+    drop = spec.get("drop_nm")
+    return f"r{spec['repeat']}-f{spec['fold']}" + ("" if drop is None else f"-no{drop:g}")
 
 
 # --------------------------------------------------------------------------- plan
@@ -272,15 +311,17 @@ def resolve_models(models: Sequence[str] | str | None, default: Sequence[str]) -
 
 
 def _model_params(name: str, preset: str | None) -> dict[str, Any]:
-    """Tuned constructor arguments of model ``name`` on ``preset`` ({} when none).
+    """Tuned constructor arguments of model ``name`` on ``preset``; without a preset
+    (user data) :func:`~nirglucose.models.tuning.untuned_params`.
 
     The one place the benchmark asks for tuned hyper-parameters
     (:func:`nirglucose.models.tuned_params`).
     """
     from ..models import tuned_params
+    from ..models.tuning import untuned_params
 
-    if preset is None:
-        return {}
+    if preset is None:  # user data: networks early-stop on held-out subjects
+        return untuned_params(name)
     return dict(tuned_params(name, preset))
 
 
@@ -346,11 +387,14 @@ class _Plan:
     splits: list[Split]
     tasks: list[_Task]
     ablation_pairs: list[dict[str, Any]]
+    #: The drop-one-LED refits (models × first-repeat folds × LEDs).
+    drop_tasks: list[_Task]
+    drop_one_models: list[str]
 
     def specs(self) -> dict[str, dict[str, Any]]:
         """Task key -> specification, in plan order (a shared fit: its first row's)."""
         out: dict[str, dict[str, Any]] = {}
-        for t in self.tasks:
+        for t in [*self.tasks, *self.drop_tasks]:
             out.setdefault(t.key, t.spec)
         return out
 
@@ -398,6 +442,8 @@ def _oracle_rows(
                 "drop 'oracle' from the models"
             )
         return [], None
+    if not oracle_reference and dataset.config is None:  # user data, not requested: no note
+        return [], None
     if not oracle_reference:
         note = "the oracle was not run (oracle_reference=False); rmse_vs_oracle is NaN"
     elif not has_truth:
@@ -444,7 +490,6 @@ def _plan(
         "n_splits": n_eff,
         "seed": int(opts["seed"]),
         "timing": tasks.canonical(dict(opts["timing"])),
-        "importance_repeats": int(opts["importance_repeats"]),
     }
     classes = {n: get_model_class(base_of[n]) for n in [*names, *aux]}
     planned = []
@@ -467,10 +512,38 @@ def _plan(
             same = base_of[name] != name and params.get(name) == params.get(base_of[name])
             key = tasks.task_key({**spec, "model": base_of[name]} if same else spec)
             planned.append(_Task(key, spec, split, classes[name]))
+    drop_models = resolve_drop_one_models(opts["drop_one_models"], names)
+    drops = _drop_tasks(dataset, drop_models, splits, planned)
     return _Plan(
         names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned,
-        pairs,
+        pairs, drops, drop_models,
     )
+
+
+def _drop_tasks(
+    dataset: Dataset, models: list[str], splits: list[Split], planned: list[_Task]
+) -> list[_Task]:
+    """One refit per model × fold of the first repeat(s) × LED, from the model's own task
+    of that fold (same specification but ``drop_nm`` and untimed)."""
+    if not models:
+        return []
+    wavelengths = led_wavelengths(dataset)
+    if len(wavelengths) < 2:
+        raise DataError(
+            f"drop-one-LED refits need a device with two LEDs or more; this one has "
+            f"{len(wavelengths)}: give drop_one_models='none' (CLI --drop-one none)"
+        )
+    own = {(t.spec["model"], t.split.repeat, t.split.fold): t for t in planned}
+    out = []
+    for split in splits:
+        if split.repeat >= DROP_ONE_REPEATS:
+            continue
+        for name in models:
+            base = own[(name, split.repeat, split.fold)]
+            for w in wavelengths:
+                spec = {**base.spec, "timed": False, "drop_nm": w}
+                out.append(_Task(tasks.task_key(spec), spec, split, base.cls))
+    return out
 
 
 # --------------------------------------------------------------------------- run
@@ -483,14 +556,14 @@ def _execute(
 ) -> None:
     """Run the pending tasks (serially or on ``jobs`` processes) into ``cache``."""
     by_key: dict[str, _Task] = {}
-    for t in plan.tasks:  # a shared fit runs as its first row
+    for t in [*plan.tasks, *plan.drop_tasks]:  # a shared fit runs as its first row
         by_key.setdefault(t.key, t)
     items = [
         (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
     ]
     hooks = task_hooks(
         "benchmark", len(by_key), len(cache.results), "cached", show=opts["progress"],
-        describe=lambda spec: f"{spec['model']} r{spec['repeat']} f{spec['fold']}",
+        describe=lambda spec: f"{spec['model']} {_task_tag(spec).replace('-', ' ')}",
         on_task=opts["on_task"],
     )
     with hooks as done, warnings.catch_warnings():
@@ -530,6 +603,8 @@ def _meta(
         "ablation": [n for n in plan.names if ablation_base(n) is not None],
         "ablation_pairs": plan.ablation_pairs,
         "ablation_method": _METHODS["ablation_method"],
+        "drop_one_models": plan.drop_one_models,
+        "drop_one_method": _METHODS["drop_one_method"],
         "n_boot": opts["n_boot"],
         "alpha": opts["alpha"],
         "ci_level": 0.95,
@@ -558,6 +633,13 @@ _METHODS = {
         "difference (with physics minus without), Holm over the tested pairs; a PINN "
         "tuned to lambda_phys=0 is its no-physics fit (untested, no verdict) and is also "
         "run at the best lambda_phys > 0 of the tuning's validation curve"
+    ),
+    "drop_one_method": (
+        "each model refitted without one LED's columns (adc_<nm>, adc_ref_<nm>; the "
+        "scenario's LED record removed), on the folds of the first repeat with the same "
+        "seeds and parameters, scored on the same held-out subjects; paired cluster "
+        "bootstrap of the RMSE difference (without the LED minus with every LED, the "
+        "latter on the same repeat), Holm over each model's LEDs"
     ),
     "ci_method": (
         "percentile cluster bootstrap over subjects; metrics computed per "
@@ -616,7 +698,7 @@ def run_benchmark(
     n_boot: int = DEFAULT_N_BOOT,
     alpha: float = 0.05,
     timing: dict[str, Any] | None = None,
-    importance_repeats: int = _IMPORTANCE_REPEATS,
+    drop_one_models: Sequence[str] | str | None = None,
     oracle_reference: bool = True,
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
     references: bool = False,
@@ -651,9 +733,11 @@ def run_benchmark(
         Family-wise significance level of the paired tests.
     timing : dict, optional
         Keyword arguments of :func:`~nirglucose.evaluation.timing.measure_latency`.
-    importance_repeats : int
-        Permutations per wavelength channel; 0 computes no importance (an empty
-        ``importance``: what a sweep, which reads the metrics only, asks for).
+    drop_one_models : sequence of str, comma-separated str, or None
+        Models refitted without each LED (``drop_one``, see *Drop-one-LED refits*
+        above): None takes :data:`~nirglucose.evaluation.drop_one.DEFAULT_DROP_ONE_MODELS`
+        among ``models``; ``"none"`` runs no refit (an empty ``drop_one``: what a sweep,
+        which reads the metrics only, asks for); ``"all"`` refits every row.
     oracle_reference : bool
         Fit the oracle for ``rmse_vs_oracle`` when it is not among ``models`` (and the
         data has ``true_*`` columns); False leaves the ratio NaN.
@@ -702,6 +786,11 @@ def run_benchmark(
         )
     result.inverse = inverse_table(
         dataset.frame, runs, plan.names, n_boot=opts["n_boot"], seed=seed
+    )
+    drops = [(t.spec, t.split, cache.results[t.key]) for t in plan.drop_tasks]
+    result.drop_one = drop_one_table(
+        result.predictions, refit_predictions(dataset.frame, drops),
+        n_boot=opts["n_boot"], seed=seed, alpha=alpha,
     )
     result.meta["wall_time_s"] = time.perf_counter() - t_start
     if out is not None:

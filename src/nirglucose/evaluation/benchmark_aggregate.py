@@ -1,12 +1,12 @@
-"""The benchmark's aggregation: task results -> metrics, comparisons, importance.
+"""The benchmark's aggregation: task results -> metrics, comparisons, ablation.
 
 :func:`aggregate` turns the per-task results of
 :func:`~nirglucose.evaluation.benchmark.run_benchmark` into a
 :class:`~nirglucose.evaluation.benchmark_result.BenchmarkResult`: the scored
 out-of-fold predictions with their conformal intervals, one metrics row per model
 (point values per repeat averaged over repeats, cluster-bootstrap CIs), the paired
-comparisons (``vs_best`` and the study's orderings), the physics ablation and the
-permutation importance.
+comparisons (``vs_best`` and the study's orderings) and the physics ablation. (The
+drop-one-LED refits are scored by :mod:`~nirglucose.evaluation.drop_one`.)
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ from ..small_data import significance_withheld
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
-    IMPORTANCE_COLUMNS,
     LAMBDA_ROW,
     METRIC_COLUMNS,
     NO_PHYSICS,
@@ -104,7 +103,8 @@ def aggregate(
 
     preds = preds_all[preds_all["model"].isin(names)].reset_index(drop=True)
     preds = preds[list(PREDICTION_COLUMNS)]
-    comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed)
+    comparisons = _comparisons(preds, names, n_boot=n_boot, alpha=alpha, seed=seed,
+                               study=dataset.config is not None)
     comparisons = _rank(preds, comparisons, metrics, meta)
     ablation = _ablation(
         preds, names, meta.get("ablation_pairs"), metrics.set_index("model")["rmse_mgdl"],
@@ -120,7 +120,6 @@ def aggregate(
         predictions=preds,
         comparisons=comparisons,
         histories={name: _timed(by_model[name])["history"] for name in names},
-        importance=_importance(names, by_model),
         meta=meta,
         dataset=dataset,
         ablation=ablation,
@@ -251,24 +250,6 @@ def _metric_row(
     }
 
 
-def _importance(names: list[str], by_model: dict[str, list]) -> pd.DataFrame:
-    """Permutation importance per model and wavelength, averaged over the model's tasks."""
-    imp_rows = []
-    for name in names:
-        for _spec, res in by_model[name]:
-            imp_rows.append(pd.DataFrame({"model": name, **res["importance"]}))
-    imp_all = pd.concat(imp_rows, ignore_index=True)
-    return (
-        imp_all.groupby(["model", "wavelength_nm"], sort=False)
-        .agg(
-            rmse_increase_mgdl=("rmse_increase_mgdl", "mean"),
-            rmse_increase_sd_mgdl=("rmse_increase_sd_mgdl", "mean"),
-            n_tasks=("rmse_increase_mgdl", "size"),
-        )
-        .reset_index()
-    )[list(IMPORTANCE_COLUMNS)]
-
-
 def _label(name: str) -> str:
     base = ablation_base(name)
     if base is None:
@@ -356,7 +337,9 @@ def _study_orderings(comparisons: pd.DataFrame) -> dict[str, Any]:
     }
 
 
-def _comparisons(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
+def _comparisons(preds, names, *, n_boot, alpha, seed, study: bool = True) -> pd.DataFrame:
+    """Every model against the best; with ``study``, the study's orderings (simulated
+    data only: on a user's device the study's claims were measured elsewhere)."""
     frames = []
     if len(names) > 1:
         vs_best = compare_models(
@@ -370,7 +353,7 @@ def _comparisons(preds, names, *, n_boot, alpha, seed) -> pd.DataFrame:
         vs_best.insert(0, "family", "vs_best")
         vs_best["study_holds"] = None
         frames.append(vs_best)
-    in_study = [m for m in STUDY_ORDER if m in names]
+    in_study = [m for m in STUDY_ORDER if m in names] if study else []
     pairs = [(worse, better) for k, better in enumerate(in_study) for worse in in_study[k + 1 :]]
     if pairs:
         so = compare_models(

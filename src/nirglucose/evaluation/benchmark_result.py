@@ -19,6 +19,7 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from .calibration import CALIBRATION_COLUMNS
+from .drop_one import DROP_ONE_COLUMNS
 from .inverse import INVERSE_COLUMNS
 from .reference import STUDY_TABLE
 from .stats import PAIRED_COLUMNS
@@ -29,7 +30,7 @@ __all__ = [
     "METRIC_COLUMNS",
     "PREDICTION_COLUMNS",
     "COMPARISON_COLUMNS",
-    "IMPORTANCE_COLUMNS",
+    "DROP_ONE_COLUMNS",
     "OUTPUT_FILES",
     "ORACLE",
     "REFERENCE_MODELS",
@@ -162,14 +163,6 @@ PREDICTION_COLUMNS = (
 )
 #: Columns of ``comparisons.csv``.
 COMPARISON_COLUMNS = ("family", *PAIRED_COLUMNS, "study_holds")
-#: Columns of ``importance.csv``.
-IMPORTANCE_COLUMNS = (
-    "model",
-    "wavelength_nm",
-    "rmse_increase_mgdl",
-    "rmse_increase_sd_mgdl",
-    "n_tasks",
-)
 #: Files :meth:`BenchmarkResult.save` writes.
 OUTPUT_FILES = (
     "metrics.csv",
@@ -178,7 +171,7 @@ OUTPUT_FILES = (
     "predictions.parquet",
     "comparisons.csv",
     "histories.json",
-    "importance.csv",
+    "drop_one.csv",
     "ablation.csv",
     "calibration.csv",
     "inverse.csv",
@@ -205,8 +198,6 @@ class BenchmarkResult:
     histories : dict
         Model -> per-epoch dicts of the first fold of the first repeat (empty list for
         models without training history).
-    importance : pandas.DataFrame
-        Permutation importance per model and wavelength (:data:`IMPORTANCE_COLUMNS`).
     meta : dict
         Protocol, seeds, dataset hash and config, versions, task counts, methods;
         ``study_orderings`` says which of the study's pairwise orderings hold here.
@@ -221,13 +212,18 @@ class BenchmarkResult:
         The inverse task (:data:`~nirglucose.evaluation.inverse.INVERSE_COLUMNS`): each
         state-predicting model's tissue-state error against the truth; empty when no
         model predicts state or the data has no ``true_*`` columns.
+    drop_one : pandas.DataFrame
+        Drop-one-LED refits (:data:`~nirglucose.evaluation.drop_one.DROP_ONE_COLUMNS`,
+        ``drop_one.csv``): per model and LED, the RMSE refitted without that LED's
+        columns minus the RMSE with every LED (same folds, seeds and held-out
+        subjects; first repeat), with its paired cluster-bootstrap 95 % CI
+        (:mod:`~nirglucose.evaluation.drop_one`); empty with ``drop_one_models="none"``.
     """
 
     metrics: pd.DataFrame
     predictions: pd.DataFrame
     comparisons: pd.DataFrame
     histories: dict[str, list[dict[str, Any]]]
-    importance: pd.DataFrame
     meta: dict[str, Any]
     dataset: Dataset | None = field(default=None, repr=False)
     ablation: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=ABLATION_COLUMNS))
@@ -235,6 +231,9 @@ class BenchmarkResult:
         default_factory=lambda: pd.DataFrame(columns=CALIBRATION_COLUMNS)
     )
     inverse: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=INVERSE_COLUMNS))
+    drop_one: pd.DataFrame = field(
+        default_factory=lambda: pd.DataFrame(columns=DROP_ONE_COLUMNS)
+    )
 
     def table_markdown(self) -> str:
         """The study's Table 1 layout with our values (95 % CIs) beside the study's."""
@@ -261,7 +260,7 @@ class BenchmarkResult:
         )
         _write_csv(out / "comparisons.csv", self.comparisons)
         _write_text(out / "histories.json", _dumps(self.histories))
-        _write_csv(out / "importance.csv", self.importance)
+        _write_csv(out / "drop_one.csv", self.drop_one)
         _write_csv(out / "ablation.csv", self.ablation)
         _write_csv(out / "calibration.csv", self.calibration)
         _write_csv(out / "inverse.csv", self.inverse)

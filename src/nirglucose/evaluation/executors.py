@@ -44,7 +44,9 @@ from ..exceptions import ConfigError
 __all__ = [
     "BACKENDS",
     "LOCAL_SCHEDULER",
+    "SCHEDULER_TIMEOUT_S",
     "available_cores",
+    "check_scheduler",
     "resolve_backend",
     "run_unordered",
     "watch_parent",
@@ -56,6 +58,56 @@ BACKENDS = ("serial", "processes", "dask")
 
 #: ``scheduler`` value that starts a Dask LocalCluster of ``jobs`` worker processes.
 LOCAL_SCHEDULER = "local"
+
+#: How long a Dask scheduler address may take to accept a connection and answer one
+#: ``identity`` request before the run is refused; ``distributed.Client`` waits forever
+#: on a peer that accepts but never answers. [s]
+SCHEDULER_TIMEOUT_S = 10.0
+
+
+def check_scheduler(scheduler: Any, timeout_s: float | None = None) -> None:
+    """Refuse a Dask scheduler address that does not answer, before any task starts.
+
+    Connects to ``scheduler`` (a ``tcp://host:port`` string; ``'local'``, None and
+    :class:`distributed.Client` objects pass unchecked) and sends one ``identity``
+    request, the message ``distributed.Client`` opens with, all within ``timeout_s``
+    (default :data:`SCHEDULER_TIMEOUT_S`). [s]
+
+    Raises
+    ------
+    ConfigError
+        Nothing listens there, it does not answer within ``timeout_s``, or it answers
+        something other than a Dask scheduler.
+    """
+    if not isinstance(scheduler, str) or scheduler == LOCAL_SCHEDULER:
+        return
+    import asyncio
+
+    timeout_s = SCHEDULER_TIMEOUT_S if timeout_s is None else float(timeout_s)
+    try:
+        from distributed.comm import connect
+    except ImportError:  # pragma: no cover - distributed is a dependency
+        raise ConfigError(
+            "a Dask scheduler needs the 'distributed' package; pip install 'dask[distributed]'"
+        ) from None
+
+    async def identity() -> Any:
+        comm = await connect(scheduler, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout_s))
+    except (OSError, TimeoutError, ValueError) as exc:
+        why = str(exc) or f"no answer within {timeout_s:g} s"
+        raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler!r}: {why}; "
+                          "check the address and that the scheduler is running") from None
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise ConfigError(f"{scheduler!r} answered, but not as a Dask scheduler; check the "
+                          "address (tcp://host:8786)")
 
 
 def available_cores() -> int:
@@ -244,6 +296,7 @@ def _run_dask(
     if scheduler == LOCAL_SCHEDULER:
         cluster, client = _local_client(jobs or available_cores())
     elif own:
+        check_scheduler(scheduler)
         try:
             client = Client(scheduler, timeout="10s", set_as_default=False)
         except (OSError, TimeoutError) as exc:

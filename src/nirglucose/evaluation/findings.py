@@ -9,7 +9,8 @@ files named in its source.
 Everything is read from what ``nirglucose benchmark --out`` wrote for each preset:
 ``metrics.json`` (one row per model), ``comparisons.csv`` (the paired cluster-bootstrap
 comparisons against the best model, Holm-adjusted, and the study's orderings),
-``ablation.csv`` (each PINN against itself without physics), ``meta.json`` (the tuned
+``ablation.csv`` (each PINN against itself without physics), ``drop_one.csv`` (each
+model refitted without each LED), ``meta.json`` (the tuned
 parameters, among them each PINN's physics weight ``lambda_phys``, and the resolved
 configuration) and the predictions (subjects and reference glucose). The statistics are
 the benchmark's own (:mod:`nirglucose.evaluation.stats`); no test is re-run here except
@@ -19,7 +20,9 @@ uses :func:`~nirglucose.evaluation.stats.compare_models` on the same predictions
 Sources
     ``"<preset>/metrics.json:<model>:<column>"``,
     ``"<preset>/comparisons.csv:<family>:<model>:<reference>:<column>"``,
-    ``"<preset>/ablation.csv:<model>:<column>"``, ``"<preset>/meta.json:<dotted key>"``,
+    ``"<preset>/ablation.csv:<model>:<column>"``,
+    ``"<preset>/drop_one.csv:<model>:<wavelength>:<column>"``,
+    ``"<preset>/meta.json:<dotted key>"``,
     ``"<preset>/predictions.parquet:<what>"``; a derived value names its operation
     (``diff``: first minus second, ``ratio``, ``share_removed``: ``1 - a / b``, ``count``).
 """
@@ -36,6 +39,7 @@ import numpy as np
 import pandas as pd
 
 from .benchmark_result import LAMBDA_ROW, NO_PHYSICS, ORACLE, ablation_base
+from .drop_one import drop_one_findings
 from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_TABLE
 
 __all__ = [
@@ -63,6 +67,8 @@ HYPO_MGDL: Final = 70.0
 
 #: Anchors (element ids of the report) that findings point to.
 ANCHOR_HEADLINE: Final = "fig-headline"
+#: The wavelength-utilisation figure (a preset after the first: ``_<preset>`` appended).
+ANCHOR_LEDS: Final = "fig-wavelengths"
 ANCHOR_DISTANCE: Final = "distance-table"
 
 
@@ -176,6 +182,8 @@ class RunData:
         ``predictions.parquet``.
     comparisons, ablation : pandas.DataFrame or None
         ``comparisons.csv``, ``ablation.csv``.
+    drop_one : pandas.DataFrame or None
+        ``drop_one.csv`` (the drop-one-LED refits).
     """
 
     preset: str
@@ -185,6 +193,7 @@ class RunData:
     comparisons: pd.DataFrame | None = None
     ablation: pd.DataFrame | None = None
     no_skill: pd.DataFrame | None = field(default=None, repr=False)
+    drop_one: pd.DataFrame | None = None
 
     @property
     def m(self) -> pd.DataFrame:
@@ -732,8 +741,8 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
     -------
     findings : list of Finding
         In reading order: best model per preset, distance from no skill and the oracle,
-        physics, the study's claims, what separates the presets, glucose range, and the
-        fewest subjects behind a statement.
+        physics, the LED whose removal costs most, the study's claims, what separates
+        the presets, glucose range, and the fewest subjects behind a statement.
     distances : pandas.DataFrame
         :func:`distance_table`.
     """
@@ -747,6 +756,10 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
         for run in runs:
             got = step(run)
             out.extend(got if isinstance(got, list) else [got] if got else [])
+        if step is _physics_findings:
+            for k, run in enumerate(runs):
+                anchor = ANCHOR_LEDS + ("" if k == 0 else f"_{run.preset}")
+                out.extend(drop_one_findings(run.preset, run.drop_one, anchor))
     if len(runs) > 1:
         sep = preset_separation(runs[0], runs[1])
         if sep is not None:

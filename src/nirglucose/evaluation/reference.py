@@ -99,6 +99,9 @@ MODEL_LABELS: dict[str, str] = {
     "mean": "No skill (training mean)",
     "gp": "Gaussian process (ARD)",
     "gbr": "Gradient boosting",
+    "physics-inversion": "Physics inversion (forward model)",
+    "ebl+gp": "EBL + residual GP",
+    "physics-inversion+gp": "Physics inversion + residual GP",
 }
 
 #: The study's ranking by RMSE, best first.

@@ -121,7 +121,7 @@ from .benchmark import (
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
 from .calibration import check_k
-from .executors import resolve_backend, run_unordered
+from .executors import check_scheduler, resolve_backend, run_unordered
 from .progress import task_hooks
 from .splits import check_protocol, effective_layout
 from .stats import cluster_bootstrap_metrics
@@ -336,7 +336,7 @@ def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
         model_params={spec["model"]: spec["model_params"]} if spec["model_params"] else None,
         n_boot=spec["n_boot"],
         timing=dict(_FAST_TIMING),
-        importance_repeats=0,  # the sweep reads metrics only
+        drop_one_models="none",  # the sweep reads metrics only
         oracle_reference=False,
         calibration=int(spec.get("calibration", 0)),
     )
@@ -551,6 +551,7 @@ def _execute(
     on_task: Callable[[dict[str, Any], bool], None] | None,
 ) -> None:
     """Run the pending tasks (here, on local processes or on Dask) into ``cache``."""
+    check_scheduler(scheduler)  # one line, before the progress starts
     hooks = task_hooks(
         "sweep", len(specs), len(cache.results), "reused", show=progress,
         describe=lambda spec: f"{spec['model']} seed {spec['seed']}", on_task=on_task,

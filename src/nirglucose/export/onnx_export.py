@@ -21,8 +21,14 @@ coefficients (``ebl``: :func:`_features_torch`, the twin of
 on EBL's residual (``ebl+gp``). Float32
 throughout; the tests hold it to the Python prediction within 0.05 mg/dL.
 
-Models without an ONNX path (:data:`NO_ONNX_PATH` says why): gradient boosting, the
-oracle (it reads the truth), the forward-model estimator and its hybrid.
+Gradient boosting (``gbr``): the traced part computes the trees' inputs (absorbances,
+physiology, the whitening) in float64 as :meth:`GBRReference.predict` does, then casts
+them to float32 as scikit-learn's trees do; the trees themselves are one ONNX-ML
+``TreeEnsembleRegressor`` node (:func:`_tree_ensemble`, built with ``onnx.helper`` from
+the model's node arrays: ``BRANCH_LEQ`` splits, summed leaf values plus ``init_``).
+
+Models without an ONNX path (:data:`NO_ONNX_PATH` says why): the oracle (it reads the
+truth), the forward-model estimator and its hybrid.
 
 Needs the optional packages ``onnx`` (and ``onnxruntime`` to run the file):
 ``pip install "nirglucose[onnx]"``.
@@ -42,16 +48,17 @@ import numpy as np
 from ..dataset import atomic_write
 from ..exceptions import ConfigError, DataError
 
-__all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "export_onnx", "onnx_graph_bytes"]
+__all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "ML_OPSET", "export_onnx", "onnx_graph_bytes"]
 
 #: ONNX operator set of the exported graphs (onnxruntime 1.16 and later run it).
 OPSET = 17
 #: Registered models with an ONNX path.
 ONNX_MODELS = ("ebl", "sdnn", "original-pinn", "optimized-pinn", "rte-pinn",
-               "selective-rte-pinn", "gp", "pls", "mean", "ebl+gp")
+               "selective-rte-pinn", "gp", "pls", "mean", "ebl+gp", "gbr")
+#: Operator-set version of the ONNX-ML domain (``TreeEnsembleRegressor``) for ``gbr``.
+ML_OPSET = 3
 #: Registered models without one, and why.
 NO_ONNX_PATH = {
-    "gbr": "not yet: its trees would need ONNX's tree-ensemble operator",
     "oracle": "it reads the simulation's truth, which no device has",
     "physics-inversion": "an iterative solver per reading (Levenberg-Marquardt), not a "
                          "fixed graph",
@@ -162,10 +169,82 @@ def _glucose_torch(torch, model, a, pmf):
     return _network(torch, model, model.module_.eval(), a, pmf)
 
 
+def _tree_inputs(torch, model, raw):
+    """``gbr``'s tree inputs from ``raw`` in float64 (its ``predict``), cast to float32."""
+    a, pmf, status = _absorbance_and_physiology(torch, model.schema_, raw.double())
+    u = torch.cat([a, pmf], dim=1) - torch.as_tensor(model.x_mean_, dtype=torch.float64)
+    return (u @ torch.as_tensor(model.whitening_, dtype=torch.float64)).float(), status
+
+
+def _tree_ensemble(model, onnx) -> tuple[Any, Any]:
+    """``(node, output value_info)``: ``gbr``'s trees as one ONNX-ML
+    ``TreeEnsembleRegressor`` on ``tree_inputs`` (float32), output ``tree_sum`` (n, 1).
+
+    A split goes left (``BRANCH_LEQ``) when ``input <= threshold``. scikit-learn compares
+    a float32 input with a float64 threshold; the node stores float32, so each threshold
+    is rounded *down* to the largest float32 not above it, which decides every float32
+    input the same way.
+    """
+    attrs: dict[str, list] = {k: [] for k in (
+        "nodes_treeids", "nodes_nodeids", "nodes_featureids", "nodes_values", "nodes_modes",
+        "nodes_truenodeids", "nodes_falsenodeids", "target_treeids", "target_nodeids",
+        "target_ids", "target_weights")}
+    for t in range(model.value_.shape[0]):
+        for i in range(int(model.n_nodes_[t])):
+            left, right = int(model.left_[t, i]), int(model.right_[t, i])
+            leaf = left < 0
+            thr = np.float32(model.threshold_[t, i])
+            if not leaf and float(thr) > float(model.threshold_[t, i]):
+                thr = np.nextafter(thr, np.float32(-np.inf))
+            attrs["nodes_treeids"].append(t)
+            attrs["nodes_nodeids"].append(i)
+            attrs["nodes_featureids"].append(0 if leaf else int(model.feature_[t, i]))
+            attrs["nodes_values"].append(0.0 if leaf else float(thr))
+            attrs["nodes_modes"].append("LEAF" if leaf else "BRANCH_LEQ")
+            attrs["nodes_truenodeids"].append(0 if leaf else left)
+            attrs["nodes_falsenodeids"].append(0 if leaf else right)
+            if leaf:
+                attrs["target_treeids"].append(t)
+                attrs["target_nodeids"].append(i)
+                attrs["target_ids"].append(0)
+                attrs["target_weights"].append(float(model.value_[t, i]))
+    node = onnx.helper.make_node(
+        "TreeEnsembleRegressor", ["tree_inputs"], ["tree_sum"], domain="ai.onnx.ml",
+        n_targets=1, aggregate_function="SUM", post_transform="NONE",
+        base_values=[float(model.init_)], **attrs)
+    out = onnx.helper.make_tensor_value_info("tree_sum", onnx.TensorProto.FLOAT, ["n", 1])
+    return node, out
+
+
+def _append_trees(proto, model, onnx) -> None:
+    """Turn the traced ``raw -> (tree_inputs, status)`` graph into ``raw ->
+    (glucose_mgdl, status)`` by appending the tree ensemble and a flatten to (n,)."""
+    graph = proto.graph
+    tree, _ = _tree_ensemble(model, onnx)
+    shape = onnx.helper.make_tensor("glucose_shape", onnx.TensorProto.INT64, [1], [-1])
+    graph.initializer.append(shape)
+    graph.node.extend([tree, onnx.helper.make_node(
+        "Reshape", ["tree_sum", "glucose_shape"], ["glucose_mgdl"])])
+    outputs = [o for o in graph.output if o.name != "tree_inputs"]
+    del graph.output[:]
+    graph.output.extend([onnx.helper.make_tensor_value_info(
+        "glucose_mgdl", onnx.TensorProto.FLOAT, ["n"]), *outputs])
+    proto.opset_import.append(onnx.helper.make_opsetid("ai.onnx.ml", ML_OPSET))
+    onnx.checker.check_model(proto)
+
+
 def _graph_module(model):
-    """A torch module ``raw -> (glucose_mgdl, status)`` equal to ``model.predict``."""
+    """A torch module ``raw -> (glucose_mgdl, status)`` equal to ``model.predict``
+    (``gbr``: ``raw -> (tree_inputs, status)``, the trees appended after tracing)."""
     torch = _torch()
     schema = model.schema_
+    if model.registry_name == "gbr":
+
+        class Inputs(torch.nn.Module):
+            def forward(self, raw):
+                return _tree_inputs(torch, model, raw)
+
+        return Inputs().eval()
 
     class Graph(torch.nn.Module):
         def __init__(self):
@@ -179,10 +258,10 @@ def _graph_module(model):
     return Graph().eval()
 
 
-def _trace(torch, graph, example, buf) -> None:
+def _trace(torch, graph, example, buf, first: str = "glucose_mgdl") -> None:
     torch.onnx.export(graph, (example,), buf, input_names=["raw"],
-                      output_names=["glucose_mgdl", "status"],
-                      dynamic_axes={"raw": {0: "n"}, "glucose_mgdl": {0: "n"}, "status": {0: "n"}},
+                      output_names=[first, "status"],
+                      dynamic_axes={"raw": {0: "n"}, first: {0: "n"}, "status": {0: "n"}},
                       opset_version=OPSET, dynamo=False)
 
 
@@ -220,10 +299,13 @@ def onnx_graph_bytes(model: Any) -> bytes:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the TorchScript exporter's deprecation notice
-            _trace(torch, graph, example, buf)
+            _trace(torch, graph, example, buf,
+                   "tree_inputs" if name == "gbr" else "glucose_mgdl")
     finally:
         torch.backends.mha.set_fastpath_enabled(fastpath)
     proto = onnx.load_from_string(buf.getvalue())
+    if name == "gbr":
+        _append_trees(proto, model, onnx)
     meta = {"nirglucose_model": name, "raw_columns": json.dumps(list(schema.raw_columns)),
             "adc_bits": str(schema.adc_bits), "glucose_unit": "mg/dL"}
     for key, value in meta.items():

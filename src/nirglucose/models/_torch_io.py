@@ -141,6 +141,14 @@ class TorchIOMixin:
         self.start_val_mse_ = doc.get("start_val_mse")
         if "conformal" in doc:  # the interval calibration saved with the model
             self.conformal_ = check_calibration_doc(doc["conformal"], repr(str(path)))
+        widths = {"nir": self.schema_.n_channels, "pmf": max(len(self.schema_.physiology), 1)}
+        for part, width in widths.items():
+            got = np.size(self.scaler_[f"{part}_mean"])
+            if got != width:
+                raise DataError(
+                    f"{str(path)!r}: scaler.{part}_mean has {got} values, the device "
+                    f"({self.schema_.describe()}) needs {width}; the file is corrupt, "
+                    "refit the model")
         self.n_features_in_ = len(self.schema_.raw_columns)
         if not self.schema_.is_plain:
             self.feature_names_in_ = np.asarray(self.schema_.raw_columns, dtype=object)

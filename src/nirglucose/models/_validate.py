@@ -174,6 +174,11 @@ def read_model_document(
             f"{str(path)!r} is not a nirglucose model file (no 'format': {MODEL_FORMAT!r} "
             "and 'model' keys)"
         )
+    if not isinstance(doc["model"], str):
+        raise DataError(
+            f"{str(path)!r}: 'model' must be a model name (a string such as 'ebl'), got "
+            f"{type(doc['model']).__name__} {str(doc['model'])[:40]}; the file is corrupt"
+        )
     if model is not None and doc["model"] != model:
         raise DataError(
             f"{str(path)!r} holds a {doc['model']!r} model, not {model!r}; load it with "

@@ -132,7 +132,7 @@ class _LinearBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
 
 @register("ebl")
 class EnhancedBeerLambert(_LinearBase):
-    """Enhanced Beer–Lambert: 56 physics features -> standardisation -> ridge.
+    """Enhanced Beer–Lambert: physics features (56 on the study's device) -> ridge.
 
     The ridge penalty is chosen by subject-grouped inner cross-validation, with one
     eigen-decomposition per fold serving every penalty in closed form [2]_. The
@@ -352,7 +352,7 @@ class EnhancedBeerLambert(_LinearBase):
 
 @register("pls")
 class PLSBaseline(_LinearBase):
-    """PLS regression on the 4 log absorbances and the 12 measured PMF entries.
+    """PLS regression on the log absorbances and the physiology (4 + 12 on the study's).
 
     The classical chemometrics baseline [3]_: inputs standardised, the number of latent
     components chosen by subject-grouped inner CV, the fitted model folded to one

@@ -12,12 +12,15 @@ import inspect
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..exceptions import ConfigError, unknown_name
 
 __all__ = [
     "register",
     "get_model_class",
     "make_model",
+    "describe_model",
     "available_models",
     "load_model",
     "MODEL_MODULES",
@@ -107,6 +110,38 @@ def is_pinn(name: str) -> bool:
     """Whether ``name`` is a physics-informed network: a network with a physics weight
     ``lambda_phys`` (0 switches its physics term off, e.g. for the ablation)."""
     return is_network(name) and "lambda_phys" in inspect.signature(get_model_class(name)).parameters
+
+
+def describe_model(model: Any) -> str:
+    """One line on a model: its summary, and for a fitted one its device's inputs.
+
+    Parameters
+    ----------
+    model : str or estimator
+        A registered name (the class's summary: the first line of its docstring), or a
+        fitted estimator (e.g. from :func:`load_model`): then the counts follow the
+        device it was fitted on (its LEDs, resolution and physiology), not the study's.
+
+    Examples
+    --------
+    >>> describe_model("mean")
+    'No skill: predicts the training mean of glucose for every row.'
+    """
+    cls = get_model_class(model) if isinstance(model, str) else type(model)
+    doc = (cls.__doc__ or "").strip().splitlines()
+    summary = doc[0] if doc else ""
+    schema = None if isinstance(model, str) else model.__dict__.get("schema_")
+    if schema is None:
+        return summary
+    parts = [f"{len(schema.raw_columns)} input columns"]
+    coef = model.__dict__.get("coef_")
+    if coef is not None:
+        parts.append(f"{np.size(coef)} features")
+    n_par = getattr(model, "n_parameters", None)
+    if isinstance(n_par, int | np.integer):
+        parts.append(f"{int(n_par):,} parameters")
+    name = getattr(cls, "registry_name", "") or cls.__name__
+    return f"{name} fitted on {schema.describe()}: {', '.join(parts)}"
 
 
 def make_model(name: str, **params: Any):

@@ -32,6 +32,8 @@ from .registry import get_model_class, is_network, is_pinn
 
 __all__ = [
     "tuned_params",
+    "untuned_params",
+    "UNTUNED_NETWORK_PARAMS",
     "tuning_record",
     "search_space",
     "TUNING_SEEDS",
@@ -202,6 +204,38 @@ def tuned_params(name: str, preset: str) -> dict:
     if isinstance(out.get("alphas"), list):  # JSON has no tuples; EBL's grid is one
         out["alphas"] = tuple(out["alphas"])
     return out
+
+
+#: Training settings of a network fitted where nothing was tuned (a team's own device
+#: file: ``fit``, ``benchmark --data``). The untuned constructor defaults train a fixed
+#: 300 epochs on every row, which on 25 readings memorises them (SDNN, 3,137 parameters:
+#: grouped-CV RMSE up to 2.2 x no skill on a file without signal, issue 28). Here: hold
+#: out a fifth of the subjects and early-stop on them, the tuning's choice of
+#: ``val_fraction`` on four of the five tuned presets (``data/tuned_params.json``), with
+#: epoch 0 (the training mean) a candidate, so a network that learns nothing returns
+#: the no-skill predictor (Prechelt 1998, LNCS 1524, 55-69,
+#: doi:10.1007/3-540-49430-8_3), then refit on every row for the chosen epochs. Patience
+#: 20 epochs: the plateau schedule's reference patience (``make_scheduler``); it stops
+#: the 300-epoch run once the validation loss has stalled, so the refit does not chase
+#: a lucky late epoch of a five-subject validation set.
+UNTUNED_NETWORK_PARAMS: dict = {"val_fraction": 0.2, "patience": 20, "refit": True}
+
+
+def untuned_params(name: str) -> dict:
+    """Constructor keyword arguments for model ``name`` fitted without tuned ones.
+
+    Networks get :data:`UNTUNED_NETWORK_PARAMS` (early stopping on held-out subjects);
+    every other model its defaults (``{}``): the linear models, gradient boosting and the
+    Gaussian process choose their own regularisation inside ``fit`` or have few knobs.
+
+    Examples
+    --------
+    >>> untuned_params("sdnn")["val_fraction"]
+    0.2
+    >>> untuned_params("ebl")
+    {}
+    """
+    return dict(UNTUNED_NETWORK_PARAMS) if is_network(name) else {}
 
 
 def lambda_curve(name: str, preset: str) -> dict | None:

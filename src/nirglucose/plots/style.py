@@ -76,6 +76,10 @@ MODEL_COLORS: dict[str, str] = {
     "gp": "#882255",
     "gbr": "#999933",
     "mean": "#BBBBBB",
+    # the forward-model estimator and the hybrids: three more of Tol's muted colours
+    "physics-inversion": "#332288",
+    "ebl+gp": "#44AA99",
+    "physics-inversion+gp": "#CC6677",
 }
 
 #: Marker of each registered model (a second cue besides colour).
@@ -91,6 +95,9 @@ MODEL_MARKERS: dict[str, str] = {
     "gp": "h",
     "gbr": "p",
     "mean": "d",  # a filled marker: a line marker vanishes into a horizontal error bar
+    "physics-inversion": "8",
+    "ebl+gp": "H",
+    "physics-inversion+gp": ">",
 }
 
 #: Colour of each diabetes status of the simulated cohort: four shades of brown, a hue

@@ -192,7 +192,10 @@ def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
             ax.plot(closed, radii[model], color=colors[model], lw=1.8, zorder=3,
                     marker=model_marker(model), ms=3.5)
             ax.fill(closed, radii[model], color=colors[model], alpha=0.25, zorder=2)
-            _radar_frame(ax, angles, names, pad=1, fontsize=7.5)
+            missing = scores.loc[model].isna().to_numpy()  # drawn at 0: say it is missing
+            _radar_frame(ax, angles, [f"{n}\n(not counted)" if miss else n
+                                      for n, miss in zip(names, missing, strict=True)],
+                         pad=1, fontsize=7.5)
             ax.set_yticks([0.5, 1.0])
             ax.set_yticklabels([])
             ax.set_title(model_label(model), fontsize=9, pad=10)

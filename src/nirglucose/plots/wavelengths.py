@@ -1,93 +1,107 @@
-"""Figure 11: wavelength utilisation, a models × wavelengths heatmap.
+"""Wavelength utilisation: what each model loses when one LED is left out.
 
-Each cell is the permutation importance of one channel for one model: how much the
-held-out RMSE rises when that channel's values are shuffled (``importance.csv``).
+One panel per model: for each LED, the paired RMSE difference of the model refitted
+without that LED minus the model with every LED, with its 95 % CI (``drop_one.csv``,
+computed by :mod:`nirglucose.evaluation.drop_one`). Above zero: the LED carries
+information the others do not.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
+
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
-from .style import model_label, new_axes, styled
+from .style import GREY, model_color, model_label, new_axes, plot_style, styled
 
-__all__ = ["plot_wavelength_heatmap"]
+__all__ = ["plot_drop_one", "figure_drop_one"]
+
+#: Panels per row of :func:`figure_drop_one`.
+_PER_ROW = 4
 
 
 @styled
-def plot_wavelength_heatmap(
-    matrix: pd.DataFrame,
+def plot_drop_one(
+    table: pd.DataFrame,
+    model: str,
     *,
-    cmap: str = "cividis",
-    annotate: bool = True,
-    relative: bool = True,
     title: str | None = None,
     ax: Axes | None = None,
 ) -> Axes:
-    """Heatmap of permutation importance, models in rows, wavelengths in columns.
+    """One model's RMSE lost per LED left out, with 95 % CIs.
 
     Parameters
     ----------
-    matrix : pandas.DataFrame
-        Index: model names; columns: wavelengths (numbers); values: RMSE increase when
-        that channel is permuted, computed by the benchmark. NaN cells are left blank.
-        [mg/dL]
-    cmap : str
-        Colour map (a perceptually uniform, colour-blind-safe one by default).
-    annotate : bool
-        Write each cell's value (ΔRMSE in mg/dL) in it. [-]
-    relative : bool
-        Colour each row on its own scale (its largest rise = 1, negatives as 0), so a
-        model with rises of a few mg/dL is as readable as one with hundreds. [-]
+    table : pandas.DataFrame
+        Rows of ``drop_one.csv``: ``model``, ``dropped_wavelength_nm`` [nm],
+        ``delta_rmse_mgdl``, ``ci_low``, ``ci_high`` [mg/dL], optionally
+        ``rmse_all_mgdl`` [mg/dL]; only ``model``'s rows are drawn.
+    model : str
+        The model whose panel this is.
     title : str, optional
-        Axes title.
+        Axes title (default: the model's name and its RMSE with every LED).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure's by default.
 
     Returns
     -------
     matplotlib.axes.Axes
-        The Axes, with one image (an AxesImage) of ``matrix.shape`` cells and a colour bar.
+        One error bar per LED (``ax.containers``), filled where the CI excludes 0 and
+        open where it does not, and a dashed line at 0.
     """
-    nrow, ncol = matrix.shape
-    ax = new_axes(ax, figsize=(1.3 * max(ncol, 1) + 3.6, 0.42 * max(nrow, 1) + 1.6))
-    values = matrix.to_numpy(float)
-    if relative:
-        # each row on its own scale: its largest rise = 1 (rows without a positive rise
-        # stay at 0), negative rises clipped to 0 in colour but printed as they are
-        peak = np.nanmax(np.where(np.isfinite(values), values, -np.inf), axis=1, initial=0.0)
-        scale = np.where(peak > 0, peak, 1.0)[:, None]
-        shown = np.clip(values / scale, 0.0, 1.0)
-        vmin, vmax = 0.0, 1.0
-    else:
-        shown = values
-        finite = values[np.isfinite(values)]
-        vmin = min(0.0, float(finite.min())) if finite.size else 0.0
-        vmax = float(finite.max()) if finite.size else 1.0
-        if vmax <= vmin:
-            vmax = vmin + 1.0
-    im = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, vmin=vmin, vmax=vmax,
-                   aspect="auto", interpolation="nearest")
-    ax.set_xticks(range(ncol))
-    ax.set_xticklabels([f"{float(c):g}" for c in matrix.columns])
-    ax.set_yticks(range(nrow))
-    ax.set_yticklabels([model_label(str(m)) for m in matrix.index])
-    ax.set_xlabel("LED wavelength [nm]")
-    for side in ("top", "right", "left", "bottom"):
-        ax.spines[side].set_visible(False)
-    ax.tick_params(length=0)
-    if annotate:
-        mid = vmin + 0.6 * (vmax - vmin)
-        for i in range(nrow):
-            for j in range(ncol):
-                v = values[i, j]
-                if np.isfinite(v):
-                    txt = f"{v:.0f}" if abs(v) >= 100 else f"{v:.1f}"
-                    ax.text(j, i, txt, ha="center", va="center", fontsize=7.5,
-                            color="black" if shown[i, j] > mid else "white")
-    cbar = ax.figure.colorbar(im, ax=ax, fraction=0.06, pad=0.02)
-    cbar.set_label("ΔRMSE / row maximum [-]" if relative else "ΔRMSE [mg/dL]")
-    ax.set_title(title if title is not None else
-                 "Wavelength utilisation: RMSE increase [mg/dL] when a channel is permuted")
+    t = table[table["model"] == model].sort_values("dropped_wavelength_nm")
+    ax = new_axes(ax, figsize=(3.4, 3.0))
+    x = np.arange(len(t), dtype=float)
+    d = t["delta_rmse_mgdl"].to_numpy(float)
+    lo, hi = t["ci_low"].to_numpy(float), t["ci_high"].to_numpy(float)
+    color = model_color(model)
+    excludes = (lo > 0) | (hi < 0)
+    ax.axhline(0.0, color=GREY, lw=0.8, ls="--", zorder=1)
+    for k in range(len(t)):
+        ax.errorbar(x[k], d[k], yerr=[[d[k] - lo[k]], [hi[k] - d[k]]], fmt="o", ms=6,
+                    color=color, mfc=color if excludes[k] else "white", mew=1.4,
+                    capsize=3, lw=1.4, zorder=3)
+    ax.set_xticks(x)
+    ax.set_xticklabels([f"{w:g}" for w in t["dropped_wavelength_nm"].astype(float)])
+    ax.set_xlim(-0.6, max(len(t) - 0.4, 0.6))
+    ax.set_xlabel("LED left out [nm]")
+    ax.set_ylabel("Δ RMSE without − with [mg/dL]")
+    if title is None:
+        title = model_label(model)
+        if "rmse_all_mgdl" in t and len(t) and math.isfinite(float(t["rmse_all_mgdl"].iloc[0])):
+            title += f"\n(all LEDs: {float(t['rmse_all_mgdl'].iloc[0]):.1f} mg/dL)"
+    ax.set_title(title, fontsize=9)
     return ax
+
+
+def figure_drop_one(table: pd.DataFrame, models: Sequence[str]) -> Figure:
+    """Every model's :func:`plot_drop_one` panel, four per row, each on its own scale.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``drop_one.csv`` (see :func:`plot_drop_one`).
+    models : sequence of str
+        The models drawn, in panel order (those without rows are skipped).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One Axes per model drawn.
+    """
+    models = [m for m in models if (table["model"] == m).any()]
+    n = max(len(models), 1)
+    ncol = min(n, _PER_ROW)
+    nrow = math.ceil(n / ncol)
+    with plot_style():
+        fig = Figure(figsize=(3.2 * ncol + 0.6, 2.9 * nrow + 0.4), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(nrow, ncol, squeeze=False)).ravel()
+        for ax, m in zip(axes, models, strict=False):
+            plot_drop_one(table, m, ax=ax)
+        for ax in axes[len(models):]:
+            ax.set_visible(False)
+    return fig

@@ -40,6 +40,7 @@ ANCHOR_NAMES = {
     "fig-headline": "headline figure",
     "distance-table": "distances table",
     "ablation": "physics ablation",
+    "fig-wavelengths": "wavelength utilisation figure",
     "study-orderings": "study orderings",
     "reproduced-table": "main table",
     "extra-table": "further metrics",
@@ -60,7 +61,7 @@ def run_data(results: Results) -> RunData:
             ablation = None
     return RunData(preset=preset_of(results), metrics=results.metrics, meta=results.meta,
                    predictions=results.predictions, comparisons=results.comparisons,
-                   ablation=ablation)
+                   ablation=ablation, drop_one=results.drop_one)
 
 
 def _value_html(v: Value) -> str:
@@ -72,7 +73,7 @@ def _value_html(v: Value) -> str:
 
 def _anchor_name(anchor: str) -> str:
     for key, name in ANCHOR_NAMES.items():
-        if anchor == key or anchor.startswith(key + "-"):
+        if anchor == key or anchor.startswith((key + "-", key + "_")):
             suffix = anchor[len(key) + 1:] if anchor != key else ""
             return f"{name} ({suffix})" if suffix else name
     return anchor
@@ -89,7 +90,8 @@ def finding_html(f: Finding) -> str:
 #: Heading of each topic of the findings, in reading order.
 TOPIC_TITLES = {
     "best": "Best model", "distance": "Distance from no skill and from the oracle",
-    "physics": "Does physics help?", "claims": "The study's claims",
+    "physics": "Does physics help?", "leds": "What each LED adds",
+    "claims": "The study's claims",
     "presets": "What separates the presets", "range": "Glucose range",
     "subgroups": "Subgroups", "subjects": "Sample size",
 }

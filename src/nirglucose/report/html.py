@@ -351,11 +351,17 @@ def hypo_note(results: Results) -> str:
     return f'<p class="note" id="{_esc(_hypo_id(results))}">{_esc(text)}</p>'
 
 
+def table_title(results: Results) -> str:
+    """The main table's heading: nothing is reproduced on a user's own data."""
+    return "Results table" if results.user_data else "Reproduced table"
+
+
 def main_table(results: Results) -> str:
     """The essentials, then every column behind a toggle (opened in print)."""
+    study = "" if results.user_data else "the study's value beside each metric, "
     return (_reproduced_table(results, full=False)
-            + '<details class="more"><summary>Every column: the study\'s value beside each '
-            "metric, prediction intervals, latency</summary>"
+            + f'<details class="more"><summary>Every column: {study}'
+            "prediction intervals, latency</summary>"
             + _reproduced_table(results, full=True) + "</details>")
 
 
@@ -511,17 +517,17 @@ _OPTIONAL_CONTENTS = (("findings", "Findings"), ("fig-headline", "Headline figur
 _MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metrics by preset"),
                     ("separation", "What separates the presets"),
                     ("ablations", "Physics ablation"), ("subgroups", "Subgroups"),
-                    ("hyperparameters", "Tuned hyper-parameters"))
+                    ("hyperparameters", "Hyper-parameters"))
 
 
 def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Sequence[str],
-              extra: Sequence[str]) -> str:
+              extra: Sequence[str], table: str = "Reproduced table") -> str:
     """The contents list: every section present on the page, and every figure."""
     def have(sections: Sequence[str], anchor: str) -> bool:
         return any(f'id="{anchor}"' in x for x in sections)
 
     items = [(a, t) for a, t in _OPTIONAL_CONTENTS if have(top, a)]
-    items += [("table", "Reproduced table"), ("further", "Further metrics"),
+    items += [("table", table), ("further", "Further metrics"),
               ("significance", "Significance")]
     items += [(a, t) for a, t in _MIDDLE_CONTENTS if have(middle, a)]
     if not have(middle, "ablations"):  # one preset: its own ablation heading
@@ -584,9 +590,10 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         f"<h1>{_esc(title)}</h1>",
         f'<p class="sub">{_esc(sub)}</p>',
         notes,
-        _contents(figures, top_sections, middle_sections, extra_sections),
+        _contents(figures, top_sections, middle_sections, extra_sections,
+                  table_title(results)),
         *top_sections,
-        '<h2 id="table">Reproduced table</h2>',
+        f'<h2 id="table">{table_title(results)}</h2>',
         ("<p>This run's metrics with 95 % confidence intervals on your data. The study's "
          "Table 1 is left out: it was measured on other data.</p>" if results.user_data else
          "<p>This run's metrics with 95 % confidence intervals next to the study's Table 1 "

@@ -67,7 +67,8 @@ def hyperparameter_section(runs: Sequence[Results]) -> str:
     rows = hyperparameter_rows(runs)
     if not rows:
         return ""
-    presets = [str(r.meta.get("preset") or r.directory.name) for r in runs]
+    presets = [str(r.meta.get("preset") or ("your data" if getattr(r, "user_data", False)
+                                            else r.directory.name)) for r in runs]
     esc = html.escape
     head = "<th>Model</th><th>Parameter</th>" + "".join(f"<th>{esc(p)}</th>" for p in presets)
     body = []
@@ -80,6 +81,14 @@ def hyperparameter_section(runs: Sequence[Results]) -> str:
             else f"<td>{esc(v)}</td>" for v in values)
         pname = "λ (lambda_phys)" if name == "lambda_phys" else name
         body.append(f"<tr><td>{label}</td><td><code>{esc(pname)}</code></td>{cells}</tr>")
+    if all(getattr(r, "user_data", False) for r in runs):  # nothing was tuned there
+        return ('<h2 id="hyperparameters">Hyper-parameters</h2>'
+                "<p>Nothing was tuned on this data: each network held out a fifth of the "
+                "training subjects for early stopping "
+                "(<code>nirglucose.models.tuning.untuned_params</code>); every model absent "
+                "here ran on its defaults.</p>"
+                f'<div class="scroll"><table id="hyperparameter-table"><thead><tr>{head}</tr>'
+                f"</thead><tbody>{''.join(body)}</tbody></table></div>")
     return ('<h2 id="hyperparameters">Tuned hyper-parameters</h2>'
             "<p>What each model was fitted with on each preset (chosen by "
             "<code>benchmarks/tune.py</code> and recorded in <code>meta.json</code>; a model "

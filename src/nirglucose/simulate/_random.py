@@ -17,7 +17,7 @@ import zlib
 import numpy as np
 from scipy.special import ndtr, ndtri
 
-__all__ = ["BLOCK_SUBJECTS", "RandomStreams", "truncated_normal"]
+__all__ = ["BLOCK_SUBJECTS", "RandomStreams", "SubjectStreams", "truncated_normal"]
 
 #: Subjects per random block (a chunk holds whole blocks).
 BLOCK_SUBJECTS = 4096
@@ -69,6 +69,36 @@ class RandomStreams:
         if name not in self._cache:
             key = zlib.crc32(name.encode("utf-8"))
             ss = np.random.SeedSequence(self.seed, spawn_key=(self.block, key))
+            self._cache[name] = _Counted(np.random.Generator(np.random.PCG64(ss)), self)
+        return self._cache[name]
+
+
+class SubjectStreams(RandomStreams):
+    """Named random generators of one subject (the wear simulation's per-reading draws).
+
+    Keyed by ``(WEAR, subject_id, name)`` (a three-part spawn key, so never one of the
+    two-part keys of :class:`RandomStreams`' blocks): a subject's draws are the same
+    whichever chunk or worker simulates it.
+
+    Examples
+    --------
+    >>> a = SubjectStreams(0, 7)("shot").normal(size=2)
+    >>> bool((a == SubjectStreams(0, 7)("shot").normal(size=2)).all())
+    True
+    >>> bool((a == SubjectStreams(0, 8)("shot").normal(size=2)).any())
+    False
+    """
+
+    _TAG = zlib.crc32(b"wear")
+
+    def __init__(self, seed: int, subject_id: int) -> None:
+        super().__init__(seed, -1)
+        self.subject_id = int(subject_id)
+
+    def __call__(self, name: str) -> _Counted:
+        if name not in self._cache:
+            key = zlib.crc32(name.encode("utf-8"))
+            ss = np.random.SeedSequence(self.seed, spawn_key=(self._TAG, self.subject_id, key))
             self._cache[name] = _Counted(np.random.Generator(np.random.PCG64(ss)), self)
         return self._cache[name]
 

@@ -106,17 +106,21 @@ def compressed_thickness_mm(thickness_mm, pressure, compression: float, f_contac
 
 
 def apply_contact(
-    cfg: ScenarioConfig, phys: dict, env: dict, measured: dict, streams: RandomStreams
+    cfg: ScenarioConfig, phys: dict, env: dict, measured: dict, streams: RandomStreams,
+    placement: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> dict:
     """Contact layer entry: pressure, coupling, blood and thickness under the probe.
 
     ``measured`` is the device's physiological vector: with
     ``device.humidity_compensation`` the firmware divides out the coupling-vs-RH curve
     at the RH sensor's reading, so only the curve at the sensor's error remains.
+    ``placement`` (optional): each reading's pressure and coupling draw, as
+    :func:`sample_contact` returns them, where they persist over several readings (a
+    worn device between re-seatings); drawn per reading when omitted.
     """
     n = len(phys["true_blood_fraction"])
     f_contact = cfg.noise_factor("contact_pressure")
-    pressure, coupling_z = sample_contact(cfg, n, streams)
+    pressure, coupling_z = sample_contact(cfg, n, streams) if placement is None else placement
     rh_range = cfg.environment.humidity_pct
     wet = humidity_wetness(env["true_humidity_pct"], rh_range)
     if cfg.device.humidity_compensation:

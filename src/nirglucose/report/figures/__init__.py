@@ -8,7 +8,7 @@ plain numbers to :mod:`nirglucose.plots` (:func:`render_figures`).
 
 Required inputs: ``metrics.csv`` (or ``metrics.json``) and ``predictions.parquet``.
 Everything else (``meta.json``, ``table.md``, ``comparisons.csv``, ``histories.json``,
-``importance.csv``, ``dataset.parquet``) is optional; what is missing is listed in
+``drop_one.csv``, ``dataset.parquet``) is optional; what is missing is listed in
 :attr:`Results.notes` and the figures that need it say so instead of drawing nothing.
 
 The package is split by concept; every name is importable from here as before:
@@ -41,11 +41,11 @@ from .inputs import (
     bland_altman_inputs,
     channel_correlations,
     competitors,
+    drop_one_models,
     efficiency_table,
     error_grid_inputs,
     first_repeat,
     forest_table,
-    importance_matrix,
     is_ablation_row,
     linearity_inputs,
     model_order,
@@ -94,7 +94,7 @@ __all__ = [
     "pareto_front",
     "efficiency_table",
     "physics_depth_table",
-    "importance_matrix",
+    "drop_one_models",
     "forest_table",
     "pipeline_columns",
     "environment_panels",

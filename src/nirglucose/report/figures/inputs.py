@@ -2,7 +2,7 @@
 
 Correlations, zone percentages, Bland–Altman limits and their confidence intervals,
 regression lines, normalised scores, Pareto fronts and the tables of the trade-off,
-importance, forest and performance figures, with :mod:`nirglucose.metrics` and numpy;
+drop-one, forest and performance figures, with :mod:`nirglucose.metrics` and numpy;
 plain numbers for :mod:`nirglucose.plots`.
 """
 
@@ -21,7 +21,7 @@ __all__ = [
     "channel_correlations", "error_grid_inputs", "bland_altman_inputs", "linearity_inputs",
     "radar_scores", "pareto_front", "efficiency_table",
     "is_ablation_row", "competitors", "reference_values", "physics_depth_table",
-    "importance_matrix", "forest_table", "performance_table", "latency_resolution",
+    "drop_one_models", "forest_table", "performance_table", "latency_resolution",
 ]
 
 #: Physics depth of each registered model: how much of the forward model it uses, as
@@ -428,16 +428,14 @@ def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str]) -> tuple[p
     return t, left_out
 
 
-def importance_matrix(importance: pd.DataFrame, models: Sequence[str]) -> pd.DataFrame:
-    """Models × wavelengths matrix of the mean RMSE increase (rows in display order).
+def drop_one_models(drop_one: pd.DataFrame, models: Sequence[str]) -> list[str]:
+    """The models of ``drop_one.csv`` in display order (``models`` first, then the rest).
 
     Ablation rows (``<pinn>/no-physics``) are left out; they have their own table.
     """
-    mat = importance.pivot_table(index="model", columns="wavelength_nm",
-                                 values="rmse_increase_mgdl", aggfunc="mean")
-    rows = [m for m in models if m in mat.index] + [m for m in mat.index if m not in models
-                                                     and not is_ablation_row(m)]
-    return mat.reindex(rows).sort_index(axis=1)
+    have = list(dict.fromkeys(str(m) for m in drop_one["model"]))
+    rows = [m for m in models if m in have] + [m for m in have if m not in models]
+    return [m for m in rows if not is_ablation_row(m)]
 
 
 def _study_rows() -> dict[str, dict[str, Any]]:

@@ -2,7 +2,7 @@
 
 Required inputs: ``metrics.csv`` (or ``metrics.json``) and ``predictions.parquet``.
 Everything else (``meta.json``, ``table.md``, ``comparisons.csv``, ``histories.json``,
-``importance.csv``, ``dataset.parquet``) is optional; what is missing is listed in
+``drop_one.csv``, ``dataset.parquet``) is optional; what is missing is listed in
 :attr:`Results.notes` and the figures that need it say so instead of drawing nothing.
 """
 
@@ -35,7 +35,7 @@ _OPTIONAL_FILES: Final = {
     "table.md": "the benchmark's table and significance statements",
     "comparisons.csv": "paired model comparisons",
     "histories.json": "training histories (figure 7)",
-    "importance.csv": "permutation importance (figure 11)",
+    "drop_one.csv": "drop-one-LED refits (wavelength utilisation)",
     "dataset.parquet": "the simulated dataset (figure 1)",
 }
 
@@ -61,8 +61,8 @@ class Results:
     histories : dict of str to pandas.DataFrame, or None
         Per-epoch histories of the networks (models with an empty history left out);
         None when ``histories.json`` is absent.
-    importance : pandas.DataFrame or None
-        ``importance.csv``.
+    drop_one : pandas.DataFrame or None
+        ``drop_one.csv`` (the drop-one-LED refits); None when absent or empty.
     dataset : nirglucose.Dataset or None
         ``dataset.parquet``.
     notes : list of str
@@ -76,7 +76,7 @@ class Results:
     table_md: str | None = None
     comparisons: pd.DataFrame | None = None
     histories: dict[str, pd.DataFrame] | None = None
-    importance: pd.DataFrame | None = None
+    drop_one: pd.DataFrame | None = None
     dataset: Any = None
     notes: list[str] = field(default_factory=list)
 
@@ -197,7 +197,7 @@ def load_results(results_dir: str | Path) -> Results:
     res = Results(directory=d, metrics=metrics, predictions=predictions, meta=meta, notes=notes)
     _load_tables(res, d)
     _load_histories(res, d)
-    _load_importance_and_dataset(res, d)
+    _load_drop_one_and_dataset(res, d)
     missing_pred = sorted(set(metrics["model"]) - set(predictions["model"]))
     if missing_pred:
         notes.append(f"No predictions for {', '.join(missing_pred)}: they are left out of the "
@@ -282,14 +282,15 @@ def _load_histories(res: Results, d: Path) -> None:
     }
 
 
-def _load_importance_and_dataset(res: Results, d: Path) -> None:
-    """``importance.csv`` and ``dataset.parquet`` into ``res`` (a note for each missing)."""
-    if (d / "importance.csv").is_file():
-        imp = _read_csv(d / "importance.csv")
-        _require_columns(imp, ("model", "wavelength_nm", "rmse_increase_mgdl"), "importance.csv")
-        res.importance = imp
+def _load_drop_one_and_dataset(res: Results, d: Path) -> None:
+    """``drop_one.csv`` and ``dataset.parquet`` into ``res`` (a note for each missing)."""
+    if (d / "drop_one.csv").is_file():
+        table = _read_csv(d / "drop_one.csv")
+        _require_columns(table, ("model", "dropped_wavelength_nm", "delta_rmse_mgdl", "ci_low",
+                                 "ci_high"), "drop_one.csv")
+        res.drop_one = table if len(table) else None
     else:
-        res.notes.append("No importance.csv: the wavelength-utilisation figure is left out.")
+        res.notes.append("No drop_one.csv: the wavelength-utilisation figure is left out.")
     if (d / "dataset.parquet").is_file():
         from ...dataset import load_dataset
 

@@ -36,9 +36,9 @@ from .inputs import (
     bland_altman_inputs,
     channel_correlations,
     competitors,
+    drop_one_models,
     efficiency_table,
     forest_table,
-    importance_matrix,
     is_ablation_row,
     latency_resolution,
     model_order,
@@ -460,28 +460,34 @@ def _section_performance(page: _Page) -> None:
 
 
 def _section_wavelengths(page: _Page) -> None:
-    """Figure 11: permutation importance of each LED channel."""
+    """Wavelength utilisation: each model refitted without each LED (``drop_one.csv``)."""
     from ...plots import wavelengths as wl_plots
-    from ...plots.style import plot_style
 
-    imp = page.results.importance
-    if imp is None or not len(imp):
-        page.add("wavelengths", "Wavelength utilisation", "Permutation importance per channel.",
-                 None, note="No importance.csv in the results directory: figure not drawn.")
+    table = page.results.drop_one
+    title = "Wavelength utilisation: what each LED adds"
+    if table is None or not len(table):
+        page.add("wavelengths", title, "Drop-one-LED refits.", None,
+                 note="No drop-one-LED refits in the results directory (drop_one.csv absent "
+                      "or empty: the benchmark ran with --drop-one none): figure not drawn.")
         return
-    mat = importance_matrix(imp, [m for m in page.models if not is_ablation_row(m)])
-    page.add("wavelengths", "Wavelength utilisation",
-             "Permutation importance of each LED channel for each model: the rise in "
-             "held-out RMSE when that channel's values are shuffled, in mg/dL (the number in "
-             "each cell). Colour is relative within each row (the row's largest rise = 1), "
-             "so that models whose absolute rises differ by orders of magnitude can be read "
-             "alike. A negative value means shuffling that channel made the model slightly "
-             "better: the channel carries no usable information for it and the value is "
-             "noise of the permutation; a very large one (polynomial features) means the "
-             "model extrapolates when a channel leaves its training range.",
-             lambda: _figure_one(lambda ax: wl_plots.plot_wavelength_heatmap(mat, ax=ax),
-                                 (1.2 * mat.shape[1] + 4.2, 0.45 * mat.shape[0] + 1.6),
-                                 plot_style))
+    models = drop_one_models(table, page.models)
+    reps = int(table["n_repeats"].max()) if "n_repeats" in table else 1
+    n_sub = int(table["n_test_subjects"].min()) if "n_test_subjects" in table else None
+    page.add("wavelengths", title,
+             "Each model refitted without one LED (its ADC code and reference columns "
+             "removed: a device with one LED fewer), on the same folds with the same seeds, "
+             "and scored on the same held-out subjects"
+             + (f" ({n_sub} subjects" if n_sub else " (")
+             + (f", the first {reps} repeats" if reps > 1 else ", the first repeat")
+             + " of the protocol). Each "
+             "dot is the paired RMSE difference, without the LED minus with every LED, in "
+             "mg/dL, with its 95 % cluster-bootstrap CI over subjects: above 0, leaving the "
+             "LED out costs accuracy (the LED carries information the others do not); at "
+             "or below 0, the other LEDs make up for it. Filled: the CI excludes 0. Each "
+             "panel has its own scale. This replaces permuting one channel at a time: the "
+             "channels correlate at 0.95–0.999, so a permuted channel is an input no "
+             "device produces and measures extrapolation, not what an LED is worth.",
+             lambda: wl_plots.figure_drop_one(table, models))
 
 
 def _section_forest(page: _Page) -> None:
