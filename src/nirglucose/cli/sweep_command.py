@@ -45,7 +45,8 @@ StudyOption = Annotated[str | None, typer.Option(help=f"Built-in study: {_STUDY_
 SweepPresetOption = Annotated[
     str | None,
     typer.Option(help=f"Scenario preset every task starts from: {_PRESET_NAMES} (default "
-                 "paper); data-size: comma-separated presets (default paper,wearable)."),
+                 "paper); data-size: comma-separated presets (default paper,wearable); "
+                 "wavelengths: default wearable."),
 ]
 SeedsOption = Annotated[
     int | None,
@@ -210,8 +211,21 @@ def _print_effects(effects) -> None:
                 f"{r['preset']}: {r['overtaker']} overtakes {r['overtaken']} between "
                 f"{r['n_before']} and {r['n_after']} training subjects (RMSE difference "
                 f"{r['diff_before']:+.1f} -> {r['diff_after']:+.1f} mg/dL)", err=False)
+    if "oracle_bound_rmse_mgdl" in effects:
+        _print_designs(effects)
     if "shift" in effects:
         for _, r in effects.iterrows():
             _say(
                 f"{r['model']}: {r['shift']} shift (train {r['train_domain']}, test "
                 f"{r['test_domain']}) ΔRMSE {r['delta']:+.1f} mg/dL", err=False)
+
+
+def _print_designs(designs) -> None:
+    """The wavelengths study: each confirmed design's bounds and RMSE per model."""
+    keys = ["detector", "n_leds", "rank", "wavelengths_nm"]
+    for (det, k, rank, wl), d in designs.groupby(keys, sort=False):
+        r = d.iloc[0]
+        scores = ", ".join(f"{m} {x:.1f}" for m, x in zip(d["model"], d["rmse_mgdl"], strict=True))
+        _say(f"{det}, {k} LEDs #{rank} ({wl} nm; keeps the study's {r['study_leds_kept']}): "
+             f"device bound {r['bound_rmse_mgdl']:.1f}, oracle-conditioned "
+             f"{r['oracle_bound_rmse_mgdl']:.1f}; RMSE {scores} mg/dL", err=False)

@@ -1,4 +1,5 @@
-"""Designing a device: the bound each design allows (:mod:`.bound`).
+"""Designing a device: the bound each design allows (:mod:`.bound`) and the search
+over LED sets ranked by it (:mod:`.search`).
 
 The parts a design is made of (photodiodes, NIR LEDs) are in the config's catalogue,
 :mod:`nirglucose.config.parts`.
@@ -14,8 +15,22 @@ from .bound import (
     design_terms,
     noise_covariance,
 )
+from .search import (
+    CANDIDATE_WAVELENGTHS_NM,
+    SEARCH_DETECTORS,
+    candidate_leds,
+    drive_powers_mw,
+    rank_designs,
+    subset_bounds,
+)
 
 __all__ = [
+    "CANDIDATE_WAVELENGTHS_NM",
+    "SEARCH_DETECTORS",
+    "candidate_leds",
+    "drive_powers_mw",
+    "rank_designs",
+    "subset_bounds",
     "CONDITIONS",
     "DesignBound",
     "DesignTerms",

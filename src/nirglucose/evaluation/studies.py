@@ -28,6 +28,7 @@ from ..config import (
     resolve_config,
 )
 from ..exceptions import ConfigError, unknown_name
+from .wavelength_study import WAVELENGTHS_MODELS, WAVELENGTHS_PRESET, wavelength_scenarios
 
 __all__ = [
     "STUDIES",
@@ -47,7 +48,8 @@ __all__ = [
 ]
 
 #: Built-in studies (``--study``).
-STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device", "data-size", "mismatch")
+STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device", "data-size", "mismatch",
+           "wavelengths")
 #: The varied key and default values of the one-key studies.
 STUDY_GRIDS: dict[str, tuple[str, tuple[float, ...]]] = {
     "noise-scale": ("noise_scale", (0.25, 0.5, 1.0, 2.0, 4.0)),
@@ -86,6 +88,7 @@ MISMATCH_SUBJECT = "physics-inversion"
 #: Default models of a study when none are given (others: the sweep's defaults).
 STUDY_MODELS: dict[str, tuple[str, ...]] = {
     "mismatch": (MISMATCH_SUBJECT, "ebl", "gp", "oracle"),
+    "wavelengths": WAVELENGTHS_MODELS,
 }
 
 
@@ -293,7 +296,8 @@ def study_scenarios(
         Replace the default values of a one-key study (``noise-scale``, ``pmf-noise``)
         or the training sizes of ``data-size``.
     presets : sequence of str, optional
-        Presets of the ``data-size`` study (default :data:`DATA_SIZE_PRESETS`).
+        Presets of the ``data-size`` study (default :data:`DATA_SIZE_PRESETS`); the
+        first is the ``wavelengths`` study's (default ``wearable``).
 
     Returns
     -------
@@ -319,6 +323,8 @@ def study_scenarios(
         return _device_scenarios()
     if study == "mismatch":
         return _mismatch_scenarios()
+    if study == "wavelengths":
+        return wavelength_scenarios(presets[0] if presets else WAVELENGTHS_PRESET)
     return _cohort_scenarios()
 
 
@@ -486,6 +492,9 @@ def resolve_scenarios(
             )
         sizes = list(vary["n_train_subjects"]) if vary else None
         return study_scenarios(study, sizes, presets), "paper"
+    if study == "wavelengths":  # the ranking's options come as --vary keys
+        preset = WAVELENGTHS_PRESET if preset is None else preset
+        return wavelength_scenarios(preset, vary, base), preset
     preset = "paper" if preset is None else preset
     if study is None:
         return grid_scenarios(vary or {}, preset=preset, base_overrides=base), preset

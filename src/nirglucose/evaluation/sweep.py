@@ -45,6 +45,13 @@ Studies (:data:`STUDIES`)
         (its ``forward_model``), every pair; EBL, the GP and the oracle (default
         models, :data:`~nirglucose.evaluation.studies.STUDY_MODELS`) for reference,
         once per data model. The estimator always runs, besides ``models``.
+    ``wavelengths``
+        LED sets: every subset of 1-6 candidate LEDs per detector ranked by the device
+        bound (:func:`~nirglucose.design.search.rank_designs`), the best of each size
+        simulated and scored by the oracle, EBL and the GP
+        (:mod:`~nirglucose.evaluation.wavelength_study`; preset ``wearable`` unless
+        given; ``--vary detector=...``, ``n_leds=...``, ``top_n=...``).
+        ``effects.csv``: :func:`~nirglucose.evaluation.wavelength_study.wavelength_designs`.
 
     Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
     Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
@@ -142,6 +149,7 @@ from .sweep_analysis import (
     threshold_crossing,
 )
 from .tasks import TASK_FORMAT, source_digest
+from .wavelength_study import wavelength_designs
 
 __all__ = [
     "STUDIES",
@@ -612,6 +620,8 @@ def _effects(study: str | None, frame: pd.DataFrame, summary: pd.DataFrame) -> p
         return shift_effects(frame)
     if study == "data-size":
         return ranking_crossings(summary)
+    if study == "wavelengths":
+        return wavelength_designs(frame)
     return None
 
 
