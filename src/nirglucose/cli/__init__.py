@@ -9,6 +9,7 @@ that came from the user or a file is printed without Rich markup.
 
 One module per command group, registered on :data:`app` in the order ``--help``
 lists them: :mod:`.data_commands` (simulate, keys, models), :mod:`.benchmark_command`,
+:mod:`.wear_command` (wear-benchmark),
 :mod:`.sweep_command`, :mod:`.device_commands` (fit, predict, export-c), :mod:`.export_commands`
 (export-onnx) and
 :mod:`.report_command`; the shared options and checks live in :mod:`._common`, the
@@ -25,6 +26,7 @@ from ._main import main
 # importing a command module registers its commands: this order is the order of --help
 from .data_commands import keys, list_models, list_parts, simulate
 from .benchmark_command import benchmark
+from .wear_command import wear_benchmark
 from .sweep_command import sweep
 from .device_commands import export_c_source, fit_model, predict_glucose
 from .export_commands import export_onnx_file
@@ -50,6 +52,7 @@ __all__ += [  # also importable, as before the split into a package
     "report",
     "simulate",
     "sweep",
+    "wear_benchmark",
     "_PRESET_NAMES",
     "_STUDY_NAMES",
 ]

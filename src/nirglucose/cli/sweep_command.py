@@ -41,7 +41,12 @@ VaryOption = Annotated[
     list[str] | None,
     typer.Option(help="KEY=V1,V2,... config values to sweep (dotted key); repeat for a grid."),
 ]
-StudyOption = Annotated[str | None, typer.Option(help=f"Built-in study: {_STUDY_NAMES}.")]
+StudyOption = Annotated[
+    str | None,
+    typer.Option(help=f"Built-in study: {_STUDY_NAMES}, wear (calibration schedule x days of "
+                 "wear x preset: --vary wear_days=1,3,7, --preset paper,wearable; each task a "
+                 "worn run of --subjects subjects, a reading every 15 min)."),
+]
 SweepPresetOption = Annotated[
     str | None,
     typer.Option(help=f"Scenario preset every task starts from: {_PRESET_NAMES} (default "
@@ -96,6 +101,11 @@ def sweep(
     """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks)."""
     from ..evaluation.sweep import run_sweep
 
+    if study == "wear":
+        from .wear_command import wear_sweep
+
+        return wear_sweep(out, vary, preset, seeds or 1, seed, models, subjects, folds,
+                          resamples, set_)
     if seeds is None:
         seeds = 1 if study == "data-size" else 5
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),

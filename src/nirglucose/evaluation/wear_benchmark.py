@@ -93,8 +93,8 @@ def _standards(g: pd.DataFrame, schedule: str, time: str, n_boot: int,
                seed: int) -> tuple[dict, pd.DataFrame]:
     """One model, variant and schedule: a row of ``wear_standards.csv`` and its iCGM table.
 
-    Scored on every held-out reading after the subject's first that is not one of this
-    schedule's fingersticks.
+    Accuracy is scored on every held-out reading after the subject's first that is not
+    one of this schedule's fingersticks; trend agreement and lag on the whole series.
     """
     from ..metrics import (
         dts_zones,
@@ -111,7 +111,12 @@ def _standards(g: pd.DataFrame, schedule: str, time: str, n_boot: int,
     keep = ((g[time] > first) & ~a["is_calibration"]).to_numpy()
     ref = g["glucose_mgdl"].to_numpy(float)[keep]
     est = np.clip(a["calibrated_mgdl"].to_numpy(float)[keep], 1.0, None)  # a meter's floor
-    sid, t = g["subject_id"].to_numpy()[keep], g[time].to_numpy(float)[keep]
+    sid = g["subject_id"].to_numpy()[keep]
+    # the series' shape (trend, lag) on every reading, fingersticks included: the
+    # estimators need uniform sampling
+    all_ref, all_sid, all_t = (g["glucose_mgdl"].to_numpy(float), g["subject_id"].to_numpy(),
+                               g[time].to_numpy(float))
+    all_est = np.clip(a["calibrated_mgdl"].to_numpy(float), 1.0, None)
     icgm = icgm_criteria(ref, est, sid, n_boot=n_boot, seed=seed)
     mard = mard_by_range(ref, est).set_index("range")["mard_pct"]
     tir = time_in_range_agreement(ref, est, sid)
@@ -122,8 +127,9 @@ def _standards(g: pd.DataFrame, schedule: str, time: str, n_boot: int,
         **{f"mard_{k}_pct": float(mard.get(k, np.nan)) for k in ("<70", "70-180", ">180")},
         "icgm_passed": int(icgm["passes"].sum()),
         "icgm_criteria": len(icgm),
-        "trend_agreement_pct": float(trend_agreement(ref, est, sid, t).agreement_pct),
-        "lag_median_min": float(estimated_lag(ref, est, sid, t).median_min),
+        "trend_agreement_pct": float(
+            trend_agreement(all_ref, all_est, all_sid, all_t).agreement_pct),
+        "lag_median_min": float(estimated_lag(all_ref, all_est, all_sid, all_t).median_min),
         "tir_difference_pct_median": float(np.median(tir_diff)) if len(tir_diff) else np.nan,
         "dts_a_pct": float(zone_percentages(dts_zones(ref, est)).get("A", 0.0)),
         "n_scored": int(keep.sum()),

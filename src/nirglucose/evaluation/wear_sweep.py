@@ -1,0 +1,134 @@
+"""``sweep --study wear``: calibration schedule × days of wear × preset.
+
+Each task simulates one worn run (:func:`nirglucose.simulate_wear`: a preset, a number
+of days, a seed) and runs the worn benchmark on it
+(:func:`~.wear_benchmark.run_wear_benchmark`), which scores every calibration schedule
+on the same held-out readings. Tasks are cached in ``OUT/.tasks`` like every other
+task (:class:`~.tasks.TaskCache`: the spec, the package's source digest and a checksum),
+so an interrupted sweep resumes; they run one after another in this process (a worn
+task holds its own subject-parallel simulation).
+
+Outputs: ``wear_sweep.csv`` (one row per preset, days, seed, model, variant and
+schedule) and ``wear_summary.csv`` (mean RMSE over seeds with its Student-t 95 %
+interval where there are two seeds or more, else the task's subject-bootstrap one).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..dataset import atomic_write
+from ..exceptions import ConfigError
+from . import tasks
+from .wear_benchmark import WEAR_MODELS
+from .wear_calibration import SCHEDULES
+
+__all__ = ["WEAR_DAYS", "WEAR_PRESETS", "run_wear_sweep"]
+
+#: Default grid of the study: days of wear and presets.
+WEAR_DAYS: tuple[int, ...] = (1, 3, 7)
+WEAR_PRESETS: tuple[str, ...] = ("paper", "wearable")
+
+
+def _task(spec: dict) -> dict:
+    from ..api import simulate_wear
+    from .wear_benchmark import run_wear_benchmark
+
+    ds = simulate_wear(spec["preset"], spec["n_subjects"], spec["wear_days"],
+                       spec["every_min"], spec["seed"])
+    res = run_wear_benchmark(ds, spec["models"], preset=spec["preset"],
+                             n_splits=spec["folds"], seed=spec["seed"],
+                             schedules=spec["schedules"], n_boot=spec["n_boot"])
+    cols = ["model", "variant", "schedule", "rmse_mgdl", "rmse_ci_low", "rmse_ci_high",
+            "mard_pct", "fingersticks_per_day", "n_scored", "n_subjects"]
+    return {"rows": res.schedules[cols].to_dict(orient="list")}
+
+
+def run_wear_sweep(
+    out: str | Path,
+    *,
+    presets: Sequence[str] = WEAR_PRESETS,
+    wear_days: Sequence[int] = WEAR_DAYS,
+    seeds: Sequence[int] = (0,),
+    models: Sequence[str] = WEAR_MODELS,
+    schedules: Sequence[str] = tuple(SCHEDULES),
+    n_subjects: int = 20,
+    every_min: int = 15,
+    folds: int = 5,
+    n_boot: int = 1000,
+    on_task: Callable[[dict, bool], None] | None = None,
+) -> pd.DataFrame:
+    """Run (or resume) the wear study; returns the summary (module docstring).
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory (created when its parent exists).
+    presets, wear_days, seeds : sequences
+        The grid: presets × days of wear × seeds.
+    models, schedules : sequences of str
+        Registered models and calibration schedules of every task.
+    n_subjects, every_min, folds, n_boot : int
+        Subjects per worn run, minutes between readings, subject-grouped folds and
+        bootstrap resamples.
+    on_task : callable, optional
+        ``on_task(spec, cached)`` after each task.
+    """
+    from ..config import resolve_config
+
+    for p in presets:
+        resolve_config(p)  # unknown presets fail before anything runs
+    bad = [d for d in wear_days if int(d) != d or d < 1]
+    if not wear_days or bad:
+        raise ConfigError(f"wear_days {list(wear_days)!r} is invalid; expected whole days >= 1")
+    unknown = [s for s in schedules if s not in SCHEDULES]
+    if unknown:
+        raise ConfigError(f"unknown calibration schedule(s) {unknown}; known: {list(SCHEDULES)}")
+    cache = tasks.TaskCache(out, valid=lambda spec, res: "rows" in res)
+    frames = []
+    for preset in presets:
+        for days in wear_days:
+            for seed in seeds:
+                spec = tasks.stamp({"model": "wear", "preset": preset, "wear_days": int(days),
+                                    "seed": int(seed), "n_subjects": int(n_subjects),
+                                    "every_min": int(every_min), "folds": int(folds),
+                                    "models": list(models), "schedules": list(schedules),
+                                    "n_boot": int(n_boot)})
+                key = tasks.task_key(spec)
+                path = cache.path(key, spec, f"{preset}-{days}d-s{seed}")
+                result = cache.load(path, spec)
+                cached = result is not None
+                if result is None:
+                    result = _task(spec)
+                    cache.save(path, spec, result)
+                if on_task is not None:
+                    on_task(spec, cached)
+                frames.append(pd.DataFrame(result["rows"]).assign(
+                    preset=preset, wear_days=int(days), seed=int(seed)))
+    sweep = pd.concat(frames, ignore_index=True)
+    summary = _summary(sweep)
+    out = Path(out)
+    atomic_write(out / "wear_sweep.csv", lambda tmp: sweep.to_csv(tmp, index=False))
+    atomic_write(out / "wear_summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
+    return summary
+
+
+def _summary(sweep: pd.DataFrame) -> pd.DataFrame:
+    rows = []
+    keys = ["preset", "wear_days", "model", "variant", "schedule"]
+    for k, g in sweep.groupby(keys, sort=False):
+        v = g["rmse_mgdl"].to_numpy(float)
+        if v.size > 1:  # over seeds
+            half = stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / np.sqrt(v.size)
+            low, high = v.mean() - half, v.mean() + half
+        else:  # one seed: the task's own subject bootstrap
+            low, high = g["rmse_ci_low"].iloc[0], g["rmse_ci_high"].iloc[0]
+        rows.append({**dict(zip(keys, k, strict=True)), "rmse_mgdl": float(v.mean()),
+                     "rmse_ci_low": float(low), "rmse_ci_high": float(high),
+                     "n_seeds": int(v.size)})
+    return pd.DataFrame(rows)
