@@ -112,9 +112,12 @@ def test_tuned_parameters_hook(data, tmp_path, monkeypatch):
 
 def test_model_params_are_the_packaged_tuned_ones():
     from nirglucose.models import tuned_params
+    from nirglucose.models.tuning import untuned_params
 
     assert bm._model_params("sdnn", "paper") == tuned_params("sdnn", "paper") != {}
-    assert bm._model_params("sdnn", None) == {}  # a user's data: no preset, defaults
+    # a user's data: no preset, the networks' small-data rule (early stopping)
+    assert bm._model_params("sdnn", None) == untuned_params("sdnn") != {}
+    assert bm._model_params("ebl", None) == {}
 
 
 def test_lambda_zero_gets_no_verdict_and_best_positive_lambda_is_tested(data, tmp_path,

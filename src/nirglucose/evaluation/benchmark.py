@@ -513,6 +513,8 @@ def _plan(
             key = tasks.task_key({**spec, "model": base_of[name]} if same else spec)
             planned.append(_Task(key, spec, split, classes[name]))
     drop_models = resolve_drop_one_models(opts["drop_one_models"], names)
+    if opts["drop_one_models"] is None and len(led_wavelengths(dataset)) < 2:
+        drop_models = []  # the default asks nothing of a one-LED device; a request is refused
     drops = _drop_tasks(dataset, drop_models, splits, planned)
     return _Plan(
         names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned,
