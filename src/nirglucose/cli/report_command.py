@@ -27,7 +27,17 @@ def report(
 ) -> None:
     """Write the figures and tables of a benchmark run as one self-contained HTML file."""
     from ..report import build_report
+    from ..report.wear import build_wear_report, is_wear_results
 
+    if results.is_dir() and is_wear_results(results):  # a worn run (wear-benchmark)
+        if out is not None:
+            _check_out_file(out)
+        if sweep:
+            raise UserError("--sweep adds to a benchmark report, not to a worn run's report")
+        path = build_wear_report(results, out if out is not None else results / "report.html",
+                                 figures_dir=figures)
+        _say(f"wrote {path}", err=False)
+        return
     _check_results_dir(results)
     if out is not None:
         _check_out_file(out)
