@@ -14,7 +14,16 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .style import DATA_COLOR, GREY, OKABE_ITO, model_color, new_axes, plot_style, styled
+from .style import (
+    DATA_COLOR,
+    GREY,
+    OKABE_ITO,
+    model_color,
+    model_label,
+    new_axes,
+    plot_style,
+    styled,
+)
 
 __all__ = ["figure_wear_traces", "plot_error_by_day"]
 
@@ -59,7 +68,7 @@ def figure_wear_traces(traces: pd.DataFrame, *, model: str, schedule: str,
             ax.axhspan(70, 180, color=GREY, alpha=0.08, lw=0)
             ax.plot(days, g["glucose_mgdl"], color=DATA_COLOR, lw=1.0, label="reference")
             ax.plot(days, g["calibrated_mgdl"], color=model_color(model), lw=1.0,
-                    label=f"{model}, {schedule}")
+                    label=f"{model_label(model)}, {schedule}")
             cal = g["is_calibration"].to_numpy(bool)
             ax.plot(days[cal], g["glucose_mgdl"].to_numpy(float)[cal], "v", ms=6,
                     color=OKABE_ITO["vermillion"], label="fingerstick")
