@@ -101,7 +101,11 @@ def plot_error_by_day(by_day: pd.DataFrame, *, title: str | None = None,
                 color=_SCHEDULE_COLORS.get(str(sched), GREY), label=str(sched))
     ax.set_xlabel("whole days since the last calibration [d]")
     ax.set_ylabel("RMSE [mg/dL]")
-    ax.set_ylim(bottom=0)
+    r = by_day["rmse_mgdl"].to_numpy(float)
+    if r.size and np.nanmin(r) > 0 and np.nanmax(r) / np.nanmin(r) > 10:
+        ax.set_yscale("log")  # factory calibration can be tens of times worse
+    else:
+        ax.set_ylim(bottom=0)
     ax.set_xticks(np.unique(by_day["days_since_calibration"].to_numpy(int)))
     ax.legend(title="schedule", fontsize=8)
     if title:
