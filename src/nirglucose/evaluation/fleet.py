@@ -37,7 +37,7 @@ import pandas as pd
 
 from ..config import resolve_config
 from ..dataset import Dataset
-from ..design.fleet import draw_units, simulate_unit
+from ..design.fleet import FleetTolerances, draw_units, simulate_unit
 from ..exceptions import ConfigError, DataError, unknown_name
 from ..metrics import summary
 from ..models.registry import get_model_class
@@ -59,7 +59,7 @@ __all__ = [
 #: Variants of the fleet study, in table order.
 FLEET_VARIANTS = ("same-unit", "no-transfer", "bias", "slope-bias")
 #: Default tolerance scales (0: identical units; 1: FleetTolerances as stated).
-FLEET_TOLERANCE_SCALES = (0.0, 0.5, 1.0, 2.0)
+FLEET_TOLERANCE_SCALES = (0.0, 0.25, 0.5, 1.0, 2.0)
 #: Default fleet layout: units to train and to test on, test subjects per test unit,
 #: and the transfer standards (subjects) each unit measures.
 FLEET_DEFAULTS: dict[str, int] = {
@@ -103,6 +103,19 @@ def _check_fleet(fleet: Mapping[str, Any]) -> None:
         raise ConfigError("fleet.transfer_subjects must be at least 2 (a line needs two points)")
 
 
+def _tolerances(fleet: Mapping[str, Any]) -> FleetTolerances | None:
+    """The task's own half-widths at scale 1 (``fleet["tolerances"]``), else the default."""
+    given = fleet.get("tolerances")
+    if given is None:
+        return None
+    known = set(FleetTolerances.__dataclass_fields__)
+    if not isinstance(given, Mapping) or not set(given) <= known:
+        raise ConfigError(
+            f"fleet.tolerances must map some of {sorted(known)} to values, got {given!r}"
+        )
+    return FleetTolerances(**given)
+
+
 def fleet_metrics(spec: Mapping[str, Any]) -> dict[str, Any]:
     """Metrics of one fleet task: one model, one variant, one tolerance scale, one seed.
 
@@ -112,7 +125,9 @@ def fleet_metrics(spec: Mapping[str, Any]) -> dict[str, Any]:
         A sweep task specification of kind ``"fleet"``: ``preset``, ``overrides``,
         ``n_subjects`` (training subjects in all), ``per_subject``, ``seed``,
         ``model``, ``model_params``, ``n_boot`` and ``fleet`` (``tolerance_scale``,
-        ``variant`` and the keys of :data:`FLEET_DEFAULTS`).
+        ``variant``, the keys of :data:`FLEET_DEFAULTS` and, optionally,
+        ``tolerances``: fields of :class:`~nirglucose.design.fleet.FleetTolerances`
+        replacing the default half-widths, e.g. ``{"wavelength_half_width_nm": 30}``).
 
     Returns
     -------
@@ -122,76 +137,77 @@ def fleet_metrics(spec: Mapping[str, Any]) -> dict[str, Any]:
     """
     fleet = spec["fleet"]
     _check_fleet(fleet)
-    preset, base, seed = spec["preset"], dict(spec["overrides"]), int(spec["seed"])
-    per, n_sub = int(spec["per_subject"]), int(spec["n_subjects"])
-    k, m = fleet["n_train_units"], fleet["n_test_units"]
+    k, n_sub = fleet["n_train_units"], int(spec["n_subjects"])
     if n_sub < 2 * k:
         raise ConfigError(
             f"the fleet study spreads {n_sub} training subjects over {k} units; give at "
             f"least {2 * k} (--subjects)"
         )
-    design = resolve_config(preset, base)
-    bits = int(design.hardware.adc_bits)
-    units = draw_units(preset, k + m, float(fleet["tolerance_scale"]), seed, overrides=base)
-
-    def sim(unit, n, tag):
-        return simulate_unit(unit, preset, n, per, tasks.derived_seed(seed, "fleet", tag,
-                                                                       unit.index), overrides=base)
-
-    variant = fleet["variant"]
-    transfers = {}
-    if variant in ("bias", "slope-bias"):
-        from ..api import simulate
-
-        t_seed = tasks.derived_seed(seed, "fleet", "transfer")
-        golden = simulate(preset, fleet["transfer_subjects"], per, t_seed, overrides=base)
-        for u in units:
-            own = simulate_unit(u, preset, fleet["transfer_subjects"], per, t_seed, overrides=base)
-            transfers[u.index] = fit_transfer(own.frame, golden.frame, variant)
-
-    def read(unit, ds):  # what the unit reports, after its factory reference if any
-        if unit.index not in transfers:
-            return ds
-        return Dataset(transfers[unit.index].apply(ds.frame, bits), config=ds.config,
-                       seed=ds.seed)
-
+    design = resolve_config(spec["preset"], dict(spec["overrides"]))
+    units = draw_units(spec["preset"], k + fleet["n_test_units"],
+                       float(fleet["tolerance_scale"]), int(spec["seed"]),
+                       overrides=dict(spec["overrides"]), tolerances=_tolerances(fleet))
+    read = _reader(spec, units, int(design.hardware.adc_bits))
     test_units = units[k:]
-    tests = [read(u, sim(u, fleet["test_subjects_per_unit"], "test")) for u in test_units]
-    preds, models, n_train = [], [], 0
-    if variant == "same-unit":
+    tests = [read(u, fleet["test_subjects_per_unit"], "test") for u in test_units]
+    preds: list = []
+    if fleet["variant"] == "same-unit":
         for u, test in zip(test_units, tests, strict=True):
-            train = sim(u, n_sub, "same-unit")
-            y, model = _fit_predict(spec, train, test)
-            preds.append((y, fallback_mgdl(train)))
-            models.append(model)
-            n_train = len(train)
+            train = read(u, n_sub, "same-unit")
+            preds.append((*_fit_predict(spec, train, test), fallback_mgdl(train)))
     else:
         sizes = [n_sub // k + (1 if i < n_sub % k else 0) for i in range(k)]
-        train = _concat([read(u, sim(u, n, "train")) for u, n in zip(units[:k], sizes,
-                                                                          strict=True)],
-                        design, seed)
-        n_train = len(train)
+        parts = [read(u, n, "train") for u, n in zip(units[:k], sizes, strict=True)]
+        train = _concat(parts, design, int(spec["seed"]))
         for test in tests:
-            y, model = _fit_predict(spec, train, test)
-            preds.append((y, fallback_mgdl(train)))
-            models.append(model)
-    test_all = _concat(tests, design, seed)
-    raw = np.concatenate([p for p, _ in preds])
-    y = np.concatenate([scored(p, fb) for p, fb in preds])
-    ref = test_all.frame["glucose_mgdl"].to_numpy(float)
+            preds.append((*_fit_predict(spec, train, test), fallback_mgdl(train)))
+    models = [m for _, m, _ in preds]
+    out = _score(spec, _concat(tests, design, int(spec["seed"])), preds)
+    out.update(n_parameters=int(getattr(models[0], "n_parameters", -1)), n_train=len(train))
+    return out
+
+
+def _reader(spec: Mapping[str, Any], units: Sequence[Any], bits: int):
+    """``read(unit, n_subjects, tag)``: a unit's readings of distinct subjects (seeded by
+    the task's seed, the tag and the unit), after its factory reference in the transfer
+    variants (fitted here on the transfer standards, once per unit)."""
+    from ..api import simulate
+
+    fleet, preset, base = spec["fleet"], spec["preset"], dict(spec["overrides"])
+    seed, per = int(spec["seed"]), int(spec["per_subject"])
+    transfers = {}
+    if fleet["variant"] in ("bias", "slope-bias"):
+        t_seed = tasks.derived_seed(seed, "fleet", "transfer")
+        n_t = fleet["transfer_subjects"]
+        golden = simulate(preset, n_t, per, t_seed, overrides=base)
+        for u in units:
+            own = simulate_unit(u, preset, n_t, per, t_seed, overrides=base)
+            transfers[u.index] = fit_transfer(own.frame, golden.frame, fleet["variant"])
+
+    def read(unit, n_subjects: int, tag: str) -> Dataset:
+        ds = simulate_unit(unit, preset, n_subjects, per,
+                           tasks.derived_seed(seed, "fleet", tag, unit.index), overrides=base)
+        if unit.index not in transfers:
+            return ds
+        frame = transfers[unit.index].apply(ds.frame, bits)
+        return Dataset(frame, config=ds.config, seed=ds.seed)
+
+    return read
+
+
+def _score(spec: Mapping[str, Any], test: Dataset, preds) -> dict[str, Any]:
+    """The sweep's metrics of the pooled predictions, with subject-bootstrap intervals."""
+    raw = np.concatenate([p for p, _, _ in preds])
+    y = np.concatenate([scored(p, fb) for p, _, fb in preds])
+    ref = test.frame["glucose_mgdl"].to_numpy(float)
     if len(ref) != len(y):
         raise DataError("the fleet task's predictions do not match its test readings")
     point = summary(ref, y)
     ci = cluster_bootstrap_metrics(
-        ref, y, test_all.frame["subject_id"].to_numpy(), n_boot=spec["n_boot"], seed=seed
+        ref, y, test.frame["subject_id"].to_numpy(), n_boot=spec["n_boot"], seed=spec["seed"]
     )
     out = {**point, **{key: v for key, v in ci.items() if "_ci_" in key}}
-    out.update(
-        n_parameters=int(getattr(models[0], "n_parameters", -1)),
-        n_predictions=len(ref),
-        n_invalid_predictions=count_invalid(raw),
-        n_train=n_train,
-    )
+    out.update(n_predictions=len(ref), n_invalid_predictions=count_invalid(raw))
     return out
 
 

@@ -55,7 +55,7 @@ Studies (:data:`STUDIES`)
     ``fleet``
         Unit-to-unit tolerance (:mod:`~nirglucose.evaluation.fleet`): units drawn from
         the parts' tolerances (:mod:`~nirglucose.design.fleet`) at each tolerance scale
-        (0, 0.5, 1, 2; ``vary={"tolerance_scale": [...]}``), a model trained on some
+        (0, 0.25, 0.5, 1, 2; ``vary={"tolerance_scale": [...]}``), a model trained on some
         units and tested on unseen ones, without and with a per-unit factory
         reference (per-channel bias or slope/bias in absorbance), besides the
         same-unit reference. ``effects.csv`` holds the table
