@@ -339,8 +339,9 @@ def simulate_unit(
     from ..api import simulate
 
     base = dict(overrides or {})
-    ds = simulate(preset, n_subjects, per_subject, seed, overrides={**base, **unit.overrides})
-    actual = ds.config.leds.wavelengths_nm
+    own = {**base, **unit.overrides}
+    ds = simulate(preset, n_subjects, per_subject, seed, overrides=own)
+    actual = resolve_config(preset, own).leds.wavelengths_nm
     design = resolve_config(preset, base)
     frame = apply_adc_offset(ds.frame, unit.adc_offset_lsb, design.hardware.adc_bits)
     frame = _relabel(frame, actual, unit.nominal_wavelengths_nm)

@@ -419,7 +419,7 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
             spec["seed"],
             overrides=spec["overrides"],
         )
-        if spec["kind"] == "fleet":
+        if ds is None:
             from .fleet import fleet_metrics
 
             metrics = fleet_metrics(spec)
