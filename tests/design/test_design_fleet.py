@@ -104,7 +104,12 @@ def test_adc_offset_shifts_codes_and_saturates():
 
 
 def test_catalogue_bin():
-    assert FleetTolerances.from_catalogue("SMC870").wavelength_half_width_nm == 10.0
+    from nirglucose.config.parts import led_part
+
+    smc = led_part("SMC870")  # the default's source: its 860-880 nm bin
+    want = (smc.wavelength_max_nm - smc.wavelength_min_nm) / 2
+    assert FleetTolerances().wavelength_half_width_nm == want == 10.0
+    assert FleetTolerances.from_catalogue("L8957").wavelength_half_width_nm == 30.0
     with pytest.raises(ConfigError, match="no wavelength bin"):
         FleetTolerances.from_catalogue("IR-1W-850")
 

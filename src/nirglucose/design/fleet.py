@@ -47,6 +47,7 @@ from ..dataset import Dataset
 from ..exceptions import ConfigError
 
 __all__ = [
+    "DEFAULT_BIN_PART",
     "FleetTolerances",
     "MAX_TOLERANCE_SCALE",
     "Unit",
@@ -59,6 +60,18 @@ __all__ = [
 MAX_TOLERANCE_SCALE = 2.4
 
 
+#: Catalogue LED whose peak-wavelength bin sets the default tolerance (860-880 nm).
+DEFAULT_BIN_PART = "SMC870"
+
+
+def _bin_half_width_nm(part: str) -> float:
+    """Half the min-max peak-wavelength bin of a catalogue LED (data/parts/leds.csv). [nm]"""
+    p = led_part(part)
+    if p.wavelength_min_nm is None or p.wavelength_max_nm is None:
+        raise ConfigError(f"LED part {part!r} states no wavelength bin; pick one that does")
+    return (p.wavelength_max_nm - p.wavelength_min_nm) / 2
+
+
 @dataclass(frozen=True)
 class FleetTolerances:
     """Half-widths of the part-to-part deviations at tolerance scale 1.
@@ -66,10 +79,10 @@ class FleetTolerances:
     Attributes
     ----------
     wavelength_half_width_nm : float
-        LED peak wavelength within +- this of its nominal value: the SMC870 bin,
-        860-880 nm around 870 nm (data/parts/leds.csv). The L8957's bin is +-30 nm
-        (840-900 nm): scale 3 of it is beyond :data:`MAX_TOLERANCE_SCALE` for power, so
-        the narrower bin is the default. [nm]
+        LED peak wavelength within +- this of its nominal value: by default half the
+        bin of :data:`DEFAULT_BIN_PART`, read from data/parts/leds.csv (the SMC870's
+        860-880 nm: 10 nm), the narrowest stated bin of the catalogue; the L8957's is
+        +-30 nm (:meth:`from_catalogue`). [nm]
     power_min_ratio : float
         LED power uniform between this fraction of the nominal and the nominal: the
         L8957 datasheet's 3.4 mW min / 5.8 mW typ (data/parts/SOURCES.md); the typical
@@ -85,7 +98,9 @@ class FleetTolerances:
         ASSUMPTION. [LSB]
     """
 
-    wavelength_half_width_nm: float = 10.0
+    wavelength_half_width_nm: float = field(
+        default_factory=lambda: _bin_half_width_nm(DEFAULT_BIN_PART)
+    )
     power_min_ratio: float = 3.4 / 5.8
     responsivity_rel: float = 0.05
     adc_offset_lsb: int = 4
@@ -106,10 +121,7 @@ class FleetTolerances:
         >>> FleetTolerances.from_catalogue("L8957").wavelength_half_width_nm
         30.0
         """
-        p = led_part(part)
-        if p.wavelength_min_nm is None or p.wavelength_max_nm is None:
-            raise ConfigError(f"LED part {part!r} states no wavelength bin; pick one that does")
-        return cls(wavelength_half_width_nm=(p.wavelength_max_nm - p.wavelength_min_nm) / 2)
+        return cls(wavelength_half_width_nm=_bin_half_width_nm(part))
 
 
 @dataclass(frozen=True)
