@@ -223,6 +223,10 @@ def _print_effects(effects) -> None:
                 f"{r['diff_before']:+.1f} -> {r['diff_after']:+.1f} mg/dL)", err=False)
     if "oracle_bound_rmse_mgdl" in effects:
         _print_designs(effects)
+    if "rmse_vs_same_unit" in effects:
+        from ..evaluation.fleet import format_fleet_table
+
+        out_console.print(format_fleet_table(effects), markup=False, highlight=False)
     if "shift" in effects:
         for _, r in effects.iterrows():
             _say(

@@ -1,5 +1,6 @@
-"""Designing a device: the bound each design allows (:mod:`.bound`) and the search
-over LED sets ranked by it (:mod:`.search`).
+"""Designing a device: the bound each design allows (:mod:`.bound`), the search
+over LED sets ranked by it (:mod:`.search`), and a fleet of units drawn from the parts'
+tolerances (:mod:`~nirglucose.design.fleet`).
 
 The parts a design is made of (photodiodes, NIR LEDs) are in the config's catalogue,
 :mod:`nirglucose.config.parts`.
@@ -15,6 +16,7 @@ from .bound import (
     design_terms,
     noise_covariance,
 )
+from .fleet import FleetTolerances, Unit, draw_units, simulate_unit
 from .search import (
     CANDIDATE_WAVELENGTHS_NM,
     SEARCH_DETECTORS,
@@ -37,4 +39,8 @@ __all__ = [
     "design_bound",
     "design_terms",
     "noise_covariance",
+    "FleetTolerances",
+    "Unit",
+    "draw_units",
+    "simulate_unit",
 ]

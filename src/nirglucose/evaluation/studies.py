@@ -40,6 +40,8 @@ __all__ = [
     "MISMATCH_FORWARD_MODELS",
     "MISMATCH_SUBJECT",
     "STUDY_MODELS",
+    "FLEET_STUDY",
+    "FLEET_KEY",
     "Scenario",
     "parse_vary",
     "grid_scenarios",
@@ -49,7 +51,11 @@ __all__ = [
 
 #: Built-in studies (``--study``).
 STUDIES = ("noise-scale", "ablation", "pmf-noise", "cohort", "device", "data-size", "mismatch",
-           "wavelengths")
+           "wavelengths", "fleet")
+#: The ``fleet`` study (unit-to-unit tolerance, :mod:`~nirglucose.evaluation.fleet`), and
+#: the key of ``--vary`` that sets its tolerance scales.
+FLEET_STUDY = "fleet"
+FLEET_KEY = "tolerance_scale"
 #: The varied key and default values of the one-key studies.
 STUDY_GRIDS: dict[str, tuple[str, tuple[float, ...]]] = {
     "noise-scale": ("noise_scale", (0.25, 0.5, 1.0, 2.0, 4.0)),
@@ -89,6 +95,7 @@ MISMATCH_SUBJECT = "physics-inversion"
 STUDY_MODELS: dict[str, tuple[str, ...]] = {
     "mismatch": (MISMATCH_SUBJECT, "ebl", "gp", "oracle"),
     "wavelengths": WAVELENGTHS_MODELS,
+    FLEET_STUDY: ("ebl", "gp", "oracle"),
 }
 
 
@@ -118,6 +125,9 @@ class Scenario:
     model_params : dict or None
         Model name -> constructor arguments of this scenario only, over the sweep's
         (the ``mismatch`` study's assumed forward model).
+    fleet : dict or None
+        A ``fleet`` study task's tolerance scale, variant and fleet layout
+        (:func:`~nirglucose.evaluation.fleet.fleet_metrics`); None otherwise.
     """
 
     name: str
@@ -130,10 +140,14 @@ class Scenario:
     n_subjects: int | None = None
     n_test_subjects: int | None = None
     model_params: dict[str, dict[str, Any]] | None = None
+    fleet: dict[str, Any] | None = None
 
     @property
     def kind(self) -> str:
-        """``"cv"`` (cross-validation on one dataset) or ``"shift"`` (train -> test)."""
+        """``"cv"`` (cross-validation on one dataset), ``"shift"`` (train -> test) or
+        ``"fleet"`` (train on some units, test on others)."""
+        if self.fleet is not None:
+            return "fleet"
         return "cv" if self.test_overrides is None else "shift"
 
 
@@ -315,6 +329,8 @@ def study_scenarios(
         return grid_scenarios({key: list(values if values is not None else default)})
     if study == "data-size":
         return _data_size_scenarios(values, presets)
+    if study == FLEET_STUDY:
+        return _fleet_scenarios(values)
     if values is not None:
         raise ConfigError(f"the {study!r} study takes no values")
     if study == "ablation":
@@ -326,6 +342,30 @@ def study_scenarios(
     if study == "wavelengths":
         return wavelength_scenarios(presets[0] if presets else WAVELENGTHS_PRESET)
     return _cohort_scenarios()
+
+
+def _fleet_scenarios(scales: Sequence[Any] | None) -> list[Scenario]:
+    """Every tolerance scale x fleet variant (:mod:`~nirglucose.evaluation.fleet`)."""
+    from ..design.fleet import MAX_TOLERANCE_SCALE
+    from .fleet import FLEET_DEFAULTS, FLEET_TOLERANCE_SCALES, FLEET_VARIANTS
+
+    scales = list(FLEET_TOLERANCE_SCALES if scales is None else scales)
+    bad = [v for v in scales if not _is_number(v) or not 0 <= v <= MAX_TOLERANCE_SCALE]
+    if not scales or bad:
+        raise ConfigError(
+            f"fleet study: {FLEET_KEY} values must be numbers in 0-{MAX_TOLERANCE_SCALE:g} "
+            f"(0: identical units, 1: the stated tolerances), got {bad or scales!r}"
+        )
+    return [
+        Scenario(
+            f"{FLEET_KEY}={float(s):g}:{v}",
+            {FLEET_KEY: float(s), "variant": v},
+            {},
+            fleet={**FLEET_DEFAULTS, FLEET_KEY: float(s), "variant": v},
+        )
+        for s in dict.fromkeys(float(x) for x in scales)
+        for v in FLEET_VARIANTS
+    ]
 
 
 def _mismatch_scenarios() -> list[Scenario]:
@@ -495,6 +535,14 @@ def resolve_scenarios(
     if study == "wavelengths":  # the ranking's options come as --vary keys
         preset = WAVELENGTHS_PRESET if preset is None else preset
         return wavelength_scenarios(preset, vary, base), preset
+    if study == FLEET_STUDY:
+        if vary and set(vary) != {FLEET_KEY}:
+            raise ConfigError(
+                f"--vary cannot be combined with --study {FLEET_STUDY} (except to set its "
+                f"tolerance scales: --vary {FLEET_KEY}=0,0.5,1,2)"
+            )
+        scales = list(vary[FLEET_KEY]) if vary else None
+        return study_scenarios(study, scales), preset or "paper"
     preset = "paper" if preset is None else preset
     if study is None:
         return grid_scenarios(vary or {}, preset=preset, base_overrides=base), preset

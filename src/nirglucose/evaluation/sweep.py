@@ -52,6 +52,15 @@ Studies (:data:`STUDIES`)
         (:mod:`~nirglucose.evaluation.wavelength_study`; preset ``wearable`` unless
         given; ``--vary detector=...``, ``n_leds=...``, ``top_n=...``).
         ``effects.csv``: :func:`~nirglucose.evaluation.wavelength_study.wavelength_designs`.
+    ``fleet``
+        Unit-to-unit tolerance (:mod:`~nirglucose.evaluation.fleet`): units drawn from
+        the parts' tolerances (:mod:`~nirglucose.design.fleet`) at each tolerance scale
+        (0, 0.25, 0.5, 1, 2; ``vary={"tolerance_scale": [...]}``), a model trained on some
+        units and tested on unseen ones, without and with a per-unit factory
+        reference (per-channel bias or slope/bias in absorbance), besides the
+        same-unit reference. ``effects.csv`` holds the table
+        (:func:`~nirglucose.evaluation.fleet.fleet_table`); EBL, the GP and the oracle
+        by default; ``n_subjects`` are the training subjects in all.
 
     Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
     Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
@@ -245,6 +254,8 @@ def _scenario_fields(
     proto = (
         layout if sc.kind == "cv" else {"protocol": "train-test", "n_splits": 1, "repeats": 1}
     )
+    if sc.fleet is not None:  # the fleet study's scale, variant and layout
+        proto = {**proto, "fleet": tasks.canonical(sc.fleet)}
     sizes = {} if sc.n_test_subjects is None else {"test_n_subjects": sc.n_test_subjects}
     return {
         "kind": sc.kind,
@@ -401,14 +412,18 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        ds = simulate(
+        ds = None if spec["kind"] == "fleet" else simulate(  # a fleet task simulates its units
             spec["preset"],
             spec["n_subjects"],
             spec["per_subject"],
             spec["seed"],
             overrides=spec["overrides"],
         )
-        if spec["kind"] == "cv":
+        if ds is None:
+            from .fleet import fleet_metrics
+
+            metrics = fleet_metrics(spec)
+        elif spec["kind"] == "cv":
             metrics = _cv_metrics(spec, _filtered(ds, spec["train_filter"]))
         else:
             test = simulate(
@@ -622,6 +637,10 @@ def _effects(study: str | None, frame: pd.DataFrame, summary: pd.DataFrame) -> p
         return ranking_crossings(summary)
     if study == "wavelengths":
         return wavelength_designs(frame)
+    if study == "fleet":
+        from .fleet import fleet_table
+
+        return fleet_table(frame)
     return None
 
 

@@ -133,6 +133,15 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
             "sweep_shift", "Domain shift: test RMSE in the training domain (hatched) and "
             "in the shifted domain (solid); error bars: 95 % paired t-interval of the "
             "shift's effect over seeds.", ax.figure))
+    if res.effects is not None and "rmse_vs_same_unit" in res.effects:
+        from ..plots.fleet import figure_fleet
+
+        out.append(SweepFigure(
+            "sweep_fleet", "Unit-to-unit tolerance: RMSE on the test units' subjects "
+            "against the tolerance scale (1 = the stated part tolerances), for a model "
+            "trained on the same unit, on other units without transfer, and with a "
+            f"per-unit factory reference (bias or slope/bias per channel); {n_seeds} "
+            "seed(s), error bars: 95 % interval.", figure_fleet(res.effects)))
     return out
 
 
@@ -315,6 +324,8 @@ def _effects_tables(e: pd.DataFrame | None) -> list[str]:
                 for _, r in e.iterrows()]
         parts.append(_table(["model", "shift", "train", "shifted test", "RMSE in domain",
                              "RMSE shifted", "ΔRMSE [95 % CI]"], rows, "sweep-shift"))
+    if e is not None and "rmse_vs_same_unit" in e and len(e):
+        parts += _fleet_table(e)
     return parts
 
 
@@ -342,3 +353,25 @@ def _designs_table(e: pd.DataFrame) -> list[str]:
             "each reading's nuisances, so compare it with the oracle-conditioned bound. "
             f"Intervals: {_esc(how)}.</p>",
             _table(head, rows, "sweep-designs")]
+
+
+def _fleet_table(e: pd.DataFrame) -> list[str]:
+    """The fleet study's table: tolerance scale x variant, RMSE [CI] per model."""
+    models = list(dict.fromkeys(e["model"]))
+    rows = []
+    for (scale, variant), g in e.groupby(["tolerance_scale", "variant"], sort=False):
+        row = [_num(scale, 2), _esc(variant)]
+        for m in models:
+            r = g[g["model"] == m]
+            if not len(r):
+                row.append("")
+                continue
+            x = r.iloc[0]
+            row.append(f"{_num(x['rmse_mgdl'])} [{_num(x['rmse_ci_low'])}, "
+                       f"{_num(x['rmse_ci_high'])}]")
+        rows.append(row)
+    return ["<h3>Which tolerance a design can afford</h3>",
+            "<p>RMSE on subjects measured by units the model never saw, mg/dL [95 % "
+            "interval]; <em>same-unit</em> trains on the test unit itself.</p>",
+            _table(["tolerance scale", "variant", *[f"{_label(m)} RMSE" for m in models]],
+                   rows, "sweep-fleet")]
