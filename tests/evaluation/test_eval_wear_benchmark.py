@@ -20,7 +20,7 @@ def series():
 @pytest.fixture(scope="module")
 def result(series):
     return run_wear_benchmark(series, ["ebl", "mean"], preset="paper", n_splits=4, seed=0,
-                              train_readings_per_subject=12, n_boot=50)
+                              train_readings_per_subject=12, n_boot=100)
 
 
 def test_every_model_variant_and_schedule_is_scored(result, series):
@@ -40,7 +40,7 @@ def test_the_smoother_is_tuned_per_fold_on_training_subjects(result):
 
 def test_it_is_deterministic_and_saves(result, series, tmp_path):
     again = run_wear_benchmark(series, ["ebl", "mean"], preset="paper", n_splits=4, seed=0,
-                               train_readings_per_subject=12, n_boot=50)
+                               train_readings_per_subject=12, n_boot=100)
     assert np.array_equal(again.schedules["rmse_mgdl"], result.schedules["rmse_mgdl"])
     result.save(tmp_path)
     assert (tmp_path / "wear_schedules.csv").exists() and (tmp_path / "wear_meta.json").exists()

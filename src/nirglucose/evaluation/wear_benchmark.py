@@ -213,6 +213,9 @@ def run_wear_benchmark(
     if missing:
         raise DataError(f"a worn benchmark needs the columns {missing}; simulate with "
                         "wear_days (nirglucose simulate --wear-days D) or add them")
+    if int(n_boot) < 100:
+        raise ConfigError(f"n_boot = {n_boot!r} is too few for a lower confidence bound; "
+                          "expected an integer >= 100")
     if int(train_readings_per_subject) < 2:
         raise ConfigError(f"train_readings_per_subject = {train_readings_per_subject!r} is "
                           "invalid; expected an integer >= 2")
@@ -237,6 +240,17 @@ def run_wear_benchmark(
             smoothers.append({"model": name, "fold": sp.fold,
                               **{k: float(scores.loc[0, k]) for k in scores.columns}})
     predictions = pd.concat(preds, ignore_index=True)
+    tables, days, standards, icgm = _scored(predictions, schedules, time, n_boot, seed)
+    meta = {"models": list(models), "preset": preset, "n_splits": n_splits, "seed": seed,
+            "schedules": list(schedules), "n_subjects": int(frame["subject_id"].nunique()),
+            "n_readings": len(frame), "train_readings_per_subject": train_readings_per_subject,
+            "n_boot": n_boot}
+    return WearResult(predictions, tables, days, pd.DataFrame(smoothers), standards, icgm, meta)
+
+
+def _scored(predictions: pd.DataFrame, schedules: Sequence[str], time: str, n_boot: int,
+            seed: int) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """Schedules, error by day, standards and iCGM criteria of every model and variant."""
     tables, days, standards, icgm = [], [], [], []
     for (name, variant), g in predictions.groupby(["model", "variant"], sort=False):
         g = g.reset_index(drop=True)
@@ -247,10 +261,5 @@ def run_wear_benchmark(
             row, crit = _standards(g, sched, time, n_boot, seed)
             standards.append({"model": name, "variant": variant, **row})
             icgm.append(crit.assign(model=name, variant=variant))
-    meta = {"models": list(models), "preset": preset, "n_splits": n_splits, "seed": seed,
-            "schedules": list(schedules), "n_subjects": int(frame["subject_id"].nunique()),
-            "n_readings": len(frame), "train_readings_per_subject": train_readings_per_subject,
-            "n_boot": n_boot}
-    return WearResult(predictions, pd.concat(tables, ignore_index=True),
-                      pd.concat(days, ignore_index=True), pd.DataFrame(smoothers),
-                      pd.DataFrame(standards), pd.concat(icgm, ignore_index=True), meta)
+    return (pd.concat(tables, ignore_index=True), pd.concat(days, ignore_index=True),
+            pd.DataFrame(standards), pd.concat(icgm, ignore_index=True))

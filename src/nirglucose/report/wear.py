@@ -102,6 +102,28 @@ def _findings(s: pd.DataFrame, st: pd.DataFrame, meta: dict) -> list[str]:
     return out
 
 
+def _figures(pred: pd.DataFrame, by_day: pd.DataFrame, model: str, sched: str) -> dict:
+    """The two figures of the page, each with its alt text."""
+    g = pred[(pred["model"] == model) & (pred["variant"] == "raw")].reset_index(drop=True)
+    traces = pd.concat([g, apply_schedule(g, sched)], axis=1)
+    return {
+        "traces": (figure_wear_traces(traces, model=model, schedule=sched),
+                   f"Reference and {_label(model)} calibrated {sched} over the days for three "
+                   "held-out subjects; fingersticks marked"),
+        "by_day": (plot_error_by_day(by_day[(by_day["model"] == model)
+                                            & (by_day["variant"] == "raw")]).figure,
+                   f"{_label(model)}: RMSE by whole days since the last calibration, per "
+                   "schedule"),
+    }
+
+
+def _write_figures(figs: dict, fd: Path) -> None:
+    fd.mkdir(parents=True, exist_ok=True)
+    for name, (fig, _) in figs.items():
+        png = figure_bytes(fig, "png")
+        atomic_write(fd / f"wear_{name}.png", lambda tmp, b=png: Path(tmp).write_bytes(b))
+
+
 def build_wear_report(results_dir: str | Path, out_path: str | Path, *,
                       figures_dir: str | Path | None = None) -> Path:
     """Write the HTML report of a worn run's results directory (atomically).
@@ -127,23 +149,9 @@ def build_wear_report(results_dir: str | Path, out_path: str | Path, *,
     pool = models if len(models) else raw
     best = pool.loc[pool["rmse_mgdl"].idxmin()]
     model, sched = str(best["model"]), str(best["schedule"])
-    g = pred[(pred["model"] == model) & (pred["variant"] == "raw")].reset_index(drop=True)
-    traces = pd.concat([g, apply_schedule(g, sched)], axis=1)
-    figs = {
-        "traces": (figure_wear_traces(traces, model=model, schedule=sched),
-                   f"Reference and {_label(model)} calibrated {sched} over the days for three "
-                   "held-out subjects; fingersticks marked"),
-        "by_day": (plot_error_by_day(by_day[(by_day["model"] == model)
-                                            & (by_day["variant"] == "raw")]).figure,
-                   f"{_label(model)}: RMSE by whole days since the last calibration, per "
-                   "schedule"),
-    }
+    figs = _figures(pred, by_day, model, sched)
     if figures_dir is not None:
-        fd = Path(figures_dir)
-        fd.mkdir(parents=True, exist_ok=True)
-        for name, (fig, _) in figs.items():
-            png = figure_bytes(fig, "png")
-            atomic_write(fd / f"wear_{name}.png", lambda tmp, b=png: Path(tmp).write_bytes(b))
+        _write_figures(figs, Path(figures_dir))
     sched_table = raw.pivot_table(index="model", columns="schedule", values="rmse_mgdl")
     crit = icgm[(icgm["model"] == model) & (icgm["variant"] == "raw")
                 & (icgm["schedule"] == sched)]
