@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING
 
 try:
     __version__ = version("nirglucose")
@@ -24,10 +25,15 @@ from .config import PRESETS, ScenarioConfig, resolve_config
 from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, DataError, NirGlucoseError, NotFittedError
 
+if TYPE_CHECKING:  # the lazy attributes below, as the type checker sees them
+    from .prediction import PredictionResult, predict
+
 __all__ = [
     "__version__",
     "simulate",
     "simulate_wear",
+    "predict",
+    "PredictionResult",
     "load_dataset",
     "Dataset",
     "ScenarioConfig",
@@ -46,6 +52,12 @@ SUBPACKAGES = ("config", "design", "evaluation", "export", "features", "metrics"
                "optics", "plots", "portable", "report")
 
 
+#: Functions and classes reachable as attributes, name -> module, imported on first
+#: access: ``ng.predict`` needs the evaluation package's interval code, which loading a
+#: model file must not import.
+LAZY_ATTRIBUTES = {"predict": "nirglucose.prediction", "PredictionResult": "nirglucose.prediction"}
+
+
 def __getattr__(name: str):
     """``ng.models``, ``ng.metrics``, ``ng.evaluation``, ...: the subpackage, imported on
     first access (then a plain attribute).
@@ -58,8 +70,10 @@ def __getattr__(name: str):
     """
     if name in SUBPACKAGES:
         return importlib.import_module(f".{name}", __name__)
+    if name in LAZY_ATTRIBUTES:
+        return getattr(importlib.import_module(LAZY_ATTRIBUTES[name]), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *SUBPACKAGES})
+    return sorted({*globals(), *SUBPACKAGES, *LAZY_ATTRIBUTES})
