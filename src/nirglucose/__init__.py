@@ -9,17 +9,12 @@
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING
-
-try:
-    __version__ = version("nirglucose")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
 
 # The simulator subpackage first: importing it later would rebind the package attribute
 # ``simulate`` from the function below to the subpackage (nothing else imports it now).
 from . import simulate as _simulate_package  # noqa: F401
+from ._version import __version__
 from .api import simulate, simulate_wear
 from .config import PRESETS, ScenarioConfig, resolve_config
 from .dataset import Dataset, load_dataset

@@ -82,7 +82,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .. import __version__
+from .._version import __version__
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
 from ..models.registry import available_models, get_model_class

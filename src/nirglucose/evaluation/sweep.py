@@ -104,7 +104,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .. import __version__
+from .._version import __version__
 from ..config import resolve_config
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int

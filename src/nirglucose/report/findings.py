@@ -26,7 +26,8 @@ from ..evaluation.findings import (
     headline_table,
 )
 from ..evaluation.subgroups import subgroup_findings
-from .html import _esc, preset_of
+from .markup import esc as _esc
+from .markup import preset_of
 
 if TYPE_CHECKING:
     from .figures import Results
