@@ -38,9 +38,12 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
+from ..config.presets import DEVICE_CAPABILITIES
+from ..small_data import significance_withheld
 from .benchmark_result import LAMBDA_ROW, NO_PHYSICS, ORACLE, ablation_base
 from .drop_one import drop_one_findings
 from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_TABLE
+from .stats import compare_models
 
 __all__ = [
     "HYPO_MGDL",
@@ -303,9 +306,6 @@ def no_skill_comparisons(run: RunData, *, n_boot: int = 2000, seed: int = 0,
     :func:`~nirglucose.evaluation.stats.compare_models` with the pairs
     ``(model, "mean")`` on the run's scored predictions (empty without a no-skill row).
     """
-    from ..small_data import significance_withheld
-    from .stats import compare_models
-
     p = run.predictions
     models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m)]
     if significance_withheld(int(p["subject_id"].nunique())):  # small-data policy
@@ -557,8 +557,6 @@ def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
 
 def device_capabilities_of(meta: Mapping[str, Any]) -> list[str] | None:
     """Device capabilities switched on in a run's recorded configuration (None: unknown)."""
-    from ..config.presets import DEVICE_CAPABILITIES
-
     flat = _flat(meta.get("config") or {})
     if not flat:
         return None

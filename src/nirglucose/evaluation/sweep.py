@@ -105,6 +105,7 @@ import numpy as np
 import pandas as pd
 
 from .._version import __version__
+from ..api import simulate
 from ..config import resolve_config
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
@@ -396,8 +397,6 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     dict
         ``{"metrics": {...}, "version": ..., "warnings": [...], "wall_s": ...}``.
     """
-    from ..api import simulate  # the api module imports the whole simulator
-
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any, Final
 
 import pandas as pd
 
+from ..evaluation.findings import RunData, physics_verdicts
+from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
 from .markup import esc as _esc
 from .markup import model_label as _model_label
@@ -89,8 +91,6 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation",
     two fits are identical, no question was asked: the row says so and shows no Δ, p
     or verdict (:func:`nirglucose.evaluation.findings.physics_verdicts`).
     """
-    from ..evaluation.findings import RunData, physics_verdicts
-
     d = Path(results_dir)
     a = _read_ablation(d)
     if a is None or a.empty:
@@ -206,8 +206,6 @@ def _model_labels(models: list[str], loaded: list[tuple[dict[str, Any], pd.DataF
 def _comparison_table(names: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]],
                       models: list[str], label: dict[str, str]) -> str:
     """The key metrics of every preset, metric-major (each metric's presets side by side)."""
-    from ..evaluation.reference import STUDY_TABLE
-
     study = {str(r["model"]): r for r in STUDY_TABLE}
     head1 = "<th rowspan=2>Model</th>" + "".join(
         f"<th colspan={len(names)}>{_esc(h)}</th>" for _, h, _ in _COMPARED

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from ..evaluation.reference import STUDY_TABLE
 from .markup import esc as _esc
 from .markup import markdown_to_html, preset_of, strip_ablation, user_data_md
 from .markup import model_label as _model_label
@@ -71,8 +72,6 @@ def _table_columns(m: pd.DataFrame) -> list[tuple[str, str | None, str | None, s
 def _reproduced_table(results: Results, *, full: bool = True, table_id: str | None = None
                       ) -> str:
     """The main table: every column (``full``) or the essentials (RMSE with the study's)."""
-    from ..evaluation.reference import STUDY_TABLE
-
     with_study = not results.user_data
     study = {str(r["model"]): r for r in STUDY_TABLE} if with_study else {}
     m = results.metrics.drop_duplicates("model").set_index("model")
