@@ -115,6 +115,7 @@ from .drop_one import (
 )
 from .inverse import inverse_table, task_state
 from .progress import task_hooks
+from .protocol import Protocol, resolve_protocol
 from .reference import STUDY_PROTOCOL
 from .splits import Split, check_protocol, effective_layout, make_splits
 from .stats import DEFAULT_N_BOOT
@@ -685,11 +686,16 @@ def _checked_options(opts: dict[str, Any]) -> dict[str, Any]:
     return opts
 
 
+#: :func:`run_benchmark`'s protocol keywords and their defaults, by Protocol field name.
+_PROTOCOL_DEFAULTS = {"n_splits": 5, "repeats": 3, "seed": 0, "resamples": DEFAULT_N_BOOT,
+                      "calibration": 0}
+
+
 def run_benchmark(
     dataset: Dataset | pd.DataFrame,
     models: Sequence[str] | str | None = None,
     *,
-    protocol: str = "grouped-cv",
+    protocol: str | Protocol = "grouped-cv",
     n_splits: int = 5,
     repeats: int = 3,
     seed: int = 0,
@@ -715,8 +721,10 @@ def run_benchmark(
         Snapshots with ``subject_id`` and ``glucose_mgdl``.
     models : sequence of str or comma-separated str, optional
         Registry names (default: every registered model).
-    protocol : {"grouped-cv", "paper-split"}
-        See :mod:`~nirglucose.evaluation.splits`.
+    protocol : {"grouped-cv", "paper-split"} or Protocol
+        The splitter (:mod:`~nirglucose.evaluation.splits`), or the whole protocol as
+        one :class:`~nirglucose.evaluation.protocol.Protocol` (then ``n_splits``,
+        ``repeats``, ``seed``, ``n_boot`` and ``calibration`` stay at their defaults).
     n_splits, repeats : int
         Folds and repeats of ``grouped-cv`` (``paper-split`` runs one split).
     seed : int
@@ -762,9 +770,21 @@ def run_benchmark(
     """
     t_start = time.perf_counter()
     dataset = _as_dataset(dataset)
-    opts = _checked_options(
-        {k: v for k, v in locals().items() if k not in ("dataset", "models", "t_start")}
+    proto = resolve_protocol(
+        protocol,
+        {"n_splits": n_splits, "repeats": repeats, "seed": seed, "resamples": n_boot,
+         "calibration": calibration},
+        _PROTOCOL_DEFAULTS,
     )
+    seed = proto.seed
+    opts = _checked_options({
+        "protocol": proto.splitter, "n_splits": proto.n_splits, "repeats": proto.repeats,
+        "seed": seed, "n_boot": proto.resamples, "calibration": proto.calibration,
+        "out": out, "jobs": jobs, "progress": progress, "model_params": model_params,
+        "alpha": alpha, "timing": timing, "importance_repeats": importance_repeats,
+        "oracle_reference": oracle_reference, "on_task": on_task, "references": references,
+        "ablation": ablation,
+    })
     plan = _plan(dataset, models, opts)
     cache = tasks.TaskCache(out, valid=_valid_result)
     specs = plan.specs()

@@ -124,7 +124,8 @@ from .benchmark_result import _dumps, _write_csv, _write_text
 from .calibration import check_k
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .progress import task_hooks
-from .splits import check_protocol, effective_layout
+from .protocol import Protocol, resolve_protocol
+from .splits import effective_layout
 from .stats import cluster_bootstrap_metrics
 from .studies import (
     COHORT_SHIFTS,
@@ -666,6 +667,11 @@ def _sweep_meta(
     }
 
 
+#: :func:`run_sweep`'s protocol keywords and their defaults, by Protocol field name.
+_PROTOCOL_DEFAULTS = {"n_splits": 5, "repeats": 3, "resamples": _DEFAULT_N_BOOT,
+                      "calibration": 0}
+
+
 def run_sweep(
     vary: Mapping[str, Sequence[Any]] | None = None,
     *,
@@ -674,7 +680,7 @@ def run_sweep(
     seeds: int | Sequence[int] = 5,
     models: Sequence[str] | str | None = None,
     overrides: Mapping[str, Any] | None = None,
-    protocol: str = "grouped-cv",
+    protocol: str | Protocol = "grouped-cv",
     n_splits: int = 5,
     repeats: int = 3,
     n_subjects: int = 80,
@@ -708,7 +714,11 @@ def run_sweep(
     overrides : mapping, optional
         Dotted overrides shared by every scenario (``--set``).
     protocol, n_splits, repeats : str, int, int
-        Protocol of :func:`~nirglucose.evaluation.benchmark.run_benchmark` per task.
+        Protocol of :func:`~nirglucose.evaluation.benchmark.run_benchmark` per task;
+        ``protocol`` may be a whole :class:`~nirglucose.evaluation.protocol.Protocol`
+        (its ``resamples`` and ``calibration`` then replace ``n_boot`` and
+        ``calibration``, which stay at their defaults, and its ``seed`` stays 0: the
+        seeds of a sweep are ``seeds``).
     n_subjects, per_subject : int
         Size of each simulated dataset. [-]
     n_boot : int
@@ -748,9 +758,19 @@ def run_sweep(
     models = resolve_models(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
     if study == "mismatch" and MISMATCH_SUBJECT not in models:
         models = [MISMATCH_SUBJECT, *models]  # the study's subject always runs
-    check_protocol(protocol)
-    for name in ("n_splits", "repeats", "n_subjects", "per_subject", "n_boot"):
-        check_positive_int(name, locals()[name])
+    proto = resolve_protocol(
+        protocol,
+        {"n_splits": n_splits, "repeats": repeats, "resamples": n_boot,
+         "calibration": calibration},
+        _PROTOCOL_DEFAULTS,
+    )
+    if proto.seed != 0:
+        raise ConfigError(f"a sweep's seeds are its seeds argument ({seeds!r}); leave the "
+                          f"Protocol's seed at 0, got {proto.seed}")
+    protocol, n_splits, repeats = proto.splitter, proto.n_splits, proto.repeats
+    n_boot, calibration = proto.resamples, proto.calibration
+    for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
+        check_positive_int(name, value)
     seed_list = _resolve_seeds(seeds)
     backend, n_workers = resolve_backend(jobs, scheduler)
     specs = plan_sweep(
@@ -771,7 +791,13 @@ def run_sweep(
     frame = _frame(scenarios, seed_list, models, [cache.results[k] for k in keys],
                    study or "grid", label_columns)
     summary = summarize_sweep(frame, label_columns)
-    opts = {**locals(), "seeds": seed_list}
+    opts = {
+        "study": study, "preset": preset, "base": base, "vary": vary, "seeds": seed_list,
+        "models": models, "protocol": protocol, "n_splits": n_splits, "repeats": repeats,
+        "n_subjects": n_subjects, "per_subject": per_subject, "n_boot": n_boot,
+        "label_columns": label_columns, "backend": backend, "n_workers": n_workers,
+        "scheduler": scheduler, "t_start": t_start,
+    }
     meta = _sweep_meta(scenarios, cache, len(pending), opts)
     result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
                          meta=meta)
