@@ -686,6 +686,15 @@ def _checked_options(opts: dict[str, Any]) -> dict[str, Any]:
     return opts
 
 
+def _options(proto: Protocol, **rest: Any) -> dict[str, Any]:
+    """The options of :func:`run_benchmark` by keyword: the protocol's, then the rest."""
+    return _checked_options({
+        "protocol": proto.splitter, "n_splits": proto.n_splits, "repeats": proto.repeats,
+        "seed": proto.seed, "n_boot": proto.resamples, "calibration": proto.calibration,
+        **rest,
+    })
+
+
 #: :func:`run_benchmark`'s protocol keywords and their defaults, by Protocol field name.
 _PROTOCOL_DEFAULTS = {"n_splits": 5, "repeats": 3, "seed": 0, "resamples": DEFAULT_N_BOOT,
                       "calibration": 0}
@@ -770,21 +779,14 @@ def run_benchmark(
     """
     t_start = time.perf_counter()
     dataset = _as_dataset(dataset)
-    proto = resolve_protocol(
-        protocol,
-        {"n_splits": n_splits, "repeats": repeats, "seed": seed, "resamples": n_boot,
-         "calibration": calibration},
-        _PROTOCOL_DEFAULTS,
-    )
+    proto = resolve_protocol(protocol, dict(n_splits=n_splits, repeats=repeats, seed=seed,
+                                            resamples=n_boot, calibration=calibration),
+                             _PROTOCOL_DEFAULTS)
     seed = proto.seed
-    opts = _checked_options({
-        "protocol": proto.splitter, "n_splits": proto.n_splits, "repeats": proto.repeats,
-        "seed": seed, "n_boot": proto.resamples, "calibration": proto.calibration,
-        "out": out, "jobs": jobs, "progress": progress, "model_params": model_params,
-        "alpha": alpha, "timing": timing, "importance_repeats": importance_repeats,
-        "oracle_reference": oracle_reference, "on_task": on_task, "references": references,
-        "ablation": ablation,
-    })
+    opts = _options(proto, out=out, jobs=jobs, progress=progress, model_params=model_params,
+                    alpha=alpha, timing=timing, importance_repeats=importance_repeats,
+                    oracle_reference=oracle_reference, on_task=on_task,
+                    references=references, ablation=ablation)
     plan = _plan(dataset, models, opts)
     cache = tasks.TaskCache(out, valid=_valid_result)
     specs = plan.specs()

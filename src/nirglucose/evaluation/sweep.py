@@ -121,7 +121,6 @@ from .benchmark import (
 )
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
-from .calibration import check_k
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .progress import task_hooks
 from .protocol import Protocol, resolve_protocol
@@ -672,6 +671,19 @@ _PROTOCOL_DEFAULTS = {"n_splits": 5, "repeats": 3, "resamples": _DEFAULT_N_BOOT,
                       "calibration": 0}
 
 
+def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int],
+                    given: dict[str, Any]) -> Protocol:
+    """The protocol of every task, checked with the cohort ``(n_subjects, per_subject)``;
+    a Protocol's seed must stay 0 (a sweep's are ``seeds``)."""
+    proto = resolve_protocol(protocol, given, _PROTOCOL_DEFAULTS)
+    for name, value in zip(("n_subjects", "per_subject"), sizes, strict=True):
+        check_positive_int(name, value)
+    if proto.seed != 0:
+        raise ConfigError(f"a sweep's seeds are its seeds argument ({seeds!r}); leave the "
+                          f"Protocol's seed at 0, got {proto.seed}")
+    return proto
+
+
 def run_sweep(
     vary: Mapping[str, Sequence[Any]] | None = None,
     *,
@@ -758,26 +770,15 @@ def run_sweep(
     models = resolve_models(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
     if study == "mismatch" and MISMATCH_SUBJECT not in models:
         models = [MISMATCH_SUBJECT, *models]  # the study's subject always runs
-    proto = resolve_protocol(
-        protocol,
-        {"n_splits": n_splits, "repeats": repeats, "resamples": n_boot,
-         "calibration": calibration},
-        _PROTOCOL_DEFAULTS,
-    )
-    if proto.seed != 0:
-        raise ConfigError(f"a sweep's seeds are its seeds argument ({seeds!r}); leave the "
-                          f"Protocol's seed at 0, got {proto.seed}")
-    protocol, n_splits, repeats = proto.splitter, proto.n_splits, proto.repeats
-    n_boot, calibration = proto.resamples, proto.calibration
-    for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
-        check_positive_int(name, value)
+    proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
+        n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
     backend, n_workers = resolve_backend(jobs, scheduler)
     specs = plan_sweep(
         scenarios, preset=preset, seeds=seed_list, models=models, base_overrides=base,
-        protocol=protocol, n_splits=n_splits, repeats=repeats, n_subjects=n_subjects,
-        per_subject=per_subject, n_boot=n_boot, model_params=model_params,
-        calibration=check_k(calibration),
+        protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
+        n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
+        model_params=model_params, calibration=proto.calibration,
     )
     keys = [tasks.task_key(s) for s in specs]
     spec_of = dict(zip(keys, specs, strict=True))
@@ -791,16 +792,13 @@ def run_sweep(
     frame = _frame(scenarios, seed_list, models, [cache.results[k] for k in keys],
                    study or "grid", label_columns)
     summary = summarize_sweep(frame, label_columns)
-    opts = {
-        "study": study, "preset": preset, "base": base, "vary": vary, "seeds": seed_list,
-        "models": models, "protocol": protocol, "n_splits": n_splits, "repeats": repeats,
-        "n_subjects": n_subjects, "per_subject": per_subject, "n_boot": n_boot,
-        "label_columns": label_columns, "backend": backend, "n_workers": n_workers,
-        "scheduler": scheduler, "t_start": t_start,
-    }
-    meta = _sweep_meta(scenarios, cache, len(pending), opts)
+    opts = dict(study=study, preset=preset, base=base, vary=vary, seeds=seed_list, models=models,
+                protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
+                n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
+                label_columns=label_columns, backend=backend, n_workers=n_workers,
+                scheduler=scheduler, t_start=t_start)
     result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
-                         meta=meta)
+                         meta=_sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:
         result.save(out)
     return result
