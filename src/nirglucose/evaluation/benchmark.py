@@ -784,7 +784,7 @@ def run_benchmark(
                              _PROTOCOL_DEFAULTS)
     seed = proto.seed
     opts = _options(proto, out=out, jobs=jobs, progress=progress, model_params=model_params,
-                    alpha=alpha, timing=timing, importance_repeats=importance_repeats,
+                    alpha=alpha, timing=timing, drop_one_models=drop_one_models,
                     oracle_reference=oracle_reference, on_task=on_task,
                     references=references, ablation=ablation)
     plan = _plan(dataset, models, opts)
