@@ -18,7 +18,7 @@ from nirglucose.exceptions import ConfigError
 
 FAST = {"timing": {"n_single": 2, "min_single": 1, "warmup": 0, "batch_rows": 20,
                    "batch_repeats": 1},
-        "oracle_reference": False, "importance_repeats": 0}
+        "oracle_reference": False, "drop_one_models": "none"}
 TIMED = ["latency_single_ms", "latency_single_p90_ms", "throughput_per_s", "fit_time_s"]
 
 

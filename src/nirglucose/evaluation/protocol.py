@@ -78,7 +78,8 @@ class Protocol:
 
 
 def resolve_protocol(
-    protocol: str | Protocol, given: Mapping[str, Any], defaults: Mapping[str, Any]
+    protocol: str | Protocol, given: Mapping[str, Any],
+    defaults: Mapping[str, Any] | None = None,
 ) -> Protocol:
     """The :class:`Protocol` a function was asked for.
 
@@ -88,8 +89,9 @@ def resolve_protocol(
         A splitter name (the options then come from ``given``) or a whole protocol.
     given : mapping
         The function's protocol keywords as called, by :class:`Protocol` field name.
-    defaults : mapping
-        The same keywords' defaults in the function's signature.
+    defaults : mapping, optional
+        The same keywords' defaults in the function's signature (default: the
+        :class:`Protocol`'s own).
 
     Raises
     ------
@@ -104,6 +106,8 @@ def resolve_protocol(
     >>> resolve_protocol(Protocol(seed=2), {"seed": 0}, {"seed": 0}).seed
     2
     """
+    if defaults is None:
+        defaults = {f.name: f.default for f in fields(Protocol)}
     if isinstance(protocol, Protocol):
         clash = [f"{k}={v!r}" for k, v in given.items() if v != defaults[k]]
         if clash:
