@@ -677,8 +677,7 @@ def _interval_method(protocol: str) -> str:
 
 
 def _checked_options(proto: Protocol, **rest: Any) -> dict[str, Any]:
-    """The options of :func:`run_benchmark` by keyword: the protocol's (checked when it
-    was made), then the rest (``jobs`` checked, ``timing`` a dict)."""
+    """:func:`run_benchmark`'s options by keyword: the Protocol's, then the rest."""
     opts = {"protocol": proto.splitter, "n_splits": proto.n_splits, "repeats": proto.repeats,
             "seed": proto.seed, "n_boot": proto.resamples, "calibration": proto.calibration,
             **rest}

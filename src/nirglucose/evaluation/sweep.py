@@ -97,7 +97,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -666,16 +666,12 @@ def _sweep_meta(
     }
 
 
-#: :func:`run_sweep`'s protocol keywords and their defaults, by Protocol field name.
-_PROTOCOL_DEFAULTS = {"n_splits": 5, "repeats": 3, "resamples": _DEFAULT_N_BOOT,
-                      "calibration": 0}
-
-
 def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int],
                     given: dict[str, Any]) -> Protocol:
     """The protocol of every task, checked with the cohort ``(n_subjects, per_subject)``;
     a Protocol's seed must stay 0 (a sweep's are ``seeds``)."""
-    proto = resolve_protocol(protocol, given, _PROTOCOL_DEFAULTS)
+    defaults = {**{f.name: f.default for f in fields(Protocol)}, "resamples": _DEFAULT_N_BOOT}
+    proto = resolve_protocol(protocol, given, defaults)  # the sweep's own resamples
     for name, value in zip(("n_subjects", "per_subject"), sizes, strict=True):
         check_positive_int(name, value)
     if proto.seed != 0:
@@ -726,11 +722,8 @@ def run_sweep(
     overrides : mapping, optional
         Dotted overrides shared by every scenario (``--set``).
     protocol, n_splits, repeats : str, int, int
-        Protocol of :func:`~nirglucose.evaluation.benchmark.run_benchmark` per task;
-        ``protocol`` may be a whole :class:`~nirglucose.evaluation.protocol.Protocol`
-        (its ``resamples`` and ``calibration`` then replace ``n_boot`` and
-        ``calibration``, which stay at their defaults, and its ``seed`` stays 0: the
-        seeds of a sweep are ``seeds``).
+        Protocol of :func:`~nirglucose.evaluation.benchmark.run_benchmark` per task, or one
+        :class:`~nirglucose.evaluation.protocol.Protocol` (seed 0: the sweep's are ``seeds``).
     n_subjects, per_subject : int
         Size of each simulated dataset. [-]
     n_boot : int
