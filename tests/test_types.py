@@ -24,6 +24,7 @@ PUBLIC = [
     "src/nirglucose/dataset.py",
     "src/nirglucose/exceptions.py",
     "src/nirglucose/portable.py",
+    "src/nirglucose/prediction.py",
     "src/nirglucose/schema.py",
     "src/nirglucose/config/keys.py",
     "src/nirglucose/config/overrides.py",

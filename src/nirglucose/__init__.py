@@ -9,25 +9,26 @@
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("nirglucose")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
+from typing import TYPE_CHECKING
 
 # The simulator subpackage first: importing it later would rebind the package attribute
 # ``simulate`` from the function below to the subpackage (nothing else imports it now).
 from . import simulate as _simulate_package  # noqa: F401
+from ._version import __version__
 from .api import simulate, simulate_wear
 from .config import PRESETS, ScenarioConfig, resolve_config
 from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, DataError, NirGlucoseError, NotFittedError
 
+if TYPE_CHECKING:  # the lazy attributes below, as the type checker sees them
+    from .prediction import PredictionResult, predict
+
 __all__ = [
     "__version__",
     "simulate",
     "simulate_wear",
+    "predict",
+    "PredictionResult",
     "load_dataset",
     "Dataset",
     "ScenarioConfig",
@@ -46,6 +47,12 @@ SUBPACKAGES = ("config", "design", "evaluation", "export", "features", "metrics"
                "optics", "plots", "portable", "report")
 
 
+#: Functions and classes reachable as attributes, name -> module, imported on first
+#: access: ``ng.predict`` needs the evaluation package's interval code, which loading a
+#: model file must not import.
+LAZY_ATTRIBUTES = {"predict": "nirglucose.prediction", "PredictionResult": "nirglucose.prediction"}
+
+
 def __getattr__(name: str):
     """``ng.models``, ``ng.metrics``, ``ng.evaluation``, ...: the subpackage, imported on
     first access (then a plain attribute).
@@ -58,8 +65,10 @@ def __getattr__(name: str):
     """
     if name in SUBPACKAGES:
         return importlib.import_module(f".{name}", __name__)
+    if name in LAZY_ATTRIBUTES:
+        return getattr(importlib.import_module(LAZY_ATTRIBUTES[name]), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *SUBPACKAGES})
+    return sorted({*globals(), *SUBPACKAGES, *LAZY_ATTRIBUTES})

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .dataset import DEFAULT_ADC_BITS
+from .columns import DEFAULT_ADC_BITS
 from .exceptions import DataError
 
 __all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits"]

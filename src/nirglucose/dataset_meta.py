@@ -20,6 +20,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from .config import ScenarioConfig, resolve_config
 from .exceptions import ConfigError, DataError
 
 __all__ = ["parse_meta"]
@@ -70,7 +71,6 @@ def parse_meta(raw: bytes | str | None, path: str | Path) -> tuple[dict[str, Any
         raise DataError(
             f"{where}: metadata config must be an object, got a {type(cfg).__name__}"
         )
-    from .config import ScenarioConfig, resolve_config
 
     try:
         config = resolve_config(ScenarioConfig.model_validate(cfg))

@@ -36,8 +36,8 @@ import numpy as np
 import pandas as pd
 from pydantic import TypeAdapter, ValidationError
 
-from .constants import MGDL_PER_MMOLL_GLUCOSE
-from .dataset import GLUCOSE_REPORTING_RANGE_MGDL, KNOWN_PHYSIOLOGY, PHYSIOLOGICAL_RANGES
+from .columns import GLUCOSE_REPORTING_RANGE_MGDL, KNOWN_PHYSIOLOGY
+from .constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
 from .exceptions import DataError
 
 __all__ = [

@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, TransformerMixin
 
+from .adc_resolution import resolve_adc_bits
 from .constants import DEFAULT_LED_WAVELENGTHS_NM
 from .dataset import (
     DEFAULT_ADC_BITS,
@@ -145,8 +146,6 @@ class DeviceSchema:
             No ``adc_<nm>`` column, reference codes for some LEDs only, or a bad
             resolution.
         """
-        from .adc_resolution import resolve_adc_bits
-
         frame = X.frame if isinstance(X, Dataset) else X
         meta_bits = None
         if isinstance(X, Dataset):

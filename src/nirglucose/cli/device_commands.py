@@ -9,7 +9,14 @@ import typer
 
 from ..small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
 from ._app import app
-from ._common import GlucoseUnitOption, UserError, _check_out_file, _check_seed, _say
+from ._common import (
+    GlucoseUnitOption,
+    UserError,
+    _check_out_file,
+    _check_seed,
+    _say,
+    _warnings_as_lines,
+)
 from .fit_report import load_device_file, report_cv, say_notes, warn_overparameterised
 
 
@@ -162,149 +169,33 @@ def predict_glucose(
     range the model was fitted on (``adc_940>``: above it). With ``--glucose-unit
     mmol/L`` the glucose columns are ``*_mmoll`` in mmol/L.
     """
-    import numpy as np
-
-    from ..dataset import atomic_write, load_dataset
+    from ..dataset import atomic_write
     from ..io_files import check_glucose_unit
-    from ..models import load_model
-    from ..models._validate import check_predictions
+    from ..prediction import predict
 
     if out.suffix != ".csv":
         raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
     check_glucose_unit(glucose_unit)
     _check_out_file(out)
-    estimator = load_model(model)
-    ds = load_dataset(data, glucose_unit=glucose_unit)
-    _check_model_codes(estimator, ds, data)
-    pred = np.asarray(check_predictions(estimator.predict(ds), model), dtype=float)
-    calibrated = None
-    if calibration is not None:
-        pred, calibrated = _calibrate(estimator, ds, pred, calibration, glucose_unit)
-    table, has_intervals = _prediction_table(estimator, ds, pred, calibrated)
-    table = _in_unit_columns(table, glucose_unit)
+    with _warnings_as_lines():
+        result = predict(model, data, calibration, glucose_unit=glucose_unit)
+    table = result.frame
     atomic_write(out, lambda tmp: table.to_csv(tmp, index=False))
-    say_notes(ds)
-    _say(_prediction_summary(table, calibrated, has_intervals, out), err=False)
+    for note in result.read_notes:
+        _say(f"note: {note}")
+    _say(_prediction_summary(result, out), err=False)
 
 
-def _check_model_codes(estimator, ds, data: Path) -> None:
-    """Codes above the model's full scale refused with the file's rows."""
-    from ..io_files import check_codes
-
-    schema = getattr(estimator, "schema_", None)
-    if schema is not None and not schema.is_plain:
-        check_codes(ds.frame, schema.adc_bits, csv=Path(data).suffix == ".csv")
-
-
-def _in_unit_columns(table, unit: str | None):
-    """The glucose columns in mmol/L (renamed ``*_mmoll``) when asked for."""
-    from ..io_files import glucose_to_unit
-
-    if unit != "mmol/L":
-        return table
-    cols = [c for c in table.columns if c.endswith("_mgdl")]
-    for c in cols:
-        table[c] = glucose_to_unit(table[c].to_numpy(float), unit)
-    return table.rename(columns={c: c[: -len("_mgdl")] + "_mmoll" for c in cols})
-
-
-def _outside_training(estimator, ds) -> list[str]:
-    """Per row, the inputs outside the model's training range (empty where none)."""
-    schema = getattr(estimator, "schema_", None)
-    if schema is None or schema.is_plain:
-        return [""] * len(ds)
-    return schema.outside_training(schema.raw(ds))
-
-
-def _calibrate(estimator, ds, pred, calibration: Path, unit: str | None = None):
-    """Each subject's mean error on their calibration readings added to their predictions:
-    ``(predictions, which rows were corrected)``."""
-    from ..dataset import load_dataset
-    from ..evaluation.calibration import apply_offset
-    from ..models._validate import check_predictions
-
-    cal = load_dataset(calibration, glucose_unit=unit)
-    for name, frame in (("--calibration", cal.frame), ("--data", ds.frame)):
-        if "subject_id" not in frame.columns:
-            raise UserError(f"{name} needs a subject_id column to match people")
-    if "glucose_mgdl" not in cal.frame.columns:
-        raise UserError("--calibration needs the reference glucose of each reading "
-                        "(glucose_mgdl or glucose_mmoll)")
-    _warn_overlap(estimator, cal, ds)
-    cal_pred = check_predictions(estimator.predict(cal), calibration)
-    return apply_offset(
-        pred,
-        ds.frame["subject_id"].to_numpy(),
-        cal_pred,
-        cal.frame["glucose_mgdl"].to_numpy(float),
-        cal.frame["subject_id"].to_numpy(),
-    )
-
-
-def _warn_overlap(estimator, cal, ds) -> None:
-    """Warn when calibration readings are among the readings predicted (their error is
-    then no test of the calibration)."""
-    cols = list(getattr(estimator.schema_, "raw_columns", ()))
-    key = ["subject_id", "measurement_id"] if "measurement_id" in cal.frame and \
-        "measurement_id" in ds.frame else ["subject_id", *cols]
-    if not all(c in cal.frame and c in ds.frame for c in key):
-        return
-    both = ds.frame[key].merge(cal.frame[key].drop_duplicates(), on=key, how="inner")
-    if len(both):
-        _say(f"warning: {len(both)} of the {len(ds)} readings predicted are also calibration "
-             f"readings (same {', '.join(key[:2])}{'...' if len(key) > 2 else ''}): their "
-             "error says nothing about the calibration; predict on other readings")
-
-
-def _prediction_table(estimator, ds, pred, calibrated):
-    """The predictions file's rows and whether the model carried an interval calibration."""
-    import pandas as pd
-
-    from ..schema import meter_flags
-
-    ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
-    table = ds.frame[ids].reset_index(drop=True).copy()
-    table["predicted_glucose_mgdl"] = pd.Series(pred, dtype=float).to_numpy()
-    lower, upper, has_intervals = _interval_bounds(estimator, pred, calibrated)
-    table["glucose_lower_mgdl"] = lower
-    table["glucose_upper_mgdl"] = upper
-    table["flag"] = meter_flags(pred)
-    table["outside_training"] = _outside_training(estimator, ds)
-    if calibrated is not None:
-        table["calibrated"] = calibrated
-    return table, has_intervals
-
-
-def _interval_bounds(estimator, pred, calibrated):
-    """The 90 % interval (NaN without a calibration; the offset-calibrated width on
-    calibrated rows where the model has one), lower bound clipped at 0: ``(lo, up, has)``."""
-    import numpy as np
-
-    from ..evaluation.conformal import calibration_of, interval
-
-    cal_doc = calibration_of(estimator)
-    if cal_doc is None:
-        return np.full(len(pred), np.nan), np.full(len(pred), np.nan), False
-    lower, upper = interval(estimator, pred, 0.9)
-    if calibrated is not None and (cal_doc.get("half_width_offset1_mgdl") or {}).get("90"):
-        lo_c, up_c = interval(estimator, pred, 0.9, offset_calibrated=True)
-        lower, upper = np.where(calibrated, lo_c, lower), np.where(calibrated, up_c, upper)
-    return np.maximum(lower, 0.0), upper, True
-
-
-def _prediction_summary(table, calibrated, has_intervals: bool, out: Path) -> str:
-    n_flag = int((table["flag"] != "").sum())
+def _prediction_summary(result, out: Path) -> str:
+    n_flag = result.n_flagged
     flagged = f" ({n_flag} outside 20-600 mg/dL, flagged LO/HI)" if n_flag else ""
-    cal_note = (
-        f"; {int(calibrated.sum())} calibrated by their person's readings"
-        if calibrated is not None
-        else ""
-    )
-    no_int = "" if has_intervals else "; the model carries no interval calibration"
-    n_out = int((table["outside_training"] != "").sum())
+    n_cal = result.n_calibrated
+    cal_note = f"; {n_cal} calibrated by their person's readings" if n_cal is not None else ""
+    no_int = "" if result.has_intervals else "; the model carries no interval calibration"
+    n_out = result.n_outside_training
     extra = (f"; {n_out} with inputs outside the training range (column outside_training)"
              if n_out else "")
-    return (f"predicted {len(table)} measurements{flagged}{extra}{cal_note}{no_int}; "
+    return (f"predicted {len(result.frame)} measurements{flagged}{extra}{cal_note}{no_int}; "
             f"wrote {out}")
 
 

@@ -11,6 +11,7 @@ import importlib
 
 __all__ = [
     "PROTOCOLS",
+    "Protocol",
     "STUDY_TABLE",
     "BenchmarkResult",
     "run_benchmark",
@@ -24,6 +25,7 @@ __all__ = [
 
 _LAZY = {
     "PROTOCOLS": "nirglucose.evaluation.splits",
+    "Protocol": "nirglucose.evaluation.protocol",
     "make_splits": "nirglucose.evaluation.splits",
     "STUDY_TABLE": "nirglucose.evaluation.reference",
     "BenchmarkResult": "nirglucose.evaluation.benchmark",

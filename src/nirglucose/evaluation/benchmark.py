@@ -82,7 +82,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .. import __version__
+from .._version import __version__
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
 from ..models.registry import available_models, get_model_class
@@ -102,7 +102,7 @@ from .benchmark_result import (
     ablation_base,
     lambda_row,
 )
-from .calibration import check_k, personal_calibration
+from .calibration import personal_calibration
 from .conformal import LEVELS
 from .drop_one import (
     DROP_ONE_COLUMNS,
@@ -115,8 +115,9 @@ from .drop_one import (
 )
 from .inverse import inverse_table, task_state
 from .progress import task_hooks
+from .protocol import Protocol, resolve_protocol
 from .reference import STUDY_PROTOCOL
-from .splits import Split, check_protocol, effective_layout, make_splits
+from .splits import Split, effective_layout, make_splits
 from .stats import DEFAULT_N_BOOT
 from .tasks import TASK_FORMAT
 from .timing import measure_latency, timing_inputs
@@ -675,12 +676,12 @@ def _interval_method(protocol: str) -> str:
     )
 
 
-def _checked_options(opts: dict[str, Any]) -> dict[str, Any]:
-    """The options of :func:`run_benchmark`, counts and protocol checked."""
-    check_protocol(opts["protocol"])
-    for name in ("n_splits", "repeats", "jobs", "n_boot"):
-        opts[name] = check_positive_int(name, opts[name])
-    opts["calibration"] = check_k(opts["calibration"])
+def _checked_options(proto: Protocol, **rest: Any) -> dict[str, Any]:
+    """:func:`run_benchmark`'s options by keyword: the Protocol's, then the rest."""
+    opts = {"protocol": proto.splitter, "n_splits": proto.n_splits, "repeats": proto.repeats,
+            "seed": proto.seed, "n_boot": proto.resamples, "calibration": proto.calibration,
+            **rest}
+    opts["jobs"] = check_positive_int("jobs", opts["jobs"])
     opts["timing"] = dict(opts["timing"] or {})
     return opts
 
@@ -689,7 +690,7 @@ def run_benchmark(
     dataset: Dataset | pd.DataFrame,
     models: Sequence[str] | str | None = None,
     *,
-    protocol: str = "grouped-cv",
+    protocol: str | Protocol = "grouped-cv",
     n_splits: int = 5,
     repeats: int = 3,
     seed: int = 0,
@@ -715,8 +716,9 @@ def run_benchmark(
         Snapshots with ``subject_id`` and ``glucose_mgdl``.
     models : sequence of str or comma-separated str, optional
         Registry names (default: every registered model).
-    protocol : {"grouped-cv", "paper-split"}
-        See :mod:`~nirglucose.evaluation.splits`.
+    protocol : {"grouped-cv", "paper-split"} or Protocol
+        The splitter (:mod:`~nirglucose.evaluation.splits`), or the whole protocol as one
+        :class:`~nirglucose.evaluation.protocol.Protocol` (the keywords it holds unset).
     n_splits, repeats : int
         Folds and repeats of ``grouped-cv`` (``paper-split`` runs one split).
     seed : int
@@ -762,9 +764,13 @@ def run_benchmark(
     """
     t_start = time.perf_counter()
     dataset = _as_dataset(dataset)
-    opts = _checked_options(
-        {k: v for k, v in locals().items() if k not in ("dataset", "models", "t_start")}
-    )
+    proto = resolve_protocol(protocol, dict(n_splits=n_splits, repeats=repeats, seed=seed,
+                                            resamples=n_boot, calibration=calibration))
+    seed = proto.seed
+    opts = _checked_options(proto, out=out, jobs=jobs, progress=progress, alpha=alpha,
+                            model_params=model_params, timing=timing, on_task=on_task,
+                            drop_one_models=drop_one_models, references=references,
+                            oracle_reference=oracle_reference, ablation=ablation)
     plan = _plan(dataset, models, opts)
     cache = tasks.TaskCache(out, valid=_valid_result)
     specs = plan.specs()
@@ -779,16 +785,10 @@ def run_benchmark(
     )
     if opts["calibration"]:
         result.calibration = personal_calibration(
-            dataset,
-            result.predictions,
-            plan.splits,
-            opts["calibration"],
-            n_boot=opts["n_boot"],
-            seed=seed,
-        )
-    result.inverse = inverse_table(
-        dataset.frame, runs, plan.names, n_boot=opts["n_boot"], seed=seed
-    )
+            dataset, result.predictions, plan.splits, opts["calibration"],
+            n_boot=opts["n_boot"], seed=seed)
+    result.inverse = inverse_table(dataset.frame, runs, plan.names, n_boot=opts["n_boot"],
+                                   seed=seed)
     drops = [(t.spec, t.split, cache.results[t.key]) for t in plan.drop_tasks]
     result.drop_one = drop_one_table(
         result.predictions, refit_predictions(dataset.frame, drops),

@@ -12,14 +12,13 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from .calibration import CALIBRATION_COLUMNS
-from .drop_one import DROP_ONE_COLUMNS
 from .inverse import INVERSE_COLUMNS
 from .reference import STUDY_TABLE
 from .stats import PAIRED_COLUMNS
@@ -41,6 +40,22 @@ __all__ = [
     "lambda_row",
     "ablation_base",
 ]
+
+#: Columns of ``BenchmarkResult.drop_one`` / ``drop_one.csv``.
+DROP_ONE_COLUMNS: Final = (
+    "model",
+    "dropped_wavelength_nm",
+    "rmse_all_mgdl",
+    "rmse_without_mgdl",
+    "delta_rmse_mgdl",
+    "ci_low",
+    "ci_high",
+    "p_value",
+    "p_holm",
+    "significant",
+    "n_test_subjects",
+    "n_repeats",
+)
 
 #: Registry name of the oracle bound.
 ORACLE = "oracle"
@@ -213,7 +228,7 @@ class BenchmarkResult:
         state-predicting model's tissue-state error against the truth; empty when no
         model predicts state or the data has no ``true_*`` columns.
     drop_one : pandas.DataFrame
-        Drop-one-LED refits (:data:`~nirglucose.evaluation.drop_one.DROP_ONE_COLUMNS`,
+        Drop-one-LED refits (:data:`DROP_ONE_COLUMNS`,
         ``drop_one.csv``): per model and LED, the RMSE refitted without that LED's
         columns minus the RMSE with every LED (same folds, seeds and held-out
         subjects; first repeat), with its paired cluster-bootstrap 95 % CI

@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import ConfigError, DataError
+from ..features import EnhancedBeerLambertFeatures
 from .stats import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
@@ -125,7 +126,6 @@ def _difference_ridge(train: pd.DataFrame, test: pd.DataFrame, k: int) -> np.nda
     from sklearn.pipeline import make_pipeline
     from sklearn.preprocessing import StandardScaler
 
-    from ..features import EnhancedBeerLambertFeatures
 
     feats = EnhancedBeerLambertFeatures().fit(train)
     dF, dy, _, _ = _pairs(train, feats.transform(train), k)

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
 from ..models._validate import check_calibration_doc
 from .stats import repeat_subject_cells, resampled_ratios, subject_draws
@@ -143,8 +144,6 @@ def _frame_of(data) -> pd.DataFrame:
 
 
 def _subset(data, mask: np.ndarray):
-    from ..dataset import Dataset
-
     if isinstance(data, Dataset):
         return data.rows(mask)
     return _frame_of(data).loc[mask].reset_index(drop=True)

@@ -43,6 +43,9 @@ import pandas as pd
 
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
+from .benchmark_aggregate import scored
+from .benchmark_result import DROP_ONE_COLUMNS, ablation_base
+from .finding import Finding, Value, label
 from .stats import compare_models
 
 __all__ = [
@@ -72,21 +75,6 @@ DEFAULT_DROP_ONE_MODELS: Final = ("ebl", "pls", "oracle")
 #: is held out once in it; the other repeats would triple the cost). [-]
 DROP_ONE_REPEATS: Final = 1
 
-#: Columns of ``BenchmarkResult.drop_one`` / ``drop_one.csv``.
-DROP_ONE_COLUMNS: Final = (
-    "model",
-    "dropped_wavelength_nm",
-    "rmse_all_mgdl",
-    "rmse_without_mgdl",
-    "delta_rmse_mgdl",
-    "ci_low",
-    "ci_high",
-    "p_value",
-    "p_holm",
-    "significant",
-    "n_test_subjects",
-    "n_repeats",
-)
 
 #: The words of ``drop_one_models`` that are not model names.
 _NONE, _ALL = "none", "all"
@@ -136,8 +124,6 @@ def resolve_drop_one_models(
     >>> resolve_drop_one_models("none", ["pls", "ebl"])
     []
     """
-    from .benchmark_result import ablation_base
-
     rows = [n for n in names if ablation_base(n) is None]
     if drop_one_models is None:
         return [n for n in rows if n in DEFAULT_DROP_ONE_MODELS]
@@ -209,8 +195,6 @@ def refit_predictions(frame: pd.DataFrame, runs: Sequence[tuple[Any, Any, Any]])
         result's ``predicted_mgdl`` and ``fallback_mgdl`` (scored as the benchmark
         scores, :func:`~nirglucose.evaluation.benchmark_aggregate.scored`).
     """
-    from .benchmark_aggregate import scored
-
     sid = frame["subject_id"].to_numpy()
     yref = frame["glucose_mgdl"].to_numpy(float)
     parts = [pd.DataFrame({
@@ -328,7 +312,6 @@ def drop_one_findings(preset: str, table: pd.DataFrame | None, anchor: str) -> l
     ``<preset>/drop_one.csv:<model>:<wavelength>:<column>``.
     """
     from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
-    from .findings import Finding, Value, label
 
     verdicts = led_verdicts(table)
     out = []

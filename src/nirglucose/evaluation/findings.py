@@ -29,8 +29,6 @@ Sources
 
 from __future__ import annotations
 
-import math
-import string
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
@@ -38,9 +36,13 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-from .benchmark_result import LAMBDA_ROW, NO_PHYSICS, ORACLE, ablation_base
+from ..config.presets import DEVICE_CAPABILITIES
+from ..small_data import significance_withheld
+from .benchmark_result import ORACLE, ablation_base
 from .drop_one import drop_one_findings
-from .reference import MODEL_LABELS, STUDY_ORDER, STUDY_TABLE
+from .finding import Finding, Value, label
+from .reference import STUDY_ORDER, STUDY_TABLE
+from .stats import compare_models
 
 __all__ = [
     "HYPO_MGDL",
@@ -70,100 +72,6 @@ ANCHOR_HEADLINE: Final = "fig-headline"
 #: The wavelength-utilisation figure (a preset after the first: ``_<preset>`` appended).
 ANCHOR_LEDS: Final = "fig-wavelengths"
 ANCHOR_DISTANCE: Final = "distance-table"
-
-
-def _fmt(value: float, digits: int, sign: bool) -> str:
-    if not math.isfinite(value):
-        return "–"
-    if digits == 0:
-        return f"{value:+,.0f}" if sign else f"{value:,.0f}"
-    return f"{value:+.{digits}f}" if sign else f"{value:.{digits}f}"
-
-
-@dataclass(frozen=True)
-class Value:
-    """One number of a finding and where it was read from.
-
-    Attributes
-    ----------
-    value : float
-        The number, unrounded.
-    digits : int
-        Decimals shown. [-]
-    sources : tuple of str
-        Where it was read (see the module's *Sources*); two for a derived value.
-    op : str
-        ``""`` (read as is), ``"diff"``, ``"ratio"``, ``"share_removed"`` or ``"count"``.
-    sign : bool
-        Show a sign.
-    scale : float
-        Factor applied before showing (100 for a share shown in %). [-]
-
-    Examples
-    --------
-    >>> Value(13.649, 1, ("paper/metrics.json:ebl:rmse_mgdl",)).text()
-    '13.6'
-    >>> Value(0.758, 0, ("a", "b"), op="share_removed", scale=100.0).text()
-    '76'
-    """
-
-    value: float
-    digits: int = 1
-    sources: tuple[str, ...] = ()
-    op: str = ""
-    sign: bool = False
-    scale: float = 1.0
-
-    def text(self) -> str:
-        """The number as shown."""
-        return _fmt(float(self.value) * self.scale, self.digits, self.sign)
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One sentence of the findings.
-
-    Attributes
-    ----------
-    topic : str
-        ``best``, ``distance``, ``physics``, ``claims``, ``presets``, ``subjects``,
-        ``range`` or ``subgroups``.
-    preset : str or None
-        The preset it is about (None: every preset).
-    template : str
-        The sentence with one ``{}`` per value (plain text, no markup).
-    values : tuple of Value
-        The numbers, in template order.
-    anchor : str
-        Id of the report element (figure or table) behind the sentence.
-
-    Examples
-    --------
-    >>> Finding("best", "paper", "Best: {} mg/dL.", (Value(4.0),), "fig-headline").text()
-    'Best: 4.0 mg/dL.'
-    """
-
-    topic: str
-    preset: str | None
-    template: str
-    values: tuple[Value, ...]
-    anchor: str
-
-    def parts(self) -> list[str | Value]:
-        """The template's literal text and the values, in order."""
-        out: list[str | Value] = []
-        k = 0
-        for literal, name, _, _ in string.Formatter().parse(self.template):
-            if literal:
-                out.append(literal)
-            if name is not None:
-                out.append(self.values[k])
-                k += 1
-        return out
-
-    def text(self) -> str:
-        """The sentence with its numbers."""
-        return self.template.format(*(v.text() for v in self.values))
 
 
 @dataclass
@@ -204,17 +112,6 @@ class RunData:
         """A value of ``metrics.json`` with its source."""
         return Value(float(self.m.at[model, column]), digits,
                      (f"{self.preset}/metrics.json:{model}:{column}",), **kw)
-
-
-def label(model: str) -> str:
-    """Display name of a model (the study's names; ``(no physics)`` or ``(λ = …)`` for
-    ablation rows)."""
-    base = ablation_base(model)
-    if base is None:
-        return MODEL_LABELS.get(model, model)
-    if model.endswith(NO_PHYSICS):
-        return f"{MODEL_LABELS.get(base, base)} (no physics)"
-    return f"{MODEL_LABELS.get(base, base)} (λ = {model.split(LAMBDA_ROW)[1]})"
 
 
 def _is_competitor(model: str) -> bool:
@@ -303,9 +200,6 @@ def no_skill_comparisons(run: RunData, *, n_boot: int = 2000, seed: int = 0,
     :func:`~nirglucose.evaluation.stats.compare_models` with the pairs
     ``(model, "mean")`` on the run's scored predictions (empty without a no-skill row).
     """
-    from ..small_data import significance_withheld
-    from .stats import compare_models
-
     p = run.predictions
     models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m)]
     if significance_withheld(int(p["subject_id"].nunique())):  # small-data policy
@@ -557,8 +451,6 @@ def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
 
 def device_capabilities_of(meta: Mapping[str, Any]) -> list[str] | None:
     """Device capabilities switched on in a run's recorded configuration (None: unknown)."""
-    from ..config.presets import DEVICE_CAPABILITIES
-
     flat = _flat(meta.get("config") or {})
     if not flat:
         return None

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import DataError
+from .findings import Finding, Value, label
 from .stats import DEFAULT_N_BOOT, cluster_bootstrap_metrics
 
 __all__ = ["SUBGROUP_COLUMNS", "SUBGROUP_LABELS", "subgroup_errors", "subject_groups",
@@ -106,8 +107,6 @@ def subgroup_findings(preset: str, best: str | None, table: pd.DataFrame) -> lis
     :data:`SUBGROUP_COLUMNS`; the sources name ``<preset>/subgroups`` (this module's
     computation from the predictions and the dataset) with the model, grouping and group.
     """
-    from .findings import Finding, Value, label
-
     if best is None or not len(table):
         return []
     out = []

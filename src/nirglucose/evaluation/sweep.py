@@ -106,14 +106,15 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from .. import __version__
+from .._version import __version__
+from ..api import simulate
 from ..config import resolve_config
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
@@ -129,10 +130,10 @@ from .benchmark import (
 )
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
-from .calibration import check_k
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .progress import task_hooks
-from .splits import check_protocol, effective_layout
+from .protocol import Protocol, resolve_protocol
+from .splits import effective_layout
 from .stats import cluster_bootstrap_metrics
 from .studies import (
     COHORT_SHIFTS,
@@ -407,8 +408,6 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     dict
         ``{"metrics": {...}, "version": ..., "warnings": [...], "wall_s": ...}``.
     """
-    from ..api import simulate  # the api module imports the whole simulator
-
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -686,6 +685,20 @@ def _sweep_meta(
     }
 
 
+def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int],
+                    given: dict[str, Any]) -> Protocol:
+    """The protocol of every task, checked with the cohort ``(n_subjects, per_subject)``;
+    a Protocol's seed must stay 0 (a sweep's are ``seeds``)."""
+    defaults = {**{f.name: f.default for f in fields(Protocol)}, "resamples": _DEFAULT_N_BOOT}
+    proto = resolve_protocol(protocol, given, defaults)  # the sweep's own resamples
+    for name, value in zip(("n_subjects", "per_subject"), sizes, strict=True):
+        check_positive_int(name, value)
+    if proto.seed != 0:
+        raise ConfigError(f"a sweep's seeds are its seeds argument ({seeds!r}); leave the "
+                          f"Protocol's seed at 0, got {proto.seed}")
+    return proto
+
+
 def run_sweep(
     vary: Mapping[str, Sequence[Any]] | None = None,
     *,
@@ -694,7 +707,7 @@ def run_sweep(
     seeds: int | Sequence[int] = 5,
     models: Sequence[str] | str | None = None,
     overrides: Mapping[str, Any] | None = None,
-    protocol: str = "grouped-cv",
+    protocol: str | Protocol = "grouped-cv",
     n_splits: int = 5,
     repeats: int = 3,
     n_subjects: int = 80,
@@ -728,7 +741,8 @@ def run_sweep(
     overrides : mapping, optional
         Dotted overrides shared by every scenario (``--set``).
     protocol, n_splits, repeats : str, int, int
-        Protocol of :func:`~nirglucose.evaluation.benchmark.run_benchmark` per task.
+        Protocol of :func:`~nirglucose.evaluation.benchmark.run_benchmark` per task, or one
+        :class:`~nirglucose.evaluation.protocol.Protocol` (seed 0: the sweep's are ``seeds``).
     n_subjects, per_subject : int
         Size of each simulated dataset. [-]
     n_boot : int
@@ -768,16 +782,15 @@ def run_sweep(
     models = resolve_models(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
     if study == "mismatch" and MISMATCH_SUBJECT not in models:
         models = [MISMATCH_SUBJECT, *models]  # the study's subject always runs
-    check_protocol(protocol)
-    for name in ("n_splits", "repeats", "n_subjects", "per_subject", "n_boot"):
-        check_positive_int(name, locals()[name])
+    proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
+        n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
     backend, n_workers = resolve_backend(jobs, scheduler)
     specs = plan_sweep(
         scenarios, preset=preset, seeds=seed_list, models=models, base_overrides=base,
-        protocol=protocol, n_splits=n_splits, repeats=repeats, n_subjects=n_subjects,
-        per_subject=per_subject, n_boot=n_boot, model_params=model_params,
-        calibration=check_k(calibration),
+        protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
+        n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
+        model_params=model_params, calibration=proto.calibration,
     )
     keys = [tasks.task_key(s) for s in specs]
     spec_of = dict(zip(keys, specs, strict=True))
@@ -791,10 +804,13 @@ def run_sweep(
     frame = _frame(scenarios, seed_list, models, [cache.results[k] for k in keys],
                    study or "grid", label_columns)
     summary = summarize_sweep(frame, label_columns)
-    opts = {**locals(), "seeds": seed_list}
-    meta = _sweep_meta(scenarios, cache, len(pending), opts)
+    opts = dict(study=study, preset=preset, base=base, vary=vary, seeds=seed_list, models=models,
+                protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
+                n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
+                label_columns=label_columns, backend=backend, n_workers=n_workers,
+                scheduler=scheduler, t_start=t_start)
     result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
-                         meta=meta)
+                         meta=_sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:
         result.save(out)
     return result

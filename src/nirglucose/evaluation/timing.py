@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from ..dataset import Dataset
+from ..models._base import MEASURED_COLUMNS, predict_input
 
 __all__ = ["count_macs", "machine_info", "measure_latency", "timing_inputs", "tile_rows"]
 
@@ -68,8 +69,6 @@ def timing_inputs(model: Any, rows: Dataset) -> tuple[str, Any]:
     the device's raw columns; the study's 20 when it records none) of ``rows`` as a float
     array; it is used when the model predicts from it.
     """
-    from ..models._base import MEASURED_COLUMNS
-
     names = getattr(model, "feature_names_in_", None)
     cols = [str(c) for c in names] if names is not None else list(MEASURED_COLUMNS)
     if set(cols) <= set(rows.frame.columns):
@@ -245,7 +244,6 @@ def _torch_macs(model: Any, row: Any) -> float:
     import torch
     from torch import nn
 
-    from ..models._base import predict_input
 
     nir, pmf = model._inputs32(predict_input(model, row)[:1])
     total = [0]

@@ -2,7 +2,7 @@
 
 :func:`wavelength_scenarios` ranks every subset of 1 ... 6 candidate LEDs per
 detector by the device bound (:func:`~nirglucose.design.search.rank_designs`) and
-returns one :class:`~nirglucose.evaluation.studies.Scenario` per top design (the
+returns one :class:`~nirglucose.evaluation.scenario.Scenario` per top design (the
 design's ``leds`` and ``detector`` as overrides, its bounds as labels), so the sweep
 engine simulates each design and scores the oracle, EBL and the GP on it, locally or
 on Dask, resumably. The ranking is deterministic, so a rerun plans the same tasks.
@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import ConfigError
+from .scenario import Scenario
 
 __all__ = [
     "WAVELENGTHS_PRESET",
@@ -92,7 +93,6 @@ def wavelength_scenarios(
         in ``base``.
     """
     from ..design.search import SEARCH_DETECTORS, rank_designs
-    from .studies import Scenario
 
     vary = dict(vary or {})
     bad = [k for k in vary if k not in WAVELENGTHS_VARY_KEYS]

@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._version import __version__
 from ..dataset import atomic_write
 from ..exceptions import ConfigError, DataError
 from ..features import _ENV as ENV_SYMBOLS
@@ -358,8 +359,6 @@ def generate_c(model) -> dict[str, str]:
     DataError
         The model is not fitted, or has non-finite coefficients.
     """
-    from .. import __version__
-
     name, coef, mean, intercept, body = _model_arrays(model)
     half = _half_width(model)
     n = len(coef)

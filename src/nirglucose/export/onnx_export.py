@@ -47,6 +47,13 @@ import numpy as np
 
 from ..dataset import atomic_write
 from ..exceptions import ConfigError, DataError
+from ..features.blocks import (
+    _ENV,
+    NOMINAL_BLOOD_PCT,
+    PERFUSION_COEFFS,
+    PRESSURE_CENTER_MBAR,
+    SKIN_TEMP_CENTER_C,
+)
 
 __all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "ML_OPSET", "export_onnx", "onnx_graph_bytes"]
 
@@ -96,14 +103,6 @@ def _standardise(torch, x, mean, scale):
 def _features_torch(torch, table, schema, A, P):
     """Torch twin of :func:`nirglucose.features.compute_features`: (n, p) features from
     absorbances ``A`` (n, k) and physiology ``P`` (n, m), one column per table row."""
-    from ..features.blocks import (
-        _ENV,
-        NOMINAL_BLOOD_PCT,
-        PERFUSION_COEFFS,
-        PRESSURE_CENTER_MBAR,
-        SKIN_TEMP_CENTER_C,
-    )
-
     col = {c: P[:, m] for m, c in enumerate(schema.physiology)}
     env = {s: (col[c] - c0) / sc for s, (c, c0, sc) in _ENV.items() if c in col}
     pc = PERFUSION_COEFFS

@@ -28,6 +28,12 @@ import numpy as np
 
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import PMF_COLUMNS, measured_columns
+from ..optics.absorption import (
+    blood_mua_per_cm,
+    melanosome_mua_per_cm,
+    skin_baseline_mua_per_cm,
+    water_mua_per_cm,
+)
 
 __all__ = [
     "FeatureSpec",
@@ -241,12 +247,6 @@ def nuisance_alphas(wavelength_nm: float) -> tuple[float, float, float]:
     if float(wavelength_nm) in study:
         k = study.index(float(wavelength_nm))
         return ALPHA_SKIN_PER_MM[k], ALPHA_PERF[k], ALPHA_MEL[k]
-    from ..optics.absorption import (
-        blood_mua_per_cm,
-        melanosome_mua_per_cm,
-        skin_baseline_mua_per_cm,
-        water_mua_per_cm,
-    )
 
     wl = np.array([float(wavelength_nm)])
     skin = 0.1 * (0.65 * water_mua_per_cm(wl) + 0.33 * skin_baseline_mua_per_cm(wl))

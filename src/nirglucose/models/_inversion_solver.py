@@ -28,6 +28,7 @@ from ..config import ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import tissue
 from ..optics.forward import FORWARD_MODELS
+from ..simulate.simulator import _band_detected_fraction, _tables
 
 __all__ = [
     "NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel", "map_estimate", "posterior_variance",
@@ -81,8 +82,6 @@ class ForwardModel:
     """
 
     def __init__(self, cfg: ScenarioConfig, model: str):
-        from ..simulate.simulator import _tables
-
         if model not in FORWARD_MODELS:
             raise ValueError(f"unknown forward model {model!r}")
         optics = cfg.optics.model_copy(update={"model": model})
@@ -92,8 +91,6 @@ class ForwardModel:
     def log_ratio(self, glucose_mgdl: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """(n, n_led) noise-free ln(adc / adc_ref) at glucose [mg/dL] and ``theta``
         ((n, len(NUISANCES)), columns as :data:`NUISANCES`)."""
-        from ..simulate.simulator import _band_detected_fraction
-
         cfg = self.cfg
         th = _clip_physical(theta)
         state = tissue.TissueState(

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .._version import __version__
 from ..dataset import atomic_write
 from ..exceptions import DataError
 from ._validate import MODEL_FORMAT, check_array, check_calibration_doc, read_model_document
@@ -86,8 +87,6 @@ class JsonModelMixin:
         pathlib.Path
             The written path.
         """
-        from .. import __version__
-
         self._require_fitted()
         doc = {
             "format": FORMAT,

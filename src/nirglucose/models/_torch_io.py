@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from .._version import __version__
 from ..dataset import atomic_write
 from ..exceptions import DataError
 from ..schema import DeviceSchema
@@ -59,8 +60,6 @@ class TorchIOMixin:
         Path
             ``path``.
         """
-        from .. import __version__
-
         self._check_fitted()
         path = Path(path)
         weights = path.with_name(path.stem + ".safetensors")

@@ -48,6 +48,7 @@ from ..config import ScenarioConfig
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
 from ..schema import DeviceSchema, check_fit_size, check_reference_glucose
+from ..simulate.simulator import _tables, detected_fraction_given_glucose
 from ._checks import require_fitted
 from ._json_io import JsonModelMixin
 from .registry import register
@@ -133,8 +134,6 @@ def _model_log_ratio(
     cfg: ScenarioConfig, frame: pd.DataFrame, glucose: np.ndarray, tables=None
 ) -> np.ndarray:
     """Noise-free ln(adc / adc_ref) = ln(fraction / T_ref) for each row at ``glucose``."""
-    from ..simulate.simulator import detected_fraction_given_glucose
-
     frac = detected_fraction_given_glucose(cfg, frame, glucose, tables)
     return np.log(frac / cfg.hardware.reference_transmission)
 
@@ -284,7 +283,6 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
         lam = 1.0 / self.prior_var_ if self.prior else 0.0
         lo, hi = GLUCOSE_SEARCH_RANGE_MGDL
         g = np.full(n, float(np.clip(self.prior_mean_, lo, hi)))
-        from ..simulate.simulator import _tables
 
         tables = _tables(cfg)  # once per call, not twice per Gauss-Newton step
         for _ in range(int(self.max_iter)):

@@ -46,7 +46,9 @@ from ..config import ScenarioConfig, resolve_config
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset
 from ..exceptions import ConfigError
+from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
+from ..simulate.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
 from ._torch_base import TorchRegressor
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
@@ -345,9 +347,6 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
     mua_per_cm, musp_per_cm : numpy.ndarray
         (n_led,) each. [1/cm]
     """
-    from ..optics import forward, tissue
-    from ..simulate.simulator import nominal_tissue, scenario_band_spectra
-
     ref = cfg.optics.reference_tissue
     spectra = scenario_band_spectra(cfg)
     optics = tissue.tissue_optics(

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ConfigError, unknown_name
+from ._validate import read_model_document
 
 __all__ = [
     "register",
@@ -155,8 +156,6 @@ def load_model(path: str | Path):
     Never executes code from the file: JSON, plus safetensors / ``weights_only`` torch
     weights for networks.
     """
-    from ._validate import read_model_document
-
     doc = read_model_document(Path(path))
     cls: Any = get_model_class(doc["model"])  # every registered class has a load()
     return cls.load(path)

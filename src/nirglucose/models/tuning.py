@@ -27,7 +27,9 @@ import json
 from functools import lru_cache
 from importlib import resources
 
+from ..config import PRESETS
 from ..exceptions import ConfigError, unknown_name
+from .linear import DEFAULT_ALPHAS
 from .registry import get_model_class, is_network, is_pinn
 
 __all__ = [
@@ -142,8 +144,6 @@ def search_space(name: str) -> dict[str, tuple]:
             space["lambda_phys"] = LAMBDA_PHYS_GRID
         return space
     if name == "ebl":
-        from .linear import DEFAULT_ALPHAS
-
         step = max(1, len(DEFAULT_ALPHAS) // N_CONFIGS)
         return {"alphas": tuple((a,) for a in DEFAULT_ALPHAS[::step][:N_CONFIGS])}
     if name == "pls":
@@ -194,8 +194,6 @@ def tuned_params(name: str, preset: str) -> dict:
         If ``name`` is not a registered model or ``preset`` is neither a preset nor
         in the tuning file.
     """
-    from ..config import PRESETS
-
     get_model_class(name)  # an unknown name raises ConfigError (and no other model loads)
     params = _document().get("params", {})
     if preset not in params and preset not in PRESETS:

@@ -23,6 +23,9 @@ import matplotlib as mpl
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..dataset import atomic_write
+from ..evaluation.reference import MODEL_LABELS
+
 __all__ = [
     "OKABE_ITO",
     "GREY",
@@ -197,10 +200,6 @@ def model_label(model: str) -> str:
     >>> model_label("ebl")
     'Enhanced Beer–Lambert'
     """
-    try:
-        from ..evaluation.reference import MODEL_LABELS
-    except ImportError:  # evaluation layer absent: fall back to the registry name
-        return model
     return MODEL_LABELS.get(model, model)
 
 
@@ -287,8 +286,6 @@ def save_figure(
     list of pathlib.Path
         The files written, one per format.
     """
-    from ..dataset import atomic_write
-
     stem = Path(stem)
     paths = []
     with plot_style():

@@ -24,9 +24,11 @@ from ..evaluation.findings import (
     best_and_tied,
     compute_findings,
     headline_table,
+    label,
 )
 from ..evaluation.subgroups import subgroup_findings
-from .html import _esc, preset_of
+from .markup import esc as _esc
+from .markup import preset_of
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -136,7 +138,6 @@ def _alt_of(table: pd.DataFrame, refs: dict, preset: str) -> str:
     part = table[table["preset"] == preset].sort_values("rmse_mgdl")
     best = part[part["status"] == "best"]
     head = part.iloc[0] if not len(best) else best.iloc[0]
-    from ..evaluation.findings import label
 
     txt = (f"{preset}: best {label(str(head['model']))} {head['rmse_mgdl']:.1f} mg/dL, "
            f"{int((part['status'] == 'tied').sum())} tied with it, worst "
@@ -162,7 +163,6 @@ def _distance_html(dist: pd.DataFrame) -> str:
     head1 = "<th rowspan=2>Model</th>" + "".join(
         f"<th colspan={len(cols)}>{_esc(p)}</th>" for p in presets)
     head2 = "".join(f"<th>{_esc(h)}</th>" for _ in presets for _, h in cols)
-    from ..evaluation.findings import label
 
     rows = []
     for m in models:

@@ -13,19 +13,29 @@ import base64
 import datetime as _dt
 import html
 import json
-import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import pandas as pd
-
+from .._version import __version__
+from ..dataset import atomic_write
 from ..exceptions import DataError
 from .figures import RenderedFigure, Results, load_results, render_figures
+from .figures.inputs import latency_resolution
+from .findings import findings_section
+from .inverse import inverse_section
+from .markup import esc as _esc
+from .markup import markdown_to_html, preset_of
+from .params import hyperparameter_section
+from .presets import ablation_section, preset_dirs, presets_section
+from .subgroups import subgroup_tables, subgroups_section
+from .sweep import sweep_section
+from .tables import extra_table as _extra_table
+from .tables import glucose_coverage, hypo_note, main_table, table_title
+from .tables import significance as _significance
 
-__all__ = ["build_report", "render_html", "markdown_to_html", "REPORT_TITLE"]
+__all__ = ["build_report", "render_html", "markdown_to_html", "REPORT_TITLE", "glucose_coverage"]
 
 #: Title of the page.
 REPORT_TITLE = "nirglucose benchmark report"
@@ -96,347 +106,6 @@ details.more { margin: -.4rem 0 1rem; }
 }
 """
 
-# (metrics column, ci stem, study column, header, digits)
-_TABLE_COLUMNS: tuple[tuple[str, str | None, str | None, str, int], ...] = (
-    ("rmse_mgdl", "rmse", "rmse_mgdl", "RMSE [mg/dL]", 1),
-    ("mard_pct", "mard", "mard_pct", "MARD [%]", 1),
-    ("clarke_a_pct", "clarke_a", "clarke_a_pct", "Clarke A [%]", 1),
-    ("within15_pct", "within15", "within15_pct", "±15 % [%]", 1),
-    ("n_parameters", None, "n_parameters", "Parameters", 0),
-    ("macs_per_prediction", None, None, "MACs / prediction", 0),
-    ("latency_single_ms", None, "latency_single_ms", "Latency median [ms]", 3),
-    ("latency_single_p90_ms", None, None, "Latency p90 [ms]", 3),
-)
-
-_EXTRA_COLUMNS: tuple[tuple[str, str, int], ...] = (
-    ("clarke_ab_pct", "Clarke A+B [%]", 1),
-    ("parkes_a_pct", "Parkes A [%]", 1),
-    ("iso15197_pct", "ISO 15197 [%]", 1),
-    ("bias_mgdl", "bias [mg/dL]", 1),
-    ("loa_low_mgdl", "LoA low [mg/dL]", 1),
-    ("loa_high_mgdl", "LoA high [mg/dL]", 1),
-    ("throughput_per_s", "throughput [1/s]", 0),
-    ("rmse_vs_oracle", "RMSE / oracle [-]", 2),
-    ("n_predictions", "predictions [-]", 0),
-)
-
-
-def _esc(x: Any) -> str:
-    return html.escape(str(x), quote=True)
-
-
-def _num(v: Any, digits: int = 1) -> str:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return "–" if v is None or v == "" else _esc(v)
-    if not math.isfinite(f):
-        return "–"
-    if digits == 0:
-        return f"{f:,.0f}"
-    if digits == 3:  # latencies span 0.001-100 ms
-        return f"{f:.3f}" if abs(f) < 0.1 else f"{f:.2f}" if abs(f) < 10 else f"{f:.1f}"
-    return f"{f:,.{digits}f}"
-
-
-def _pval(v: Any) -> str:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return "–"
-    return f"{f:.3g}" if math.isfinite(f) else "–"
-
-
-def _inline_md(text: str) -> str:
-    out = _esc(text)
-    out = re.sub(r"`([^`]+)`", r"<code>\1</code>", out)
-    out = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", out)
-    return out
-
-
-def markdown_to_html(text: str, *, skip_tables: bool = False, skip_h1: bool = False) -> str:
-    """Render the small Markdown subset the benchmark writes (headings, tables, lists).
-
-    Everything is HTML-escaped first; only headings, pipe tables, ``-`` lists,
-    paragraphs, ``code`` and ``**bold**`` are recognised.
-
-    Examples
-    --------
-    >>> markdown_to_html("# T\\n\\nA `x` <b>\\n\\n- one")
-    '<h3>T</h3>\\n<p>A <code>x</code> &lt;b&gt;</p>\\n<ul><li>one</li></ul>'
-    """
-    blocks: list[str] = []
-    lines = text.splitlines()
-    i = 0
-    while i < len(lines):
-        line = lines[i].rstrip()
-        if not line.strip():
-            i += 1
-            continue
-        if line.startswith("#"):
-            level = len(line) - len(line.lstrip("#"))
-            if not (skip_h1 and level == 1):
-                h = min(6, level + 2)
-                blocks.append(f"<h{h}>{_inline_md(line.lstrip('#').strip())}</h{h}>")
-            i += 1
-        elif line.lstrip().startswith("|"):
-            rows = []
-            while i < len(lines) and lines[i].lstrip().startswith("|"):
-                rows.append(lines[i].strip().strip("|").split("|"))
-                i += 1
-            if skip_tables:
-                continue
-            body = [r for r in rows if not all(re.fullmatch(r"\s*:?-+:?\s*", c) for c in r)]
-            if not body:
-                continue
-            head = "".join(f"<th>{_inline_md(c.strip())}</th>" for c in body[0])
-            trs = "".join("<tr>" + "".join(f"<td>{_inline_md(c.strip())}</td>" for c in r)
-                          + "</tr>" for r in body[1:])
-            blocks.append(f'<div class="scroll"><table><thead><tr>{head}</tr></thead>'
-                          f"<tbody>{trs}</tbody></table></div>")
-        elif re.match(r"\s*[-*] ", line):
-            items = []
-            while i < len(lines) and re.match(r"\s*[-*] ", lines[i]):
-                item = re.sub(r"^\s*[-*] ", "", lines[i])
-                items.append(f"<li>{_inline_md(item)}</li>")
-                i += 1
-            blocks.append(f"<ul>{''.join(items)}</ul>")
-        else:
-            para = []
-            while (i < len(lines) and lines[i].strip() and not lines[i].startswith("#")
-                   and not lines[i].lstrip().startswith("|")
-                   and not re.match(r"\s*[-*] ", lines[i])):
-                para.append(lines[i].strip())
-                i += 1
-            blocks.append(f"<p>{_inline_md(' '.join(para))}</p>")
-    return "\n".join(blocks)
-
-
-def _model_label(model: str, metrics_row: pd.Series | None = None) -> str:
-    from ..plots.style import model_label
-
-    if metrics_row is not None and isinstance(metrics_row.get("label"), str):
-        return metrics_row["label"]
-    return model_label(model)
-
-
-#: Prediction-interval columns shown beside RMSE when the benchmark wrote them
-#: (metrics column, ci stem, header, digits).
-_INTERVAL_COLUMNS: tuple[tuple[str, str | None, str, int], ...] = (
-    ("coverage90_pct", "coverage90", "90 % interval coverage [%]", 1),
-    ("width90_mgdl", None, "90 % interval width [mg/dL]", 1),
-    ("coverage80_pct", None, "80 % interval coverage [%]", 1),
-    ("width80_mgdl", None, "80 % interval width [mg/dL]", 1),
-)
-
-
-def _user_data_md(md: str) -> str:
-    """The benchmark's table.md text for a user's data: no preset, no study protocol.
-
-    The benchmark writes one paragraph for every run; on measured data its preset is
-    ``None`` and the study it compares against was measured on another device.
-    """
-    md = re.sub(r",? preset `(None|null)`", "", md)
-    return re.sub(r" ?Study: [^.]*?test n = \d+\.", "", md)
-
-
-def preset_of(results: Results) -> str:
-    """The preset name of a run (its directory's name when none is recorded)."""
-    p = results.meta.get("preset")
-    return str(p) if p not in (None, "", "None") else results.directory.name or "run"
-
-
-#: Columns of the main table shown without opening the toggle (metrics columns); the
-#: study's value is shown beside ours for RMSE only.
-_ESSENTIAL: tuple[str, ...] = ("rmse_mgdl", "mard_pct", "clarke_a_pct", "within15_pct",
-                               "coverage90_pct", "n_parameters", "macs_per_prediction")
-
-
-def _table_columns(m: pd.DataFrame) -> list[tuple[str, str | None, str | None, str, int]]:
-    base = list(_TABLE_COLUMNS)
-    intervals = [c for c in _INTERVAL_COLUMNS if c[0] in m.columns]
-    return base[:1] + [(c, stem, None, h, d) for c, stem, h, d in intervals] + base[1:]
-
-
-def _reproduced_table(results: Results, *, full: bool = True, table_id: str | None = None
-                      ) -> str:
-    """The main table: every column (``full``) or the essentials (RMSE with the study's)."""
-    from ..evaluation.reference import STUDY_TABLE
-
-    with_study = not results.user_data
-    study = {str(r["model"]): r for r in STUDY_TABLE} if with_study else {}
-    m = results.metrics.drop_duplicates("model").set_index("model")
-    columns = _table_columns(m)
-    if not full:
-        columns = [c for c in columns if c[0] in _ESSENTIAL]
-        columns = [(c, stem, scol if c == "rmse_mgdl" else None, h, d)
-                   for c, stem, scol, h, d in columns]
-    span = 2 if with_study else 1
-    mark = _hypo_mark(results)
-    head1 = "<th rowspan=2>Model</th>" + "".join(
-        f"<th colspan={span if scol else 1}>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}"
-        "</th>" for c, _, scol, h, _ in columns)
-    head2 = "".join(f"<th>{'ours [95 % CI]' if stem else 'ours'}</th>"
-                    + ("<th>study</th>" if with_study and scol else "")
-                    for _, stem, scol, _, _ in columns)
-    rows = []
-    for model in results.models:
-        r = m.loc[model]
-        s = study.get(model, {})
-        cells = [f"<td>{_esc(_model_label(model, r))}</td>"]
-        for col, stem, scol, _, digits in columns:
-            ours = _num(r.get(col), digits)
-            if stem and f"{stem}_ci_low" in r.index and f"{stem}_ci_high" in r.index:
-                lo, hi = r.get(f"{stem}_ci_low"), r.get(f"{stem}_ci_high")
-                if _num(lo) != "–":
-                    ours += f" [{_num(lo, digits)}, {_num(hi, digits)}]"
-            cells.append(f"<td>{ours}</td>")
-            if with_study and scol:
-                cells.append(f'<td class="study">{_num(s.get(scol), digits) if s else "–"}'
-                             "</td>")
-        rows.append("<tr>" + "".join(cells) + "</tr>")
-    tid = table_id or f"reproduced-table{'-full' if full else ''}-{preset_of(results)}"
-    return (f'<div class="scroll"><table id="{_esc(tid)}"><thead><tr>{head1}</tr>'
-            f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
-
-
-#: Columns of error-grid shares: their header carries the hypoglycaemia caveat's mark.
-_ZONE_COLUMNS: tuple[str, ...] = ("clarke_a_pct", "clarke_ab_pct", "parkes_a_pct",
-                                  "iso15197_pct")
-
-
-def glucose_coverage(results: Results) -> tuple[float, float, int, int] | None:
-    """Reference glucose of the run: (min, max, readings, readings below 70 mg/dL).
-
-    Each snapshot counted once (by ``measurement_id`` when recorded); None without
-    predictions.
-    """
-    p = results.predictions
-    if p is None or not len(p) or "reference_mgdl" not in p.columns:
-        return None
-    if "measurement_id" in p.columns:
-        p = p.drop_duplicates("measurement_id")
-    ref = p["reference_mgdl"].to_numpy(float)
-    ref = ref[np.isfinite(ref)]
-    if not ref.size:
-        return None
-    return float(ref.min()), float(ref.max()), int(ref.size), int((ref < 70.0).sum())
-
-
-def _hypo_id(results: Results) -> str:
-    return f"hypo-note-{preset_of(results)}"
-
-
-def _hypo_mark(results: Results) -> str:
-    """The † after an error-grid column's header, linked to :func:`hypo_note`."""
-    return (f'<a class="mark" href="#{_esc(_hypo_id(results))}" title="glucose range '
-            'caveat">†</a>' if glucose_coverage(results) else "")
-
-
-def hypo_note(results: Results) -> str:
-    """The caveat beside the error-grid columns: what range of glucose they tested."""
-    cov = glucose_coverage(results)
-    if cov is None:
-        return ""
-    lo, hi, n, n_hypo = cov
-    if n_hypo == 0:
-        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): no reading of this run "
-                f"is below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} mg/dL, {n:,} "
-                "readings), so these shares say nothing about hypoglycaemia, where an "
-                "error matters most.")
-    else:
-        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): {n_hypo:,} of the "
-                f"{n:,} readings are below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} "
-                "mg/dL).")
-    return f'<p class="note" id="{_esc(_hypo_id(results))}">{_esc(text)}</p>'
-
-
-def table_title(results: Results) -> str:
-    """The main table's heading: nothing is reproduced on a user's own data."""
-    return "Results table" if results.user_data else "Reproduced table"
-
-
-def main_table(results: Results) -> str:
-    """The essentials, then every column behind a toggle (opened in print)."""
-    study = "" if results.user_data else "the study's value beside each metric, "
-    return (_reproduced_table(results, full=False)
-            + f'<details class="more"><summary>Every column: {study}'
-            "prediction intervals, latency</summary>"
-            + _reproduced_table(results, full=True) + "</details>")
-
-
-def _extra_table(results: Results) -> str:
-    m = results.metrics.drop_duplicates("model").set_index("model")
-    cols = [c for c in _EXTRA_COLUMNS if c[0] in m.columns]
-    if not cols:
-        return ""
-    mark = _hypo_mark(results)
-    head = "<th>Model</th>" + "".join(
-        f"<th>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}</th>" for c, h, _ in cols)
-    rows = []
-    for model in results.models:
-        r = m.loc[model]
-        rows.append(f"<tr><td>{_esc(_model_label(model, r))}</td>" + "".join(
-            f"<td>{_num(r.get(c), d)}</td>" for c, _, d in cols) + "</tr>")
-    return (f'<div class="scroll"><table id="extra-table-{_esc(preset_of(results))}">'
-            f"<thead><tr>{head}</tr></thead>"
-            f"<tbody>{''.join(rows)}</tbody></table></div>")
-
-
-def _significance(results: Results) -> str:
-    parts = []
-    if results.table_md:
-        from .presets import strip_ablation
-
-        md = strip_ablation(results.table_md)
-        if results.user_data:
-            md = _user_data_md(md)
-        parts.append(markdown_to_html(md, skip_tables=True, skip_h1=True))
-    c = results.comparisons
-    if c is not None and len(c):
-        if not results.table_md:
-            lines = []
-            for _, r in c.iterrows():
-                sig = bool(r.get("significant")) if pd.notna(r.get("significant")) else False
-                lines.append(
-                    f"<li>{_esc(_model_label(str(r['model'])))} vs "
-                    f"{_esc(_model_label(str(r['reference_model'])))}: RMSE difference "
-                    f"{_num(r.get('rmse_diff_mgdl'))} mg/dL [{_num(r.get('ci_low'))}, "
-                    f"{_num(r.get('ci_high'))}], p (Holm) = {_pval(r.get('p_holm'))}: "
-                    + ('<span class="sig">significant</span>' if sig else "not significant")
-                    + "</li>")
-            parts.append(f"<ul>{''.join(lines)}</ul>")
-        cols = [k for k in ("family", "model", "reference_model", "rmse_diff_mgdl", "ci_low",
-                            "ci_high", "p_value", "p_holm", "significant") if k in c.columns]
-        names = {"family": "family", "model": "model", "reference_model": "against",
-                 "rmse_diff_mgdl": "Δ RMSE [mg/dL]", "ci_low": "95 % CI low",
-                 "ci_high": "95 % CI high", "p_value": "p", "p_holm": "p (Holm)",
-                 "significant": "significant"}
-        head = "".join(f"<th>{_esc(names.get(k, k))}</th>" for k in cols)
-
-        def cell(k: str, v: Any) -> str:
-            if k.startswith("p_"):
-                return _pval(v)
-            if k in ("rmse_diff_mgdl", "ci_low", "ci_high"):
-                return _num(v)
-            if k in ("model", "reference_model"):
-                return _esc(_model_label(str(v)))
-            return _esc(v)
-
-        body = "".join("<tr>" + "".join(f"<td>{cell(k, r[k])}</td>" for k in cols) + "</tr>"
-                       for _, r in c.iterrows())
-        parts.append(f"<details><summary>All paired comparisons (comparisons.csv, "
-                     f"{len(c)} rows)</summary><div class=\"scroll\">"
-                     f"<table id=\"comparisons-{_esc(preset_of(results))}\">"
-                     f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>"
-                     f"</details>")
-    if not parts:
-        parts.append('<p class="note">No significance statements: neither table.md nor '
-                     "comparisons.csv is in the results directory.</p>")
-    return (f'<div id="study-orderings-{_esc(preset_of(results))}">' + "\n".join(parts)
-            + "</div>")
-
-
 def _machine_text(machine: Any) -> str | None:
     """``timing_machine`` of ``meta.json`` in one line (None when not recorded)."""
     if not isinstance(machine, dict):
@@ -450,8 +119,6 @@ def _machine_text(machine: Any) -> str | None:
 
 
 def _run_info(results: Results) -> str:
-    from .. import __version__
-
     meta = results.meta
     ds = results.dataset
     dataset_hash = meta.get("dataset_hash") or meta.get("dataset_sha256")
@@ -544,8 +211,6 @@ def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Seq
 
 def _latency_note(results: Results, peers: Sequence[Results] = ()) -> str:
     """How far the latencies can be trusted (shown under the main table)."""
-    from .figures.inputs import latency_resolution
-
     res = latency_resolution(results.metrics, [p.metrics for p in peers])
     return f'<p class="note" id="latency-note">{_esc(res["text"])}</p>' if res else ""
 
@@ -659,14 +324,10 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     >>> build_report("results/", "results/report.html")  # doctest: +SKIP
     PosixPath('results/report.html')
     """
-    from ..dataset import atomic_write
-
     out_path = Path(out_path)
     if not out_path.parent.exists():
         raise DataError(f"output directory {str(out_path.parent)!r} does not exist; "
                         "create it first")
-    from .presets import ablation_section, preset_dirs, presets_section
-
     dirs = preset_dirs(results_dir)
     primary = dirs[0] if dirs else Path(results_dir)
     runs = [load_results(d) for d in dirs] if dirs else [load_results(primary)]
@@ -675,20 +336,12 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     if len(runs) > 1:  # every preset on the performance panel's shared axes
         compare = {str(r.meta.get("preset") or r.directory.name): r.metrics for r in runs}
     figures = render_figures(results, figures_dir, compare=compare, peers=runs[1:])
-    from .findings import findings_section
-    from .sweep import sweep_section
-
     # several presets: the ablations are shown side by side in the presets section
     middle = ([presets_section(runs)] if len(runs) > 1 else
               [ablation_section(primary, preset=preset_of(results))])
-    from .subgroups import subgroup_tables, subgroups_section
-
     groups = subgroup_tables(runs)
     middle.append(subgroups_section(runs, groups))
-    from .params import hyperparameter_section
-
     middle.append(hyperparameter_section(runs))
-    from .inverse import inverse_section  # lazy, as subgroups: it imports html
     middle.append(inverse_section(runs))
     top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],

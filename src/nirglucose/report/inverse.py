@@ -11,7 +11,9 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from .html import _esc, _model_label, preset_of
+from .markup import esc as _esc
+from .markup import model_label as _model_label
+from .markup import preset_of
 
 if TYPE_CHECKING:
     from .figures import Results

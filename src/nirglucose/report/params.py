@@ -12,7 +12,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from .figures import Results
+from .figures import Results, model_order
 
 __all__ = ["hyperparameter_rows", "hyperparameter_section"]
 
@@ -46,8 +46,6 @@ def hyperparameter_rows(runs: Sequence[Results]) -> list[tuple[str, str, list[st
     >>> hyperparameter_rows([a, b])
     [('pinn', 'lambda_phys', ['0', '0.01']), ('pinn', 'lr', ['0.003', '0.01'])]
     """
-    from .figures import model_order
-
     params = [r.meta.get("model_params") or {} for r in runs]
     models = model_order(m for p in params for m in p if "/" not in str(m))
     rows = []

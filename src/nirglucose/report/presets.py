@@ -18,8 +18,12 @@ from typing import TYPE_CHECKING, Any, Final
 
 import pandas as pd
 
+from ..evaluation.findings import RunData, physics_verdicts
+from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
-from .html import _esc, _model_label
+from .markup import esc as _esc
+from .markup import model_label as _model_label
+from .tables import extra_table, hypo_note, main_table, significance
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -87,8 +91,6 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation",
     two fits are identical, no question was asked: the row says so and shows no Δ, p
     or verdict (:func:`nirglucose.evaluation.findings.physics_verdicts`).
     """
-    from ..evaluation.findings import RunData, physics_verdicts
-
     d = Path(results_dir)
     a = _read_ablation(d)
     if a is None or a.empty:
@@ -124,11 +126,6 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation",
         "<th>Δ RMSE [95 % CI]</th><th>p (Holm)</th><th>verdict</th></tr></thead>"
         f"<tbody>{''.join(rows)}</tbody></table></div>"
     )
-
-
-def strip_ablation(table_md: str) -> str:
-    """``table.md`` without its ablation section (the report shows it as a table)."""
-    return table_md.split("\n## Physics ablation", 1)[0]
 
 
 def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
@@ -209,8 +206,6 @@ def _model_labels(models: list[str], loaded: list[tuple[dict[str, Any], pd.DataF
 def _comparison_table(names: list[str], loaded: list[tuple[dict[str, Any], pd.DataFrame]],
                       models: list[str], label: dict[str, str]) -> str:
     """The key metrics of every preset, metric-major (each metric's presets side by side)."""
-    from ..evaluation.reference import STUDY_TABLE
-
     study = {str(r["model"]): r for r in STUDY_TABLE}
     head1 = "<th rowspan=2>Model</th>" + "".join(
         f"<th colspan={len(names)}>{_esc(h)}</th>" for _, h, _ in _COMPARED
@@ -257,12 +252,10 @@ def _ablations_side_by_side(dirs: list[Path], names: list[str]) -> str:
 
 def _preset_details(runs: Sequence[Results], names: list[str]) -> list[str]:
     """A collapsed block per preset with its reproduced table and significance statements."""
-    from .html import _extra_table, _significance, hypo_note, main_table
-
     out = []
     for res, n in zip(runs, names, strict=True):
-        inner = [main_table(res), hypo_note(res), "<h4>Further metrics</h4>", _extra_table(res),
-                 _significance(res)]
+        inner = [main_table(res), hypo_note(res), "<h4>Further metrics</h4>", extra_table(res),
+                 significance(res)]
         out.append(f'<details id="preset-{_esc(n)}"><summary>Full reproduced table and '
                    f"significance statements on <code>{_esc(n)}</code></summary>"
                    + "\n".join(inner) + "</details>")

@@ -12,7 +12,10 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from ..evaluation.subgroups import SUBGROUP_COLUMNS, SUBGROUP_LABELS, subgroup_errors
-from .html import _esc, _model_label, preset_of
+from .figures.inputs import competitors
+from .markup import esc as _esc
+from .markup import model_label as _model_label
+from .markup import preset_of
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -26,8 +29,6 @@ def subgroup_tables(runs: Sequence[Results], *, n_boot: int = 2000) -> dict[str,
     Competitors only (no oracle, no-skill or ablation rows); a run without its dataset
     (or without the grouping columns) has no entry.
     """
-    from .figures.inputs import competitors
-
     out = {}
     for res in runs:
         ds = res.dataset

@@ -37,6 +37,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .._version import __version__
 from ..config import ScenarioConfig
 from ..dataset import (
     _META_KEY,
@@ -108,8 +109,6 @@ def write_partitioned(
     Peak memory is about ``n_jobs`` blocks of ``BLOCK_SUBJECTS × per_subject`` rows
     plus each worker's interpreter, whatever ``n_subjects`` is.
     """
-    from .. import __version__
-
     out = Path(out)
     if not out.parent.exists():
         raise DataError(f"output directory {str(out.parent)!r} does not exist; create it first")

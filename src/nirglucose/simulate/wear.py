@@ -41,8 +41,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._version import __version__
 from ..config import ScenarioConfig
-from ..exceptions import ConfigError
+from ..dataset import _META_KEY, MANIFEST, PART_PATTERN, atomic_write
+from ..exceptions import ConfigError, DataError
 from . import contact, diurnal, environment, hardware, measurement, physiology
 from . import meal_scenario as meals
 from . import uva_padova as uva
@@ -377,7 +379,6 @@ def _write_chunk(cfg, seed, chunk, start, k, n_subjects, wear_days, every_min, o
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from ..dataset import _META_KEY, atomic_write
 
     frame = simulate_wear_chunk(cfg, seed, start, k, n_subjects, wear_days, every_min, options,
                                 tables)
@@ -395,10 +396,6 @@ def write_wear_partitioned(cfg: ScenarioConfig, out: str | Path, n_subjects: int
     """Write the wear dataset as ``part-NNNNNN.parquet`` files, one per chunk of subjects,
     and ``manifest.json`` last (as :func:`.partitioned.write_partitioned`); returns the
     rows written. Memory: ``n_jobs`` chunks at a time, whatever ``n_subjects``."""
-    from .. import __version__
-    from ..dataset import MANIFEST, PART_PATTERN, atomic_write
-    from ..exceptions import DataError
-
     n_t = readings_per_subject(wear_days, every_min)
     out = Path(out)
     if not out.parent.exists():

@@ -1,0 +1,123 @@
+"""The evaluation protocol as one value: how the data are split, how often, with which
+seed, how many bootstrap resamples, and how many personal calibration readings.
+
+:func:`~nirglucose.evaluation.benchmark.run_benchmark` and
+:func:`~nirglucose.evaluation.sweep.run_sweep` accept a :class:`Protocol` as their
+``protocol`` argument (as scikit-learn's ``cross_validate`` takes one splitter object)
+or, as before, the protocol's name with the options as keywords.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+from ..exceptions import ConfigError, check_positive_int
+from .calibration import check_k
+from .splits import check_protocol
+from .stats import DEFAULT_N_BOOT
+
+__all__ = ["Protocol", "resolve_protocol"]
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """How models are evaluated; checked when made.
+
+    Parameters
+    ----------
+    splitter : {"grouped-cv", "paper-split"}
+        Subject-grouped repeated K-fold, or the study's single 60/20/20 split
+        (:data:`~nirglucose.evaluation.splits.PROTOCOLS`).
+    n_splits : int
+        Folds of ``grouped-cv``. [-]
+    repeats : int
+        Repeats of ``grouped-cv`` (``paper-split`` runs one split). [-]
+    seed : int
+        Seed of the splits, the models' initialisation and the bootstrap. [-]
+    resamples : int
+        Bootstrap resamples of every interval and paired test. [-]
+    calibration : int
+        Personal calibration readings per test subject: 0 (none), 1 or 2. [-]
+
+    Raises
+    ------
+    ConfigError
+        An unknown splitter, a count that is not a positive integer, a negative seed, or
+        a calibration other than 0, 1 or 2.
+
+    Examples
+    --------
+    >>> p = Protocol(repeats=5, seed=1)
+    >>> p.splitter, p.n_splits, p.repeats, p.seed
+    ('grouped-cv', 5, 5, 1)
+    >>> Protocol(splitter="k-fold")
+    Traceback (most recent call last):
+    ...
+    nirglucose.exceptions.ConfigError: unknown protocol 'k-fold'; valid: grouped-cv, paper-split
+    """
+
+    splitter: str = "grouped-cv"
+    n_splits: int = 5
+    repeats: int = 3
+    seed: int = 0
+    resamples: int = DEFAULT_N_BOOT
+    calibration: int = 0
+
+    def __post_init__(self) -> None:
+        check_protocol(self.splitter)
+        for name in ("n_splits", "repeats", "resamples"):
+            object.__setattr__(self, name, check_positive_int(name, getattr(self, name)))
+        seed = self.seed
+        if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+            raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+        object.__setattr__(self, "seed", int(seed))
+        object.__setattr__(self, "calibration", check_k(self.calibration))
+
+
+def resolve_protocol(
+    protocol: str | Protocol, given: Mapping[str, Any],
+    defaults: Mapping[str, Any] | None = None,
+) -> Protocol:
+    """The :class:`Protocol` a function was asked for.
+
+    Parameters
+    ----------
+    protocol : str or Protocol
+        A splitter name (the options then come from ``given``) or a whole protocol.
+    given : mapping
+        The function's protocol keywords as called, by :class:`Protocol` field name.
+    defaults : mapping, optional
+        The same keywords' defaults in the function's signature (default: the
+        :class:`Protocol`'s own).
+
+    Raises
+    ------
+    ConfigError
+        A :class:`Protocol` together with a keyword that differs from its default (the
+        options belong in one place), or invalid options.
+
+    Examples
+    --------
+    >>> resolve_protocol("paper-split", {"seed": 3}, {"seed": 0}).seed
+    3
+    >>> resolve_protocol(Protocol(seed=2), {"seed": 0}, {"seed": 0}).seed
+    2
+    """
+    if defaults is None:
+        defaults = {f.name: f.default for f in fields(Protocol)}
+    if isinstance(protocol, Protocol):
+        clash = [f"{k}={v!r}" for k, v in given.items() if v != defaults[k]]
+        if clash:
+            raise ConfigError(
+                f"give the protocol's options in the Protocol or as keywords, not both: "
+                f"{', '.join(clash)} beside {protocol!r}"
+            )
+        return protocol
+    if not isinstance(protocol, str):
+        raise ConfigError(f"protocol must be a splitter name or a Protocol, got "
+                          f"{type(protocol).__name__}")
+    known = {f.name for f in fields(Protocol)}
+    return Protocol(splitter=protocol, **{k: v for k, v in given.items() if k in known})
