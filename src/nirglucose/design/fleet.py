@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..api import simulate
 from ..config import resolve_config
 from ..config.detector import band_responsivity_a_per_w, responsivity_curve
 from ..config.parts import led_part
@@ -348,7 +349,6 @@ def simulate_unit(
     -------
     Dataset
     """
-    from ..api import simulate
 
     base = dict(overrides or {})
     own = {**base, **unit.overrides}

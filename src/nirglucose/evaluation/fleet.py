@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..api import simulate
 from ..config import resolve_config
 from ..dataset import Dataset
 from ..design.fleet import FleetTolerances, draw_units, simulate_unit
@@ -171,7 +172,6 @@ def _reader(spec: Mapping[str, Any], units: Sequence[Any], bits: int):
     """``read(unit, n_subjects, tag)``: a unit's readings of distinct subjects (seeded by
     the task's seed, the tag and the unit), after its factory reference in the transfer
     variants (fitted here on the transfer standards, once per unit)."""
-    from ..api import simulate
 
     fleet, preset, base = spec["fleet"], spec["preset"], dict(spec["overrides"])
     seed, per = int(spec["seed"]), int(spec["per_subject"])

@@ -3,9 +3,68 @@
 A :class:`Scenario` is one simulated condition (dotted config overrides on a preset,
 optionally a separately simulated test cohort); :func:`grid_scenarios` builds the
 Cartesian grid of ``--vary`` values, :func:`study_scenarios` the built-in studies
-(:data:`STUDIES`, described in :mod:`~nirglucose.evaluation.sweep`), and
+(:data:`STUDIES`, below), and
 :func:`resolve_scenarios` the scenarios of one :func:`~nirglucose.evaluation.sweep.run_sweep`
 call from its ``vary`` / ``study`` / ``preset`` arguments.
+
+Studies (:data:`STUDIES`)
+    ``noise-scale``
+        ``noise_scale`` (every noise source together) over 0.25, 0.5, 1, 2, 4.
+    ``pmf-noise``
+        ``noise.pmf_measurement.scale`` (the error of the measured physiological
+        vector) over 0, 0.5, 1, 2, 4.
+    ``ablation``
+        Every noise source of :data:`~nirglucose.config.NOISE_SOURCES` switched off
+        alone (``off``), and switched on alone (``only``), besides all sources on
+        (``all-on``) and all off (``all-off``).
+        :func:`~nirglucose.evaluation.sweep_analysis.ablation_effects` turns these
+        into ΔRMSE per source, paired by seed.
+    ``cohort``
+        Domain shift. ``fitzpatrick``: train on measured Fitzpatrick types I–III, test
+        on I–III (in domain) and on IV–VI (shifted); ``temperature``: train at
+        20–25 °C ambient, test at 20–25 °C and at 5–35 °C. Training and test cohorts
+        are simulated separately (the test seed is derived from the task's seed), so
+        no subject is in both.
+        :func:`~nirglucose.evaluation.sweep_analysis.shift_effects` gives the ΔRMSE of
+        the shift.
+    ``device``
+        Each device capability (:data:`~nirglucose.config.DEVICE_CAPABILITIES`)
+        switched off alone in ``paper`` and on alone in ``wearable``, besides both
+        presets as they are; each scenario sets every key distinguishing the two.
+    ``data-size``
+        RMSE against the number of training subjects (:data:`DATA_SIZE_SUBJECTS`) on
+        each preset of :data:`DATA_SIZE_PRESETS`: every model is trained on a draw of
+        that many subjects and tested on an independent draw of
+        :data:`DATA_SIZE_TEST_SUBJECTS` subjects (another seed, derived from the
+        task's). :func:`~nirglucose.evaluation.sweep_analysis.ranking_crossings` says
+        between which sizes two models swap places.
+    ``mismatch``
+        Model mismatch, the honest test of a physics model: data made by each forward
+        model of :data:`~nirglucose.evaluation.studies.MISMATCH_FORWARD_MODELS`
+        (``optics.model``) and the forward-model estimator
+        (:data:`~nirglucose.evaluation.studies.MISMATCH_SUBJECT`) assuming each one
+        (its ``forward_model``), every pair; EBL, the GP and the oracle (default
+        models, :data:`~nirglucose.evaluation.studies.STUDY_MODELS`) for reference,
+        once per data model. The estimator always runs, besides ``models``.
+    ``wavelengths``
+        LED sets: every subset of 1-6 candidate LEDs per detector ranked by the device
+        bound (:func:`~nirglucose.design.search.rank_designs`), the best of each size
+        simulated and scored by the oracle, EBL and the GP
+        (:mod:`~nirglucose.evaluation.wavelength_study`; preset ``wearable`` unless
+        given; ``--vary detector=...``, ``n_leds=...``, ``top_n=...``).
+        ``effects.csv``: :func:`~nirglucose.evaluation.wavelength_study.wavelength_designs`.
+    ``fleet``
+        Unit-to-unit tolerance (:mod:`~nirglucose.evaluation.fleet`): units drawn from
+        the parts' tolerances (:mod:`~nirglucose.design.fleet`) at each tolerance scale
+        (0, 0.25, 0.5, 1, 2; ``vary={"tolerance_scale": [...]}``), a model trained on some
+        units and tested on unseen ones, without and with a per-unit factory
+        reference (per-channel bias or slope/bias in absorbance), besides the
+        same-unit reference. ``effects.csv`` holds the table
+        (:func:`~nirglucose.evaluation.fleet.fleet_table`); EBL, the GP and the oracle
+        by default; ``n_subjects`` are the training subjects in all.
+
+    Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
+    Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
 """
 
 from __future__ import annotations
@@ -26,7 +85,9 @@ from ..config import (
     parse_override,
     resolve_config,
 )
+from ..design.fleet import MAX_TOLERANCE_SCALE
 from ..exceptions import ConfigError, unknown_name
+from .fleet import FLEET_DEFAULTS, FLEET_TOLERANCE_SCALES, FLEET_VARIANTS
 from .scenario import Scenario
 from .wavelength_study import WAVELENGTHS_MODELS, WAVELENGTHS_PRESET, wavelength_scenarios
 
@@ -295,8 +356,6 @@ def study_scenarios(
 
 def _fleet_scenarios(scales: Sequence[Any] | None) -> list[Scenario]:
     """Every tolerance scale x fleet variant (:mod:`~nirglucose.evaluation.fleet`)."""
-    from ..design.fleet import MAX_TOLERANCE_SCALE
-    from .fleet import FLEET_DEFAULTS, FLEET_TOLERANCE_SCALES, FLEET_VARIANTS
 
     scales = list(FLEET_TOLERANCE_SCALES if scales is None else scales)
     bad = [v for v in scales if not _is_number(v) or not 0 <= v <= MAX_TOLERANCE_SCALE]

@@ -9,61 +9,9 @@ scores on a shifted test cohort. :func:`run_sweep` runs the tasks in this proces
 a local process pool or on a Dask cluster (:mod:`~nirglucose.evaluation.executors`)
 and gathers one row per task.
 
-Studies (:data:`STUDIES`)
-    ``noise-scale``
-        ``noise_scale`` (every noise source together) over 0.25, 0.5, 1, 2, 4.
-    ``pmf-noise``
-        ``noise.pmf_measurement.scale`` (the error of the measured physiological
-        vector) over 0, 0.5, 1, 2, 4.
-    ``ablation``
-        Every noise source of :data:`~nirglucose.config.NOISE_SOURCES` switched off
-        alone (``off``), and switched on alone (``only``), besides all sources on
-        (``all-on``) and all off (``all-off``). :func:`ablation_effects` turns these
-        into ΔRMSE per source, paired by seed.
-    ``cohort``
-        Domain shift. ``fitzpatrick``: train on measured Fitzpatrick types I–III, test
-        on I–III (in domain) and on IV–VI (shifted); ``temperature``: train at
-        20–25 °C ambient, test at 20–25 °C and at 5–35 °C. Training and test cohorts
-        are simulated separately (the test seed is derived from the task's seed), so
-        no subject is in both. :func:`shift_effects` gives the ΔRMSE of the shift.
-    ``device``
-        Each device capability (:data:`~nirglucose.config.DEVICE_CAPABILITIES`)
-        switched off alone in ``paper`` and on alone in ``wearable``, besides both
-        presets as they are; each scenario sets every key distinguishing the two.
-    ``data-size``
-        RMSE against the number of training subjects (:data:`DATA_SIZE_SUBJECTS`) on
-        each preset of :data:`DATA_SIZE_PRESETS`: every model is trained on a draw of
-        that many subjects and tested on an independent draw of
-        :data:`DATA_SIZE_TEST_SUBJECTS` subjects (another seed, derived from the
-        task's). :func:`ranking_crossings` says between which sizes two models swap
-        places.
-    ``mismatch``
-        Model mismatch, the honest test of a physics model: data made by each forward
-        model of :data:`~nirglucose.evaluation.studies.MISMATCH_FORWARD_MODELS`
-        (``optics.model``) and the forward-model estimator
-        (:data:`~nirglucose.evaluation.studies.MISMATCH_SUBJECT`) assuming each one
-        (its ``forward_model``), every pair; EBL, the GP and the oracle (default
-        models, :data:`~nirglucose.evaluation.studies.STUDY_MODELS`) for reference,
-        once per data model. The estimator always runs, besides ``models``.
-    ``wavelengths``
-        LED sets: every subset of 1-6 candidate LEDs per detector ranked by the device
-        bound (:func:`~nirglucose.design.search.rank_designs`), the best of each size
-        simulated and scored by the oracle, EBL and the GP
-        (:mod:`~nirglucose.evaluation.wavelength_study`; preset ``wearable`` unless
-        given; ``--vary detector=...``, ``n_leds=...``, ``top_n=...``).
-        ``effects.csv``: :func:`~nirglucose.evaluation.wavelength_study.wavelength_designs`.
-    ``fleet``
-        Unit-to-unit tolerance (:mod:`~nirglucose.evaluation.fleet`): units drawn from
-        the parts' tolerances (:mod:`~nirglucose.design.fleet`) at each tolerance scale
-        (0, 0.25, 0.5, 1, 2; ``vary={"tolerance_scale": [...]}``), a model trained on some
-        units and tested on unseen ones, without and with a per-unit factory
-        reference (per-channel bias or slope/bias in absorbance), besides the
-        same-unit reference. ``effects.csv`` holds the table
-        (:func:`~nirglucose.evaluation.fleet.fleet_table`); EBL, the GP and the oracle
-        by default; ``n_subjects`` are the training subjects in all.
-
-    Any other grid comes from ``vary={"dotted.key": [values]}`` (several keys make a
-    Cartesian product), e.g. ``{"hardware.adc_bits": [10, 12, 14]}``.
+Studies
+    The built-in studies (:data:`STUDIES`) are described in
+    :mod:`~nirglucose.evaluation.studies`, where they are defined.
 
 Determinism
     A task draws every random number from its own specification (the dataset from the
@@ -131,6 +79,7 @@ from .benchmark import (
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
 from .executors import check_scheduler, resolve_backend, run_unordered
+from .fleet import fleet_metrics, fleet_table
 from .progress import task_hooks
 from .protocol import Protocol, resolve_protocol
 from .splits import effective_layout
@@ -419,7 +368,6 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
             overrides=spec["overrides"],
         )
         if ds is None:
-            from .fleet import fleet_metrics
 
             metrics = fleet_metrics(spec)
         elif spec["kind"] == "cv":
@@ -637,7 +585,6 @@ def _effects(study: str | None, frame: pd.DataFrame, summary: pd.DataFrame) -> p
     if study == "wavelengths":
         return wavelength_designs(frame)
     if study == "fleet":
-        from .fleet import fleet_table
 
         return fleet_table(frame)
     return None

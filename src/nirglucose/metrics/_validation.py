@@ -182,3 +182,10 @@ def subject_codes(subject_id: ArrayLike, n: int) -> tuple[NDArray[np.intp], NDAr
     except TypeError as exc:  # e.g. ints mixed with strings in an object array
         raise DataError(f"subject_id values must be of one sortable type: {exc}") from exc
     return codes.astype(np.intp), uniq
+
+
+#: Public names of the shared checks, for the worn-monitor modules (cgm, trend,
+#: time_in_range): the same functions as the underscored ones the older modules import.
+as_1d_float = _as_1d_float
+describe_bad = _describe_bad
+validate_pairs = _validate_pairs

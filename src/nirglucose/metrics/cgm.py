@@ -33,9 +33,9 @@ from scipy import stats
 
 from nirglucose.exceptions import DataError
 from nirglucose.metrics._validation import (
-    _validate_pairs,
     label_array,
     subject_codes,
+    validate_pairs,
 )
 
 __all__ = [
@@ -128,7 +128,7 @@ def mard_by_range(reference_mgdl: ArrayLike, predicted_mgdl: ArrayLike) -> pd.Da
     >>> mard_by_range([50, 100, 200], [55, 110, 180])["mard_pct"].round(3).tolist()
     [10.0, 10.0, 10.0, 10.0]
     """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
+    ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
     rows = _mard_rows(ref, pred, _range_codes(ref), GLUCOSE_RANGE_LABELS)
     rows += _mard_rows(ref, pred, np.zeros(ref.shape[0], np.intp), (_OVERALL,))
     return pd.DataFrame(rows, columns=["range", "n_readings", "mard_pct"])
@@ -171,7 +171,7 @@ def mard_by_day(
     >>> mard_by_day([100, 100, 100], [110, 120, 95], [1, 1, 2])["mard_pct"].round(6).tolist()
     [15.0, 5.0]
     """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
+    ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
     days = label_array(day, ref.shape[0], "day")
     uniq, codes = np.unique(days, return_inverse=True)
     rows = _mard_rows(ref, pred, codes.astype(np.intp), uniq.tolist())
@@ -301,7 +301,7 @@ def _rate_table(ref, pred, subj, n_subjects, range_codes, *, method, n_boot, see
 
 def _prepare_agreement(reference_mgdl, predicted_mgdl, subject_id, range_by, method, n_boot,
                        confidence):
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
+    ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
     subj, uniq = subject_codes(subject_id, ref.shape[0])
     if range_by not in ("device", "reference"):
         raise DataError(f"range_by must be 'device' or 'reference', got {range_by!r}")

@@ -13,10 +13,10 @@ from numpy.typing import ArrayLike
 
 from nirglucose.exceptions import DataError
 from nirglucose.metrics._validation import (
-    _as_1d_float,
-    _describe_bad,
-    _validate_pairs,
+    as_1d_float,
+    describe_bad,
     subject_codes,
+    validate_pairs,
 )
 from nirglucose.metrics.cgm import EUGLYCAEMIC_HIGH_MGDL, EUGLYCAEMIC_LOW_MGDL
 
@@ -95,12 +95,12 @@ def time_in_ranges(glucose_mgdl: ArrayLike, subject_id: ArrayLike) -> pd.DataFra
     >>> time_in_ranges([50, 100, 150, 300], [1, 1, 1, 1])["tir_70_180_pct"].tolist()
     [50.0]
     """
-    g = _as_1d_float(glucose_mgdl, "glucose_mgdl")
+    g = as_1d_float(glucose_mgdl, "glucose_mgdl")
     if g.shape[0] == 0:
         raise DataError("glucose_mgdl is empty; at least one reading is needed")
     bad = ~np.isfinite(g)
     if bad.any():
-        raise DataError(f"glucose_mgdl contains NaN or infinite values: {_describe_bad(bad)}")
+        raise DataError(f"glucose_mgdl contains NaN or infinite values: {describe_bad(bad)}")
     subj, uniq = subject_codes(subject_id, g.shape[0])
     return _tir_table(g, subj, uniq)
 
@@ -151,7 +151,7 @@ def time_in_range_agreement(
     >>> t.loc[t["metric"] == "tir_70_180_pct", "difference_pct"].tolist()
     [50.0]
     """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
+    ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
     subj, uniq = subject_codes(subject_id, ref.shape[0])
     a, b = _tir_table(ref, subj, uniq), _tir_table(pred, subj, uniq)
     frames = []

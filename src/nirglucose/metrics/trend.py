@@ -19,11 +19,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.exceptions import DataError
 from nirglucose.metrics._validation import (
-    _as_1d_float,
-    _describe_bad,
-    _validate_pairs,
+    as_1d_float,
+    describe_bad,
     subject_codes,
     time_array,
+    validate_pairs,
 )
 
 __all__ = [
@@ -122,10 +122,10 @@ def rate_of_change(
     >>> rate_of_change([100, 110, 90], [1, 1, 1], [0, 5, 15]).tolist()
     [nan, 2.0, -2.0]
     """
-    g = _as_1d_float(glucose_mgdl, "glucose_mgdl")
+    g = as_1d_float(glucose_mgdl, "glucose_mgdl")
     bad = ~np.isfinite(g)
     if bad.any():
-        raise DataError(f"glucose_mgdl contains NaN or infinite values: {_describe_bad(bad)}")
+        raise DataError(f"glucose_mgdl contains NaN or infinite values: {describe_bad(bad)}")
     subj, _ = subject_codes(subject_id, g.shape[0])
     t = time_array(time_min, g.shape[0])
     return _rates(g, subj, t, _order(subj, t), _check_gap(max_gap_min))
@@ -211,7 +211,7 @@ def trend_agreement(
     >>> r.agreement_pct, r.n_pairs
     (50.0, 2)
     """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
+    ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
     edges = np.asarray(edges_mgdl_per_min, dtype=np.float64)
     if edges.ndim != 1 or edges.shape[0] == 0 or np.any(np.diff(edges) <= 0) or not np.all(
             np.isfinite(edges)):
@@ -331,7 +331,7 @@ def estimated_lag(
     >>> round(estimated_lag(ref, dev, np.zeros(t.size), t).median_min, 1)
     10.0
     """
-    ref, pred = _validate_pairs(reference_mgdl, predicted_mgdl)
+    ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
     if not (np.isfinite(max_lag_min) and max_lag_min > 0):
         raise DataError(f"max_lag_min must be positive, got {max_lag_min!r}")
     subj, uniq = subject_codes(subject_id, ref.shape[0])

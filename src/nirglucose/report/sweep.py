@@ -24,6 +24,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
+from ..plots.fleet import figure_fleet
 
 __all__ = ["SweepFigure", "MARD_LIMIT_PCT", "sweep_figures", "save_sweep_figures",
            "sweep_section"]
@@ -134,7 +135,6 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
             "in the shifted domain (solid); error bars: 95 % paired t-interval of the "
             "shift's effect over seeds.", ax.figure))
     if res.effects is not None and "rmse_vs_same_unit" in res.effects:
-        from ..plots.fleet import figure_fleet
 
         out.append(SweepFigure(
             "sweep_fleet", "Unit-to-unit tolerance: RMSE on the test units' subjects "
