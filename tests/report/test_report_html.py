@@ -19,9 +19,9 @@ from nirglucose.report import build_report, load_results
 FIGURES = {
     "data": "1", "environment": "2", "physiology": "3", "pipeline": "4",
     "architecture": "5", "features": "6", "scatter": "7", "bland_altman": "8",
-    "residuals": "9", "fold_spread": "10", "training": "11", "radar": "12",
-    "physics_depth": "13", "efficiency": "14", "performance": "15", "wavelengths": "16",
-    "forest": "17",
+    "residuals": "9", "fold_spread": "10", "training": "11", "physics_weight": "12",
+    "radar": "13", "physics_depth": "14", "efficiency": "15", "performance": "16",
+    "wavelengths": "17", "forest": "18",
 }
 
 

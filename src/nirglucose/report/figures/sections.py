@@ -17,6 +17,8 @@ import numpy as np
 import pandas as pd
 
 from ...exceptions import DataError
+from ...models.registry import is_pinn
+from ...models.tuning import lambda_curve
 from .descriptive import (
     ARCHITECTURE_MODELS,
     _adc_by_wavelength,
@@ -374,6 +376,29 @@ def _reference_text(refs: Mapping[str, float]) -> str:
                " is drawn as a horizontal reference line."))
 
 
+def _section_physics_weight(page: _Page) -> None:
+    """The tuning's validation curve of each PINN against λ, every preset of the run."""
+    from ...plots.physics_weight import figure_lambda_curves
+
+    runs = [page.results, *page.peers]
+    curves = {}
+    for res in runs:
+        preset = _preset_name(res)
+        got = {m: c for m in page.models if "/" not in m and is_pinn(m)
+               and (c := lambda_curve(m, preset)) is not None}
+        if got:
+            curves[preset] = got
+    page.add("physics_weight", "The physics weight's validation curve",
+             "Each PINN's cross-validated RMSE on the tuning seeds (1000-1002, never the "
+             "reported ones) against its physics weight λ, from the packaged tuning file: "
+             "solid, the tuned training parameters refitted at every λ (only λ changes); "
+             "dashed, the best of the tuning's own draws at each λ (the other parameters "
+             "differ); the ring marks the λ the tuning chose. Where it chose 0 the benchmark "
+             "also runs the solid curve's best λ > 0 (the ablation table).",
+             lambda: figure_lambda_curves(curves) if curves else None,
+             note=None if curves else "No tuned PINN in this run.")
+
+
 def _section_radar(page: _Page) -> None:
     """Figure 8: normalised scores."""
     from ...plots import tradeoffs
@@ -509,7 +534,7 @@ def _section_forest(page: _Page) -> None:
 _SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
     _section_data, _section_pipeline, _section_architecture, _section_features,
     section_scatter, _section_agreement, section_residuals, section_spread,
-    _section_training, _section_radar, _section_costs,
+    _section_training, _section_physics_weight, _section_radar, _section_costs,
     _section_performance, _section_wavelengths, _section_forest,
 )
 
