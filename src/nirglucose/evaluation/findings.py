@@ -38,7 +38,7 @@ import pandas as pd
 
 from ..config.presets import DEVICE_CAPABILITIES
 from ..small_data import significance_withheld
-from .benchmark_result import ORACLE, ablation_base
+from .benchmark_result import LAMBDA_ROW, ORACLE, ablation_base
 from .drop_one import drop_one_findings
 from .finding import Finding, Value, label
 from .reference import STUDY_ORDER, STUDY_TABLE
@@ -360,6 +360,9 @@ def _physics_findings(run: RunData) -> list[Finding]:
                 Value(float(r["ci_high"]), 2, (f"{src}:ci_high",), sign=True),
                 Value(float(r["p_holm"]), 3, (f"{src}:p_holm",)))
         lam_txt = " (tuned λ = {})" if vals[0] is not None else ""
+        if LAMBDA_ROW in m:  # λ is in the label; it is the curve's best > 0, not the tuned one
+            vals = (None, *vals[1:])
+            lam_txt = " (the best λ > 0 of the tuning's validation curve; the tuning chose 0)"
         unadj = (v["verdict"] == "no significant difference"
                  and (float(r["ci_low"]) > 0 or float(r["ci_high"]) < 0))
         out.append(Finding("physics", p, (
