@@ -35,12 +35,7 @@ PINNS = {
 FAST = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-import torch
 
 import nirglucose as ng
 from nirglucose.dataset import Dataset
@@ -26,12 +25,7 @@ PINNS = NETWORKS[1:]
 REPORTED_SEEDS = range(5)
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
 
 
 # ----------------------------------------------------------------- accessor and file

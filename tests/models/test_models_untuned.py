@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-import torch
 from sklearn.model_selection import GroupKFold
 
 from nirglucose.dataset import load_dataset
@@ -22,12 +21,7 @@ from nirglucose.models.tuning import UNTUNED_NETWORK_PARAMS, untuned_params
 N = 25
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
 
 
 def _device_file(tmp_path, seed: int, signal: bool):
