@@ -77,6 +77,26 @@ def _write_block(cfg, seed, block, start, n_sub, per_subject, tables, out: Path,
     return block, table.num_rows
 
 
+def prepare_partitioned_dir(out: str | Path) -> Path:
+    """The output directory of a partitioned dataset, created, with no part or manifest
+    left from an earlier run (so nothing incomplete looks complete).
+
+    Raises
+    ------
+    DataError
+        The parent does not exist, or ``out`` exists and is not a directory.
+    """
+    out = Path(out)
+    if not out.parent.exists():
+        raise DataError(f"output directory {str(out.parent)!r} does not exist; create it first")
+    if out.exists() and not out.is_dir():
+        raise DataError(f"{str(out)!r} exists and is not a directory")
+    out.mkdir(exist_ok=True)
+    for stale in [out / MANIFEST, *out.glob(PART_PATTERN)]:
+        stale.unlink(missing_ok=True)
+    return out
+
+
 def write_partitioned(
     cfg: ScenarioConfig, out: str | Path, n_subjects: int, per_subject: int, seed: int,
     n_jobs: int = 1,
@@ -109,14 +129,7 @@ def write_partitioned(
     Peak memory is about ``n_jobs`` blocks of ``BLOCK_SUBJECTS × per_subject`` rows
     plus each worker's interpreter, whatever ``n_subjects`` is.
     """
-    out = Path(out)
-    if not out.parent.exists():
-        raise DataError(f"output directory {str(out.parent)!r} does not exist; create it first")
-    if out.exists() and not out.is_dir():
-        raise DataError(f"{str(out)!r} exists and is not a directory")
-    out.mkdir(exist_ok=True)
-    for stale in [out / MANIFEST, *out.glob(PART_PATTERN)]:
-        stale.unlink(missing_ok=True)
+    out = prepare_partitioned_dir(out)
     meta_doc = {"nirglucose_version": __version__, "seed": seed,
                 "config": json.loads(cfg.to_json())}
     meta = json.dumps(meta_doc, sort_keys=True).encode()

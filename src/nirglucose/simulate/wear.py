@@ -43,14 +43,15 @@ import pandas as pd
 
 from .._version import __version__
 from ..config import ScenarioConfig
-from ..dataset import _META_KEY, MANIFEST, PART_PATTERN, atomic_write
-from ..exceptions import ConfigError, DataError
+from ..dataset import _META_KEY, MANIFEST, atomic_write
+from ..exceptions import ConfigError
 from . import contact, diurnal, environment, hardware, measurement, physiology
 from . import meal_scenario as meals
 from . import uva_padova as uva
 from ._random import BLOCK_SUBJECTS, RandomStreams, SubjectStreams
 from .glucose import reflect_into_range
 from .interstitial import ISF_LAG_MIN, interstitial_glucose_mgdl
+from .partitioned import prepare_partitioned_dir
 from .simulator import _columns, _hidden, _optics_layer, _tables
 
 __all__ = [
@@ -397,14 +398,7 @@ def write_wear_partitioned(cfg: ScenarioConfig, out: str | Path, n_subjects: int
     and ``manifest.json`` last (as :func:`.partitioned.write_partitioned`); returns the
     rows written. Memory: ``n_jobs`` chunks at a time, whatever ``n_subjects``."""
     n_t = readings_per_subject(wear_days, every_min)
-    out = Path(out)
-    if not out.parent.exists():
-        raise DataError(f"output directory {str(out.parent)!r} does not exist; create it first")
-    if out.exists() and not out.is_dir():
-        raise DataError(f"{str(out)!r} exists and is not a directory")
-    out.mkdir(exist_ok=True)
-    for stale in [out / MANIFEST, *out.glob(PART_PATTERN)]:
-        stale.unlink(missing_ok=True)
+    out = prepare_partitioned_dir(out)
     meta_doc = {"nirglucose_version": __version__, "seed": seed,
                 "config": json.loads(cfg.to_json()),
                 "wear": wear_metadata(wear_days, every_min, options)}
