@@ -36,6 +36,9 @@ PHYSICS_DEPTH: Final[dict[str, int]] = {
     "selective-rte-pinn": 2,
     "rte-pinn": 3,
     "ebl": 4,
+    "ebl+gp": 4,  # a hybrid sits at its physics backbone's depth
+    "physics-inversion": 5,
+    "physics-inversion+gp": 5,
     "oracle": 5,
 }
 #: Rows that are references, not competitors: drawn as horizontal lines in figures 9-10
@@ -50,6 +53,7 @@ PHYSICS_DEPTH_LABELS: Final[dict[int, str]] = {
     2: "RTE loss\n(2 λ)",
     3: "RTE loss\n(all λ)",
     4: "Beer–Lambert\nfeatures",
+    5: "forward model\ninverted",
 }
 
 #: Axes of the radar chart: (label, metrics column, higher is better, log scale).
