@@ -31,7 +31,27 @@ DESIGNS = {
                                  (990, 2.5, 0.5), (1100, 6, 0.25), (1250, 20, 0.1))],
     }),
 }
-CASES = {**{p: (p, None) for p in PRESETS}, **DESIGNS}
+#: Three designs outside the study's band: InGaAs LEDs up to 1,650 nm (issue 30), where
+#: the diffusion-based optics are qualitative; the bound must still hold for the oracle.
+SWIR_DESIGNS = {
+    "ingaas-1550": ("paper", {
+        "detector": "G17190-010K",
+        "leds": [{"wavelength_nm": w, "fwhm_nm": 80, "power_mw": p}
+                 for w, p in ((1050, 2.5), (1300, 4.0), (1550, 10.0))],
+    }),
+    "ingaas-1650": ("wearable", {
+        "detector": "G17190-010K",
+        "leds": [{"wavelength_nm": w, "fwhm_nm": 80, "power_mw": p}
+                 for w, p in ((1100, 2.5), (1450, 10.0), (1650, 10.0))],
+    }),
+    "ingaas-six-to-1600": ("wearable", {
+        "detector": "G17190-010K",
+        "leds": [{"wavelength_nm": w, "fwhm_nm": 60, "power_mw": p}
+                 for w, p in ((900, 3), (1050, 2.5), (1100, 2.5), (1200, 2.0), (1400, 10),
+                              (1600, 10))],
+    }),
+}
+CASES = {**{p: (p, None) for p in PRESETS}, **DESIGNS, **SWIR_DESIGNS}
 
 
 def _oracle_rmse_and_upper(preset, overrides, seed=1, model=None):
