@@ -8,6 +8,7 @@ from; a value that is an assumption of this package says so.
 from __future__ import annotations
 
 __all__ = [
+    "MINUTES_PER_DAY",
     "ELEMENTARY_CHARGE_C",
     "BOLTZMANN_J_PER_K",
     "ZERO_CELSIUS_K",
@@ -29,6 +30,9 @@ __all__ = [
 ]
 
 # --- CODATA 2018 (exact in the 2019 SI) --------------------------------------------
+#: Minutes in a day. [min]
+MINUTES_PER_DAY = 1440
+
 ELEMENTARY_CHARGE_C = 1.602176634e-19
 BOLTZMANN_J_PER_K = 1.380649e-23
 ZERO_CELSIUS_K = 273.15

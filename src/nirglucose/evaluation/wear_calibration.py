@@ -35,6 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from ..constants import MINUTES_PER_DAY
 from ..exceptions import ConfigError, DataError
 from .stats import subject_draws
 
@@ -50,7 +51,6 @@ SCHEDULES: dict[str, tuple[float | None, tuple[float, ...]]] = {
     "every-12h": (12.0, ()),
 }
 _MIN_PER_H = 60.0
-_MIN_PER_DAY = 1440.0
 
 
 def _check_schedules(schedules: Sequence[str]) -> list[str]:
@@ -170,7 +170,7 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
                         "more than one reading per subject")
     ref = frame[reference].to_numpy(float)[scored]
     subj = frame[subject].to_numpy()[scored]
-    days = (frame[time] - first).to_numpy(float)[scored] / _MIN_PER_DAY
+    days = (frame[time] - first).to_numpy(float)[scored] / MINUTES_PER_DAY
     codes, sid = np.unique(subj, return_inverse=True)
     draws = subject_draws(codes.size, int(n_boot), [int(seed), 31])
     summary, by_day = [], []
@@ -183,7 +183,7 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
         boot = np.sqrt(sums[draws].sum(1) / cnt[draws].sum(1))
         n_cal = a["is_calibration"].groupby(frame[subject]).sum()
         span_days = (frame.groupby(subject)[time].agg(lambda x: x.max() - x.min())
-                     / _MIN_PER_DAY).clip(lower=1.0)
+                     / MINUTES_PER_DAY).clip(lower=1.0)
         summary.append({
             "schedule": s,
             "rmse_mgdl": float(np.sqrt(sq.mean())),
@@ -195,7 +195,7 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
             "n_subjects": int(codes.size),
         })
         since = a["min_since_calibration"].to_numpy(float)[scored]
-        day_bin = np.floor(np.where(np.isnan(since), days, since / _MIN_PER_DAY)).astype(int)
+        day_bin = np.floor(np.where(np.isnan(since), days, since / MINUTES_PER_DAY)).astype(int)
         for d in np.unique(day_bin):
             m = day_bin == d
             by_day.append({"schedule": s, "days_since_calibration": int(d),

@@ -14,6 +14,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..constants import MINUTES_PER_DAY
 from .style import (
     DATA_COLOR,
     GREY,
@@ -27,7 +28,6 @@ from .style import (
 
 __all__ = ["figure_wear_traces", "plot_error_by_day"]
 
-_MIN_PER_DAY = 1440.0
 #: One colour per calibration schedule (Okabe–Ito; schedules are not models).
 _SCHEDULE_COLORS = {
     "factory": OKABE_ITO["black"],
@@ -64,7 +64,7 @@ def figure_wear_traces(traces: pd.DataFrame, *, model: str, schedule: str,
         axes = fig.subplots(len(subjects), ncols, sharex=True, squeeze=False)[:, 0]
         for ax, sid in zip(axes, subjects, strict=True):
             g = traces[traces["subject_id"] == sid].sort_values("time_min")
-            days = g["time_min"].to_numpy(float) / _MIN_PER_DAY
+            days = g["time_min"].to_numpy(float) / MINUTES_PER_DAY
             ax.axhspan(70, 180, color=GREY, alpha=0.08, lw=0)
             ax.plot(days, g["glucose_mgdl"], color=DATA_COLOR, lw=1.0, label="reference")
             ax.plot(days, g["calibrated_mgdl"], color=model_color(model), lw=1.0,

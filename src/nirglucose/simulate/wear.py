@@ -43,6 +43,7 @@ import pandas as pd
 
 from .._version import __version__
 from ..config import ScenarioConfig
+from ..constants import MINUTES_PER_DAY
 from ..dataset import _META_KEY, MANIFEST, atomic_write
 from ..exceptions import ConfigError
 from . import contact, diurnal, environment, hardware, measurement, physiology
@@ -69,8 +70,6 @@ __all__ = [
     "write_wear_partitioned",
 ]
 
-#: Minutes in a day. [min]
-MINUTES_PER_DAY = 1440
 #: Subjects per chunk: a chunk of a 14-day, 5-minute wear is 16 x 4032 rows, about
 #: 70 MB in memory. [-]
 WEAR_CHUNK_SUBJECTS = 16
