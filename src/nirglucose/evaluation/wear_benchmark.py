@@ -89,12 +89,13 @@ def _thin(frame: pd.DataFrame, rows: np.ndarray, per_subject: int, time: str) ->
     return np.sort(np.concatenate(keep))
 
 
-def _standards(g: pd.DataFrame, schedule: str, time: str, n_boot: int,
+def _standards(g: pd.DataFrame, schedule: str, a: pd.DataFrame, time: str, n_boot: int,
                seed: int) -> tuple[dict, pd.DataFrame]:
     """One model, variant and schedule: a row of ``wear_standards.csv`` and its iCGM table.
 
-    Accuracy is scored on every held-out reading after the subject's first that is not
-    one of this schedule's fingersticks; trend agreement and lag on the whole series.
+    ``a`` is :func:`~.wear_calibration.apply_schedule` of ``schedule`` on ``g``. Accuracy
+    is scored on every held-out reading after the subject's first that is not one of
+    this schedule's fingersticks; trend agreement and lag on the whole series.
     """
     from ..metrics import (
         dts_zones,
@@ -106,7 +107,6 @@ def _standards(g: pd.DataFrame, schedule: str, time: str, n_boot: int,
         zone_percentages,
     )
 
-    a = apply_schedule(g, schedule, time=time)
     first = g.groupby("subject_id")[time].transform("min")
     keep = ((g[time] > first) & ~a["is_calibration"]).to_numpy()
     ref = g["glucose_mgdl"].to_numpy(float)[keep]
@@ -254,11 +254,13 @@ def _scored(predictions: pd.DataFrame, schedules: Sequence[str], time: str, n_bo
     tables, days, standards, icgm = [], [], [], []
     for (name, variant), g in predictions.groupby(["model", "variant"], sort=False):
         g = g.reset_index(drop=True)
-        summary, by_day = schedule_table(g, schedules, time=time, n_boot=n_boot, seed=seed)
+        applied = {s: apply_schedule(g, s, time=time) for s in schedules}  # once, for both
+        summary, by_day = schedule_table(g, schedules, time=time, n_boot=n_boot, seed=seed,
+                                         applied=applied)
         tables.append(summary.assign(model=name, variant=variant))
         days.append(by_day.assign(model=name, variant=variant))
         for sched in schedules:
-            row, crit = _standards(g, sched, time, n_boot, seed)
+            row, crit = _standards(g, sched, applied[sched], time, n_boot, seed)
             standards.append({"model": name, "variant": variant, **row})
             icgm.append(crit.assign(model=name, variant=variant))
     return (pd.concat(tables, ignore_index=True), pd.concat(days, ignore_index=True),

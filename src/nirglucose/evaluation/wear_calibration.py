@@ -130,7 +130,9 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
                    prediction: str = "predicted_glucose_mgdl",
                    reference: str = "glucose_mgdl", time: str = "time_min",
                    subject: str = "subject_id", n_boot: int = 1000,
-                   seed: int = 0) -> tuple[pd.DataFrame, pd.DataFrame]:
+                   seed: int = 0,
+                   applied: dict[str, pd.DataFrame] | None = None,
+                   ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Every schedule scored on the same readings, overall and by days since calibration.
 
     Parameters
@@ -142,6 +144,9 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
         Names of :data:`SCHEDULES`.
     n_boot, seed : int
         Cluster-bootstrap resamples over subjects and their seed.
+    applied : dict, optional
+        :func:`apply_schedule` of each schedule on ``frame``, where the caller has them
+        already (computed here otherwise).
 
     Returns
     -------
@@ -158,8 +163,10 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
     if int(n_boot) < 1:
         raise ConfigError(f"n_boot = {n_boot!r} is invalid; expected an integer >= 1")
     _check_columns(frame, (prediction, reference, time, subject))
-    applied = {s: apply_schedule(frame, s, prediction=prediction, reference=reference,
-                                 time=time, subject=subject) for s in names}
+    applied = {s: (applied or {}).get(s) for s in names}
+    applied = {s: a if a is not None else
+               apply_schedule(frame, s, prediction=prediction, reference=reference,
+                              time=time, subject=subject) for s, a in applied.items()}
     first = frame.groupby(subject)[time].transform("min")
     used = np.zeros(len(frame), dtype=bool)
     for a in applied.values():
@@ -173,6 +180,8 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
     days = (frame[time] - first).to_numpy(float)[scored] / MINUTES_PER_DAY
     codes, sid = np.unique(subj, return_inverse=True)
     draws = subject_draws(codes.size, int(n_boot), [int(seed), 31])
+    span_days = (frame.groupby(subject)[time].agg(lambda x: x.max() - x.min())
+                 / MINUTES_PER_DAY).clip(lower=1.0)  # fingersticks per day of at least a day
     summary, by_day = [], []
     for s in names:
         a = applied[s]
@@ -182,8 +191,6 @@ def schedule_table(frame: pd.DataFrame, schedules: Sequence[str] = tuple(SCHEDUL
         cnt = np.bincount(sid, minlength=codes.size).astype(float)
         boot = np.sqrt(sums[draws].sum(1) / cnt[draws].sum(1))
         n_cal = a["is_calibration"].groupby(frame[subject]).sum()
-        span_days = (frame.groupby(subject)[time].agg(lambda x: x.max() - x.min())
-                     / MINUTES_PER_DAY).clip(lower=1.0)
         summary.append({
             "schedule": s,
             "rmse_mgdl": float(np.sqrt(sq.mean())),
