@@ -21,11 +21,11 @@ from ._common import (
     _check_out_dir,
     _check_seed,
     _model_names,
-    _parse_sets,
     _say,
     _tidy_out,
     _warnings_as_lines,
 )
+from .benchmark_command import _benchmark_runs
 
 
 def _schedule_names(schedules: str) -> list[str]:
@@ -86,9 +86,9 @@ def wear_benchmark(
     names = _model_names(models) or list(WEAR_MODELS)
     sched = _schedule_names(schedules)
     _check_out_dir(out)
-    runs = _runs(preset, data, set_, out)
+    runs, overrides = _benchmark_runs(preset, data, set_, out)  # the benchmark's own rule
     for p, run_out in runs:
-        ds = _worn_data(p, data, subjects, wear_days, every_min, seed, _parse_sets(set_))
+        ds = _worn_data(p, data, subjects, wear_days, every_min, seed, overrides)
         with _warnings_as_lines():
             res = run_wear_benchmark(ds, names, preset=p, n_splits=folds, seed=seed,
                                      schedules=sched, train_readings_per_subject=train_readings,
@@ -96,21 +96,6 @@ def wear_benchmark(
         run_out.mkdir(exist_ok=True)
         res.save(run_out)
         _print(res, p or str(data), run_out)
-
-
-def _runs(preset: str, data: Path | None, set_, out: Path) -> list[tuple[str | None, Path]]:
-    presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
-    if data is not None:
-        if set_:
-            raise UserError("--set changes the simulation; it cannot apply to --data")
-        return [(None, out)]
-    from ..config import resolve_config
-
-    for p in presets:
-        resolve_config(p, _parse_sets(set_))  # an unknown preset fails before anything runs
-    if not presets:
-        raise UserError(f"--preset {preset!r} names no preset")
-    return [(p, out / p if len(presets) > 1 else out) for p in presets]
 
 
 def _worn_data(preset, data, subjects, wear_days, every_min, seed, overrides):
