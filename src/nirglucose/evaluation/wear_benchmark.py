@@ -89,6 +89,12 @@ def _thin(frame: pd.DataFrame, rows: np.ndarray, per_subject: int, time: str) ->
     return np.sort(np.concatenate(keep))
 
 
+#: Calibrated predictions below this are scored as this value: the CGM metrics take
+#: positive readings (MARD's and the grids' ratios), and an offset can push a low
+#: prediction to or below 0. Not a clinical limit. [mg/dL]
+_FLOOR_MGDL = 1.0
+
+
 def _standards(g: pd.DataFrame, schedule: str, a: pd.DataFrame, time: str, n_boot: int,
                seed: int) -> tuple[dict, pd.DataFrame]:
     """One model, variant and schedule: a row of ``wear_standards.csv`` and its iCGM table.
@@ -110,13 +116,13 @@ def _standards(g: pd.DataFrame, schedule: str, a: pd.DataFrame, time: str, n_boo
     first = g.groupby("subject_id")[time].transform("min")
     keep = ((g[time] > first) & ~a["is_calibration"]).to_numpy()
     ref = g["glucose_mgdl"].to_numpy(float)[keep]
-    est = np.clip(a["calibrated_mgdl"].to_numpy(float)[keep], 1.0, None)  # a meter's floor
+    est = np.clip(a["calibrated_mgdl"].to_numpy(float)[keep], _FLOOR_MGDL, None)
     sid = g["subject_id"].to_numpy()[keep]
     # the series' shape (trend, lag) on every reading, fingersticks included: the
     # estimators need uniform sampling
     all_ref, all_sid, all_t = (g["glucose_mgdl"].to_numpy(float), g["subject_id"].to_numpy(),
                                g[time].to_numpy(float))
-    all_est = np.clip(a["calibrated_mgdl"].to_numpy(float), 1.0, None)
+    all_est = np.clip(a["calibrated_mgdl"].to_numpy(float), _FLOOR_MGDL, None)
     icgm = icgm_criteria(ref, est, sid, n_boot=n_boot, seed=seed)
     mard = mard_by_range(ref, est).set_index("range")["mard_pct"]
     tir = time_in_range_agreement(ref, est, sid)

@@ -58,7 +58,7 @@ def _table(frame: pd.DataFrame) -> str:
 _REFERENCE = ("oracle", "mean")
 
 
-def _findings(s: pd.DataFrame, st: pd.DataFrame, meta: dict) -> list[str]:
+def _findings(s: pd.DataFrame, st: pd.DataFrame) -> list[str]:
     """Every sentence computed from the tables."""
     raw = s[s["variant"] == "raw"]
     n_subj = int(raw["n_subjects"].max())
@@ -155,7 +155,7 @@ def build_wear_report(results_dir: str | Path, out_path: str | Path, *,
     sched_table = raw.pivot_table(index="model", columns="schedule", values="rmse_mgdl")
     crit = icgm[(icgm["model"] == model) & (icgm["variant"] == "raw")
                 & (icgm["schedule"] == sched)]
-    items = "".join(f"<li>{html.escape(t)}</li>" for t in _findings(s, st, meta))
+    items = "".join(f"<li>{html.escape(t)}</li>" for t in _findings(s, st))
     body = (
         f"<h1>A device worn for days: {html.escape(str(meta.get('preset') or 'user data'))}</h1>"
         f"<p>{meta['n_subjects']} subjects, {meta['n_readings']} readings, "
