@@ -301,3 +301,10 @@ def test_ablation_rows_never_compete_and_are_named():
     assert _is_competitor("rte-pinn")
     assert label("rte-pinn/lambda=0.1").endswith("(λ = 0.1)")
     assert label("rte-pinn/no-physics").endswith("(no physics)")
+
+
+def test_no_sentence_keeps_an_unfilled_placeholder(preset_report):
+    """Every ``{}`` of a finding's template is filled by one of its values (a stray one
+    shifts every later number onto the wrong words)."""
+    page = Path(preset_report).read_text()
+    assert "{}" not in page and "{{" not in page

@@ -328,8 +328,9 @@ def _physics_findings(run: RunData) -> list[Finding]:
     anchor = f"ablation-{p}"
     tested = [v for v in verdicts if v["tested"]]
     src = f"{p}/ablation.csv"
-    summary = (f"Does physics help on {p}? Of {{}} physics-informed networks, {{}} "
-               "had their physics tested against the same network without it")
+    summary = (f"Does physics help on {p}? Of {{}} ablation pairs (each PINN against "
+               "itself without physics, at its tuned λ and, where tuning chose 0, at the "
+               "best λ > 0), {} tested physics at a weight above 0")
     vals = [Value(len(verdicts), 0, (f"{src}:rows",), op="count"),
             Value(len(tested), 0, (f"{src}:tested",), op="count")]
     if tested:
