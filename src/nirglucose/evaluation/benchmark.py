@@ -432,17 +432,22 @@ def _oracle_rows(
     return [], note
 
 
+def _rows(models: Any, references: bool) -> tuple[list[str], dict[str, Any]]:
+    """The rows' labels (the references last) and label -> estimator object."""
+    entries = resolve_entries(models, available_models())
+    names = [e.label for e in entries]
+    if references:
+        names += [m for m in REFERENCE_MODELS if m not in names]
+    return names, {e.label: e.estimator for e in entries if e.estimator is not None}
+
+
 def _plan(
     dataset: Dataset,
-    models: Sequence[str] | str | None,
+    models: Sequence[Any] | str | None,
     opts: dict[str, Any],
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
-    entries = resolve_entries(models, available_models())
-    names = [e.label for e in entries]
-    objects = {e.label: e.estimator for e in entries if e.estimator is not None}
-    if opts["references"]:
-        names += [m for m in REFERENCE_MODELS if m not in names]
+    names, objects = _rows(models, opts["references"])
     preset = getattr(dataset.config, "preset", None)
     names, base_of, params, pairs = _row_params(
         names, objects, opts["model_params"], preset, opts["ablation"]

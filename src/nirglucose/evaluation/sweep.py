@@ -245,11 +245,9 @@ def plan_sweep(
 
     Every configuration is resolved here, so a bad value fails before anything runs.
     ``calibration`` (personal calibration readings) joins the cross-validated tasks'
-    specifications only when non-zero. ``estimators`` maps the labels among ``models``
-    that are estimator objects to those objects: their tasks' specifications hold
-    :func:`~nirglucose.evaluation.estimators.estimator_identity` (class path and
-    parameters) as ``estimator``, so the cache keys on it; the object itself travels
-    beside the specification (:func:`run_sweep_task`).
+    specifications only when non-zero. ``estimators`` (label -> estimator object) puts
+    each object's :func:`~nirglucose.evaluation.estimators.estimator_identity` in its
+    tasks' specifications (the cache key); the object travels beside them.
 
     Returns
     -------
@@ -667,6 +665,20 @@ def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int]
     return proto
 
 
+def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario]
+                  ) -> tuple[list[str], dict[str, Any]]:
+    """The rows' labels (a study's subject first) and label -> estimator object."""
+    entries = resolve_entries(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
+    labels = [e.label for e in entries]
+    objects = {e.label: e.estimator for e in entries if e.estimator is not None}
+    if objects and any(sc.kind == "fleet" for sc in scenarios):
+        raise ConfigError(f"the fleet study takes registered model names, not estimator "
+                          f"objects ({', '.join(objects)}); run the objects in a grid study")
+    if study == "mismatch" and MISMATCH_SUBJECT not in labels:
+        labels = [MISMATCH_SUBJECT, *labels]  # the study's subject always runs
+    return labels, objects
+
+
 def run_sweep(
     vary: Mapping[str, Sequence[Any]] | None = None,
     *,
@@ -706,16 +718,11 @@ def run_sweep(
     models : sequence or comma-separated str, optional
         Registry names (default :data:`DEFAULT_MODELS`; a study of
         :data:`~nirglucose.evaluation.studies.STUDY_MODELS`: its own), unfitted
-        estimator objects and ``(label, estimator)`` pairs, as in
-        :func:`~nirglucose.evaluation.benchmark.run_benchmark`
-        (:mod:`~nirglucose.evaluation.estimators`): each task fits a clone, as given
-        (no tuned parameters; ``model_params[label]`` applies). Local processes
-        receive the objects pickled, as joblib sends them; on a Dask cluster each
-        object must be picklable (cloudpickle) and its class importable on the
-        workers (or defined in ``__main__``). The task cache keys an object on its
-        class path and parameters
-        (:func:`~nirglucose.evaluation.estimators.estimator_identity`). The fleet
-        study takes names only.
+        estimator objects and ``(label, estimator)`` pairs, as ``run_benchmark``
+        takes them (:mod:`~nirglucose.evaluation.estimators`; the fleet study takes
+        names only). Objects are pickled to local workers, as joblib sends them; a
+        Dask cluster needs them picklable (cloudpickle), their classes importable
+        there (or defined in ``__main__``). The cache keys on class path + parameters.
     overrides : mapping, optional
         Dotted overrides shared by every scenario (``--set``).
     protocol, n_splits, repeats : str, int, int
@@ -757,14 +764,7 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    entries = resolve_entries(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
-    models = [e.label for e in entries]
-    objects = {e.label: e.estimator for e in entries if e.estimator is not None}
-    if objects and any(sc.kind == "fleet" for sc in scenarios):
-        raise ConfigError(f"the fleet study takes registered model names, not estimator "
-                          f"objects ({', '.join(objects)}); run the objects in a grid study")
-    if study == "mismatch" and MISMATCH_SUBJECT not in models:
-        models = [MISMATCH_SUBJECT, *models]  # the study's subject always runs
+    models, objects = _sweep_models(models, study, scenarios)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
