@@ -173,6 +173,24 @@ def test_bad_entries_refused(data, models, words):
     assert "\n" not in msg and all(w in msg for w in words), msg
 
 
+def test_bad_object_params_refused(data):
+    with pytest.raises(ConfigError, match=r"model_params\['ridge'\]: .*no_such"):
+        run_benchmark(data, [("ridge", Ridge())], model_params={"ridge": {"no_such": 1}}, **FAST)
+    res = run_benchmark(data, [("ridge", Ridge())], model_params={"ridge": {"alpha": 5e4}},
+                        **FAST)
+    plain = run_benchmark(data, [("ridge", Ridge())], **FAST)
+    assert res.meta["model_params"] == {"ridge": {"alpha": 5e4}}
+    assert not np.allclose(_pred(res, "ridge"), _pred(plain, "ridge"))  # set_params applied
+
+
+def test_drop_one_refits_an_object(data):
+    res = run_benchmark(data, [("ridge", make_pipeline(StandardScaler(), Ridge()))],
+                        **{**FAST, "drop_one_models": "all"})
+    d = res.drop_one
+    assert sorted(d["dropped_wavelength_nm"]) == sorted(data.wavelengths_nm)
+    assert (d["model"] == "ridge").all() and np.isfinite(d["delta_rmse_mgdl"]).all()
+
+
 def test_resolve_entries_forms():
     r = Ridge()
     assert [e.label for e in resolve_entries(r, [])] == ["Ridge"]  # one object

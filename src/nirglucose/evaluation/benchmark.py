@@ -119,6 +119,7 @@ from .drop_one import (
 )
 from .estimators import (
     build_estimator,
+    check_object_params,
     describe_entries,
     estimator_identity,
     fit_history,
@@ -448,6 +449,7 @@ def _plan(
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
     names, objects = _rows(models, opts["references"])
+    check_object_params(objects, opts["model_params"] or {})
     preset = getattr(dataset.config, "preset", None)
     names, base_of, params, pairs = _row_params(
         names, objects, opts["model_params"], preset, opts["ablation"]

@@ -59,6 +59,7 @@ __all__ = [
     "OBJECT_TUNING",
     "ModelEntry",
     "build_estimator",
+    "check_object_params",
     "describe_entries",
     "estimator_identity",
     "fit_history",
@@ -191,6 +192,23 @@ def resolve_entries(models: Any, default: Sequence[str]) -> list[ModelEntry]:
     if not entries:
         raise ConfigError(f"no models given; valid: {', '.join(available_models())}")
     return list(entries.values())
+
+
+def check_object_params(objects: Mapping[str, Any], params: Mapping[str, Any]) -> None:
+    """Refuse ``model_params`` that an estimator object does not take, before any task runs.
+
+    Raises
+    ------
+    ConfigError
+        ``set_params`` of a clone refuses ``params[label]`` (the message is its reason).
+    """
+    for label, est in objects.items():
+        if params.get(label):
+            try:
+                clone(est).set_params(**params[label])
+            except ValueError as exc:
+                raise ConfigError(f"model_params[{label!r}]: {' '.join(str(exc).split())}"
+                                  ) from None
 
 
 def describe_entries(objects: Mapping[str, Any]) -> dict[str, dict[str, str]]:

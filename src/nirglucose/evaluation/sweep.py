@@ -74,6 +74,7 @@ from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
 from .estimators import (
     build_estimator,
+    check_object_params,
     describe_entries,
     estimator_identity,
     fit_model,
@@ -363,8 +364,7 @@ def run_sweep_task(spec: Mapping[str, Any], estimator: Any = None) -> dict[str, 
     spec : dict
         One task specification of :func:`plan_sweep`.
     estimator : estimator, optional
-        The caller's unfitted estimator object of a task whose model was given as one
-        (cloned, never fitted itself); None for a registered name.
+        The task's estimator object (cloned, never fitted); None for a registered name.
 
     Returns
     -------
@@ -665,12 +665,13 @@ def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int]
     return proto
 
 
-def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario]
-                  ) -> tuple[list[str], dict[str, Any]]:
+def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
+                  params: Mapping[str, Any] | None) -> tuple[list[str], dict[str, Any]]:
     """The rows' labels (a study's subject first) and label -> estimator object."""
     entries = resolve_entries(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
     labels = [e.label for e in entries]
     objects = {e.label: e.estimator for e in entries if e.estimator is not None}
+    check_object_params(objects, params or {})
     if objects and any(sc.kind == "fleet" for sc in scenarios):
         raise ConfigError(f"the fleet study takes registered model names, not estimator "
                           f"objects ({', '.join(objects)}); run the objects in a grid study")
@@ -764,7 +765,7 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    models, objects = _sweep_models(models, study, scenarios)
+    models, objects = _sweep_models(models, study, scenarios, model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
