@@ -9,6 +9,7 @@ from pydantic import Field, field_validator, model_validator
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..exceptions import ConfigError
 from ._base import _Model
+from .parts import led_part
 
 
 class LED(_Model):
@@ -141,8 +142,6 @@ def expand_led_part(record: Any) -> Any:
     ConfigError
         Unknown part name (the message lists the catalogue).
     """
-    from .parts import led_part
-
     if isinstance(record, str):
         return led_part(record).led_record()
     if isinstance(record, dict) and record.get("part") is not None:

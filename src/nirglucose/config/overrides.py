@@ -12,7 +12,7 @@ from ..exceptions import ConfigError, unknown_name
 from .keys import out_of_range_message, suggest_keys, unit_of, valid_keys
 from .leds import LED, LEGACY_LED_KEYS, _merge_legacy_leds
 from .presets import PRESETS
-from .scenario import ScenarioConfig
+from .scenario import DETECTOR_KEYS, ScenarioConfig
 
 
 def parse_override(text: str) -> tuple[str, Any]:
@@ -86,8 +86,6 @@ def _clear_detector_values(out: dict[str, Any]) -> None:
     """Before a new detector: the values a detector decides back to their defaults and
     the LED set's responsivities cleared, so the new detector sets them (values given in
     the same overrides still win: they are applied after)."""
-    from .scenario import DETECTOR_KEYS
-
     defaults = ScenarioConfig.model_construct()
     for section, key, _ in DETECTOR_KEYS:
         out.setdefault(section, {})[key] = getattr(getattr(defaults, section), key)

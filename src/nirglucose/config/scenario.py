@@ -15,6 +15,7 @@ from .environment import ContactConfig, EnvironmentConfig
 from .instrument import HardwareConfig, MeasurementConfig, OpticsConfig
 from .leds import DEFAULT_LEDS, LEDConfig, _merge_legacy_leds, expand_led_part
 from .noise import NOISE_SOURCES, NoiseConfig, NoiseSource
+from .parts import detector_part
 from .subject import GlucoseConfig, PhysiologyConfig
 
 #: ``hardware`` keys of recorded configs that no longer exist: read nowhere when they
@@ -120,8 +121,6 @@ def _apply_detector(data: dict) -> dict:
     LEDs without ``responsivity_a_per_w`` get the detector's band-averaged curve; without
     a detector they are refused.
     """
-    from .parts import detector_part
-
     det = data.get("detector")
     if isinstance(det, str):
         det = detector_part(det)
