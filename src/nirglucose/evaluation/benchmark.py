@@ -89,7 +89,9 @@ import pandas as pd
 from .._version import __version__
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
-from ..models.registry import available_models, get_model_class
+from ..models import tuned_params
+from ..models.registry import available_models, get_model_class, is_pinn
+from ..models.tuning import best_positive_lambda, untuned_params
 from . import executors, tasks
 from .benchmark_aggregate import aggregate, fallback_mgdl
 from .benchmark_result import (
@@ -277,9 +279,6 @@ def _model_params(name: str, preset: str | None) -> dict[str, Any]:
     The one place the benchmark asks for tuned hyper-parameters
     (:func:`nirglucose.models.tuned_params`).
     """
-    from ..models import tuned_params
-    from ..models.tuning import untuned_params
-
     if preset is None:  # user data: networks early-stop on held-out subjects
         return untuned_params(name)
     return dict(tuned_params(name, preset))
@@ -298,9 +297,6 @@ def _variants(
     (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
     paired against ``<name>/no-physics``. Estimator objects (``objects``) are not ablated.
     """
-    from ..models.registry import is_pinn
-    from ..models.tuning import best_positive_lambda
-
     out: dict[str, tuple[str, dict[str, Any]]] = {n: (n, {}) for n in names}
     pairs: list[dict[str, Any]] = []
     if not ablation:

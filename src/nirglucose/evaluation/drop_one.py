@@ -43,6 +43,8 @@ import pandas as pd
 
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
+from ..schema import _ADC_RE
+from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
 from .benchmark_aggregate import scored
 from .benchmark_result import DROP_ONE_COLUMNS, ablation_base
 from .finding import Finding, Value, label
@@ -92,8 +94,6 @@ def drop_one_row(model: str, wavelength_nm: float) -> str:
 def led_wavelengths(dataset: Dataset) -> list[float]:
     """The dataset's LEDs (those with an ``adc_<nm>`` column, as the models read them),
     ascending. [nm]"""
-    from ..schema import _ADC_RE
-
     return sorted(float(m.group(1)) for c in dataset.frame.columns
                   if isinstance(c, str) and (m := _ADC_RE.match(c)))
 
@@ -288,8 +288,6 @@ def led_verdicts(table: pd.DataFrame | None) -> list[dict[str, Any]]:
     above 0; None when no CI does, or when withheld). An LED whose CI includes 0 is
     never named as the one that matters.
     """
-    from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
-
     if table is None or not len(table):
         return []
     out = []
@@ -311,8 +309,6 @@ def drop_one_findings(preset: str, table: pd.DataFrame | None, anchor: str) -> l
     subjects (:func:`led_verdicts`); the sources name
     ``<preset>/drop_one.csv:<model>:<wavelength>:<column>``.
     """
-    from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
-
     verdicts = led_verdicts(table)
     out = []
     for v in (v for v in verdicts if v["row"] is not None):

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..design.search import SEARCH_DETECTORS, rank_designs
 from ..exceptions import ConfigError
 from .scenario import Scenario
 
@@ -92,8 +93,6 @@ def wavelength_scenarios(
         An unknown option, detector or preset; bad numbers; ``leds`` or ``detector``
         in ``base``.
     """
-    from ..design.search import SEARCH_DETECTORS, rank_designs
-
     vary = dict(vary or {})
     bad = [k for k in vary if k not in WAVELENGTHS_VARY_KEYS]
     if bad:

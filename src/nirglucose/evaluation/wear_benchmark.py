@@ -36,6 +36,19 @@ import pandas as pd
 
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
+from ..metrics import (
+    dts_zones,
+    estimated_lag,
+    icgm_criteria,
+    mard_by_range,
+    time_in_range_agreement,
+    trend_agreement,
+    zone_percentages,
+)
+from ..models import make_model
+from ..models.registry import get_model_class
+from ..models.smoothing import tune_smoother
+from .benchmark import _model_params
 from .splits import grouped_kfold
 from .wear_calibration import SCHEDULES, apply_schedule, schedule_table
 
@@ -103,16 +116,6 @@ def _standards(g: pd.DataFrame, schedule: str, a: pd.DataFrame, time: str, n_boo
     is scored on every held-out reading after the subject's first that is not one of
     this schedule's fingersticks; trend agreement and lag on the whole series.
     """
-    from ..metrics import (
-        dts_zones,
-        estimated_lag,
-        icgm_criteria,
-        mard_by_range,
-        time_in_range_agreement,
-        trend_agreement,
-        zone_percentages,
-    )
-
     first = g.groupby("subject_id")[time].transform("min")
     keep = ((g[time] > first) & ~a["is_calibration"]).to_numpy()
     ref = g["glucose_mgdl"].to_numpy(float)[keep]
@@ -147,8 +150,6 @@ def _standards(g: pd.DataFrame, schedule: str, a: pd.DataFrame, time: str, n_boo
 def _fit_predict(name: str, params: dict, data: Dataset, train: np.ndarray,
                  test: np.ndarray, seed: int) -> np.ndarray:
     """Fit on rows ``train`` of ``data`` (a Dataset keeps the ADC resolution), predict ``test``."""
-    from ..models import make_model
-
     model = make_model(name, **params)
     if "random_state" in model.get_params():
         model.set_params(random_state=seed)
@@ -158,8 +159,6 @@ def _fit_predict(name: str, params: dict, data: Dataset, train: np.ndarray,
 
 def _tuned_smoother(name, params, data, train, per_subject, time, seed):
     """The smoother's grid scored on a fifth of the training subjects (module docstring)."""
-    from ..models.smoothing import tune_smoother
-
     frame = data.frame
     subjects = np.unique(frame["subject_id"].to_numpy()[train])
     rng = np.random.default_rng(np.random.SeedSequence([seed, 17]))
@@ -209,9 +208,6 @@ def run_wear_benchmark(
     -------
     WearResult
     """
-    from ..models.registry import get_model_class
-    from .benchmark import _model_params
-
     data = data if isinstance(data, Dataset) else Dataset(data)
     data = data.rows(np.arange(len(data)))  # renumbered from 0
     frame = data.frame

@@ -22,10 +22,12 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..api import simulate_wear
+from ..config import resolve_config
 from ..dataset import atomic_write
 from ..exceptions import ConfigError
 from . import tasks
-from .wear_benchmark import WEAR_MODELS
+from .wear_benchmark import WEAR_MODELS, run_wear_benchmark
 from .wear_calibration import SCHEDULES
 
 __all__ = ["WEAR_DAYS", "WEAR_PRESETS", "run_wear_sweep"]
@@ -36,9 +38,6 @@ WEAR_PRESETS: tuple[str, ...] = ("paper", "wearable")
 
 
 def _task(spec: dict) -> dict:
-    from ..api import simulate_wear
-    from .wear_benchmark import run_wear_benchmark
-
     ds = simulate_wear(spec["preset"], spec["n_subjects"], spec["wear_days"],
                        spec["every_min"], spec["seed"])
     res = run_wear_benchmark(ds, spec["models"], preset=spec["preset"],
@@ -79,8 +78,6 @@ def run_wear_sweep(
     on_task : callable, optional
         ``on_task(spec, cached)`` after each task.
     """
-    from ..config import resolve_config
-
     for p in presets:
         resolve_config(p)  # unknown presets fail before anything runs
     bad = [d for d in wear_days if int(d) != d or d < 1]

@@ -22,9 +22,14 @@ from typing import Any
 
 import pandas as pd
 from matplotlib.figure import Figure
+from pydantic import BaseModel
 
+from ..config import ScenarioConfig
 from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
+from ..plots.designs import plot_design_curve
 from ..plots.fleet import figure_fleet
+from ..plots.style import figure_bytes, model_label, save_figure
+from ..plots.sweep import figure_ablation, figure_data_size, plot_shift_bars, plot_sweep_curve
 
 __all__ = ["SweepFigure", "MARD_LIMIT_PCT", "sweep_figures", "save_sweep_figures",
            "sweep_section"]
@@ -62,10 +67,6 @@ def _key_label(key: str) -> str:
     """Axis label of a config key, with the unit from the field's description."""
     if key in _KEY_LABELS:
         return _KEY_LABELS[key]
-    from pydantic import BaseModel
-
-    from ..config import ScenarioConfig
-
     model: Any = ScenarioConfig
     desc = ""
     for part in key.split("."):
@@ -99,8 +100,6 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
     -------
     list of SweepFigure
     """
-    from ..plots.sweep import figure_ablation, figure_data_size, plot_shift_bars, plot_sweep_curve
-
     res = sweep_dir if isinstance(sweep_dir, SweepResult) else load_sweep(sweep_dir)
     n_seeds = len(res.meta.get("seeds", []))
     out: list[SweepFigure] = []
@@ -147,8 +146,6 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
 
 def _design_figure(designs: pd.DataFrame) -> SweepFigure:
     """The ``wavelengths`` study's curve: best RMSE against LEDs per detector."""
-    from ..plots.designs import plot_design_curve
-
     ax = plot_design_curve(designs)
     return SweepFigure(
         "sweep_designs", "Best achievable glucose RMSE against the number of LEDs, one "
@@ -167,8 +164,6 @@ def save_sweep_figures(
     list of pathlib.Path
         The files written.
     """
-    from ..plots.style import save_figure
-
     d = Path(sweep_dir)
     figs = sweep_figures(d)
     (d / "figures").mkdir(exist_ok=True)
@@ -203,14 +198,10 @@ def _ci(row: pd.Series, stem: str) -> str:
 
 
 def _label(model: str) -> str:
-    from ..plots.style import model_label
-
     return _esc(model_label(model))
 
 
 def _figure_html(f: SweepFigure) -> str:
-    from ..plots.style import figure_bytes
-
     data = base64.b64encode(figure_bytes(f.figure, "png", close=True)).decode("ascii")
     return (f'<figure id="fig-{f.name}"><img src="data:image/png;base64,{data}" '
             f'alt="{_esc(f.caption)}"><figcaption><b>{_esc(f.name)}.</b> '

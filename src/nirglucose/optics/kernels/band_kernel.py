@@ -30,6 +30,7 @@ from numba import njit
 
 from ... import portable as pm
 from ...exceptions import ConfigError
+from ..lut import interpolate as lut_mod
 from ..tissue import SUBCUTIS, BandSpectra
 
 __all__ = ["band_detected_fraction", "band_detected_fraction_lut"]
@@ -303,7 +304,6 @@ def _table_reflectance(node_lut, shape, t_cm, mua_d, mua_s, mua_e, musp_d, musp_
 
     Outside the table the NumPy reference path names the axis and raises ConfigError.
     """
-    from ..lut import interpolate as lut_mod
     from .lut_kernel import node_reflectance
 
     n_led, n_pts, n = shape

@@ -13,6 +13,10 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
+from ...config import NOISE_SOURCES, device_capabilities
+from ...models import make_model, tuned_params
+from ...simulation.measurement import PMF_COLUMNS, PPG_COLUMNS
+
 __all__ = ["NOISE_LAYER", "NEUTRALISED_BY", "REDUCED_BY", "noise_states",
            "ARCHITECTURE_MODELS", "fitted_architectures", "physics_loss_texts",
            "ebl_feature_table",
@@ -66,8 +70,6 @@ def noise_states(config) -> dict[str, tuple[str, str]]:
     the configuration removes it: :data:`NEUTRALISED_BY`) or ``"off"`` (factor 0);
     ``note`` is the factor when not ×1 and the capability's effect.
     """
-    from ...config import NOISE_SOURCES, device_capabilities
-
     caps = set(device_capabilities(config))
     out: dict[str, tuple[str, str]] = {}
     for src in NOISE_SOURCES:
@@ -122,8 +124,6 @@ def fitted_architectures(dataset, preset: str | None,
     When ``fitted`` is given, each fitted model is also stored there by name (the
     report reuses the EBL fit for :func:`ebl_feature_table`).
     """
-    from ...models import make_model, tuned_params
-
     out: dict[str, tuple[list[tuple[str, str]], int]] = {}
     for name in models:
         params = dict(tuned_params(name, preset)) if preset else {}
@@ -187,8 +187,6 @@ def ebl_feature_table(dataset, preset: str | None, *, model: Any = None
         (feature table of :func:`nirglucose.features.feature_table`, LED channels,
         physiological entries).
     """
-    from ...models import make_model, tuned_params
-
     m = model if model is not None else make_model(
         "ebl", **(tuned_params("ebl", preset) if preset else {})).fit(dataset)
     return tuple(m.table_), len(m.schema_.labels), len(m.schema_.physiology)
@@ -288,9 +286,6 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
 
 def _measured_lines(config) -> list[str]:
     """What the device records and knows, from its capabilities (``device.*``)."""
-    from ...config import device_capabilities
-    from ...simulation.measurement import PMF_COLUMNS, PPG_COLUMNS
-
     caps = device_capabilities(config)
     n_phys = len(PMF_COLUMNS) + (len(PPG_COLUMNS) if "ppg_perfusion_spo2" in caps else 0)
     ref = ("monitor photodiode, per reading" if "monitor_photodiode" in caps

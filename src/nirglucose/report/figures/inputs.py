@@ -15,6 +15,9 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
+from ...evaluation.reference import STUDY_TABLE
+from ...metrics import bland_altman, clarke_zones, parkes_zones, zone_percentages
+
 __all__ = [
     "PHYSICS_DEPTH", "REFERENCE_ROWS", "PHYSICS_DEPTH_LABELS", "RADAR_AXES",
     "RADAR_COST_DECADES", "model_order", "scored_column", "first_repeat", "pooled",
@@ -168,8 +171,6 @@ def error_grid_inputs(predictions: pd.DataFrame, models: Sequence[str], *, kind:
     n_clipped : int
         Raw predictions below 0 placed at 0 here.
     """
-    from ...metrics import clarke_zones, parkes_zones, zone_percentages
-
     col = scored_column(predictions)
     grids: dict[str, dict[str, Any]] = {}
     clipped = 0
@@ -245,8 +246,6 @@ def _per_repeat_limits(ref: np.ndarray, pred: np.ndarray, rep: np.ndarray
     repeat and averages (:mod:`nirglucose.evaluation.stats`), so the figure does too.
     Returns (bias, lower, upper, snapshots per repeat, the smallest).
     """
-    from ...metrics import bland_altman
-
     per = [bland_altman(ref[rep == r], pred[rep == r]) for r in np.unique(rep)
            if (rep == r).sum() >= 3]
     if not per:
@@ -443,8 +442,6 @@ def drop_one_models(drop_one: pd.DataFrame, models: Sequence[str]) -> list[str]:
 
 
 def _study_rows() -> dict[str, dict[str, Any]]:
-    from ...evaluation.reference import STUDY_TABLE
-
     return {str(r["model"]): dict(r) for r in STUDY_TABLE}
 
 

@@ -17,6 +17,8 @@ from typing import Any, Final
 
 import pandas as pd
 
+from ...config import ScenarioConfig
+from ...dataset import load_dataset
 from ...exceptions import DataError
 from .inputs import model_order
 
@@ -102,8 +104,6 @@ class Results:
             except json.JSONDecodeError:
                 return None
         if isinstance(cfg, dict):
-            from ...config import ScenarioConfig
-
             try:
                 return ScenarioConfig.model_validate(cfg)
             except ValueError:
@@ -292,8 +292,6 @@ def _load_drop_one_and_dataset(res: Results, d: Path) -> None:
     else:
         res.notes.append("No drop_one.csv: the wavelength-utilisation figure is left out.")
     if (d / "dataset.parquet").is_file():
-        from ...dataset import load_dataset
-
         res.dataset = load_dataset(d / "dataset.parquet")
     else:
         res.notes.append("No dataset.parquet: the data-characteristics figures are left out.")
