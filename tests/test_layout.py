@@ -70,11 +70,6 @@ UNREASONED_FUNCTION_IMPORTS: frozenset[str] = frozenset({
     "api:simulate_wear -> dataset",
     "api:simulate_wear -> resources",
     "api:simulate_wear -> simulation.wear",
-    "design.bound:_pilot -> simulation.simulator",
-    "design.bound:_population_key -> config.scenario",
-    "design.bound:design_terms -> models._inversion_solver",
-    "design.bound:noise_covariance -> simulation.hardware",
-    "design.search:drive_powers_mw -> models._inversion_solver",
 })
 
 #: Imports of another module's private (``_x``) names: a ratchet at this count, which

@@ -2,7 +2,7 @@
 
 A device (its LED set, detector, ADC, noise budget and the signals it measures) turns
 glucose g and the per-reading nuisances theta into y = ln(adc / adc_ref) per LED. Near
-the noise-free forward model m(g, theta) (:class:`~nirglucose.models._inversion_solver.
+the noise-free forward model m(g, theta) (:class:`~nirglucose.simulation.forward_model.
 ForwardModel`, the simulator's optics) the reading is y ~ N(m(g, theta), S) with S the
 hardware noise covariance (:func:`noise_covariance`). Its Fisher information is
 
@@ -16,7 +16,7 @@ Two conditionings, :data:`CONDITIONS`:
     (variance of simulated glucose) and on the nuisances (their simulated spread given
     the device's measured physiological columns, a linear regression on a pilot
     simulation), ``MSE >= [(E F + P)^-1]_gg``, E the average over simulated states, P
-    the prior precisions. Nuisances: :data:`~nirglucose.models._inversion_solver.
+    the prior precisions. Nuisances: :data:`~nirglucose.simulation.forward_model.
     NUISANCES` (blood volume under the probe, saturation, water, fat, melanin, skin
     thickness under the probe, one common LED peak shift, the optical coupling); each
     LED's own junction-temperature shift beyond the common one is taken as known, which
@@ -63,6 +63,7 @@ from typing import Any
 import numpy as np
 
 from ..config import DEFAULT_LEDS, ScenarioConfig, resolve_config
+from ..config.scenario import DETECTOR_KEYS
 from ..constants import (
     BOLTZMANN_J_PER_K,
     ELEMENTARY_CHARGE_C,
@@ -70,6 +71,9 @@ from ..constants import (
     ZERO_CELSIUS_K,
 )
 from ..exceptions import ConfigError, check_positive_int, unknown_name
+from ..simulation.forward_model import ForwardModel
+from ..simulation.hardware import dark_current_a, johnson_resistance_ohm
+from ..simulation.simulator import simulate_frame
 
 __all__ = ["CONDITIONS", "DesignBound", "DesignTerms", "design_bound", "design_terms",
            "noise_covariance"]
@@ -236,8 +240,6 @@ def _resolve(config, leds, detector, overrides) -> ScenarioConfig:
 
 def _population_key(cfg: ScenarioConfig) -> str:
     """The config less what a design changes (LEDs, detector): the pilot's cache key."""
-    from ..config.scenario import DETECTOR_KEYS
-
     data = cfg.model_dump(mode="json")
     data["leds"] = {"emitters": [e.model_dump(mode="json") for e in DEFAULT_LEDS],
                     "band_points": data["leds"]["band_points"]}
@@ -251,8 +253,6 @@ def _population_key(cfg: ScenarioConfig) -> str:
 @lru_cache(maxsize=16)
 def _pilot(population_json: str) -> _Pilot:
     """Nuisance states, temperatures and the nuisance prior from a pilot simulation."""
-    from ..simulation.simulator import simulate_frame
-
     cfg = ScenarioConfig.model_validate(json.loads(population_json))
     f = simulate_frame(cfg, PILOT_SUBJECTS, PILOT_PER_SUBJECT, PILOT_SEED)
     shift = f[[c for c in f.columns if c.startswith("true_led_shift_nm_")]].to_numpy(float)
@@ -321,8 +321,6 @@ def noise_covariance(cfg: ScenarioConfig, log_ratio: np.ndarray, board_c) -> tup
     and a^2 E[dT_ambient^2] + b^2 var(dt) / 10^6 common (the coefficients of
     :func:`nirglucose.simulation.hardware.led_power_w`).
     """
-    from ..simulation.hardware import dark_current_a, johnson_resistance_ohm
-
     hw = cfg.hardware
     full = 2**hw.adc_bits - 1
     p0_w = np.asarray(cfg.leds.power_mw)[None, :] * 1e-3
@@ -370,8 +368,6 @@ def design_terms(config="paper", leds=None, detector=None, *, overrides=None,
 
     Parameters are as :func:`design_bound`'s.
     """
-    from ..models._inversion_solver import ForwardModel
-
     n_states = check_positive_int("n_states", n_states)
     cfg = _resolve(config, leds, detector, overrides)
     pilot = _pilot(_population_key(cfg))

@@ -55,6 +55,7 @@ from ..config.detector import responsivity_curve
 from ..config.parts import detector_part
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..exceptions import ConfigError, check_positive_int, unknown_name
+from ..simulation.forward_model import ForwardModel
 from .bound import CONDITIONS, DesignTerms, _pilot, _population_key, design_terms
 
 __all__ = [
@@ -167,8 +168,6 @@ def drive_powers_mw(
     list of float
         Power per LED. [mW]
     """
-    from ..models._inversion_solver import ForwardModel
-
     if not 0 < target_code_fraction <= 1:
         raise ConfigError(f"target_code_fraction must be in (0, 1], got {target_code_fraction}")
     cap = MAX_POWER_MW if max_power_mw is None else float(max_power_mw)

@@ -1,9 +1,11 @@
-"""The forward model seen by the physics inversion, and its batched MAP solver.
+"""The physics inversion's batched MAP solver over the simulator's forward model.
 
-:class:`ForwardModel` evaluates the noise-free log ratio ln(fraction / T_ref) of each
-reading for any glucose and any tissue and probe state (the simulator's optics through
-its band integral, :mod:`nirglucose.optics.forward`), with the forward model chosen by
-name. :func:`map_estimate` minimises, for all rows at once,
+The forward model, :class:`~nirglucose.simulation.forward_model.ForwardModel` (the
+noise-free log ratio ln(fraction / T_ref) of each reading for any glucose and any tissue
+and probe state), lives beside the simulator (:mod:`nirglucose.simulation.forward_model`)
+and is re-exported here with its :data:`NUISANCES` and :data:`PHYSICAL_BOUNDS`.
+
+:func:`map_estimate` minimises, for all rows at once,
 
     || R (y - a - b * m(theta(z))) ||^2 + || z ||^2
 
@@ -24,92 +26,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import ScenarioConfig
-from ..constants import MGDL_PER_MMOLL_GLUCOSE
-from ..optics import tissue
-from ..optics.forward import FORWARD_MODELS
-from ..simulation.simulator import _band_detected_fraction, _tables
+from ..simulation.forward_model import NUISANCES, PHYSICAL_BOUNDS, ForwardModel
 
 __all__ = [
     "NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel", "map_estimate", "posterior_variance",
 ]
 
-#: The unknowns besides glucose, in column order: ln of the detected dermal blood
-#: fraction, saturation, dermal water fraction, subcutis fat fraction, epidermal
-#: melanosome fraction, skin thickness under the probe [mm], the LEDs' common thermal
-#: peak shift [nm], ln of the optical coupling.
-NUISANCES = (
-    "log_blood_fraction",
-    "saturation",
-    "water_fraction",
-    "subcutis_fat_fraction",
-    "melanin_fraction",
-    "skin_thickness_mm",
-    "led_shift_nm",
-    "log_coupling",
-)
-#: Where the forward model is evaluated, per unknown: volume fractions inside (0, 1),
-#: a thickness inside the configured skin range's order of magnitude (0.1-10 mm), LED
-#: shifts within +/- 30 nm (a 100 degC swing at the datasheets' 0.3 nm/degC). The
-#: estimate itself is never clipped; only the model's argument is.
-PHYSICAL_BOUNDS = {
-    "log_blood_fraction": (np.log(1e-4), np.log(0.5)),
-    "saturation": (0.01, 0.999),
-    "water_fraction": (0.05, 0.95),
-    "subcutis_fat_fraction": (0.05, 0.95),
-    "melanin_fraction": (0.0, 0.6),
-    "skin_thickness_mm": (0.1, 10.0),
-    "led_shift_nm": (-30.0, 30.0),
-    "log_coupling": (-2.0, 2.0),
-}
 #: Forward-difference step of the Jacobian, in prior standard deviations. [-]
 _STEP_SD = 1e-4
 #: Levenberg-Marquardt damping: start, growth on a refused step, shrink on an accepted
 #: one (Marquardt 1963's factor 10).
 _DAMP_START, _DAMP_UP, _DAMP_DOWN = 1e-3, 10.0, 0.1
-
-
-class ForwardModel:
-    """ln(fraction / T_ref) per LED for given glucose and nuisance state.
-
-    Parameters
-    ----------
-    cfg : ScenarioConfig
-        The device and optics (LED bands, geometry, tables, glucose's optical signal).
-    model : str
-        The forward model assumed, one of :data:`nirglucose.optics.forward.FORWARD_MODELS`
-        (may differ from the one that made the data).
-    """
-
-    def __init__(self, cfg: ScenarioConfig, model: str):
-        if model not in FORWARD_MODELS:
-            raise ValueError(f"unknown forward model {model!r}")
-        optics = cfg.optics.model_copy(update={"model": model})
-        self.cfg = cfg.model_copy(update={"optics": optics})
-        self.tables = _tables(self.cfg)
-
-    def log_ratio(self, glucose_mgdl: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """(n, n_led) noise-free ln(adc / adc_ref) at glucose [mg/dL] and ``theta``
-        ((n, len(NUISANCES)), columns as :data:`NUISANCES`)."""
-        cfg = self.cfg
-        th = _clip_physical(theta)
-        state = tissue.TissueState(
-            np.exp(th[:, 0]),
-            th[:, 1],
-            th[:, 2],
-            th[:, 3],
-            cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
-        )
-        n_led = len(cfg.leds.wavelengths_nm)
-        shift = np.repeat(th[:, 6:7], n_led, axis=1)
-        frac = _band_detected_fraction(cfg, self.tables, state, th[:, 4], th[:, 5], shift)
-        return np.log(frac / cfg.hardware.reference_transmission) + th[:, 7:8]
-
-
-def _clip_physical(theta: np.ndarray) -> np.ndarray:
-    lo = np.array([PHYSICAL_BOUNDS[k][0] for k in NUISANCES])
-    hi = np.array([PHYSICAL_BOUNDS[k][1] for k in NUISANCES])
-    return np.clip(theta, lo, hi)
 
 
 def _residuals(fm, y, calib, root_w, mean, sd, z):

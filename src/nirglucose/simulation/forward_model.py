@@ -1,0 +1,105 @@
+"""The simulator's noise-free forward model, as an estimator or a design bound sees it.
+
+:class:`ForwardModel` evaluates the noise-free log ratio ln(fraction / T_ref) of each
+reading for any glucose and any tissue and probe state: the simulator's optics through
+its band integral (:func:`nirglucose.simulation.simulator.simulate_block`'s optics layer,
+:mod:`nirglucose.optics.forward`), with the forward model chosen by name. The physics
+inversion estimator (:mod:`nirglucose.models.inversion`) fits it to readings; the
+design bound (:mod:`nirglucose.design.bound`) differentiates it. Neither needs the
+models package to evaluate it, so it lives beside the simulator whose tables it reads.
+
+The optics and their citations are the simulator's: tissue mixing
+(:mod:`nirglucose.optics.tissue`), the forward models (:mod:`nirglucose.optics.forward`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from nirglucose.config import resolve_config
+>>> fm = ForwardModel(resolve_config("paper"), "beer-lambert")
+>>> theta = np.array([[np.log(0.02), 0.7, 0.6, 0.5, 0.05, 1.5, 0.0, 0.0]])
+>>> fm.log_ratio(np.array([100.0]), theta).shape
+(1, 4)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import ScenarioConfig
+from ..constants import MGDL_PER_MMOLL_GLUCOSE
+from ..optics import tissue
+from ..optics.forward import FORWARD_MODELS
+from .simulator import _band_detected_fraction, _tables
+
+__all__ = ["NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel"]
+
+#: The unknowns besides glucose, in column order: ln of the detected dermal blood
+#: fraction, saturation, dermal water fraction, subcutis fat fraction, epidermal
+#: melanosome fraction, skin thickness under the probe [mm], the LEDs' common thermal
+#: peak shift [nm], ln of the optical coupling.
+NUISANCES = (
+    "log_blood_fraction",
+    "saturation",
+    "water_fraction",
+    "subcutis_fat_fraction",
+    "melanin_fraction",
+    "skin_thickness_mm",
+    "led_shift_nm",
+    "log_coupling",
+)
+#: Where the forward model is evaluated, per unknown: volume fractions inside (0, 1),
+#: a thickness inside the configured skin range's order of magnitude (0.1-10 mm), LED
+#: shifts within +/- 30 nm (a 100 degC swing at the datasheets' 0.3 nm/degC). The
+#: estimate itself is never clipped; only the model's argument is.
+PHYSICAL_BOUNDS = {
+    "log_blood_fraction": (np.log(1e-4), np.log(0.5)),
+    "saturation": (0.01, 0.999),
+    "water_fraction": (0.05, 0.95),
+    "subcutis_fat_fraction": (0.05, 0.95),
+    "melanin_fraction": (0.0, 0.6),
+    "skin_thickness_mm": (0.1, 10.0),
+    "led_shift_nm": (-30.0, 30.0),
+    "log_coupling": (-2.0, 2.0),
+}
+
+class ForwardModel:
+    """ln(fraction / T_ref) per LED for given glucose and nuisance state.
+
+    Parameters
+    ----------
+    cfg : ScenarioConfig
+        The device and optics (LED bands, geometry, tables, glucose's optical signal).
+    model : str
+        The forward model assumed, one of :data:`nirglucose.optics.forward.FORWARD_MODELS`
+        (may differ from the one that made the data).
+    """
+
+    def __init__(self, cfg: ScenarioConfig, model: str):
+        if model not in FORWARD_MODELS:
+            raise ValueError(f"unknown forward model {model!r}")
+        optics = cfg.optics.model_copy(update={"model": model})
+        self.cfg = cfg.model_copy(update={"optics": optics})
+        self.tables = _tables(self.cfg)
+
+    def log_ratio(self, glucose_mgdl: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """(n, n_led) noise-free ln(adc / adc_ref) at glucose [mg/dL] and ``theta``
+        ((n, len(NUISANCES)), columns as :data:`NUISANCES`)."""
+        cfg = self.cfg
+        th = _clip_physical(theta)
+        state = tissue.TissueState(
+            np.exp(th[:, 0]),
+            th[:, 1],
+            th[:, 2],
+            th[:, 3],
+            cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
+        )
+        n_led = len(cfg.leds.wavelengths_nm)
+        shift = np.repeat(th[:, 6:7], n_led, axis=1)
+        frac = _band_detected_fraction(cfg, self.tables, state, th[:, 4], th[:, 5], shift)
+        return np.log(frac / cfg.hardware.reference_transmission) + th[:, 7:8]
+
+
+def _clip_physical(theta: np.ndarray) -> np.ndarray:
+    lo = np.array([PHYSICAL_BOUNDS[k][0] for k in NUISANCES])
+    hi = np.array([PHYSICAL_BOUNDS[k][1] for k in NUISANCES])
+    return np.clip(theta, lo, hi)
