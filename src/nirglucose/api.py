@@ -5,8 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 from .config import ScenarioConfig, resolve_config
-from .dataset import Dataset
+from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, check_positive_int
+from .resources import check_simulation_size
 
 __all__ = ["simulate", "simulate_wear"]
 
@@ -56,7 +57,8 @@ def simulate(
     >>> len(ds), ds.frame["adc_850"].dtype.kind
     (8, 'i')
     """
-    from .resources import check_simulation_size
+    # deferred: the simulator loads scipy.special (~0.2 s), which ``import nirglucose``
+    # skips until the first simulation (tests/test_layout.py, SLOW_MODULES)
     from .simulation.simulator import simulate_frame
 
     if wear_days is not None or every_min is not None:
@@ -142,7 +144,8 @@ def simulate_wear(
     >>> len(ds), list(ds.frame.columns[2:5])
     (24, ['time_min', 'wear_day', 'seating_id'])
     """
-    from .resources import check_simulation_size
+    # deferred: the wear simulator loads scipy.signal (~0.8 s), which ``import
+    # nirglucose`` skips until the first worn-device simulation (SLOW_MODULES)
     from .simulation import wear
 
     check_positive_int("n_subjects", n_subjects)
@@ -152,8 +155,6 @@ def simulate_wear(
     cfg = _resolve(preset, overrides, dotted)
     meta = {"wear": wear.wear_metadata(wear_days, every_min, None)}
     if out is not None:
-        from .dataset import load_dataset
-
         wear.write_wear_partitioned(cfg, out, int(n_subjects), wear_days, every_min, seed,
                                     n_jobs=n_jobs)
         return load_dataset(out)
