@@ -348,6 +348,17 @@ def test_the_function_import_census_sees_lazy_heavy_imports():
     assert "torch" not in heavy_libraries()["nirglucose"]
 
 
+def test_the_slow_modules_are_deferred_by_import_nirglucose():
+    # the stated reasons hold: ``import nirglucose`` loads none of SLOW_MODULES (nor the
+    # scipy parts that make the simulators slow), in a fresh interpreter
+    slow = [f"{_PACKAGE}.{m}" for m in SLOW_MODULES] + ["scipy.special", "scipy.signal"]
+    run = subprocess.run([sys.executable, "-c", "import sys, nirglucose; print(sorted(m for m "
+                          f"in {slow!r} if m in sys.modules))"],
+                         capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.strip() == "[]"
+
+
 def test_private_names_imported_across_modules_do_not_grow():
     found = underscore_imports()
     assert len(found) <= MAX_UNDERSCORE_IMPORTS, (
