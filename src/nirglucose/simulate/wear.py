@@ -46,7 +46,7 @@ from ..config import ScenarioConfig
 from ..constants import MINUTES_PER_DAY
 from ..dataset import _META_KEY, MANIFEST, atomic_write
 from ..exceptions import ConfigError
-from . import contact, diurnal, environment, hardware, measurement, physiology
+from . import contact, diurnal, environment, hardware, measurement, physiology, therapy
 from . import meal_scenario as meals
 from . import uva_padova as uva
 from ._random import BLOCK_SUBJECTS, RandomStreams, SubjectStreams
@@ -176,8 +176,10 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
     """Plasma glucose every minute of the wear and the meals behind it.
 
     Each subject's meals (stream ``wear.meals``) and, for type 1, virtual patient
-    (stream ``wear.patient``, uniform over the adults) and carb-count errors (stream
-    ``wear.carb_count``) come from its own streams;
+    (stream ``wear.patient``, uniform over the adults) and the therapy's departures from
+    the ideal (:mod:`.therapy`: carb-count errors, stream ``wear.carb_count``; missed
+    boluses, ``wear.missed_bolus``; the day's insulin sensitivity,
+    ``wear.insulin_sensitivity``) come from its own streams;
     subjects of one model kind are integrated together, element-wise
     (:func:`.uva_padova.integrate`).
 
@@ -185,37 +187,47 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
     -------
     dict
         ``blood_mgdl`` (n, wear_days * 1440) [mg/dL]; ``meal_min`` list of (meals,)
-        int arrays [min]; ``patient`` (n,) type 1 patient name or "".
+        int arrays [min]; ``patient`` (n,) type 1 patient name or "";
+        ``bolus_missed`` list of (meals,) bool arrays (all False but for type 1);
+        ``sensitivity`` (n, wear_days) the day's insulin-sensitivity factor (1 but for
+        type 1). [-]
     """
     names = list(cfg.glucose.status_probs)
     n, n_min = len(subject_ids), wear_days * MINUTES_PER_DAY
     patient_names, pcols = uva.type1_patients()
     meal_grid, meal_min, patient = np.zeros((n, n_min)), [], np.full(n, "", dtype=object)
-    bolus = np.zeros((n, n_min))
+    bolus, missed, si_day = np.zeros((n, n_min)), [], np.ones((n, wear_days))
     for i, sid in enumerate(subject_ids):
         streams = SubjectStreams(seed, int(sid))
         minute, carbs = meals.draw_meals(streams("wear.meals"), wear_days)
         meal_min.append(minute)
         meal_grid[i] = meals.meal_grid_mg(minute, 1000.0 * carbs, n_min)
         k = int(streams("wear.patient").integers(len(patient_names)))
+        missed.append(np.zeros(minute.size, dtype=bool))
         if names[status_codes[i]] == "type1":
             patient[i] = patient_names[k]
             counted = meals.estimated_carbs_g(streams("wear.carb_count"), carbs)
-            units = meals.bolus_units(counted, pcols["carb_ratio_g_per_u"][k])
+            missed[i] = therapy.draw_missed_boluses(streams("wear.missed_bolus"), wear_days)
+            units = np.where(missed[i], 0.0,
+                             meals.bolus_units(counted, pcols["carb_ratio_g_per_u"][k]))
             bolus[i] = meals.meal_grid_mg(
                 minute, units * meals.INSULIN_PMOL_PER_UNIT / pcols["BW"][k], n_min)
+            si_day[i] = therapy.draw_daily_sensitivity(streams("wear.insulin_sensitivity"),
+                                                       wear_days)
     blood = np.empty((n, n_min))
     is_t1 = np.array([names[c] == "type1" for c in status_codes], dtype=bool)
     if is_t1.any():
         rows = [patient_names.index(p) for p in patient[is_t1]]
         p = {k: v[rows] for k, v in pcols.items()}
+        si = np.stack([therapy.sensitivity_per_minute(f, n_min) for f in si_day[is_t1]])
         blood[is_t1] = uva.integrate("type1", p, uva.basal_type1(p), meal_grid[is_t1],
-                                     bolus[is_t1])
+                                     bolus[is_t1], sensitivity=si)
     if (~is_t1).any():
         sets = [uva.parameters_2007(names[c]) for c in status_codes[~is_t1]]
         p, x0 = uva.basal_2007({k: np.array([s[k] for s in sets]) for k in sets[0]})
         blood[~is_t1] = uva.integrate("meal_2007", p, x0, meal_grid[~is_t1])
-    return {"blood_mgdl": blood, "meal_min": meal_min, "patient": patient}
+    return {"blood_mgdl": blood, "meal_min": meal_min, "patient": patient,
+            "bolus_missed": missed, "sensitivity": si_day}
 
 
 def _wear_environment(cfg: ScenarioConfig, streams, times_min, options: WearOptions) -> dict:
