@@ -10,7 +10,7 @@ so an interrupted sweep resumes. The pending tasks run where the other sweeps' r
 pool of local processes (``jobs=N``) or on a Dask cluster (``scheduler``); each task
 simulates its subjects in one process (``n_jobs=1``), seeded from its own specification,
 so every backend gives the same rows. A task's memory is that of one worn run
-(``n_subjects`` x days x 96 readings at 15 min, about 2,000 rows a subject-week), and
+(``n_subjects`` x days x 96 readings at 15 min, 672 rows a subject-week), and
 its result, a few dozen table rows, travels back to this process, which alone writes
 the cache.
 
@@ -30,11 +30,12 @@ import pandas as pd
 from scipy import stats
 
 from .._version import __version__
+from ..api import simulate_wear
 from ..dataset import atomic_write
 from ..exceptions import ConfigError, DataError
 from . import tasks
 from .executors import check_scheduler, resolve_backend, run_unordered
-from .wear_benchmark import WEAR_MODELS
+from .wear_benchmark import WEAR_MODELS, run_wear_benchmark
 from .wear_calibration import SCHEDULES
 
 __all__ = ["WEAR_DAYS", "WEAR_PRESETS", "run_wear_sweep", "run_wear_task"]
@@ -48,11 +49,9 @@ def run_wear_task(spec: dict) -> dict:
     """One task of the study: simulate the worn run of ``spec`` and score its schedules.
 
     Module-level and seeded only from ``spec`` (a Dask or process-pool worker runs it).
-    Returns ``{"rows": {column: values}}``, the schedule table's columns.
+    Returns ``{"rows": {column: values}, "version": ...}``: the schedule table's columns
+    and the package version that computed them.
     """
-    from ..api import simulate_wear
-    from .wear_benchmark import run_wear_benchmark
-
     ds = simulate_wear(spec["preset"], spec["n_subjects"], spec["wear_days"],
                        spec["every_min"], spec["seed"])
     res = run_wear_benchmark(ds, spec["models"], preset=spec["preset"],
