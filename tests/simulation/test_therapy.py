@@ -11,10 +11,10 @@ import pytest
 from scipy.integrate import quad
 
 import nirglucose as ng
-from nirglucose.simulate import therapy, wear
-from nirglucose.simulate import uva_padova as uva
-from nirglucose.simulate._random import SubjectStreams
-from nirglucose.simulate.meal_scenario import estimated_carbs_g
+from nirglucose.simulation import therapy, wear
+from nirglucose.simulation import uva_padova as uva
+from nirglucose.simulation._random import SubjectStreams
+from nirglucose.simulation.meal_scenario import estimated_carbs_g
 
 DATA = Path(ng.__file__).parent / "data" / "uva_padova"
 #: The published values, as the sources state them (SOURCES.md): Brazeau et al. 2013
