@@ -112,6 +112,44 @@ def replay(label: str) -> dict:
     }
 
 
+def _range_metrics(g: np.ndarray) -> dict:
+    """Time in ranges, CV and extremes of (subjects, minutes) plasma glucose."""
+    tir = ((g >= 70) & (g <= 180)).mean(axis=1)
+    return {
+        "tir_70_180_pct": round(100 * float(tir.mean()), 1),
+        "tir_subject_range_pct": [round(100 * float(tir.min()), 1),
+                                  round(100 * float(tir.max()), 1)],
+        "within_70_140_pct": round(100 * float(((g >= 70) & (g <= 140)).mean()), 1),
+        "tbr_below_70_pct": round(100 * float((g < 70).mean()), 2),
+        "tbr_below_54_pct": round(100 * float((g < 54).mean()), 2),
+        "tar_above_180_pct": round(100 * float((g > 180).mean()), 1),
+        "cv_pct": round(100 * float((g.std(axis=1) / g.mean(axis=1)).mean()), 1),
+        "mean_mgdl": round(float(g.mean()), 1),
+        "min_mgdl": round(float(g.min()), 1),
+        "max_mgdl": round(float(g.max()), 1),
+    }
+
+
+def type1_ablation() -> dict:
+    """Type 1 time in ranges with no therapy error, and with each alone (the same
+    subjects and meals: each error's stream is its own)."""
+    import nirglucose as ng
+    from nirglucose.simulation import therapy, wear
+
+    cfg = ng.resolve_config("paper", {"glucose.status_probs": {
+        s: float(s == "type1") for s in ("normal", "prediabetes", "type1", "type2")}})
+    codes = np.full(N_PER_STATUS, list(cfg.glucose.status_probs).index("type1"))
+    runs = {"none": (), **{f"only_{e}": (e,) for e in therapy.THERAPY_ERRORS}}
+    out = {}
+    for label, errors in runs.items():
+        g = wear.glucose_trajectories(cfg, 0, np.arange(N_PER_STATUS), codes, DAYS,
+                                      therapy_errors=errors)["blood_mgdl"]
+        m = _range_metrics(g)
+        out[label] = {k: m[k] for k in ("tir_70_180_pct", "tbr_below_70_pct",
+                                        "tar_above_180_pct", "cv_pct")}
+    return out
+
+
 def time_in_range() -> dict:
     import nirglucose as ng
     from nirglucose.simulation import wear
@@ -122,20 +160,7 @@ def time_in_range() -> dict:
             s: float(s == status) for s in ("normal", "prediabetes", "type1", "type2")}})
         codes = np.full(N_PER_STATUS, list(cfg.glucose.status_probs).index(status))
         g = wear.glucose_trajectories(cfg, 0, np.arange(N_PER_STATUS), codes, DAYS)["blood_mgdl"]
-        tir = ((g >= 70) & (g <= 180)).mean(axis=1)
-        out[status] = {
-            "tir_70_180_pct": round(100 * float(tir.mean()), 1),
-            "tir_subject_range_pct": [round(100 * float(tir.min()), 1),
-                                      round(100 * float(tir.max()), 1)],
-            "within_70_140_pct": round(100 * float(((g >= 70) & (g <= 140)).mean()), 1),
-            "tbr_below_70_pct": round(100 * float((g < 70).mean()), 2),
-            "tbr_below_54_pct": round(100 * float((g < 54).mean()), 2),
-            "tar_above_180_pct": round(100 * float((g > 180).mean()), 1),
-            "cv_pct": round(100 * float((g.std(axis=1) / g.mean(axis=1)).mean()), 1),
-            "mean_mgdl": round(float(g.mean()), 1),
-            "min_mgdl": round(float(g.min()), 1),
-            "max_mgdl": round(float(g.max()), 1),
-        }
+        out[status] = _range_metrics(g)
     out["published"] = {
         "consensus_targets_type1_type2": "TIR > 70 %, TBR < 4 % (Battelino et al. 2019)",
         "healthy_adults_cgm": "about 96 % within 70-140 mg/dL, about 1 % below 70 "
@@ -158,5 +183,5 @@ def time_in_range() -> dict:
 if __name__ == "__main__":
     result = {"benchmark": "wear_trajectories", "subjects_per_status": N_PER_STATUS,
               "days": DAYS, "replay": {k: replay(k) for k in REPLAYS},
-              "time_in_range": time_in_range()}
+              "time_in_range": time_in_range(), "type1_therapy_ablation": type1_ablation()}
     print(json.dumps(result))

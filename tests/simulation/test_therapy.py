@@ -108,3 +108,29 @@ def test_more_insulin_sensitivity_lowers_glucose_and_ones_change_nothing():
     more = uva.integrate("type1", p, x0, meals, sensitivity=np.full((2, 600), 1.2))
     less = uva.integrate("type1", p, x0, meals, sensitivity=np.full((2, 600), 0.8))
     assert (more[:, 300:] < base[:, 300:]).all() and (less[:, 300:] > base[:, 300:]).all()
+
+
+def test_each_error_can_be_left_out_without_moving_the_others():
+    cfg = _type1_cfg()
+    codes = np.full(3, list(cfg.glucose.status_probs).index("type1"))
+    ids = np.arange(3)
+    full = wear.glucose_trajectories(cfg, 4, ids, codes, 2)
+    ideal = wear.glucose_trajectories(cfg, 4, ids, codes, 2, therapy_errors=())
+    assert not any(m.any() for m in ideal["bolus_missed"])
+    assert (ideal["sensitivity"] == 1.0).all()
+    only = wear.glucose_trajectories(cfg, 4, ids, codes, 2, therapy_errors=["missed_bolus"])
+    for a, b in zip(only["bolus_missed"], full["bolus_missed"], strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert (only["sensitivity"] == 1.0).all()
+    with pytest.raises(ng.ConfigError, match="unknown therapy error.*valid: carb_count"):
+        wear.glucose_trajectories(cfg, 4, ids, codes, 1, therapy_errors=["snacks"])
+
+
+def test_the_errors_widen_the_glucose_excursions():
+    cfg = _type1_cfg()
+    codes = np.full(6, list(cfg.glucose.status_probs).index("type1"))
+    out = lambda g: float(((g < 70) | (g > 180)).mean())  # noqa: E731
+    full = wear.glucose_trajectories(cfg, 0, np.arange(6), codes, 3)["blood_mgdl"]
+    ideal = wear.glucose_trajectories(cfg, 0, np.arange(6), codes, 3,
+                                      therapy_errors=())["blood_mgdl"]
+    assert out(full) > out(ideal) and full.std() > ideal.std()

@@ -64,9 +64,12 @@ from scipy.special import ndtr
 
 from .. import portable as pm
 from ..constants import MINUTES_PER_DAY
+from ..exceptions import ConfigError
 
 __all__ = [
     "MEALS_PER_DAY",
+    "THERAPY_ERRORS",
+    "check_therapy_errors",
     "therapy_table",
     "carb_count_log_sd",
     "daily_sensitivity_log_sd",
@@ -79,6 +82,28 @@ __all__ = [
 #: Meals of a day the missed-bolus probabilities are given for: breakfast, lunch,
 #: dinner (the order of :data:`.meal_scenario.DAILY_MEALS`).
 MEALS_PER_DAY = ("breakfast", "lunch", "dinner")
+#: The departures from ideal therapy, by name (each can be left out, to ablate it).
+THERAPY_ERRORS = ("carb_count", "missed_bolus", "sensitivity")
+
+
+def check_therapy_errors(errors) -> frozenset[str]:
+    """The set of therapy errors named, checked against :data:`THERAPY_ERRORS`.
+
+    Examples
+    --------
+    >>> sorted(check_therapy_errors(["sensitivity"]))
+    ['sensitivity']
+    >>> check_therapy_errors(["snacks"])
+    Traceback (most recent call last):
+    ...
+    nirglucose.exceptions.ConfigError: unknown therapy error(s) ['snacks']; valid: carb_count, ...
+    """
+    chosen = [str(e) for e in errors]
+    unknown = [e for e in chosen if e not in THERAPY_ERRORS]
+    if unknown:
+        raise ConfigError(f"unknown therapy error(s) {unknown}; valid: "
+                          f"{', '.join(THERAPY_ERRORS)}")
+    return frozenset(chosen)
 
 
 @cache

@@ -172,7 +172,8 @@ def subject_profiles(cfg: ScenarioConfig, seed: int, first: int, n: int, n_subje
 
 
 def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_codes,
-                         wear_days: int) -> dict:
+                         wear_days: int,
+                         therapy_errors=therapy.THERAPY_ERRORS) -> dict:
     """Plasma glucose every minute of the wear and the meals behind it.
 
     Each subject's meals (stream ``wear.meals``) and, for type 1, virtual patient
@@ -181,7 +182,9 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
     boluses, ``wear.missed_bolus``; the day's insulin sensitivity,
     ``wear.insulin_sensitivity``) come from its own streams;
     subjects of one model kind are integrated together, element-wise
-    (:func:`.uva_padova.integrate`).
+    (:func:`.uva_padova.integrate`). ``therapy_errors`` names the departures drawn
+    (default all of :data:`.therapy.THERAPY_ERRORS`; leave one out to ablate it: its
+    stream is then not read, and the others' draws do not move).
 
     Returns
     -------
@@ -193,6 +196,7 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
         type 1). [-]
     """
     names = list(cfg.glucose.status_probs)
+    errors = therapy.check_therapy_errors(therapy_errors)
     n, n_min = len(subject_ids), wear_days * MINUTES_PER_DAY
     patient_names, pcols = uva.type1_patients()
     meal_grid, meal_min, patient = np.zeros((n, n_min)), [], np.full(n, "", dtype=object)
@@ -206,14 +210,10 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
         missed.append(np.zeros(minute.size, dtype=bool))
         if names[status_codes[i]] == "type1":
             patient[i] = patient_names[k]
-            counted = meals.estimated_carbs_g(streams("wear.carb_count"), carbs)
-            missed[i] = therapy.draw_missed_boluses(streams("wear.missed_bolus"), wear_days)
-            units = np.where(missed[i], 0.0,
-                             meals.bolus_units(counted, pcols["carb_ratio_g_per_u"][k]))
+            units, missed[i], si_day[i] = _type1_therapy(
+                streams, carbs, {c: v[k] for c, v in pcols.items()}, wear_days, errors)
             bolus[i] = meals.meal_grid_mg(
                 minute, units * meals.INSULIN_PMOL_PER_UNIT / pcols["BW"][k], n_min)
-            si_day[i] = therapy.draw_daily_sensitivity(streams("wear.insulin_sensitivity"),
-                                                       wear_days)
     blood = np.empty((n, n_min))
     is_t1 = np.array([names[c] == "type1" for c in status_codes], dtype=bool)
     if is_t1.any():
@@ -228,6 +228,19 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
         blood[~is_t1] = uva.integrate("meal_2007", p, x0, meal_grid[~is_t1])
     return {"blood_mgdl": blood, "meal_min": meal_min, "patient": patient,
             "bolus_missed": missed, "sensitivity": si_day}
+
+
+def _type1_therapy(streams, carbs_g, patient: dict, wear_days: int, errors) -> tuple:
+    """One type 1 subject's meal boluses [U], which were missed, and each day's insulin
+    sensitivity factor, with the therapy errors named in ``errors`` (:mod:`.therapy`)."""
+    counted = (meals.estimated_carbs_g(streams("wear.carb_count"), carbs_g)
+               if "carb_count" in errors else carbs_g)
+    missed = (therapy.draw_missed_boluses(streams("wear.missed_bolus"), wear_days)
+              if "missed_bolus" in errors else np.zeros(len(carbs_g), dtype=bool))
+    si_day = (therapy.draw_daily_sensitivity(streams("wear.insulin_sensitivity"), wear_days)
+              if "sensitivity" in errors else np.ones(wear_days))
+    units = np.where(missed, 0.0, meals.bolus_units(counted, patient["carb_ratio_g_per_u"]))
+    return units, missed, si_day
 
 
 def _wear_environment(cfg: ScenarioConfig, streams, times_min, options: WearOptions) -> dict:
