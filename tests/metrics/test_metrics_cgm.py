@@ -274,8 +274,8 @@ def test_trend_agreement_hand_computed_matrix() -> None:
     assert r.n_pairs == 3
     assert r.agreement_pct == pytest.approx(200.0 / 3)
     m = r.matrix
-    assert m.index.tolist() == ["<-2", "-2..-1", "-1..1", "1..2", ">=2"]
-    assert m.loc[">=2", ">=2"] == 1 and m.loc["-1..1", "1..2"] == 1
+    assert m.index.tolist() == ["<-2", "-2..-1", "-1..1", "1..2", ">2"]
+    assert m.loc[">2", ">2"] == 1 and m.loc["-1..1", "1..2"] == 1
     assert m.loc["-2..-1", "-2..-1"] == 1 and int(m.to_numpy().sum()) == 3
 
 

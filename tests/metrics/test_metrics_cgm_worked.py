@@ -34,7 +34,13 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from nirglucose.metrics import ICGM_CRITERIA, agreement_rates, icgm_criteria
+from nirglucose.metrics import (
+    ICGM_CRITERIA,
+    agreement_rates,
+    icgm_criteria,
+    rate_categories,
+    trend_agreement,
+)
 from nirglucose.metrics.cgm import _prepare_agreement, _rate_table
 
 DATA = Path(__file__).parent / "data"
@@ -144,3 +150,48 @@ def test_icgm_verdicts_follow_the_published_bounds(readings, published) -> None:
     high_low = ((readings["CGM"] > 180) & (readings["Comp"] < 70)).sum()
     assert t.loc["H", "estimate_pct"] == low_high and t.loc["I", "estimate_pct"] == high_low
     assert t.loc["H", "passes"] == (low_high == 0) and t.loc["I", "passes"] == (high_low == 0)
+
+
+# --- trend categories: the clinical trend concurrence analysis (CTCA) example ------------
+#
+# Eichenlaub, Pleus & Freckmann (2024) publish with their CTCA code a test file of
+# comparator rates of change (``Comp_ROC``, mg/dL/min) and the category the authors gave
+# each (``Comp_ROC_Cat``, -3..3: '<-3', '-3 to <-2', '-2 to <-1', '-1 to +1', '>+1 to +2',
+# '>+2 to +3', '>+3'). Its first 465 rows are stored (SOURCES.md). They hold rates exactly
+# on every edge, so they pin down the convention: an edge belongs to the band nearer zero.
+
+CTCA = DATA / "ifdt_ulm_ctca_test_data_head.csv"
+CTCA_EDGES = (-3.0, -2.0, -1.0, 1.0, 2.0, 3.0)
+
+
+@pytest.fixture(scope="module")
+def ctca() -> pd.DataFrame:
+    return pd.read_csv(CTCA)
+
+
+def test_the_stored_ctca_rows_are_complete(ctca) -> None:
+    assert CTCA.stat().st_size == 15_971
+    assert ctca.columns.tolist() == ["BG", "CGM", "Comp_ROC", "Comp_ROC_Cat", "CGM_ROC_Cat"]
+    assert ctca.shape[0] == 465 and ctca.notna().all().all()
+    for edge in CTCA_EDGES:  # each edge occurs: the convention is exercised both ways
+        assert (ctca["Comp_ROC"] == edge).any(), edge
+
+
+def test_rate_categories_reproduce_the_ctca_comparator_categories(ctca) -> None:
+    got = rate_categories(ctca["Comp_ROC"], edges_mgdl_per_min=CTCA_EDGES) - 3
+    np.testing.assert_array_equal(got, ctca["Comp_ROC_Cat"].to_numpy(dtype=int))
+
+
+def test_trend_agreement_counts_the_ctca_categories(ctca) -> None:
+    # One subject per row, two readings 5 min apart whose rate is the comparator rate
+    # (exact on the edges: 5 x an integer rate is an integer).
+    n = ctca.shape[0]
+    start = np.full(n, 200.0)
+    glucose = np.column_stack([start, start + 5.0 * ctca["Comp_ROC"].to_numpy()]).ravel()
+    subject = np.repeat(np.arange(n), 2)
+    time_min = np.tile([0.0, 5.0], n)
+    r = trend_agreement(glucose, glucose, subject, time_min, edges_mgdl_per_min=CTCA_EDGES)
+    assert r.n_pairs == n and r.agreement_pct == 100.0
+    expected = ctca["Comp_ROC_Cat"].value_counts().reindex(range(-3, 4), fill_value=0)
+    np.testing.assert_array_equal(np.diag(r.matrix.to_numpy()), expected.to_numpy())
+    assert r.matrix.index.tolist() == ["<-3", "-3..-2", "-2..-1", "-1..1", "1..2", "2..3", ">3"]
