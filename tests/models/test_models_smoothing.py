@@ -77,7 +77,9 @@ def test_tuning_picks_from_the_grid_and_beats_raw():
 @pytest.mark.parametrize("kw", [{"measurement_sd_mgdl": 0}, {"accel_psd": float("nan")},
                                 {"max_rate_mgdl_per_min": -1}])
 def test_bad_parameters_are_one_line(kw):
-    with pytest.raises(ConfigError, match="invalid"):
+    (name, value), = kw.items()
+    with pytest.raises(ConfigError, match=rf"^The '{name}' parameter of CausalKalmanSmoother "
+                       rf"must be a float in the range \(0\.0, inf[)\]]\. Got {value} instead\.$"):
         CausalKalmanSmoother(**kw)
 
 
