@@ -4,7 +4,7 @@ status beside published CGM values.
 
 1. Replay. simglucose (J. Xie, github.com/jxx123/simglucose) ships runs of its virtual
    patients with a basal-bolus controller. Two are replayed with this package's type 1
-   model (``simulate.uva_padova``) fed the same meal and insulin, and the plasma glucose
+   model (``simulation.uva_padova``) fed the same meal and insulin, and the plasma glucose
    (column BG) compared at the times below:
 
    * ``examples/results/2022-11-27_09-54-45/adolescent#001.csv`` (commit 763dc728, the
@@ -19,7 +19,7 @@ status beside published CGM values.
 
    Meals enter as per-minute intakes over the same 3 minutes, the boluses as per-minute
    doses.
-2. Time in range. 14 days of the wear scenario (``simulate.meal_scenario``) for
+2. Time in range. 14 days of the wear scenario (``simulation.meal_scenario``) for
    :data:`N_PER_STATUS` subjects of each status: share of plasma glucose 70-180 mg/dL
    (TIR) and below 70 mg/dL (TBR), beside the international consensus targets
    (Battelino et al., Diabetes Care 42, 1593-1603 (2019): TIR > 70 %, TBR < 4 % for
@@ -68,7 +68,7 @@ ADOLESCENT_001 = dict(
 
 
 def _patient(name: str) -> dict:
-    from nirglucose.simulate import uva_padova as uva
+    from nirglucose.simulation import uva_padova as uva
 
     if name == "adolescent#001":
         return {k: np.array([v]) for k, v in ADOLESCENT_001.items()}
@@ -78,8 +78,8 @@ def _patient(name: str) -> dict:
 
 
 def replay(label: str) -> dict:
-    from nirglucose.simulate import uva_padova as uva
-    from nirglucose.simulate.meal_scenario import INSULIN_PMOL_PER_UNIT
+    from nirglucose.simulation import uva_padova as uva
+    from nirglucose.simulation.meal_scenario import INSULIN_PMOL_PER_UNIT
 
     name, m0, meal_g_min, bolus_u_min, basal_u_min, bg = REPLAYS[label]
     p = _patient(name)
@@ -106,7 +106,7 @@ def replay(label: str) -> dict:
 
 def time_in_range() -> dict:
     import nirglucose as ng
-    from nirglucose.simulate import wear
+    from nirglucose.simulation import wear
 
     out = {}
     for status in ("normal", "prediabetes", "type1", "type2"):

@@ -18,7 +18,7 @@ Determinism
     sweep seed, splits and models from ``run_benchmark``'s seeding), never from the
     order or the place it ran, so results are identical for ``jobs=1``, a process
     pool or a Dask cluster. The same seed in every scenario gives common random
-    numbers: with :mod:`~nirglucose.simulate._random`'s per-source streams, switching
+    numbers: with :mod:`~nirglucose.simulation._random`'s per-source streams, switching
     one noise source off leaves every other draw unchanged, so scenario differences
     are paired.
 

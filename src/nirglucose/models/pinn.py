@@ -47,7 +47,7 @@ from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
-from ..simulate.simulator import nominal_tissue, scenario_band_spectra
+from ..simulation.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
 from ._params import Integral, Interval, ParameterError, Real, StrOptions
 from ._torch_base import TorchRegressor

@@ -27,7 +27,7 @@ stages with ``np.dot`` (BLAS, whose kernel and hence last bits depend on the CPU
 step keeps every subject's bits independent of its neighbours and of the CPU. The
 fastest rate of either model is below 1.3 /min (``kabs``, ``m1 + m30``), so λh < 1.3,
 inside RK4's stability region (abs(λh) < 2.78) with a local error of order (λh)^5/120;
-``tests/simulate/test_uva_padova.py`` checks the trajectories against ``solve_ivp``
+``tests/simulation/test_uva_padova.py`` checks the trajectories against ``solve_ivp``
 (LSODA, rtol 1e-8).
 
 References
