@@ -29,8 +29,8 @@ from sklearn.model_selection import GroupKFold
 
 from ..dataset import Dataset
 from ..exceptions import DataError
+from ..fitted import require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import require_fitted
 from ._json_io import _state_value, _to_json
 from ._params import Integral, Interval, ValidatedParamsMixin
 from .reference import GP_RANDOM_STATE

@@ -52,10 +52,10 @@ from ..config import ScenarioConfig, resolve_config
 from ..constants import LED_REFERENCE_TEMPERATURE_C
 from ..dataset import Dataset
 from ..exceptions import DataError
+from ..fitted import require_fitted
 from ..optics.forward import FORWARD_MODELS
 from ..simulation.physiology import melanin_fraction_from_fitzpatrick, subcutis_fat_fraction
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import require_fitted
 from ._inversion_solver import NUISANCES, ForwardModel, map_estimate, posterior_variance
 from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from .registry import register

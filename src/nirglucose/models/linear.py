@@ -46,8 +46,8 @@ from ..features import (
     ebl_feature_matrix,
     feature_table,
 )
+from ..fitted import EstimatorNotFittedError, require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import EstimatorNotFittedError, require_fitted
 from ._ebl_folded import FoldedKernel, fold_ebl, folded_predict_one, predict_one_row
 from ._linear_solvers import fit_standardized_cv, pls1_coefs, ridge_coefs
 from ._params import Integral, Interval, IntervalArray, Real, ValidatedParamsMixin

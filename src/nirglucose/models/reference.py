@@ -32,8 +32,8 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from threadpoolctl import threadpool_limits
 
 from ..exceptions import DataError
+from ..fitted import require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import require_fitted
 from ._params import Integral, Interval, Real, ValidatedParamsMixin
 from ._whitening import scale_of, zca_whitening
 from .registry import register
