@@ -91,8 +91,6 @@ UNREASONED_FUNCTION_IMPORTS: frozenset[str] = frozenset({
     "evaluation.wear_benchmark:_tuned_smoother -> models.smoothing",
     "evaluation.wear_benchmark:run_wear_benchmark -> evaluation.benchmark",
     "evaluation.wear_benchmark:run_wear_benchmark -> models.registry",
-    "evaluation.wear_sweep:_task -> api",
-    "evaluation.wear_sweep:_task -> evaluation.wear_benchmark",
     "evaluation.wear_sweep:run_wear_sweep -> config",
     "optics.kernels.band_kernel:_table_reflectance -> optics.lut.interpolate",
     "report.figures.descriptive:_measured_lines -> config",
