@@ -8,7 +8,7 @@
 * :func:`check_parameter_validation` — every constructor parameter has a constraint in
   ``_parameter_constraints`` and a bad type or value is refused by ``fit`` in one line
   (a :class:`~nirglucose.exceptions.ConfigError`), by scikit-learn's own
-  ``check_param_validation``.
+  ``check_param_validation``; NaN, and infinity where the range is open, too.
 
 Used by ``tests/models`` (every estimator family) and ``tests/test_features.py``.
 """
@@ -32,10 +32,12 @@ from sklearn.utils.estimator_checks import (
 )
 
 from nirglucose.exceptions import ConfigError
+from nirglucose.models._params import Integral, Interval
 
 __all__ = [
     "NO_DATA_CHECKS",
     "check_parameter_validation",
+    "non_finite_cases",
     "run_check",
     "sklearn_checks",
 ]
@@ -100,3 +102,20 @@ def check_parameter_validation(estimator: Any) -> None:
         with pytest.raises(ConfigError) as info:
             bad.fit(np.ones((4, 2)), np.ones(4))
         assert "\n" not in str(info.value) and param in str(info.value), str(info.value)
+
+
+def non_finite_cases(estimator: Any) -> list[tuple[str, float]]:
+    """``(parameter, value)``: NaN for every parameter with a real interval, and +-inf
+    where no interval of the parameter admits it (an open or finite end)."""
+    cases = []
+    for param, constraints in estimator._parameter_constraints.items():
+        if constraints == "no_validation":
+            continue
+        real = [c for c in constraints if isinstance(c, Interval) and c.type is not Integral]
+        if not real:
+            continue
+        cases.append((param, float("nan")))
+        for inf in (np.inf, -np.inf):
+            if not any(c.is_satisfied_by(inf) for c in real):
+                cases.append((param, inf))
+    return cases

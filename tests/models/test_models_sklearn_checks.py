@@ -10,9 +10,17 @@ Every estimator runs the parameter-validation check of its constraints table.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from common_checks import NO_DATA_CHECKS, check_parameter_validation, run_check, sklearn_checks
+from common_checks import (
+    NO_DATA_CHECKS,
+    check_parameter_validation,
+    non_finite_cases,
+    run_check,
+    sklearn_checks,
+)
+from nirglucose.exceptions import ConfigError
 from nirglucose.models import available_models, get_model_class, make_model
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/conftest.py
@@ -60,3 +68,21 @@ def test_sklearn_checks_that_need_no_data(name, check):
 @pytest.mark.parametrize("name", sorted(FIT_ON_ARRAYS | NEED_A_DEVICE))
 def test_parameters_are_validated_by_their_constraints(name):
     check_parameter_validation(make_model(name))
+
+
+@pytest.mark.parametrize("name", sorted(FIT_ON_ARRAYS | NEED_A_DEVICE))
+def test_non_finite_parameters_are_refused_in_one_line(name):
+    cases = non_finite_cases(make_model(name))
+    for param, value in cases:
+        with pytest.raises(ConfigError) as info:
+            make_model(name, **{param: value}).fit(np.ones((4, 2)), np.ones(4))
+        assert "\n" not in str(info.value) and f"'{param}'" in str(info.value)
+
+
+def test_the_non_finite_cases_cover_the_real_parameters():
+    # worked example: SDNN's real parameters lr (0, inf), weight_decay [0, inf),
+    # dropout and val_fraction [0, 1); integers (max_epochs) have no NaN case
+    cases = non_finite_cases(make_model("sdnn"))
+    assert {p for p, _ in cases} == {"lr", "weight_decay", "dropout", "val_fraction"}
+    assert ("lr", np.inf) in cases and ("dropout", -np.inf) in cases
+    assert non_finite_cases(make_model("pls")) == []
