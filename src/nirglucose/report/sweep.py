@@ -13,7 +13,6 @@ writes the same figures as files. The numbers come from
 from __future__ import annotations
 
 import base64
-import html
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +24,7 @@ from matplotlib.figure import Figure
 from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
 from ..formatting import format_ci, format_number
 from ..plots.fleet import figure_fleet
+from .markup import esc as _esc
 
 __all__ = ["SweepFigure", "MARD_LIMIT_PCT", "sweep_figures", "save_sweep_figures",
            "sweep_section"]
@@ -177,10 +177,6 @@ def save_sweep_figures(
     for f in figs:
         paths += save_figure(f.figure, d / "figures" / f.name, formats)
     return paths
-
-
-def _esc(x: Any) -> str:
-    return html.escape(str(x))
 
 
 def _num(v: Any, digits: int = 1) -> str:
