@@ -274,8 +274,8 @@ def test_trend_agreement_hand_computed_matrix() -> None:
     assert r.n_pairs == 3
     assert r.agreement_pct == pytest.approx(200.0 / 3)
     m = r.matrix
-    assert m.index.tolist() == ["<-2", "-2..-1", "-1..1", "1..2", ">=2"]
-    assert m.loc[">=2", ">=2"] == 1 and m.loc["-1..1", "1..2"] == 1
+    assert m.index.tolist() == ["<-2", "-2..-1", "-1..1", "1..2", ">2"]
+    assert m.loc[">2", ">2"] == 1 and m.loc["-1..1", "1..2"] == 1
     assert m.loc["-2..-1", "-2..-1"] == 1 and int(m.to_numpy().sum()) == 3
 
 
@@ -359,3 +359,14 @@ def test_time_in_range_agreement_targets() -> None:
 def test_time_in_ranges_rejects_nan() -> None:
     with pytest.raises(DataError, match="glucose_mgdl contains NaN"):
         time_in_ranges([100, np.nan], [1, 1])
+
+
+def test_clopper_pearson_closed_forms() -> None:
+    # Exact binomial bound (Clopper & Pearson 1934), one-sided: with all n readings
+    # within the limit P(X = n | p) = p^n = alpha gives p_L = alpha^(1/n); with none, 0.
+    ref, pred, subj = _independent(10, 10)
+    t = agreement_rates(ref, pred, subj, method="clopper-pearson")
+    assert t.loc[1, "lower_bound_pct"] == pytest.approx(100.0 * 0.05 ** (1 / 10), rel=1e-12)
+    ref, pred, subj = _independent(0, 10)
+    t = agreement_rates(ref, pred, subj, method="clopper-pearson", confidence=0.975)
+    assert t.loc[1, "lower_bound_pct"] == 0.0 and t.loc[1, "estimate_pct"] == 0.0

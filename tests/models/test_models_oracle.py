@@ -6,13 +6,6 @@ import json
 
 import numpy as np
 import pytest
-from sklearn.utils.estimator_checks import (
-    check_do_not_raise_errors_in_init_or_set_params,
-    check_get_params_invariance,
-    check_no_attributes_set_in_init,
-    check_parameters_default_constructible,
-    check_set_params,
-)
 
 import nirglucose as ng
 from nirglucose.dataset import measured_columns
@@ -38,21 +31,9 @@ def paper():
     return ng.simulate("wearable", 40, 3, seed=3), ng.simulate("wearable", 20, 3, seed=4)
 
 
-@pytest.mark.parametrize(
-    "check",
-    [
-        check_parameters_default_constructible,
-        check_no_attributes_set_in_init,
-        check_get_params_invariance,
-        check_set_params,
-        check_do_not_raise_errors_in_init_or_set_params,
-    ],
-    ids=lambda c: c.__name__,
-)
-def test_sklearn_checks_that_need_no_data(check):
-    # The data-driven checks cannot apply: the oracle reads true_* columns and the
-    # scenario config, which no array carries. Those behaviours are tested below.
-    check("Oracle", Oracle())
+# The data-driven scikit-learn checks cannot apply (the oracle reads true_* columns and
+# the scenario config, which no array carries); the checks that need no data run in
+# test_models_sklearn_checks.py, those behaviours are tested here.
 
 
 def test_noise_free_error_is_quantisation_only(noise_free):

@@ -35,7 +35,7 @@ PINNS = {
 FAST = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
 
 
-pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/conftest.py
 
 
 @pytest.fixture(scope="module")

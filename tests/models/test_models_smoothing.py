@@ -4,6 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from common_checks import non_finite_cases
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models.smoothing import SMOOTHER_GRID, CausalKalmanSmoother, tune_smoother
 
@@ -77,7 +78,9 @@ def test_tuning_picks_from_the_grid_and_beats_raw():
 @pytest.mark.parametrize("kw", [{"measurement_sd_mgdl": 0}, {"accel_psd": float("nan")},
                                 {"max_rate_mgdl_per_min": -1}])
 def test_bad_parameters_are_one_line(kw):
-    with pytest.raises(ConfigError, match="invalid"):
+    (name, value), = kw.items()
+    with pytest.raises(ConfigError, match=rf"^The '{name}' parameter of CausalKalmanSmoother "
+                       rf"must be a float in the range \(0\.0, inf[)\]]\. Got {value} instead\.$"):
         CausalKalmanSmoother(**kw)
 
 
@@ -89,3 +92,14 @@ def test_bad_series_are_refused():
         s.smooth([1.0, 2.0], [5.0, 5.0], [0, 0])
     with pytest.raises(DataError, match="columns"):
         tune_smoother(pd.DataFrame({"x": [1]}))
+
+
+def test_non_finite_parameters_are_refused_but_no_rate_limit_is_inf():
+    cases = non_finite_cases(CausalKalmanSmoother())
+    shown = {(p, "nan" if np.isnan(v) else v) for p, v in cases}
+    assert ("max_rate_mgdl_per_min", np.inf) not in shown  # inf: no limit
+    assert {("accel_psd", np.inf), ("max_rate_mgdl_per_min", "nan")} <= shown
+    for param, value in cases:
+        with pytest.raises(ConfigError, match=f"'{param}' parameter of CausalKalmanSmoother"):
+            CausalKalmanSmoother(**{param: value})
+    assert CausalKalmanSmoother(max_rate_mgdl_per_min=np.inf).max_rate_mgdl_per_min == np.inf

@@ -10,7 +10,6 @@ import pytest
 import torch
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError as SklearnNotFittedError
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError, DataError, NotFittedError
@@ -46,7 +45,7 @@ FAST = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
 ES = {"val_fraction": 0.2}
 
 
-pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/conftest.py
 
 
 @pytest.fixture(scope="module")
@@ -582,21 +581,7 @@ def test_pickle_and_clone(fitted, small):
     assert c.get_params() == fitted.get_params() and not hasattr(c, "module_")
 
 
-# ----------------------------------------------------------------- scikit-learn checks
-
-#: Every scikit-learn check runs on plain arrays (a plain schema: generic channels, no
-#: physiology, physics terms off); none is expected to fail.
-_EXPECTED_FAILED: dict[str, str] = {}
-_FAST_CHECKS = {"max_epochs": 2, "batch_size": 32, "random_state": 0}
-
-
-@parametrize_with_checks(
-    [cls(**_FAST_CHECKS) for cls in (OriginalPINN, OptimizedPINN, RTEPINN, SelectiveRTEPINN, SDNN)],
-    expected_failed_checks=lambda est: _EXPECTED_FAILED,
-    xfail_strict=True,
-)
-def test_sklearn_common_checks(estimator, check):
-    check(estimator)
+# scikit-learn's common checks of the networks: tests/models/test_models_sklearn_checks.py
 
 
 def test_base_class_is_abstract():

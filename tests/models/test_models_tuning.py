@@ -25,7 +25,7 @@ PINNS = NETWORKS[1:]
 REPORTED_SEEDS = range(5)
 
 
-pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/conftest.py
 
 
 # ----------------------------------------------------------------- accessor and file

@@ -21,7 +21,7 @@ from nirglucose.models.tuning import UNTUNED_NETWORK_PARAMS, untuned_params
 N = 25
 
 
-pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
+pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/conftest.py
 
 
 def _device_file(tmp_path, seed: int, signal: bool):

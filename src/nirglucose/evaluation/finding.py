@@ -4,22 +4,14 @@ drop-one-LED refits write their own, neither imports the other back)."""
 
 from __future__ import annotations
 
-import math
 import string
 from dataclasses import dataclass
 
+from ..formatting import format_number
 from .benchmark_result import LAMBDA_ROW, NO_PHYSICS, ablation_base
 from .reference import MODEL_LABELS
 
 __all__ = ["Value", "Finding", "label"]
-
-
-def _fmt(value: float, digits: int, sign: bool) -> str:
-    if not math.isfinite(value):
-        return "–"
-    if digits == 0:
-        return f"{value:+,.0f}" if sign else f"{value:,.0f}"
-    return f"{value:+.{digits}f}" if sign else f"{value:.{digits}f}"
 
 
 @dataclass(frozen=True)
@@ -58,7 +50,8 @@ class Value:
 
     def text(self) -> str:
         """The number as shown."""
-        return _fmt(float(self.value) * self.scale, self.digits, self.sign)
+        value = float(self.value) * self.scale
+        return format_number(value, self.digits, sign=self.sign, thousands=self.digits == 0)
 
 
 @dataclass(frozen=True)

@@ -119,9 +119,12 @@ Physical rationale by block:
 
 The package, by concept: :mod:`~nirglucose.features.blocks` (the parameters above, the
 environment symbols and the kernels :func:`log10_absorbance` and :func:`perfusion_index`),
-:mod:`~nirglucose.features.study` (:data:`FEATURE_TABLE` and the vectorised
-:func:`ebl_feature_matrix`), :mod:`~nirglucose.features.device` (:func:`feature_table` of
-any device and :func:`compute_features`) and :mod:`~nirglucose.features.transform`
+:mod:`~nirglucose.features.table` (the one table builder,
+:func:`~nirglucose.features.table.build_feature_table`, for any device),
+:mod:`~nirglucose.features.study` (:data:`FEATURE_TABLE`: that builder at the study's
+device with the study's notes, and the vectorised :func:`ebl_feature_matrix`),
+:mod:`~nirglucose.features.device` (:func:`feature_table` of any device and
+:func:`compute_features`) and :mod:`~nirglucose.features.transform`
 (:func:`enhanced_beer_lambert` and :class:`EnhancedBeerLambertFeatures`); every public
 name is importable from ``nirglucose.features``.
 

@@ -1,10 +1,10 @@
 """The Enhanced Beer–Lambert features of any device, and their evaluation.
 
-:func:`feature_table` builds the feature table of a device's
+:func:`feature_table` is the feature table of a device's
 :class:`~nirglucose.schema.DeviceSchema` (any LEDs, optional reference codes, any known
-physiological columns) block by block from the shared blocks of
-:mod:`~nirglucose.features.blocks`; at the study's device it is the study's
-:data:`~nirglucose.features.study.FEATURE_TABLE`. :func:`compute_features` evaluates
+physiological columns), from the one builder
+:func:`~nirglucose.features.table.build_feature_table`; at the study's device it is the
+study's :data:`~nirglucose.features.study.FEATURE_TABLE`. :func:`compute_features` evaluates
 any such table from absorbances and physiology.
 
 References
@@ -22,139 +22,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from .blocks import (
-    _ENV,
-    _ENV2,
-    _W_COLUMNS,
-    NOMINAL_BLOOD_PCT,
-    FeatureSpec,
-    _curvature_weights,
-    nuisance_alphas,
-    perfusion_index,
-)
+from .blocks import _ENV, NOMINAL_BLOOD_PCT, FeatureSpec, perfusion_index
 from .study import FEATURE_TABLE
+from .table import build_feature_table
 
 __all__ = ["feature_table", "compute_features"]
-
-#: Category and rationale of each environment symbol's x A_k block.
-_ENV_CATEGORY = {
-    "dT": ("temp", "LED/water-band thermal drift"),
-    "dH": ("hydration", "water share of absorbance"),
-    "dP": ("pressure", "perfusion/contact with pressure"),
-    "dB": ("blood-volume", "blood's share of the absorbance (PPG perfusion)"),
-    "dS": ("saturation", "Hb/HbO2 balance of the blood's spectrum (PPG SpO2)"),
-}
-#: Channel spacing of a plain schema, for its curvature. [nm]
-_PLAIN_SPACING_NM = 100.0
-
-
-def _absorbance_rows(lab, a) -> list[FeatureSpec]:
-    return [
-        FeatureSpec(a[i], f"log10(I0_{lab[i]}/I_{lab[i]})", "absorbance",
-                    "absorbance at this LED", ("A", i))
-        for i in range(len(lab))
-    ]
-
-
-def _difference_rows(lab, a) -> list[FeatureSpec]:
-    """All k(k-1)/2 pairwise differences A_i - A_j, j < i."""
-    return [
-        FeatureSpec(f"dA_{lab[i]}_{lab[j]}", f"{a[i]} - {a[j]}", "difference",
-                    "cancels coupling and LED-power offsets", ("lin", ((i, 1.0), (j, -1.0))))
-        for i in range(len(lab))
-        for j in range(i)
-    ]
-
-
-def _curvature_rows(schema, lab) -> list[FeatureSpec]:
-    """k - 2 second derivatives (none under three channels)."""
-    k = len(lab)
-    if k < 3:
-        return []
-    x = (
-        np.asarray(schema.wavelengths_nm, dtype=float)
-        if not schema.is_plain
-        else _PLAIN_SPACING_NM * np.arange(k)
-    )
-    cw = _curvature_weights(x)
-    return [
-        FeatureSpec(
-            f"d2A_{lab[m]}",
-            f"d2A/dλ² ({lab[m - 1]},{lab[m]},{lab[m + 1]})",
-            "curvature",
-            "removes linear scatter baseline",
-            ("lin", tuple((c, float(cw[m - 1, c])) for c in (m - 1, m, m + 1))),
-        )
-        for m in range(1, k - 1)
-    ]
-
-
-def _product_rows(a) -> list[FeatureSpec]:
-    k = len(a)
-    return [
-        FeatureSpec(f"{a[i]}_x_{a[j]}", f"{a[i]}^2" if i == j else f"{a[i]} {a[j]}",
-                    "product", "path-length nonlinearity", ("AA", i, j))
-        for i in range(k)
-        for j in range(i, k)
-    ]
-
-
-def _weight_rows(schema, lab, a) -> list[FeatureSpec]:
-    """w_k A_k, where the device measures every column w needs."""
-    if not all(c in schema.physiology for c in _W_COLUMNS):
-        return []
-    return [
-        FeatureSpec(f"w_x_{a[i]}", f"w_{lab[i]} {a[i]}", "pmf-weight",
-                    "skin/blood/melanin path weight", ("w", i, *nuisance_alphas(w)))
-        for i, w in enumerate(schema.wavelengths_nm)
-    ]
-
-
-def _environment_rows(schema, a) -> list[FeatureSpec]:
-    """Environment x A_k, every physiological column, the 2nd-order terms present."""
-    phys = schema.physiology
-    syms = [s for s in _ENV if _ENV[s][0] in phys]
-    rows = [
-        FeatureSpec(f"{s}_x_{a[i]}", f"{s} {a[i]}", *_ENV_CATEGORY[s], ("envA", s, i))
-        for s in syms
-        for i in range(len(a))
-    ]
-    rows += [
-        FeatureSpec(c, c, "pmf", "measured physiology", ("pmf", m)) for m, c in enumerate(phys)
-    ]
-    for s1, s2 in _ENV2:
-        if s1 in syms and s2 in syms:
-            name, formula = (f"{s1}_sq", f"{s1}^2") if s1 == s2 else (f"{s1}_x_{s2}", f"{s1} {s2}")
-            rows.append(
-                FeatureSpec(name, formula, "env-2nd", "second-order environment", ("env2", s1, s2))
-            )
-    return rows
 
 
 def feature_table(schema) -> tuple[FeatureSpec, ...]:
     """The Enhanced Beer–Lambert features of any device (its :class:`DeviceSchema`).
 
-    Blocks, each where the device's columns allow it: k absorbances; all k(k-1)/2
-    pairwise differences (the study's contrasts first at its four LEDs); k - 2
-    curvatures; k(k+1)/2 products; PMF-weighted absorbances (needs skin thickness,
-    melanin, skin temperature, systolic BP and pressure); temperature, hydration and
-    pressure x A_k (each needs its column); every physiological column; the
-    second-order temperature/hydration/pressure terms among those present. At the
-    study's four LEDs with its 12-entry vector this is exactly :data:`FEATURE_TABLE`.
-    A plain schema's channels sit one (100 nm) unit apart for the curvature.
+    :func:`~nirglucose.features.table.build_feature_table` at that device; at the
+    study's four LEDs with its 12-entry vector exactly :data:`FEATURE_TABLE` (the same
+    builder with the study's notes and its glucose contrasts first).
     """
     if schema.is_study:
         return FEATURE_TABLE
-    lab = schema.labels
-    a = [f"A_{w}" for w in lab]
-    return tuple(
-        _absorbance_rows(lab, a)
-        + _difference_rows(lab, a)
-        + _curvature_rows(schema, lab)
-        + _product_rows(a)
-        + _weight_rows(schema, lab, a)
-        + _environment_rows(schema, a)
-    )
+    return build_feature_table(schema)
 
 
 def compute_features(table, schema, absorbance, physiology) -> np.ndarray:

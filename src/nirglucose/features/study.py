@@ -1,7 +1,9 @@
 """The study's 56-feature table and its vectorised evaluation.
 
-:data:`FEATURE_TABLE` spells out the reference study's Enhanced Beer–Lambert features
-[1]_ at its four LEDs and 12-entry physiological vector, block by block (the table
+:data:`FEATURE_TABLE` is the reference study's Enhanced Beer–Lambert features [1]_ at
+its four LEDs and 12-entry physiological vector: the one builder
+(:func:`~nirglucose.features.table.build_feature_table`) at the study's device, with
+the study's rationale for each feature and its glucose contrasts first (the table
 with every formula is in the :mod:`nirglucose.features` docstring and
 ``docs/features.md``); :func:`ebl_feature_matrix` computes them from a raw
 measurement array without a row loop, and :func:`features_markdown` writes the docs page.
@@ -17,8 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import PMF_COLUMNS
 from ..exceptions import DataError
+from ..schema import DeviceSchema
 from .blocks import (
     _ENV2,
     _MEASURED,
@@ -39,6 +43,7 @@ from .blocks import (
     log10_absorbance,
     perfusion_index,
 )
+from .table import build_feature_table
 
 __all__ = [
     "N_FEATURES",
@@ -65,12 +70,6 @@ _WHY_DIFFERENCE = (
     "cancels coupling; water slope",
     "cancels coupling; full span",
 )
-#: Environment x A_k blocks: symbol, category, rationale.
-_WHY_ENV_X_A = (
-    ("dT", "temp", "LED/water-band thermal drift"),
-    ("dH", "hydration", "water share of absorbance"),
-    ("dP", "pressure", "perfusion/contact with pressure"),
-)
 _WHY_PMF = {
     "age_yr": "dermal thinning, collagen",
     "bmi_kgm2": "subcutaneous fat, lipid band",
@@ -95,89 +94,32 @@ _WHY_ENV2 = (
     "water-perfusion coupling",
 )
 
-#: Absorbance names A_850 ... A_1150, in channel order.
-_A = tuple(f"A_{w}" for w in _WL)
 
 
-def _absorbance_rows() -> list[FeatureSpec]:
-    return [
-        FeatureSpec(_A[k], f"log10(I0_{_WL[k]}/I_{_WL[k]})", "absorbance", _WHY_A[k], ("A", k))
-        for k in range(_N_CH)
-    ]
-
-
-def _difference_rows() -> list[FeatureSpec]:
-    """The glucose contrasts, then the other pairwise differences."""
-    blocks = (("contrast", CONTRAST_PAIRS, _WHY_CONTRAST),
-              ("difference", DIFFERENCE_PAIRS, _WHY_DIFFERENCE))
-    return [
-        FeatureSpec(f"dA_{_WL[i]}_{_WL[j]}", f"{_A[i]} - {_A[j]}", cat, why,
-                    ("lin", ((i, 1.0), (j, -1.0))))
-        for cat, pairs, whys in blocks
-        for (i, j), why in zip(pairs, whys, strict=True)
-    ]
-
-
-def _curvature_rows() -> list[FeatureSpec]:
-    """One second derivative per interior channel (weights :data:`CURVATURE_WEIGHTS`)."""
-    return [
-        FeatureSpec(
-            f"d2A_{_WL[m]}",
-            f"d2A/dλ² ({_WL[m - 1]},{_WL[m]},{_WL[m + 1]})",
-            "curvature",
-            "removes linear scatter baseline",
-            ("lin", tuple((c, float(CURVATURE_WEIGHTS[m - 1, c])) for c in (m - 1, m, m + 1))),
-        )
-        for m in range(1, _N_CH - 1)
-    ]
-
-
-def _product_rows() -> list[FeatureSpec]:
-    return [
-        FeatureSpec(f"{_A[i]}_x_{_A[j]}", f"{_A[i]}^2" if i == j else f"{_A[i]} {_A[j]}",
-                    "product", "path-length nonlinearity", ("AA", i, j))
-        for i, j in PRODUCT_PAIRS
-    ]
-
-
-def _weight_rows() -> list[FeatureSpec]:
-    """The PMF-weighted absorbances w_k A_k with the tabulated α of each LED."""
-    return [
-        FeatureSpec(f"w_x_{_A[k]}", f"w_{_WL[k]} {_A[k]}", "pmf-weight",
-                    "skin/blood/melanin path weight",
-                    ("w", k, ALPHA_SKIN_PER_MM[k], ALPHA_PERF[k], ALPHA_MEL[k]))
-        for k in range(_N_CH)
-    ]
-
-
-def _environment_rows() -> list[FeatureSpec]:
-    """Temperature, hydration and pressure x A_k, the PMF entries, the 2nd-order terms."""
-    rows = [
-        FeatureSpec(f"{sym}_x_{_A[k]}", f"{sym} {_A[k]}", cat, why, ("envA", sym, k))
-        for sym, cat, why in _WHY_ENV_X_A
-        for k in range(_N_CH)
-    ]
-    rows += [FeatureSpec(c, c, "pmf", _WHY_PMF[c], ("pmf", m)) for m, c in enumerate(PMF_COLUMNS)]
+def _study_notes() -> dict[str, tuple[str, str]]:
+    """Feature name -> (category, rationale) where the study's table says more than a
+    generic device's: each LED's band, the contrasts, each physiological column."""
+    notes = {f"A_{w}": ("absorbance", why) for w, why in zip(_WL, _WHY_A, strict=True)}
+    for cat, pairs, whys in (("contrast", CONTRAST_PAIRS, _WHY_CONTRAST),
+                             ("difference", DIFFERENCE_PAIRS, _WHY_DIFFERENCE)):
+        for (i, j), why in zip(pairs, whys, strict=True):
+            notes[f"dA_{_WL[i]}_{_WL[j]}"] = (cat, why)
+    notes.update({c: ("pmf", why) for c, why in _WHY_PMF.items()})
     for (s1, s2), why in zip(_ENV2, _WHY_ENV2, strict=True):
-        name, formula = (f"{s1}_sq", f"{s1}^2") if s1 == s2 else (f"{s1}_x_{s2}", f"{s1} {s2}")
-        rows.append(FeatureSpec(name, formula, "env-2nd", why, ("env2", s1, s2)))
-    return rows
+        notes[f"{s1}_sq" if s1 == s2 else f"{s1}_x_{s2}"] = ("env-2nd", why)
+    return notes
 
 
-def _build_table() -> tuple[FeatureSpec, ...]:
-    """The study's features in output order, each with its op (see :class:`FeatureSpec`)."""
-    return tuple(
-        _absorbance_rows()
-        + _difference_rows()
-        + _curvature_rows()
-        + _product_rows()
-        + _weight_rows()
-        + _environment_rows()
-    )
-
+#: The study's device: its four LEDs, reference codes and 12-entry physiological vector.
+_STUDY_DEVICE = DeviceSchema(
+    wavelengths_nm=tuple(float(w) for w in DEFAULT_LED_WAVELENGTHS_NM),
+    physiology=tuple(PMF_COLUMNS),
+)
 
 #: Every feature, in output order.
-FEATURE_TABLE: tuple[FeatureSpec, ...] = _build_table()
+FEATURE_TABLE: tuple[FeatureSpec, ...] = build_feature_table(
+    _STUDY_DEVICE, _study_notes(), first_differences=CONTRAST_PAIRS
+)
 #: Feature names, in output order.
 FEATURE_NAMES: tuple[str, ...] = tuple(f.name for f in FEATURE_TABLE)
 #: Number of features (56, the study's count).

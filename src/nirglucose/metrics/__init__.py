@@ -57,6 +57,7 @@ from nirglucose.metrics.trend import (
     LagEstimate,
     TrendAgreement,
     estimated_lag,
+    rate_categories,
     rate_of_change,
     trend_agreement,
 )
@@ -97,6 +98,7 @@ __all__ = [
     "agreement_rates",
     "icgm_criteria",
     "rate_of_change",
+    "rate_categories",
     "trend_agreement",
     "estimated_lag",
     "time_in_ranges",

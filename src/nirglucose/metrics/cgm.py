@@ -65,7 +65,7 @@ _OVERALL: Final[str] = "overall"
 AGREEMENT_LIMITS: Final[tuple[int, ...]] = (15, 20, 40)
 
 #: Methods for the lower confidence bound of an agreement rate.
-CI_METHODS: Final[tuple[str, ...]] = ("bootstrap", "wilson")
+CI_METHODS: Final[tuple[str, ...]] = ("bootstrap", "wilson", "clopper-pearson")
 
 
 def _range_codes(glucose_mgdl: NDArray[np.float64]) -> NDArray[np.intp]:
@@ -190,37 +190,49 @@ def _within(ref, pred, codes, limit: float, absolute_low: bool) -> NDArray[np.bo
     return np.where(codes == 0, absdiff <= limit, rel)
 
 
-def _wilson_cc_lower(hits: NDArray, n: NDArray, alpha: float, rho_degenerate: float = 1.0
-                     ) -> float:
-    """Clustered, continuity-corrected Wilson lower bound (Short et al. 2020).
-
-    The intraclass correlation is undefined at a rate of 0 or 1; ``rho_degenerate`` is
-    used there (1, the most conservative, as the reference implementation of Stephan et
-    al. 2022 does).
-    """
+def _icc(hits: NDArray, n: NDArray, rho_degenerate: float = 1.0) -> float:
+    """ANOVA intraclass correlation of a within-limit indicator by subject (Short et al.
+    2020, Eq. 2), 0 where the estimate is negative. At a rate of 0 or 1 it is undefined
+    and ``rho_degenerate`` is returned (1, the most conservative, as the reference
+    implementation of Stephan et al. 2022 does)."""
     keep = n > 0
     x, m = hits[keep].astype(np.float64), n[keep].astype(np.float64)
-    k = x.shape[0]
-    big_m = m.sum()
+    k, big_m = x.shape[0], m.sum()
     p = x.sum() / big_m
-    m2 = float(np.sum(m * m))
-    if k < 2 or p in (0.0, 1.0):
-        rho = rho_degenerate if p in (0.0, 1.0) else 0.0
-    else:
-        bms = (np.sum(x * x / m) - x.sum() ** 2 / big_m) / (k - 1)
-        dof_w = np.sum(m - 1.0)
-        wms = (x.sum() - np.sum(x * x / m)) / dof_w if dof_w > 0 else 0.0
-        n_star = (big_m**2 - m2) / ((k - 1) * big_m)
-        denom = bms + (n_star - 1.0) * wms
-        rho = max(0.0, (bms - wms) / denom) if denom > 0 else 0.0
-    xi = 1.0 + rho * (m2 - big_m) / big_m  # variance inflation (design effect)
-    z = stats.norm.ppf(1.0 - alpha)
+    if p in (0.0, 1.0):
+        return rho_degenerate
+    if k < 2:
+        return 0.0
+    bms = (np.sum(x * x / m) - x.sum() ** 2 / big_m) / (k - 1)
+    dof_w = np.sum(m - 1.0)
+    wms = (x.sum() - np.sum(x * x / m)) / dof_w if dof_w > 0 else 0.0
+    n_star = (big_m**2 - float(np.sum(m * m))) / ((k - 1) * big_m)
+    denom = bms + (n_star - 1.0) * wms
+    return float(max(0.0, (bms - wms) / denom)) if denom > 0 else 0.0
+
+
+def _wilson_cc_lower(hits: NDArray, n: NDArray, alpha: float, rho: float) -> float:
+    """Clustered, continuity-corrected Wilson lower bound (Short et al. 2020, Eq. 6) for
+    the intraclass correlation ``rho``; Newcombe's (1998) bound at ``rho = 0``."""
+    m = n[n > 0].astype(np.float64)
+    big_m = m.sum()
+    p = float(hits.sum()) / big_m
     if p == 0.0:
         return 0.0
+    xi = 1.0 + rho * (float(np.sum(m * m)) - big_m) / big_m  # design effect
+    z = stats.norm.ppf(1.0 - alpha)
     root = np.sqrt(xi * z * z - 2.0 - 1.0 / big_m + 4.0 * p * (big_m * (1.0 - p) + 1.0))
     lower = (2 * big_m * p + xi * z * z - 1.0 - np.sqrt(xi) * z * root) / (
         2.0 * (big_m + xi * z * z))
     return float(max(lower, 0.0))
+
+
+def _clopper_pearson_lower(hits: float, n: float, alpha: float) -> float:
+    """Exact binomial (Clopper & Pearson 1934) one-sided lower bound: the ``alpha``
+    quantile of Beta(x, n - x + 1); 0 at x = 0."""
+    if hits <= 0:
+        return 0.0
+    return float(stats.beta.ppf(alpha, hits, n - hits + 1.0))
 
 
 def _bca_lower(boot: NDArray, theta: float, jack: NDArray, alpha: float) -> float:
@@ -244,57 +256,79 @@ def _bca_lower(boot: NDArray, theta: float, jack: NDArray, alpha: float) -> floa
     return float(np.quantile(boot, level))
 
 
-def _rate_table(ref, pred, subj, n_subjects, range_codes, *, method, n_boot, seed,
-                confidence) -> pd.DataFrame:
-    alpha = 1.0 - confidence
+def _subject_counts(ref, pred, subj, n_subjects, range_codes):
+    """The (range, limit) tasks and per-subject readings ``n[s, t]`` and hits ``h[s, t]``."""
     labels = (*GLUCOSE_RANGE_LABELS, _OVERALL)
-    rows: list[dict] = []
-    tasks = []  # (range label, limit, within mask, member mask)
+    tasks, members, hits = [], [], []
     for limit in AGREEMENT_LIMITS:
         within_ranged = _within(ref, pred, range_codes, limit, absolute_low=True)
         within_rel = _within(ref, pred, range_codes, limit, absolute_low=False)
         for r, label in enumerate(labels):
             member = range_codes == r if label != _OVERALL else np.ones_like(ref, bool)
             within = within_ranged if label != _OVERALL else within_rel
-            tasks.append((label, limit, within, member))
-    # Per-subject counts, one column per task: hits[s, t], n[s, t].
-    member_mat = np.stack([t[3] for t in tasks], axis=1)
-    hit_mat = member_mat & np.stack([t[2] for t in tasks], axis=1)
+            tasks.append((label, limit))
+            members.append(member)
+            hits.append(member & within)
     n_sub = np.zeros((n_subjects, len(tasks)))
     h_sub = np.zeros((n_subjects, len(tasks)))
-    np.add.at(n_sub, subj, member_mat)
-    np.add.at(h_sub, subj, hit_mat)
+    np.add.at(n_sub, subj, np.stack(members, axis=1))
+    np.add.at(h_sub, subj, np.stack(hits, axis=1))
+    return tasks, n_sub, h_sub
+
+
+def _bootstrap_bounds(draws: NDArray[np.intp], n_sub, h_sub, est, alpha) -> NDArray:
+    """BCa lower bound per task from cluster resamples ``draws[b, j]`` (subject codes)."""
+    n_boot, n_subjects = draws.shape
+    flat = (np.arange(n_boot)[:, None] * n_subjects + draws).ravel()
+    weights = np.bincount(flat, minlength=n_boot * n_subjects).reshape(
+        n_boot, n_subjects).astype(np.float64)  # times each subject was drawn
+    n_tot, h_tot = n_sub.sum(axis=0), h_sub.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        boot = 100.0 * (weights @ h_sub) / (weights @ n_sub)
+        jack = 100.0 * (h_tot - h_sub) / (n_tot - n_sub)  # leave one subject out
+    lower = np.full(n_sub.shape[1], np.nan)
+    for t in range(n_sub.shape[1]):
+        present = n_sub[:, t] > 0
+        if n_tot[t] > 0:
+            lower[t] = _bca_lower(boot[:, t], float(est[t]), jack[present, t], alpha)
+    return lower
+
+
+def _rate_table(ref, pred, subj, n_subjects, range_codes, *, method, n_boot, seed,
+                confidence, draws=None) -> pd.DataFrame:
+    """The table of :func:`agreement_rates`; ``draws`` (subject codes, one row per
+    resample) replaces the seeded resamples, e.g. to replay another implementation's."""
+    alpha = 1.0 - confidence
+    tasks, n_sub, h_sub = _subject_counts(ref, pred, subj, n_subjects, range_codes)
     n_tot, h_tot = n_sub.sum(axis=0), h_sub.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
         est = 100.0 * h_tot / n_tot
     if method == "bootstrap":
-        rng = np.random.default_rng(seed)
-        draws = rng.integers(0, n_subjects, size=(n_boot, n_subjects))
-        flat = (np.arange(n_boot)[:, None] * n_subjects + draws).ravel()
-        weights = np.bincount(flat, minlength=n_boot * n_subjects).reshape(
-            n_boot, n_subjects).astype(np.float64)  # times each subject was drawn
-        with np.errstate(invalid="ignore", divide="ignore"):
-            boot = 100.0 * (weights @ h_sub) / (weights @ n_sub)
-            jack = 100.0 * (h_tot - h_sub) / (n_tot - n_sub)  # leave one subject out
-    for t, (label, limit, _, _) in enumerate(tasks):
+        if draws is None:
+            draws = np.random.default_rng(seed).integers(0, n_subjects, (n_boot, n_subjects))
+        boot_lower = _bootstrap_bounds(np.asarray(draws), n_sub, h_sub, est, alpha)
+    rows: list[dict] = []
+    for t, (label, limit) in enumerate(tasks):
         n_t = int(n_tot[t])
+        icc = _icc(h_sub[:, t], n_sub[:, t]) if n_t else float("nan")
         if n_t == 0:
             lower = float("nan")
-        elif method == "bootstrap":
-            present = n_sub[:, t] > 0
-            lower = _bca_lower(boot[:, t], float(est[t]), jack[present, t], alpha)
-            if not np.isfinite(lower):
-                lower = 100.0 * _wilson_cc_lower(h_sub[:, t], n_sub[:, t], alpha, 0.0)
+        elif method == "clopper-pearson":
+            lower = 100.0 * _clopper_pearson_lower(h_tot[t], n_tot[t], alpha)
+        elif method == "wilson":
+            lower = 100.0 * _wilson_cc_lower(h_sub[:, t], n_sub[:, t], alpha, icc)
         else:
-            lower = 100.0 * _wilson_cc_lower(h_sub[:, t], n_sub[:, t], alpha)
-        unit = "mg/dL" if label == "<70" else "%"
+            lower = float(boot_lower[t])
+            if not np.isfinite(lower):  # no bootstrap spread: readings as independent
+                lower = 100.0 * _wilson_cc_lower(h_sub[:, t], n_sub[:, t], alpha, 0.0)
         rows.append({
             "range": label,
-            "limit": f"{limit} {unit}",
+            "limit": f"{limit} {'mg/dL' if label == '<70' else '%'}",
             "estimate_pct": float(est[t]) if n_t else float("nan"),
             "lower_bound_pct": lower,
             "n_readings": n_t,
             "n_subjects": int(np.count_nonzero(n_sub[:, t])),
+            "icc": icc,
         })
     return pd.DataFrame(rows)
 
@@ -352,7 +386,18 @@ def agreement_rates(
       correlation ``rho`` (Short et al. 2020); deterministic. With ``rho = 0`` it is
       Newcombe's (1998) continuity-corrected Wilson bound. At a rate of 0 or 100 % the
       intraclass correlation is undefined and ``rho = 1`` is used (each subject counts
-      once), as in the reference implementation of Stephan et al. (2022).
+      once), as in the reference implementation of Stephan et al. (2022);
+    * ``method="clopper-pearson"``: the exact binomial bound (Clopper & Pearson 1934),
+      the ``1 - confidence`` quantile of Beta(x, n - x + 1) for x of n readings within
+      the limit (0 at x = 0). It takes the readings as *independent*, so on clustered
+      data it is too optimistic; it is here for comparison, as the third column of
+      Stephan et al. (2022).
+
+    On the worked example of Stephan et al. (24 sensors, 3,600 paired readings; their
+    repository's ``Test_Data.csv``), the rates, the Wilson and Clopper-Pearson bounds
+    and the intraclass correlations equal the authors' published results, and the BCa
+    bounds equal theirs when given their resamples (tests/metrics/
+    test_metrics_cgm_worked.py).
 
     Parameters
     ----------
@@ -364,8 +409,8 @@ def agreement_rates(
         Subject (or sensor) of each reading: the cluster. [-]
     range_by : {"device", "reference"}, optional
         Which value assigns a reading to a range. [-]
-    method : {"bootstrap", "wilson"}, optional
-        Lower-bound method (see above). [-]
+    method : {"bootstrap", "wilson", "clopper-pearson"}, optional
+        Lower-bound method (see above; the valid names are :data:`CI_METHODS`). [-]
     n_boot : int, optional
         Bootstrap resamples (Stephan et al. recommend at least 10,000). [-]
     seed : int, optional
@@ -378,8 +423,11 @@ def agreement_rates(
     pandas.DataFrame
         One row per (limit, range): columns ``range`` ('<70', '70-180', '>180',
         'overall'), ``limit`` (e.g. '15 mg/dL', '15 %'), ``estimate_pct`` [%],
-        ``lower_bound_pct`` [%], ``n_readings`` and ``n_subjects`` [-]. A range without
-        readings has NaN estimate and bound.
+        ``lower_bound_pct`` [%], ``n_readings``, ``n_subjects`` [-] and ``icc`` [-], the
+        intraclass correlation by subject of being within the limit (Short et al.
+        2020's ANOVA estimate, 0 where negative, 1 at a rate of 0 or 100 %: the value
+        the Wilson bound uses; reported whatever the ``method``). A range without
+        readings has NaN estimate, bound and ``icc``.
 
     Raises
     ------
@@ -402,6 +450,9 @@ def agreement_rates(
        doi:10.1002/(SICI)1097-0258(19980430)17:8<857::AID-SIM777>3.0.CO;2-E
     .. [4] DiCiccio TJ, Efron B. Bootstrap confidence intervals. Stat Sci
        11(3):189-228, 1996. doi:10.1214/ss/1032280214
+    .. [5] Clopper CJ, Pearson ES. The use of confidence or fiducial limits illustrated
+       in the case of the binomial. Biometrika 26(4):404-413, 1934.
+       doi:10.1093/biomet/26.4.404
 
     Examples
     --------

@@ -1,7 +1,8 @@
 """Rates of change, trend agreement and the sensor's lag, for a worn monitor.
 
-* :func:`rate_of_change`, :func:`trend_agreement` -- rates of change from consecutive
-  readings and the agreement of their categories (a confusion matrix);
+* :func:`rate_of_change`, :func:`rate_categories`, :func:`trend_agreement` -- rates of
+  change from consecutive readings, their categories (trend-arrow bands) and the
+  agreement of the categories (a confusion matrix);
 * :func:`estimated_lag` -- the time shift that best aligns the sensor to the reference,
   per subject.
 
@@ -31,6 +32,7 @@ __all__ = [
     "TrendAgreement",
     "LagEstimate",
     "rate_of_change",
+    "rate_categories",
     "trend_agreement",
     "estimated_lag",
 ]
@@ -145,9 +147,80 @@ class TrendAgreement(NamedTuple):
 
 
 def _category_labels(edges: tuple[float, ...]) -> list[str]:
-    labels = [f"<{edges[0]:g}"]
+    # A rate on an edge belongs to the category nearer zero (see rate_categories).
+    labels = [f"<{edges[0]:g}" if edges[0] <= 0 else f"<={edges[0]:g}"]
     labels += [f"{lo:g}..{hi:g}" for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
-    return labels + [f">={edges[-1]:g}"]
+    return labels + [f">{edges[-1]:g}" if edges[-1] > 0 else f">={edges[-1]:g}"]
+
+
+def _check_edges(edges_mgdl_per_min) -> NDArray[np.float64]:
+    edges = np.asarray(edges_mgdl_per_min, dtype=np.float64)
+    if edges.ndim != 1 or edges.shape[0] == 0 or np.any(np.diff(edges) <= 0) or not np.all(
+            np.isfinite(edges)):
+        raise DataError(f"edges_mgdl_per_min must be finite and strictly increasing, got "
+                        f"{tuple(edges_mgdl_per_min)!r}")
+    return edges
+
+
+def _categories(rate: NDArray[np.float64], edges: NDArray[np.float64]) -> NDArray[np.intp]:
+    above = np.searchsorted(edges, rate, side="left")   # an edge joins the lower band
+    below = np.searchsorted(edges, rate, side="right")  # an edge joins the upper band
+    return np.where(rate > 0, above, below).astype(np.intp)
+
+
+def rate_categories(
+    rate_mgdl_per_min: ArrayLike,
+    *,
+    edges_mgdl_per_min: tuple[float, ...] = TREND_EDGES_MGDL_PER_MIN,
+) -> NDArray[np.intp]:
+    """Trend category of each rate of change: the band between consecutive edges.
+
+    Category ``0`` lies below the first edge and category ``len(edges)`` above the
+    last. A rate *on* an edge falls in the category nearer zero, as in the clinical
+    trend concurrence analysis of Eichenlaub et al. (2024): with the default edges,
+    ``-1 <= rate <= 1`` is steady, ``1 < rate <= 2`` rising, ``rate > 2`` rising fast, and
+    the same mirrored below zero, so a fall and a rise of the same size get mirrored
+    categories (integer readings 5 minutes apart give rates of exactly 1 or 2
+    mg/dL/min often). A rate of exactly 0 on an edge of 0 goes to the category above.
+
+    Parameters
+    ----------
+    rate_mgdl_per_min : array_like
+        Rates of change, e.g. from :func:`rate_of_change`; NaN allowed. [mg/dL/min]
+    edges_mgdl_per_min : tuple of float, optional
+        Strictly increasing category edges. [mg/dL/min]
+
+    Returns
+    -------
+    numpy.ndarray
+        Category index of each rate, ``0 .. len(edges)``; ``-1`` where the rate is
+        NaN. [-]
+
+    Raises
+    ------
+    DataError
+        On edges that are not finite and strictly increasing, or an infinite rate.
+
+    References
+    ----------
+    .. [1] Eichenlaub M, Pleus S, Freckmann G. A proposal for the clinical
+       characterization of continuous glucose monitoring trend arrow accuracy.
+       J Diabetes Sci Technol, 2024. doi:10.1177/19322968241232679 (categories
+       '<-3', '-3 to <-2', '-2 to <-1', '-1 to +1', '>+1 to +2', '>+2 to +3', '>+3').
+
+    Examples
+    --------
+    >>> rate_categories([-2.0, -1.0, 0.0, 1.0, 1.5, 2.0, 2.5, np.nan]).tolist()
+    [1, 2, 2, 2, 3, 3, 4, -1]
+    """
+    edges = _check_edges(edges_mgdl_per_min)
+    rate = as_1d_float(rate_mgdl_per_min, "rate_mgdl_per_min")
+    if np.isinf(rate).any():
+        raise DataError("rate_mgdl_per_min contains infinite values: "
+                        f"{describe_bad(np.isinf(rate))}")
+    out = _categories(rate, edges)
+    out[np.isnan(rate)] = -1
+    return out
 
 
 def trend_agreement(
@@ -163,10 +236,10 @@ def trend_agreement(
 
     Rates come from consecutive readings of each subject (:func:`rate_of_change`), for
     the reference and the device series at the same times; each rate falls in a
-    category bounded by ``edges_mgdl_per_min`` (category ``lo..hi`` holds
-    ``lo <= rate < hi``; by default < -2, -2..-1, -1..1, 1..2, >= 2 mg/dL/min). The
-    result is the confusion matrix of the categories (rows: reference, columns:
-    device) and the share on its diagonal.
+    category bounded by ``edges_mgdl_per_min`` (:func:`rate_categories`: a rate on an
+    edge belongs to the category nearer zero; by default < -2, -2..-1, -1..1 (both
+    included), 1..2, > 2 mg/dL/min). The result is the confusion matrix of the
+    categories (rows: reference, columns: device) and the share on its diagonal.
 
     Parameters
     ----------
@@ -204,19 +277,19 @@ def trend_agreement(
     .. [2] Klonoff DC, Freckmann G, Pleus S, et al. The Diabetes Technology Society Error
        Grid and Trend Accuracy Matrix for glucose monitors. J Diabetes Sci Technol
        18(6):1346-1361, 2024. doi:10.1177/19322968241275701
+    .. [3] Eichenlaub M, Pleus S, Freckmann G. A proposal for the clinical
+       characterization of continuous glucose monitoring trend arrow accuracy.
+       J Diabetes Sci Technol, 2024. doi:10.1177/19322968241232679 (edges joining the
+       category nearer zero).
 
     Examples
     --------
-    >>> r = trend_agreement([100, 110, 100], [100, 111, 100], [1, 1, 1], [0, 5, 10])
+    >>> r = trend_agreement([100, 110, 100], [100, 109, 95], [1, 1, 1], [0, 5, 10])
     >>> r.agreement_pct, r.n_pairs
     (50.0, 2)
     """
     ref, pred = validate_pairs(reference_mgdl, predicted_mgdl)
-    edges = np.asarray(edges_mgdl_per_min, dtype=np.float64)
-    if edges.ndim != 1 or edges.shape[0] == 0 or np.any(np.diff(edges) <= 0) or not np.all(
-            np.isfinite(edges)):
-        raise DataError(f"edges_mgdl_per_min must be finite and strictly increasing, got "
-                        f"{tuple(edges_mgdl_per_min)!r}")
+    edges = _check_edges(edges_mgdl_per_min)
     subj, _ = subject_codes(subject_id, ref.shape[0])
     t = time_array(time_min, ref.shape[0])
     order = _order(subj, t)
@@ -225,8 +298,7 @@ def trend_agreement(
     keep = np.isfinite(rr)
     if not keep.any():
         raise DataError("no subject has two readings; a rate of change needs two")
-    cr = np.searchsorted(edges, rr[keep], side="right")
-    cp = np.searchsorted(edges, rp[keep], side="right")
+    cr, cp = _categories(rr[keep], edges), _categories(rp[keep], edges)
     k = edges.shape[0] + 1
     counts = np.bincount(cr * k + cp, minlength=k * k).reshape(k, k)
     labels = _category_labels(tuple(edges.tolist()))

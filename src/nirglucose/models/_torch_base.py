@@ -79,7 +79,7 @@ from sklearn.utils import check_random_state
 from torch import nn
 
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError
+from ..exceptions import DataError
 from ..fitted import require_fitted
 from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
@@ -90,6 +90,7 @@ from ._constructor import (
     TRAINING_PARAMS,
     keyword_init,
 )
+from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from ._torch_io import FORMAT_VERSION, WHITENING_KEY, TorchIOMixin
 from ._torch_predict import NUMPY_ROWS, PREDICT_CHUNK, TorchPredictMixin
 from ._training import (
@@ -188,11 +189,14 @@ class _WhitenedInputs(nn.Module):
         return run
 
 
-class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstimator):
+class TorchRegressor(
+    ValidatedParamsMixin, TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstimator
+):
     """Base of the network estimators: one seeded training loop, save/load, fast predict.
 
     Subclasses implement :meth:`build_module` and may override :meth:`get_loss`
-    (calling the parent), :meth:`_fit_physics` and :meth:`_validate_extra_params`.
+    (calling the parent) and :meth:`_fit_physics`, and extend ``_parameter_constraints``
+    (:mod:`~nirglucose.models._params`) with their own parameters.
 
     Parameters
     ----------
@@ -284,6 +288,20 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
     own_params: ClassVar[dict[str, Any]] = {}
     #: Training defaults a subclass changes (e.g. the Optimized PINN's dropout 0.1).
     training_defaults: ClassVar[dict[str, Any]] = {}
+    #: Constraints of the training parameters; a subclass adds its ``own_params``'.
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "max_epochs": [Interval(Integral, 1, None, closed="left")],
+        "batch_size": [None, Interval(Integral, 1, None, closed="left")],
+        "lr": [Interval(Real, 0, None, closed="neither")],
+        "weight_decay": [Interval(Real, 0, None, closed="left")],
+        "dropout": [Interval(Real, 0, 1, closed="left")],
+        "whiten_inputs": ["boolean"],
+        "patience": [None, Interval(Integral, 1, None, closed="left")],
+        "val_fraction": [Interval(Real, 0, 1, closed="left")],
+        "lr_schedule": [StrOptions(set(LR_SCHEDULES))],
+        "refit": ["boolean"],
+        "random_state": ["random_state"],
+    }
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -350,9 +368,6 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
         """``physics_`` used to build an unfitted module (for ``n_parameters``)."""
         return {}
 
-    def _validate_extra_params(self) -> None:
-        """Check subclass hyper-parameters (raise ConfigError)."""
-
     def _prepare_physics_tensors(self) -> None:
         """Turn ``physics_`` into tensors the loss uses (after fit setup or load)."""
 
@@ -385,58 +400,6 @@ class TorchRegressor(TorchIOMixin, TorchPredictMixin, RegressorMixin, BaseEstima
     @staticmethod
     def _glucose(out: Any) -> torch.Tensor:
         return out[0] if isinstance(out, tuple) else out
-
-    def _validate_params(self) -> None:
-        def need(ok: bool, name: str, rule: str) -> None:
-            if not ok:
-                raise ConfigError(f"{type(self).__name__}: {name}={getattr(self, name)!r}; {rule}")
-
-        v = self.max_epochs
-        need(
-            isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1,
-            "max_epochs",
-            "must be an integer >= 1",
-        )
-        v = self.batch_size
-        need(
-            v is None or (isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1),
-            "batch_size",
-            "must be None (full batch) or an integer >= 1",
-        )
-        need(
-            self.patience is None
-            or (isinstance(self.patience, int | np.integer) and self.patience >= 1),
-            "patience",
-            "must be None or an integer >= 1",
-        )
-        need(
-            isinstance(self.lr, float | int) and math.isfinite(self.lr) and self.lr > 0,
-            "lr",
-            "must be a finite number > 0",
-        )
-        need(
-            isinstance(self.weight_decay, float | int) and self.weight_decay >= 0,
-            "weight_decay",
-            "must be >= 0",
-        )
-        need(
-            isinstance(self.dropout, float | int) and 0 <= self.dropout < 1,
-            "dropout",
-            "must lie in [0, 1)",
-        )
-        need(
-            isinstance(self.val_fraction, float | int) and 0 <= self.val_fraction < 1,
-            "val_fraction",
-            "must lie in [0, 1)",
-        )
-        need(self.lr_schedule in LR_SCHEDULES, "lr_schedule", f"valid: {', '.join(LR_SCHEDULES)}")
-        need(isinstance(self.refit, bool | np.bool_), "refit", "must be True or False")
-        need(
-            isinstance(self.whiten_inputs, bool | np.bool_),
-            "whiten_inputs",
-            "must be True or False",
-        )
-        self._validate_extra_params()
 
     def _measurements(
         self, X: Any, y: Any = None, *, require_target: bool = False, fit: bool = False

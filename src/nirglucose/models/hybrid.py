@@ -20,18 +20,20 @@ References
 
 from __future__ import annotations
 
-from numbers import Integral
 from pathlib import Path
+from typing import Any, ClassVar
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.model_selection import GroupKFold
 
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError
+from ..exceptions import DataError
+from ..fitted import require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import require_fitted
 from ._json_io import _state_value, _to_json
+from ._params import Integral, Interval, ValidatedParamsMixin
+from .reference import GP_RANDOM_STATE
 from .registry import get_model_class, make_model, register
 
 __all__ = ["EBLGP", "PhysicsInversionGP"]
@@ -70,7 +72,7 @@ def _nested_model(name: str, doc) -> object:
     return model
 
 
-class _ResidualHybrid(SchemaJsonMixin, RegressorMixin, BaseEstimator):
+class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, BaseEstimator):
     """Backbone, then a GP on its out-of-fold residual (see the module docstring).
 
     Parameters
@@ -89,6 +91,12 @@ class _ResidualHybrid(SchemaJsonMixin, RegressorMixin, BaseEstimator):
 
     backbone_name = ""
     _STATE = {"schema_": "json", "backbone_": "json", "residual_": "json"}
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "backbone_params": [None, dict],
+        "gp_params": [None, dict],
+        "cv": [Interval(Integral, 0, None, closed="left")],
+        "random_state": GP_RANDOM_STATE,
+    }
 
     def __init__(self, backbone_params=None, gp_params=None, cv: int = 3, random_state=None):
         self.backbone_params = backbone_params
@@ -98,14 +106,6 @@ class _ResidualHybrid(SchemaJsonMixin, RegressorMixin, BaseEstimator):
 
     def _require_fitted(self) -> None:
         require_fitted(self, "residual_")
-
-    def _check_params(self) -> None:
-        cv = self.cv
-        if isinstance(cv, bool) or not isinstance(cv, Integral) or cv < 0:
-            raise ConfigError(f"cv must be an integer >= 0 (folds), got {cv!r}")
-        for name in ("backbone_params", "gp_params"):
-            if getattr(self, name) is not None and not isinstance(getattr(self, name), dict):
-                raise ConfigError(f"{name} must be a dict or None, got {getattr(self, name)!r}")
 
     def _backbone(self):
         return make_model(self.backbone_name, **(self.backbone_params or {}))
@@ -141,7 +141,7 @@ class _ResidualHybrid(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         -------
         self
         """
-        self._check_params()
+        self._validate_params()
         self.schema_, Xa, y, groups = fit_input(self, X, y, groups)
         if self.schema_.is_plain:
             raise DataError(f"{self.registry_name} needs a device's ADC columns, not a plain array")

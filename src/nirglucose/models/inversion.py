@@ -42,7 +42,7 @@ References
 
 from __future__ import annotations
 
-from numbers import Integral, Real
+from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
@@ -51,12 +51,13 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from ..config import ScenarioConfig, resolve_config
 from ..constants import LED_REFERENCE_TEMPERATURE_C
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError, unknown_name
+from ..exceptions import DataError
+from ..fitted import require_fitted
 from ..optics.forward import FORWARD_MODELS
 from ..simulation.physiology import melanin_fraction_from_fitzpatrick, subcutis_fat_fraction
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import require_fitted
 from ._inversion_solver import NUISANCES, ForwardModel, map_estimate, posterior_variance
+from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from .registry import register
 
 __all__ = ["PhysicsInversion", "START_SD", "prior_start"]
@@ -174,13 +175,8 @@ def _scenario(X, schema) -> ScenarioConfig:
     return cfg
 
 
-def _check_choice(name: str, value, valid) -> None:
-    if value not in valid:
-        raise ConfigError(unknown_name(name, value, valid))
-
-
 @register("physics-inversion")
-class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
+class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, BaseEstimator):
     """Forward-model inversion for glucose and the unmeasured nuisances (MAP).
 
     See the module docstring for the model, what it learns and from what.
@@ -225,6 +221,13 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
     (60,)
     """
 
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "forward_model": [StrOptions(set(FORWARD_MODELS))],
+        "prior_scale": [Interval(Real, 0, None, closed="neither")],
+        "n_em": [Interval(Integral, 0, None, closed="left")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+    }
+
     _STATE = {
         "schema_": "json",
         "config_": "json",
@@ -255,16 +258,6 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
 
     def _require_fitted(self) -> None:
         require_fitted(self, "offset_")
-
-    def _check_params(self) -> None:
-        _check_choice("forward model", self.forward_model, FORWARD_MODELS)
-        ps = self.prior_scale
-        if isinstance(ps, bool) or not isinstance(ps, Real) or not (0 < ps < np.inf):
-            raise ConfigError(f"prior_scale must be a positive number, got {ps!r}")
-        for name, lo in (("n_em", 0), ("max_iter", 1)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, Integral) or v < lo:
-                raise ConfigError(f"{name} must be an integer >= {lo}, got {v!r}")
 
     def _state_dict(self):
         cfg = self.config_
@@ -328,7 +321,7 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         -------
         self
         """
-        self._check_params()
+        self._validate_params()
         self.schema_, Xa, y, _ = fit_input(self, X, y, groups)
         if self.schema_.is_plain:
             raise DataError(
@@ -404,7 +397,7 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         """Each reading's estimated glucose [mg/dL] and nuisances (:data:`NUISANCES`,
         blood fraction and coupling as values, not logs), as a DataFrame."""
         self._require_fitted()
-        self._check_params()
+        self._validate_params()
         obs, phys = self._observed(predict_input(self, X))
         mean, sd = self._prior(phys)
         sd[:, 1:] *= float(self.prior_scale)

@@ -33,23 +33,24 @@ References
 from __future__ import annotations
 
 import math
-from numbers import Integral
+from typing import Any, ClassVar
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.model_selection import GroupKFold, KFold
 from threadpoolctl import threadpool_limits
 
-from ..exceptions import ConfigError, DataError
+from ..exceptions import DataError
 from ..features import (
     compute_features,
     ebl_feature_matrix,
     feature_table,
 )
+from ..fitted import EstimatorNotFittedError, require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import EstimatorNotFittedError, require_fitted
 from ._ebl_folded import FoldedKernel, fold_ebl, folded_predict_one, predict_one_row
 from ._linear_solvers import fit_standardized_cv, pls1_coefs, ridge_coefs
+from ._params import Integral, Interval, IntervalArray, Real, ValidatedParamsMixin
 from .registry import register
 
 __all__ = ["EnhancedBeerLambert", "PLSBaseline", "DEFAULT_ALPHAS"]
@@ -100,13 +101,16 @@ def _fold_ids(n: int, groups, cv: int, random_state) -> np.ndarray | None:
     return None
 
 
-def _check_cv(cv) -> int:
-    if isinstance(cv, bool) or not isinstance(cv, Integral) or cv < 2:
-        raise ConfigError(f"cv must be an integer >= 2 (number of inner folds), got {cv!r}")
-    return int(cv)
+#: Constraints shared by both linear models: inner folds, the KFold seed, the ADC.
+_COMMON_CONSTRAINTS: dict[str, Any] = {
+    "cv": [Interval(Integral, 2, None, closed="left")],
+    "random_state": ["random_state"],
+    # checked where the resolution is resolved (check_adc_bits names the valid range)
+    "adc_bits": "no_validation",
+}
 
 
-class _LinearBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
+class _LinearBase(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, BaseEstimator):
     """Shared plumbing: input handling, fitted checks, ``n_parameters``."""
 
     def _require_fitted(self) -> None:
@@ -181,6 +185,15 @@ class EnhancedBeerLambert(_LinearBase):
     ((60,), 57)
     """
 
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "alphas": [
+            None,
+            Interval(Real, 0, None, closed="neither"),
+            IntervalArray(Real, 0, None, closed="neither"),
+        ],
+        **_COMMON_CONSTRAINTS,
+    }
+
     _STATE = {
         "schema_": "json",
         "alpha_": None,
@@ -216,13 +229,7 @@ class EnhancedBeerLambert(_LinearBase):
 
     def _alpha_grid(self) -> np.ndarray:
         alphas = DEFAULT_ALPHAS if self.alphas is None else self.alphas
-        try:
-            grid = np.atleast_1d(np.asarray(alphas, dtype=float))
-        except (TypeError, ValueError):
-            raise ConfigError(f"alphas must be positive numbers, got {alphas!r}") from None
-        if grid.ndim != 1 or grid.size == 0 or not np.all(np.isfinite(grid)) or np.any(grid <= 0):
-            raise ConfigError(f"alphas must be positive finite numbers, got {alphas!r}")
-        return grid
+        return np.atleast_1d(np.asarray(alphas, dtype=float))
 
     def fit(self, X, y=None, groups=None):
         """Fit on measurements.
@@ -240,8 +247,9 @@ class EnhancedBeerLambert(_LinearBase):
         -------
         self
         """
+        self._validate_params()
         alphas = self._alpha_grid()
-        cv = _check_cv(self.cv)
+        cv = int(self.cv)
         self.schema_, Xa, y, g = fit_input(self, X, y, groups, self.adc_bits)
         self.table_ = feature_table(self.schema_)
         folds = _fold_ids(len(Xa), g, cv, self.random_state) if len(alphas) > 1 else None
@@ -399,6 +407,12 @@ class PLSBaseline(_LinearBase):
     ((60,), 17)
     """
 
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "n_components": [None, Interval(Integral, 1, None, closed="left")],
+        "max_components": [Interval(Integral, 1, None, closed="left")],
+        **_COMMON_CONSTRAINTS,
+    }
+
     _STATE = {
         "schema_": "json",
         "n_components_": None,
@@ -432,13 +446,10 @@ class PLSBaseline(_LinearBase):
 
     def fit(self, X, y=None, groups=None):
         """Fit on measurements (same inputs as :meth:`EnhancedBeerLambert.fit`)."""
-        cv = _check_cv(self.cv)
+        self._validate_params()
+        cv = int(self.cv)
         mc = self.max_components
-        if isinstance(mc, bool) or not isinstance(mc, Integral) or mc < 1:
-            raise ConfigError(f"max_components must be a positive integer, got {mc!r}")
         nc = self.n_components
-        if nc is not None and (isinstance(nc, bool) or not isinstance(nc, Integral) or nc < 1):
-            raise ConfigError(f"n_components must be None or a positive integer, got {nc!r}")
         self.schema_, Xa, y, g = fit_input(self, X, y, groups, self.adc_bits)
         U = self._features(Xa)
         n, p = U.shape

@@ -38,7 +38,7 @@ References
 
 from __future__ import annotations
 
-from numbers import Integral, Real
+from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
@@ -46,11 +46,12 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from ..config import ScenarioConfig
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError
+from ..exceptions import DataError
+from ..fitted import require_fitted
 from ..schema import DeviceSchema, check_fit_size, check_reference_glucose
 from ..simulation.simulator import _tables, detected_fraction_given_glucose
-from ._checks import require_fitted
 from ._json_io import JsonModelMixin
+from ._params import Integral, Interval, Real, ValidatedParamsMixin
 from .registry import register
 
 __all__ = ["Oracle", "ORACLE_TRUE_COLUMNS", "GLUCOSE_SEARCH_RANGE_MGDL"]
@@ -139,7 +140,7 @@ def _model_log_ratio(
 
 
 @register("oracle")
-class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
+class Oracle(ValidatedParamsMixin, JsonModelMixin, RegressorMixin, BaseEstimator):
     """Best-case estimator: the forward model inverted with the true nuisance state.
 
     Reads ``true_*`` columns (the only estimator allowed to). See the module docstring
@@ -174,6 +175,12 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
     >>> bool(abs(o.predict(ds) - ds.frame["glucose_mgdl"]).max() < 3.0)
     True
     """
+
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "prior": ["boolean"],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "tol": [Interval(Real, 0, None, closed="neither")],  # [mg/dL]
+    }
 
     _STATE = {
         "offset_": (-1,),
@@ -210,15 +217,6 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
         self.prior_mean_ = float(self.prior_mean_)
         self.prior_var_ = float(self.prior_var_)
 
-    def _check_params(self) -> None:
-        if not isinstance(self.prior, bool | np.bool_):
-            raise ConfigError(f"prior must be True or False, got {self.prior!r}")
-        mi = self.max_iter
-        if isinstance(mi, bool) or not isinstance(mi, Integral) or mi < 1:
-            raise ConfigError(f"max_iter must be a positive integer, got {mi!r}")
-        if isinstance(self.tol, bool) or not isinstance(self.tol, Real) or not self.tol > 0:
-            raise ConfigError(f"tol must be a positive number [mg/dL], got {self.tol!r}")
-
     def fit(self, X, y=None):
         """Learn the channel offsets, the residual covariance and the glucose prior.
 
@@ -233,7 +231,7 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
         -------
         self
         """
-        self._check_params()
+        self._validate_params()
         cfg, frame = _config_and_frame(X, None)
         _check_truth(cfg, frame)
         if y is None:
@@ -274,7 +272,7 @@ class Oracle(JsonModelMixin, RegressorMixin, BaseEstimator):
             Simulated snapshots; a DataFrame is read with the training scenario.
         """
         self._require_fitted()
-        self._check_params()
+        self._validate_params()
         cfg, frame = _config_and_frame(X, self.config_)
         _check_truth(cfg, frame)
         y_obs = _log_ratio(cfg, frame) - self.offset_

@@ -36,7 +36,6 @@ References
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar
 
 import numpy as np
@@ -50,6 +49,7 @@ from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
 from ..simulation.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
+from ._params import Integral, Interval, ParameterError, Real, StrOptions
 from ._torch_base import TorchRegressor
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
@@ -97,12 +97,6 @@ def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig |
         return None, f"none: {exc}"
 
 
-def _positive_or_none(est: Any, name: str) -> None:
-    v = getattr(est, name)
-    if v is not None and not (isinstance(v, float | int) and math.isfinite(v) and v > 0):
-        raise ConfigError(f"{type(est).__name__}: {name}={v!r}; must be None or a number > 0")
-
-
 def _with_physics(est: Any, total: torch.Tensor, physics: torch.Tensor) -> torch.Tensor:
     """``total + lambda_phys * physics``; with ``lambda_phys == 0`` exactly ``total``.
 
@@ -115,10 +109,10 @@ def _with_physics(est: Any, total: torch.Tensor, physics: torch.Tensor) -> torch
     return total + est.lambda_phys * physics
 
 
-def _lambda_ok(est: Any) -> None:
-    v = est.lambda_phys
-    if not (isinstance(v, float | int) and math.isfinite(v) and v >= 0):
-        raise ConfigError(f"{type(est).__name__}: lambda_phys={v!r}; must be a finite number >= 0")
+#: Constraint of the physics weight shared by every PINN: finite and >= 0.
+_LAMBDA_PHYS = [Interval(Real, 0, None, closed="left")]
+#: A physics constant that defaults to the scenario's: None, or finite and > 0.
+_POSITIVE_OR_NONE = [None, Interval(Real, 0, None, closed="neither")]
 
 
 # ============================================================================ Beer-Lambert
@@ -134,15 +128,13 @@ class _BeerLambertPINN(TorchRegressor):
         "signal_gain": None,
     }
 
-    def _validate_extra_params(self) -> None:
-        _lambda_ok(self)
-        if self.physics_form not in PHYSICS_FORMS:
-            raise ConfigError(
-                f"{type(self).__name__}: physics_form={self.physics_form!r}; "
-                f"valid: {', '.join(PHYSICS_FORMS)}"
-            )
-        _positive_or_none(self, "absorptivity_per_cm_per_mm")
-        _positive_or_none(self, "signal_gain")
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        **TorchRegressor._parameter_constraints,
+        "lambda_phys": _LAMBDA_PHYS,
+        "physics_form": [StrOptions(set(PHYSICS_FORMS))],
+        "absorptivity_per_cm_per_mm": _POSITIVE_OR_NONE,
+        "signal_gain": _POSITIVE_OR_NONE,
+    }
 
     def _physics_constants(self, cfg: ScenarioConfig, origin: str) -> dict:
         peak = self.absorptivity_per_cm_per_mm
@@ -304,19 +296,16 @@ class OptimizedPINN(_BeerLambertPINN):
     own_params: ClassVar[dict[str, Any]] = {"d_model": 64, "n_heads": 4}
     training_defaults: ClassVar[dict[str, Any]] = {"dropout": 0.1}
 
-    def _validate_extra_params(self) -> None:
-        super()._validate_extra_params()
-        ok = (
-            isinstance(self.d_model, int)
-            and isinstance(self.n_heads, int)
-            and self.d_model >= 1
-            and self.n_heads >= 1
-            and self.d_model % self.n_heads == 0
-        )
-        if not ok:
-            raise ConfigError(
-                f"OptimizedPINN: d_model={self.d_model!r}, n_heads={self.n_heads!r}; both "
-                f"integers >= 1 with n_heads dividing d_model"
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        **_BeerLambertPINN._parameter_constraints,
+        "d_model": [Interval(Integral, 1, None, closed="left")],
+        "n_heads": [Interval(Integral, 1, None, closed="left")],
+    }
+
+    def _check_param_relations(self) -> None:
+        if self.d_model % self.n_heads:
+            raise ParameterError(
+                f"OptimizedPINN: n_heads={self.n_heads!r} must divide d_model={self.d_model!r}"
             )
 
     def build_module(self) -> OptimizedPINNNet:
@@ -372,11 +361,11 @@ class _RTEPINNBase(TorchRegressor):
     #: Wavelengths the optical heads predict and the regulariser covers. [nm]
     REGULARISED_NM: ClassVar[tuple[float, ...]] = DEFAULT_LED_WAVELENGTHS_NM
 
-    def _validate_extra_params(self) -> None:
-        _lambda_ok(self)
-        v = self.stability_weight
-        if not (isinstance(v, float | int) and math.isfinite(v) and v >= 0):
-            raise ConfigError(f"{type(self).__name__}: stability_weight={v!r}; must be >= 0")
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        **TorchRegressor._parameter_constraints,
+        "lambda_phys": _LAMBDA_PHYS,
+        "stability_weight": [Interval(Real, 0, None, closed="left")],
+    }
 
     def _regularised(self, wavelengths_nm: tuple[float, ...]) -> list[int]:
         """Indices of the data's LEDs the optical heads cover (all of them here)."""

@@ -25,19 +25,24 @@ References
 
 from __future__ import annotations
 
-from numbers import Integral
+from typing import Any, ClassVar
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from threadpoolctl import threadpool_limits
 
-from ..exceptions import ConfigError, DataError
+from ..exceptions import DataError
+from ..fitted import require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._checks import require_fitted
+from ._params import Integral, Interval, Real, ValidatedParamsMixin
 from ._whitening import scale_of, zca_whitening
 from .registry import register
 
-__all__ = ["MeanReference", "GPReference", "GBRReference"]
+__all__ = ["MeanReference", "GPReference", "GBRReference", "GP_RANDOM_STATE"]
+
+#: Seeds :func:`numpy.random.default_rng` takes: None, an integer >= 0 or a Generator
+#: (the GP's row subset and restarts).
+GP_RANDOM_STATE: list[Any] = [None, Interval(Integral, 0, None, closed="left"), np.random.Generator]
 
 
 #: Rows per block of prediction: the GP's kernel rows and the trees' node indices are
@@ -53,7 +58,7 @@ def _by_chunks(fn, U: np.ndarray) -> np.ndarray:
     return np.concatenate([fn(U[i : i + PREDICT_ROWS]) for i in range(0, len(U), PREDICT_ROWS)])
 
 
-class _ReferenceBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
+class _ReferenceBase(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, BaseEstimator):
     """Input reading, fitted checks and the saved device, shared by the reference learners.
 
     Inputs: the fitted device's absorbances, then its physiological columns (n, p).
@@ -65,7 +70,9 @@ class _ReferenceBase(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         require_fitted(self, self._FITTED)
 
     def _fit_inputs(self, X, y, groups):
-        """``(U (n, p), y)`` for ``fit``; records the device as ``schema_``."""
+        """``(U (n, p), y)`` for ``fit``, parameters checked first; records the device
+        as ``schema_``."""
+        self._validate_params()
         self.schema_, Xa, y, _ = fit_input(self, X, y, groups)
         return self._inputs(Xa), y
 
@@ -151,10 +158,8 @@ class MeanReference(_ReferenceBase):
         return tags
 
 
-def _positive_int(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, Integral) or value < 1:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
+#: A positive count (rows, stages, depth).
+_POSITIVE_INT = [Interval(Integral, 1, None, closed="left")]
 
 
 @register("gp")
@@ -211,6 +216,12 @@ class GPReference(_ReferenceBase):
     (30,)
     """
 
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "max_fit_rows": _POSITIVE_INT,
+        "n_restarts_optimizer": [Interval(Integral, 0, None, closed="left")],
+        "random_state": GP_RANDOM_STATE,
+    }
+
     _STATE = {
         "schema_": "json",
         "x_mean_": (-1,),
@@ -239,11 +250,8 @@ class GPReference(_ReferenceBase):
         from sklearn.gaussian_process.kernels import RBF, WhiteKernel
         from sklearn.gaussian_process.kernels import ConstantKernel as C
 
-        max_rows = _positive_int("max_fit_rows", self.max_fit_rows)
-        nr = self.n_restarts_optimizer
-        if isinstance(nr, bool) or not isinstance(nr, Integral) or nr < 0:
-            raise ConfigError(f"n_restarts_optimizer must be an integer >= 0, got {nr!r}")
         U, y = self._fit_inputs(X, y, groups)
+        max_rows = int(self.max_fit_rows)
         rng = np.random.default_rng(self.random_state)
         if len(U) > max_rows:
             keep = np.sort(rng.choice(len(U), size=max_rows, replace=False))
@@ -264,7 +272,7 @@ class GPReference(_ReferenceBase):
         gp = GaussianProcessRegressor(
             kernel=kernel,
             normalize_y=True,
-            n_restarts_optimizer=int(nr),
+            n_restarts_optimizer=int(self.n_restarts_optimizer),
             random_state=None if self.random_state is None else int(rng.integers(2**31 - 1)),
         )
         # One BLAS thread: the fitted kernel depends on the thread count (1 against 2
@@ -381,6 +389,15 @@ class GBRReference(_ReferenceBase):
     (30,)
     """
 
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "n_estimators": _POSITIVE_INT,
+        "learning_rate": [Interval(Real, 0, 1, closed="right")],
+        "max_depth": _POSITIVE_INT,
+        "subsample": [Interval(Real, 0, 1, closed="right")],
+        "whiten_inputs": ["boolean"],
+        "random_state": ["random_state"],
+    }
+
     _STATE = {
         "schema_": "json",
         "init_": None,
@@ -416,14 +433,6 @@ class GBRReference(_ReferenceBase):
         """Fit the boosted trees on the training rows."""
         from sklearn.ensemble import GradientBoostingRegressor
 
-        _positive_int("n_estimators", self.n_estimators)
-        _positive_int("max_depth", self.max_depth)
-        for name in ("learning_rate", "subsample"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not 0 < v <= 1:
-                raise ConfigError(f"{name} must be a number in (0, 1], got {v!r}")
-        if not isinstance(self.whiten_inputs, bool | np.bool_):
-            raise ConfigError(f"whiten_inputs must be True or False, got {self.whiten_inputs!r}")
         U, y = self._fit_inputs(X, y, groups)
         p = U.shape[1]
         if self.whiten_inputs:

@@ -26,13 +26,15 @@ next reading.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from itertools import product
+from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
 
-from ..exceptions import ConfigError, DataError
+from ..exceptions import DataError
+from ._params import Interval, Real, check_parameters
 
 __all__ = ["CausalKalmanSmoother", "INITIAL_RATE_SD_MGDL_PER_MIN", "SMOOTHER_GRID", "tune_smoother"]
 
@@ -47,13 +49,6 @@ SMOOTHER_GRID: dict[str, tuple[float, ...]] = {
     "accel_psd": (0.001, 0.01, 0.1),
     "max_rate_mgdl_per_min": (2.0, 4.0),
 }
-
-
-def _positive(name: str, value: float) -> float:
-    v = float(value)
-    if not np.isfinite(v) or v <= 0:
-        raise ConfigError(f"{name} = {value!r} is invalid; expected a finite number > 0")
-    return v
 
 
 @dataclass(frozen=True)
@@ -86,13 +81,16 @@ class CausalKalmanSmoother:
     max_rate_mgdl_per_min: float = 4.0
     reset_after_min: float = 120.0
 
+    #: Finite and > 0, except the rate limit, which may be ``inf`` (no limit).
+    _parameter_constraints: ClassVar[dict[str, Any]] = {
+        "measurement_sd_mgdl": [Interval(Real, 0, None, closed="neither")],
+        "accel_psd": [Interval(Real, 0, None, closed="neither")],
+        "max_rate_mgdl_per_min": [Interval(Real, 0, None, closed="right")],
+        "reset_after_min": [Interval(Real, 0, None, closed="neither")],
+    }
+
     def __post_init__(self) -> None:
-        _positive("measurement_sd_mgdl", self.measurement_sd_mgdl)
-        _positive("accel_psd", self.accel_psd)
-        _positive("reset_after_min", self.reset_after_min)
-        if np.isnan(self.max_rate_mgdl_per_min) or self.max_rate_mgdl_per_min <= 0:
-            raise ConfigError(f"max_rate_mgdl_per_min = {self.max_rate_mgdl_per_min!r} is "
-                              "invalid; expected a number > 0 (inf for no limit)")
+        check_parameters(self._parameter_constraints, asdict(self), type(self).__name__)
 
     def smooth(self, predicted_mgdl, time_min, subject_id) -> np.ndarray:
         """The filtered glucose of every reading [mg/dL], in the input's order.

@@ -27,6 +27,7 @@ from ..evaluation.findings import (
     label,
 )
 from ..evaluation.subgroups import subgroup_findings
+from ..formatting import format_number
 from .markup import esc as _esc
 from .markup import preset_of
 
@@ -139,14 +140,14 @@ def _alt_of(table: pd.DataFrame, refs: dict, preset: str) -> str:
     best = part[part["status"] == "best"]
     head = part.iloc[0] if not len(best) else best.iloc[0]
 
-    txt = (f"{preset}: best {label(str(head['model']))} {head['rmse_mgdl']:.1f} mg/dL, "
-           f"{int((part['status'] == 'tied').sum())} tied with it, worst "
-           f"{label(str(part.iloc[-1]['model']))} {part.iloc[-1]['rmse_mgdl']:.1f}")
+    txt = (f"{preset}: best {label(str(head['model']))} {format_number(head['rmse_mgdl'])} "
+           f"mg/dL, {int((part['status'] == 'tied').sum())} tied with it, worst "
+           f"{label(str(part.iloc[-1]['model']))} {format_number(part.iloc[-1]['rmse_mgdl'])}")
     r = refs.get(preset, {})
     if "mean" in r:
-        txt += f", no skill {r['mean']:.1f}"
+        txt += f", no skill {format_number(r['mean'])}"
     if "oracle" in r:
-        txt += f", oracle {r['oracle']:.1f}"
+        txt += f", oracle {format_number(r['oracle'])}"
     return txt
 
 

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
+from ..formatting import format_ci, format_number
 from .markup import esc as _esc
 from .markup import model_label as _model_label
 from .markup import preset_of
@@ -42,15 +43,19 @@ def _read(res: Results) -> pd.DataFrame | None:
 
 
 def _table(t: pd.DataFrame, preset: str) -> str:
+    def sig(value, low, high) -> str:  # three significant digits: errors span units
+        return format_ci(value, low, high, 3, style="significant")
+
     rows = []
     for _, r in t.iterrows():
         unit = "" if r["unit"] == "-" else f" {r['unit']}"
         rows.append(
             f"<tr><td>{_esc(_model_label(str(r['model'])))}</td>"
             f"<td>{_esc(_LABELS.get(r['quantity'], r['quantity']))}</td>"
-            f"<td>{r['rmse']:.3g} [{r['rmse_ci_low']:.3g}, {r['rmse_ci_high']:.3g}]{unit}</td>"
-            f"<td>{r['bias']:+.2g}</td><td>{r['pearson_r']:.2f}</td>"
-            f"<td>{r['truth_sd']:.3g}{unit}</td></tr>"
+            f"<td>{sig(r['rmse'], r['rmse_ci_low'], r['rmse_ci_high'])}{unit}</td>"
+            f"<td>{format_number(r['bias'], 2, style='significant', sign=True)}</td>"
+            f"<td>{format_number(r['pearson_r'], 2)}</td>"
+            f"<td>{format_number(r['truth_sd'], 3, style='significant')}{unit}</td></tr>"
         )
     return (f'<div class="scroll"><table id="inverse-{_esc(preset)}"><thead><tr>'
             "<th>Model</th><th>Quantity</th><th>RMSE [95 % CI]</th><th>Bias</th>"

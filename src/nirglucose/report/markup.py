@@ -5,11 +5,12 @@ section modules and the page read them, none of them imports back)."""
 from __future__ import annotations
 
 import html
-import math
 import re
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
+
+from ..formatting import format_number
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -32,26 +33,14 @@ def num(v: Any, digits: int = 1) -> str:
     >>> num(1234.56), num(0.01234, 3), num(float("nan"))
     ('1,234.6', '0.012', '–')
     """
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return "–" if v is None or v == "" else esc(v)
-    if not math.isfinite(f):
-        return "–"
-    if digits == 0:
-        return f"{f:,.0f}"
     if digits == 3:  # latencies span 0.001-100 ms
-        return f"{f:.3f}" if abs(f) < 0.1 else f"{f:.2f}" if abs(f) < 10 else f"{f:.1f}"
-    return f"{f:,.{digits}f}"
+        return format_number(v, style="latency", text=esc)
+    return format_number(v, digits, thousands=True, text=esc)
 
 
 def pval(v: Any) -> str:
     """A p-value with 3 significant digits, ``"–"`` when missing."""
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return "–"
-    return f"{f:.3g}" if math.isfinite(f) else "–"
+    return format_number(v, 3, style="significant")
 
 
 def _inline_md(text: str) -> str:

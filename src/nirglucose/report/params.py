@@ -8,10 +8,10 @@ ablation rows (``<pinn>/no-physics``) are left out (their λ is 0 by constructio
 from __future__ import annotations
 
 import html
-import math
 from collections.abc import Sequence
 from typing import Any
 
+from ..formatting import format_number
 from .figures import Results, model_order
 
 __all__ = ["hyperparameter_rows", "hyperparameter_section"]
@@ -27,9 +27,9 @@ def _fmt(v: Any) -> str:
     if isinstance(v, (list, tuple)):
         return ", ".join(_fmt(x) for x in v)
     if isinstance(v, float):
-        if v == 0 or not math.isfinite(v):
-            return f"{v:g}"
-        return f"{v:.3g}" if 1e-3 <= abs(v) < 1e4 else f"{v:.0e}"
+        if v == 0 or 1e-3 <= abs(v) < 1e4:  # readable as 3 significant digits
+            return format_number(v, 3, style="significant")
+        return format_number(v, 0, style="scientific")  # lr 1e-05, weight decay 1e+04
     return str(v)
 
 

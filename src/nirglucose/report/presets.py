@@ -11,7 +11,6 @@ settings that differ, and how the results differ).
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
@@ -21,6 +20,7 @@ import pandas as pd
 from ..evaluation.findings import RunData, physics_verdicts
 from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
+from ..formatting import format_number
 from .markup import esc as _esc
 from .markup import model_label as _model_label
 from .tables import extra_table, hypo_note, main_table, significance
@@ -51,15 +51,9 @@ def preset_dirs(results_dir: str | Path) -> list[Path]:
 
 
 def _num(v: Any, digits: int = 1, sign: bool = False) -> str:
-    """A fixed-point number (``"–"`` when missing); unlike the page's ``html._num`` no
+    """A fixed-point number (``"–"`` when missing); unlike the page's ``markup.num`` no
     thousands separator and no latency rounding (p-values keep 3 decimals), and a sign."""
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return "–"
-    if not math.isfinite(f):
-        return "–"
-    return f"{f:+.{digits}f}" if sign else f"{f:.{digits}f}"
+    return format_number(v, digits, sign=sign)
 
 
 def _read_ablation(d: Path) -> pd.DataFrame | None:
@@ -103,7 +97,7 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation",
     rows = []
     for v in physics_verdicts(run):
         r = v["row"]
-        lam_txt = "–" if v["lambda"] is None else f"{v['lambda']:g}"
+        lam_txt = format_number(v["lambda"], style="general")
         if v["tested"]:
             diff = (f"<td>{_num(r['rmse_diff_mgdl'], 2, True)} [{_num(r['ci_low'], 2, True)}, "
                     f"{_num(r['ci_high'], 2, True)}]</td><td>{_num(r['p_holm'], 3)}</td>")

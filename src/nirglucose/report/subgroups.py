@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from ..evaluation.subgroups import SUBGROUP_COLUMNS, SUBGROUP_LABELS, subgroup_errors
+from ..formatting import MISSING, format_ci
 from .figures.inputs import competitors
 from .markup import esc as _esc
 from .markup import model_label as _model_label
@@ -55,8 +56,8 @@ def _table(t: pd.DataFrame, by: str, preset: str, order: list[str]) -> str:
     for m in [m for m in order if m in set(part["model"])]:
         r = part[part["model"] == m].set_index("group")
         cells = "".join(
-            f"<td>{r.at[g, 'rmse_mgdl']:.1f} [{r.at[g, 'rmse_ci_low']:.1f}, "
-            f"{r.at[g, 'rmse_ci_high']:.1f}]</td>" if g in r.index else "<td>–</td>"
+            f"<td>{format_ci(*r.loc[g, ['rmse_mgdl', 'rmse_ci_low', 'rmse_ci_high']])}</td>"
+            if g in r.index else f"<td>{MISSING}</td>"
             for g in groups)
         rows.append(f"<tr><td>{_esc(_model_label(m))}</td>{cells}</tr>")
     return (f"<h4>RMSE [mg/dL, 95 % CI] by {_esc(SUBGROUP_LABELS[by])} on "

@@ -13,8 +13,6 @@ writes the same figures as files. The numbers come from
 from __future__ import annotations
 
 import base64
-import html
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,10 +24,12 @@ from pydantic import BaseModel
 
 from ..config import ScenarioConfig
 from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
+from ..formatting import format_ci, format_number
 from ..plots.designs import plot_design_curve
 from ..plots.fleet import figure_fleet
 from ..plots.style import figure_bytes, model_label, save_figure
 from ..plots.sweep import figure_ablation, figure_data_size, plot_shift_bars, plot_sweep_curve
+from .markup import esc as _esc
 
 __all__ = ["SweepFigure", "MARD_LIMIT_PCT", "sweep_figures", "save_sweep_figures",
            "sweep_section"]
@@ -114,7 +114,8 @@ def sweep_figures(sweep_dir: str | Path | SweepResult) -> list[SweepFigure]:
                               threshold=MARD_LIMIT_PCT)
         out.append(SweepFigure(
             "sweep_mard", f"MARD of each model against {key}, with the "
-            f"{MARD_LIMIT_PCT:g} % line; band = 95 % t-interval over seeds.", ax.figure))
+            f"{format_number(MARD_LIMIT_PCT, style='general')} % line; band = 95 % t-interval "
+            "over seeds.", ax.figure))
     if res.effects is not None and "source" in res.effects:
         out.append(SweepFigure(
             "sweep_ablation", "Noise-source ablation: ΔRMSE when a source is switched off "
@@ -173,16 +174,8 @@ def save_sweep_figures(
     return paths
 
 
-def _esc(x: Any) -> str:
-    return html.escape(str(x))
-
-
 def _num(v: Any, digits: int = 1) -> str:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        return _esc(v)
-    return "–" if not math.isfinite(v) else f"{v:.{digits}f}"
+    return format_number(v, digits, text=_esc)
 
 
 def _table(head: list[str], rows: list[list[str]], table_id: str) -> str:
@@ -193,8 +186,8 @@ def _table(head: list[str], rows: list[list[str]], table_id: str) -> str:
 
 
 def _ci(row: pd.Series, stem: str) -> str:
-    return (f"{_num(row[f'{stem}_mean'])} [{_num(row.get(f'{stem}_ci_low'))}, "
-            f"{_num(row.get(f'{stem}_ci_high'))}]")
+    return format_ci(row[f"{stem}_mean"], row.get(f"{stem}_ci_low"), row.get(f"{stem}_ci_high"),
+                     text=_esc)
 
 
 def _label(model: str) -> str:
@@ -268,7 +261,7 @@ def _crossing(s: pd.DataFrame, key: str) -> list[str]:
     rows = [[_label(r["model"]),
              _num(r["crossing"], 2) if r["status"] == "crosses" else _esc(r["status"])]
             for _, r in cross.iterrows()]
-    return [f"<h3>Where MARD crosses {MARD_LIMIT_PCT:g} %</h3>",
+    return [f"<h3>Where MARD crosses {format_number(MARD_LIMIT_PCT, style='general')} %</h3>",
             _table(["model", f"{_esc(key)} at the crossing"], rows, "sweep-crossing")]
 
 

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from ..evaluation.reference import STUDY_TABLE
+from ..formatting import format_number
 from .markup import esc as _esc
 from .markup import markdown_to_html, preset_of, strip_ablation, user_data_md
 from .markup import model_label as _model_label
@@ -150,13 +151,15 @@ def hypo_note(results: Results) -> str:
     lo, hi, n, n_hypo = cov
     if n_hypo == 0:
         text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): no reading of this run "
-                f"is below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} mg/dL, {n:,} "
+                f"is below 70 mg/dL (reference glucose {format_number(lo, 0)}–"
+                f"{format_number(hi, 0)} mg/dL, {format_number(n, 0, thousands=True)} "
                 "readings), so these shares say nothing about hypoglycaemia, where an "
                 "error matters most.")
     else:
-        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): {n_hypo:,} of the "
-                f"{n:,} readings are below 70 mg/dL (reference glucose {lo:.0f}–{hi:.0f} "
-                "mg/dL).")
+        text = (f"† Error-grid columns (Clarke, Parkes, ISO 15197): "
+                f"{format_number(n_hypo, 0, thousands=True)} of the "
+                f"{format_number(n, 0, thousands=True)} readings are below 70 mg/dL (reference "
+                f"glucose {format_number(lo, 0)}–{format_number(hi, 0)} mg/dL).")
     return f'<p class="note" id="{_esc(_hypo_id(results))}">{_esc(text)}</p>'
 
 

@@ -20,6 +20,7 @@ from ..dataset import atomic_write
 from ..evaluation.reference import MODEL_LABELS
 from ..evaluation.wear_calibration import apply_schedule
 from ..exceptions import DataError
+from ..formatting import format_number
 from ..plots.style import figure_bytes
 from ..plots.wear import figure_wear_traces, plot_error_by_day
 
@@ -50,7 +51,7 @@ def _img(fig, alt: str) -> str:
 
 
 def _table(frame: pd.DataFrame) -> str:
-    return frame.to_html(index=False, float_format=lambda v: f"{v:.1f}", border=0,
+    return frame.to_html(index=False, float_format=format_number, border=0,
                          escape=True)
 
 
@@ -67,27 +68,29 @@ def _findings(s: pd.DataFrame, st: pd.DataFrame) -> list[str]:
     if len(models):
         best = models.loc[models["rmse_mgdl"].idxmin()]
         out.append(f"Best model and schedule: {_label(best['model'])} with {best['schedule']}, "
-                   f"RMSE {best['rmse_mgdl']:.1f} mg/dL [{best['rmse_ci_low']:.1f}, "
-                   f"{best['rmse_ci_high']:.1f}] ({n_subj} subjects, subject bootstrap).")
+                   f"RMSE {format_number(best['rmse_mgdl'])} mg/dL "
+                   f"[{format_number(best['rmse_ci_low'])}, {format_number(best['rmse_ci_high'])}]"
+                   f" ({n_subj} subjects, subject bootstrap).")
     for ref, what in (("oracle", "the oracle (true nuisances), the bound"),
                       ("mean", "no skill: the training mean, and with a schedule the last "
                        "fingerstick carried forward")):
         r = raw[raw["model"] == ref].set_index("schedule")["rmse_mgdl"]
         if len(r):
-            out.append(f"Reference, {what}: " + ", ".join(f"{k} {v:.1f}" for k, v in r.items())
-                       + " mg/dL.")
+            values = ", ".join(f"{k} {format_number(v)}" for k, v in r.items())
+            out.append(f"Reference, {what}: {values} mg/dL.")
     for model, g in models.groupby("model", sort=False):
         r = g.set_index("schedule")
         if "factory" in r.index and len(r) > 1:
             b = r.drop(index="factory")["rmse_mgdl"].idxmin()
             overlap = r.loc[b, "rmse_ci_high"] >= r.loc["factory", "rmse_ci_low"]
-            out.append(f"{_label(model)}: factory {r.loc['factory', 'rmse_mgdl']:.1f}, best "
-                       f"schedule {b} {r.loc[b, 'rmse_mgdl']:.1f} mg/dL"
+            out.append(f"{_label(model)}: factory {format_number(r.loc['factory', 'rmse_mgdl'])}"
+                       f", best schedule {b} {format_number(r.loc[b, 'rmse_mgdl'])} mg/dL"
                        + (" (intervals overlap: not shown to differ)." if overlap else "."))
     sm = s.pivot_table(index=["model", "schedule"], columns="variant", values="rmse_mgdl")
     if {"raw", "smoothed"} <= set(sm.columns):
         d = (sm["smoothed"] - sm["raw"])
-        out.append(f"The causal smoother changes RMSE by {d.min():+.1f} to {d.max():+.1f} "
+        out.append(f"The causal smoother changes RMSE by {format_number(d.min(), sign=True)} to "
+                   f"{format_number(d.max(), sign=True)} "
                    "mg/dL across models and schedules (negative: it helps).")
     passed = st[(st["variant"] == "raw") & ~st["model"].isin(_REFERENCE)]
     if len(passed):

@@ -281,7 +281,8 @@ def rhs_type1(x: np.ndarray, p: dict, dose_mg, insulin_pmol_per_kg_min) -> np.nd
 
 
 def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
-              bolus_pmol_per_kg: np.ndarray | None = None) -> np.ndarray:
+              bolus_pmol_per_kg: np.ndarray | None = None,
+              sensitivity: np.ndarray | None = None) -> np.ndarray:
     """Plasma glucose every minute, by fixed-step RK4 (module docstring).
 
     Parameters
@@ -300,6 +301,11 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     bolus_pmol_per_kg : numpy.ndarray, optional
         Insulin bolus at the start of each minute (type 1), (n, n_min); it enters
         Isc1. [pmol/kg]
+    sensitivity : numpy.ndarray, optional
+        Insulin-sensitivity factor at each minute (type 1), (n, n_min): both insulin
+        actions, ``Vmx`` and ``kp3``, are multiplied by it during that minute (the
+        time-varying insulin sensitivity of the S2017 simulator, Visentin et al. 2018,
+        J. Diabetes Sci. Technol. 12(2), 273-281; :mod:`.therapy`). Default 1. [-]
 
     Returns
     -------
@@ -313,6 +319,8 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     n, n_min = meals_mg.shape
     if kind == "type1":
         u = p["u2ss"]
+        base = p
+        p = dict(p)
 
         def f(x, dose):
             return rhs_type1(x, p, dose, u)
@@ -327,8 +335,13 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     terms = _emptying_terms(dose, p["b"], p["d"])
     out = np.empty((n, n_min))
     h = STEP_MIN
+    factor = None
     for k in range(n_min):
         out[:, k] = x[gp_row] / vg
+        if sensitivity is not None and kind == "type1" and (
+                factor is None or (sensitivity[:, k] != factor).any()):
+            factor = sensitivity[:, k].copy()
+            p["Vmx"], p["kp3"] = base["Vmx"] * factor, base["kp3"] * factor
         meal = meals_mg[:, k]
         if meal.any() or eating.any():
             x[0] += meal

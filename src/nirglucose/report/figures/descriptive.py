@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from ...config import NOISE_SOURCES, device_capabilities
+from ...formatting import format_number
 from ...models import make_model, tuned_params
 from ...simulation.measurement import PMF_COLUMNS, PPG_COLUMNS
 
@@ -77,7 +78,7 @@ def noise_states(config) -> dict[str, tuple[str, str]]:
         if f <= 0:
             out[src] = ("off", "off")
             continue
-        factor = f"×{f:g}" if f != 1 else ""
+        factor = f"×{_g(f)}" if f != 1 else ""
         cap, note = NEUTRALISED_BY.get(src, (None, ""))
         if cap in caps:
             out[src] = ("neutralised", note)
@@ -108,7 +109,7 @@ def _module_blocks(module) -> list[tuple[str, str]]:
         widths = [linears[0].in_features] + [m.out_features for m in linears]
         drop = [m.p for m in child.modules() if isinstance(m, nn.Dropout) and m.p > 0]
         blocks.append((name, "→".join(str(w) for w in widths)
-                       + (f", dropout {drop[0]:g}" if drop else "")))
+                       + (f", dropout {_g(drop[0])}" if drop else "")))
     return blocks
 
 
@@ -138,7 +139,8 @@ def fitted_architectures(dataset, preset: str | None,
             blocks = [("inputs", f"{n_a} absorbances + {n_p} physiology"),
                       ("features", f"{len(m.table_)} engineered (Beer–Lambert)"),
                       ("standardise", f"{len(m.table_)}"),
-                      ("ridge", f"{len(m.table_)}→1, α = {m.alpha_:.0e}"),
+                      ("ridge", f"{len(m.table_)}→1, α = "
+                                       f"{format_number(m.alpha_, 0, style='scientific')}"),
                       ("output", "glucose [mg/dL]")]
         else:
             blocks = [("inputs", f"{n_a} absorbances + {n_p} physiology")] \
@@ -168,8 +170,8 @@ def physics_loss_texts(fitted: dict[str, Any]) -> dict[str, str]:
         if lam is None:
             continue
         term = PHYSICS_TERMS.get(name, "physics residual")
-        out[name] = (f"MSE + λ·{term}\nλ = {lam:g}" + (" (off: tuned to 0)" if lam == 0
-                                                        else ""))
+        out[name] = (f"MSE + λ·{term}\nλ = {_g(lam)}" + (" (off: tuned to 0)" if lam == 0
+                                                         else ""))
     return out
 
 
@@ -212,8 +214,13 @@ def feature_categories(table) -> tuple[dict[str, list[str]], dict[str, str]]:
     return cats, {c: next(iter(s)) if len(s) == 1 else "both" for c, s in src.items()}
 
 
+def _g(v: float) -> str:
+    """A configuration value in its shortest form (1050, 0.5, 1e-05)."""
+    return format_number(v, style="general")
+
+
 def _fmt_range(v: Sequence[float], unit: str) -> str:
-    return f"{v[0]:g}–{v[1]:g} {unit}"
+    return f"{_g(v[0])}–{_g(v[1])} {unit}"
 
 
 def pipeline_columns(config) -> list[list[dict[str, Any]]]:
@@ -242,8 +249,8 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
 
     env, phys, glu, hw, opt = (config.environment, config.physiology, config.glucose,
                                config.hardware, config.optics)
-    wl = ", ".join(f"{w:g}" for w in config.leds.wavelengths_nm)
-    status = [f"  {k} {v:.0%}" for k, v in glu.status_probs.items()]
+    wl = ", ".join(_g(w) for w in config.leds.wavelengths_nm)
+    status = [f"  {k} {format_number(v, 0, style='percent')}" for k, v in glu.status_probs.items()]
     return [
         [
             box("Environment", ("environment",), [
@@ -252,20 +259,20 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
                 f"light {_fmt_range(env.ambient_lux, 'lx')}",
             ], "input"),
             box("Glucose", (), [
-                f"signal gain ×{glu.signal_gain:g}",
+                f"signal gain ×{_g(glu.signal_gain)}",
                 "diabetes status mix:",
                 *status,
             ], "input"),
             box("Physiology + contact", ("physiology", "contact"), [
                 f"age {_fmt_range(phys.age_yr, 'yr')}",
-                f"variation scale ×{phys.variation_scale:g}",
-                f"coupling SD {config.contact.coupling_sd:g}",
+                f"variation scale ×{_g(phys.variation_scale)}",
+                f"coupling SD {_g(config.contact.coupling_sd)}",
             ], "input"),
         ],
         [
             box(f"Optics: {opt.model}", (), [
                 f"LEDs {wl} nm",
-                f"source–detector {opt.source_detector_mm:g} mm",
+                f"source–detector {_g(opt.source_detector_mm)} mm",
                 f"water spectrum: {opt.water_source}",
                 "μa: water, Hb, HbO2, lipid, melanin, glucose; μs′: power law, "
                 "lowered by glucose",
@@ -273,9 +280,9 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
         ],
         [
             box("Hardware", ("hardware",), [
-                f"LED power {', '.join(f'{p:g}' for p in config.leds.power_mw)} mW",
-                f"TIA gain {hw.tia_gain_ohm:.0e} Ω",
-                f"ADC {hw.adc_bits} bit, {hw.adc_vref_v:g} V",
+                f"LED power {', '.join(_g(p) for p in config.leds.power_mw)} mW",
+                f"TIA gain {format_number(hw.tia_gain_ohm, 0, style='scientific')} Ω",
+                f"ADC {hw.adc_bits} bit, {_g(hw.adc_vref_v)} V",
             ], "hardware"),
         ],
         [

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation.reference import STUDY_TABLE
+from ...formatting import format_number
 from ...metrics import bland_altman, clarke_zones, parkes_zones, zone_percentages
 
 __all__ = [
@@ -514,8 +515,9 @@ def latency_resolution(metrics: pd.DataFrame, peers: Sequence[pd.DataFrame] = ()
     resolved = spread > noise
     across = " between this benchmark's presets" if peers else " (p90 / median)"
     text = (f"Latency: median single-sample prediction time on the benchmark's machine; "
-            f"the competitors span {own.min():.3f}–{own.max():.3f} ms ({spread:.1f}×) and the "
-            f"same model's timing varies up to {noise:.1f}×{across}. ")
+            f"the competitors span {format_number(own.min(), 3)}–{format_number(own.max(), 3)} ms "
+            f"({format_number(spread)}×) and the same model's timing varies up to "
+            f"{format_number(noise)}×{across}. ")
     text += ("The differences exceed that noise." if resolved else
              "The differences are inside that noise, so no table or figure here ranks the "
              "models on latency (Python call overhead, not the models' arithmetic).")

@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ...exceptions import DataError
+from ...formatting import format_number
 from ...models.registry import is_pinn
 from ...models.tuning import lambda_curve
 from .descriptive import (
@@ -151,7 +152,10 @@ def _section_data(page: _Page) -> None:
     adc = _adc_by_wavelength(frame, [float(w) for w in ds.wavelengths_nm])
     g = frame["glucose_mgdl"].to_numpy(float)
     corr = channel_correlations(g, adc)
-    corr_txt = ", ".join(f"{w:g} nm r = {r:+.2f}" for w, r in corr.items())
+    corr_txt = ", ".join(
+        f"{format_number(w, style='general')} nm r = {format_number(r, 2, sign=True)}"
+        for w, r in corr.items()
+    )
     by_status = ("by diabetes status (left)" if "diabetes_status" in frame
                  else "(left; the diabetes status is not recorded)")
     page.add("data", "Glucose and NIR signal",
@@ -638,5 +642,5 @@ def _figure_pipeline(pipeline_mod, cfg, plot_style):
         pipeline_mod.plot_pipeline(
             cols, ax=fig.add_subplot(),
             title=f"Simulator layers: preset '{cfg.preset}', global noise scale "
-                  f"×{cfg.noise_scale:g}")
+                  f"×{format_number(cfg.noise_scale, style='general')}")
     return fig
