@@ -7,7 +7,17 @@ estimator              registry name         physics term added to the MSE
 :class:`OptimizedPINN` ``optimized-pinn``    the same, on an attention network
 :class:`RTEPINN`       ``rte-pinn``          diffusion-theory reflectance + mus' prior
 :class:`SelectiveRTEPINN` ``selective-rte-pinn`` the same at 1050 and 1150 nm only
+:class:`OriginalPINNForward` ``original-pinn-fm`` forward-model likelihood (``'forward'``)
+:class:`OptimizedPINNForward` ``optimized-pinn-fm`` the same, on the attention network
 =====================  ====================  ==========================================
+
+The Beer-Lambert PINNs choose their term by ``physics_form``
+(:data:`PHYSICS_FORMS`): ``'study'`` (the default, alias ``'absolute'``) is the study's
+residual, kept so the reproduction stays; ``'forward'`` ties the predicted glucose to
+the measured absorbances through the package's own forward model
+(:meth:`~nirglucose.models.inversion.PhysicsInversion.glucose_likelihood`,
+:func:`~nirglucose.models.physics_losses.forward_likelihood_loss`); the ``-fm``
+estimators are the study networks with that form by default.
 
 All share :class:`~nirglucose.models._torch_base.TorchRegressor`'s one training loop;
 each adds its residual in ``get_loss`` by calling the parent (the skorch habit).
@@ -45,16 +55,19 @@ import torch
 from ..config import ScenarioConfig, resolve_config
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, DataError
 from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
+from ..optics.forward import FORWARD_MODELS
 from ..simulate.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
 from ._torch_base import TorchRegressor
+from .inversion import PhysicsInversion
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
     beer_lambert_loss,
     diffusion_reflectance_loss,
+    forward_likelihood_loss,
     glucose_absorptivity_per_cm_per_mgdl,
     scattering_prior_loss,
 )
@@ -65,12 +78,18 @@ __all__ = [
     "OptimizedPINN",
     "RTEPINN",
     "SelectiveRTEPINN",
+    "OriginalPINNForward",
+    "OptimizedPINNForward",
     "PHYSICS_FORMS",
     "nominal_optics",
 ]
 
-#: Valid ``physics_form`` values of the Beer-Lambert PINNs.
-PHYSICS_FORMS = ("absolute", "relative")
+#: Valid ``physics_form`` values of the Beer-Lambert PINNs: the study's residual
+#: (``'study'``, also accepted under its earlier name ``'absolute'``), its differential
+#: variant, and the forward model's likelihood.
+PHYSICS_FORMS = ("study", "absolute", "relative", "forward")
+#: Per-row keys of the ``'forward'`` term in a training batch.
+_FM_KEYS = ("fm_glucose_mgdl", "fm_information")
 
 
 def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig | None, str]:
@@ -129,9 +148,10 @@ class _BeerLambertPINN(TorchRegressor):
 
     own_params: ClassVar[dict[str, Any]] = {
         "lambda_phys": 0.01,
-        "physics_form": "absolute",
+        "physics_form": "study",
         "absorptivity_per_cm_per_mm": None,
         "signal_gain": None,
+        "forward_model": None,
     }
 
     def _validate_extra_params(self) -> None:
@@ -143,6 +163,11 @@ class _BeerLambertPINN(TorchRegressor):
             )
         _positive_or_none(self, "absorptivity_per_cm_per_mm")
         _positive_or_none(self, "signal_gain")
+        if self.forward_model is not None and self.forward_model not in FORWARD_MODELS:
+            raise ConfigError(
+                f"{type(self).__name__}: forward_model={self.forward_model!r}; "
+                f"valid: None (the data's), {', '.join(FORWARD_MODELS)}"
+            )
 
     def _physics_constants(self, cfg: ScenarioConfig, origin: str) -> dict:
         peak = self.absorptivity_per_cm_per_mm
@@ -176,7 +201,52 @@ class _BeerLambertPINN(TorchRegressor):
         if self.physics_form == "relative":
             phys["absorbance_ref"] = absorbance.mean(axis=0).tolist()
             phys["glucose_ref_mgdl"] = float(y.mean())
+        if self.physics_form == "forward":
+            phys.update(self._fit_forward(source, y))
         return phys
+
+    def _fit_forward(self, source: Any, y: np.ndarray) -> dict:
+        """The ``'forward'`` term's model: a :class:`PhysicsInversion` fitted on the
+        training rows (kept for this fit only), or why the term is off."""
+        self.__dict__.pop("_fm_inversion", None)
+        cfg = source.config if isinstance(source, Dataset) else None
+        name = self.forward_model or (cfg.optics.model if cfg is not None else "beer-lambert")
+        out: dict[str, Any] = {"forward_model": name}
+        if self.schema_.is_plain:
+            return {**out, "enabled": False,
+                    "constants_from": "none: a plain array has no device (physics term off)"}
+        try:
+            inv = PhysicsInversion(forward_model=name).fit(source, y)
+        except DataError as exc:  # no optics for this device: the term is off
+            return {**out, "enabled": False, "constants_from": f"none: {exc}"}
+        self._fm_inversion = inv
+        _, info = inv.glucose_likelihood(source, y)
+        sd = 1.0 / np.sqrt(info[info > 0]) if np.any(info > 0) else np.array([np.inf])
+        return {
+            **out,
+            "enabled": True,
+            "constants_from": "forward model of the " + ("dataset" if cfg else "paper preset"),
+            "likelihood_sd_median_mgdl": float(np.median(sd)),
+        }
+
+    def _training_rows(self, Xa: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+        """Inputs, plus for the ``'forward'`` term each row's glucose likelihood (its
+        mode and information, linearised at the row's reference glucose)."""
+        rows = super()._training_rows(Xa, y)
+        if self.physics_form != "forward":
+            return rows
+        inv = self.__dict__.get("_fm_inversion")
+        if inv is None:  # the term is off: constant placeholders
+            return {**rows, _FM_KEYS[0]: np.asarray(y, float), _FM_KEYS[1]: np.zeros(len(y))}
+        mode, info = inv.glucose_likelihood(Xa, y)
+        return {**rows, _FM_KEYS[0]: mode, _FM_KEYS[1]: info}
+
+    def fit(self, X: Any, y: Any = None, *, X_val: Any = None, y_val: Any = None):
+        """Train the network (see :meth:`TorchRegressor.fit`)."""
+        try:
+            return super().fit(X, y, X_val=X_val, y_val=y_val)
+        finally:
+            self.__dict__.pop("_fm_inversion", None)
 
     def _prepare_physics_tensors(self) -> None:
         p = self.physics_
@@ -198,6 +268,10 @@ class _BeerLambertPINN(TorchRegressor):
             terms["physics"] = torch.zeros(())
             return total, terms
         c_hat = self._glucose(y_pred) * ph["y_scale"] + ph["y_mean"]
+        if self.physics_form == "forward":
+            physics = forward_likelihood_loss(c_hat, batch[_FM_KEYS[0]], batch[_FM_KEYS[1]])
+            terms["physics"] = physics
+            return _with_physics(self, total, physics), terms
         physics = beer_lambert_loss(
             batch["absorbance"],
             c_hat,
@@ -239,14 +313,27 @@ class OriginalPINN(_BeerLambertPINN):
         Weight of the physics term, ``<< 1`` in the study; a tuned hyper-parameter
         (grid includes 0). 0 trains exactly the plain network (same initialisation,
         same data path, bit-identical weights): the physics ablation. [-]
-    physics_form : {'absolute', 'relative'}
-        'absolute' (default) is the study's residual. 'relative' subtracts the training
-        means from both sides, :math:`(A - \bar A) - \varepsilon(\hat c - \bar c)l`
-        (differential Beer-Lambert), which removes the tissue's constant background.
+    physics_form : {'study', 'absolute', 'relative', 'forward'}
+        'study' (default; 'absolute' is the same, its earlier name) is the study's
+        residual above. 'relative' subtracts the training means from both sides,
+        :math:`(A - \bar A) - \varepsilon(\hat c - \bar c)l` (differential
+        Beer-Lambert), which removes the tissue's constant background. 'forward' is the
+        negative log-likelihood of each training reading's measured log ratios at the
+        predicted glucose under the package's forward model, the nuisances (blood,
+        water, fat, melanin, thickness, LED shift, coupling) marginalised by Laplace
+        (:func:`~nirglucose.models.physics_losses.forward_likelihood_loss`; the model
+        is a :class:`~nirglucose.models.inversion.PhysicsInversion` fitted on the
+        training rows' measured columns and reference glucose, never ``true_*``). Off
+        (recorded in ``physics_``) where the data has no optics: a plain array, or
+        LEDs the scenario does not describe. Prediction is the same for every form.
     absorptivity_per_cm_per_mm, signal_gain : float or None
         Glucose peak absorption [1/(cm mM)] and signal gain [-] for
         :math:`\varepsilon`; None takes them from the training Dataset's scenario (the
         ``paper`` preset when the data carries none).
+    forward_model : {None, 'beer-lambert', 'diffusion', 'rte-lut'}
+        The forward model of the 'forward' form; None takes the training Dataset's
+        (``optics.model``; 'beer-lambert' for data without a scenario). Unused by the
+        other forms.
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
@@ -294,7 +381,7 @@ class OptimizedPINN(_BeerLambertPINN):
     dropout : float
         Dropout probability (0.1 by default: with weight decay, part of the study's
         "optimisation"). [-]
-    lambda_phys, physics_form, absorptivity_per_cm_per_mm, signal_gain
+    lambda_phys, physics_form, absorptivity_per_cm_per_mm, signal_gain, forward_model
         As in :class:`OriginalPINN`.
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
@@ -324,6 +411,51 @@ class OptimizedPINN(_BeerLambertPINN):
         return OptimizedPINNNet(
             int(self.d_model), int(self.n_heads), float(self.dropout), **self._input_widths()
         )
+
+
+_FORWARD_NOTES = """
+    Notes
+    -----
+    The term per training reading i is :math:`w_i(\\hat c_i - \\hat g_i)^2`,
+    :math:`-2\\ln p(y_i \\mid \\hat c_i)` less its minimum: :math:`\\hat g_i` and
+    :math:`w_i` are the mode and curvature of the reading's glucose likelihood
+    (:meth:`~nirglucose.models.inversion.PhysicsInversion.glucose_likelihood`,
+    linearised at its reference glucose and nuisance mode), computed once per fit. The
+    weight :math:`\\lambda_\\mathrm{phys}` multiplies it in the MSE's standardised
+    units, so 1 puts one standard deviation of the likelihood on a par with one of the
+    training glucose; a device whose nuisances swamp glucose's signal gets small
+    :math:`w_i` and hence a weak term. Its grid is the study PINNs'
+    (:data:`~nirglucose.models.tuning.LAMBDA_PHYS_GRID`, 0 included); the training
+    parameters are its study twin's until ``benchmarks/tune.py`` has tuned it.
+    """
+
+
+@register("original-pinn-fm")
+class OriginalPINNForward(OriginalPINN):
+    __doc__ = (
+        """The Original PINN with the forward-model likelihood as its physics term.
+
+    :class:`OriginalPINN` with ``physics_form='forward'`` by default (its parameters,
+    network and prediction are the same).
+    """
+        + _FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 0.1}
+
+
+@register("optimized-pinn-fm")
+class OptimizedPINNForward(OptimizedPINN):
+    __doc__ = (
+        """The Optimized PINN with the forward-model likelihood as its physics term.
+
+    :class:`OptimizedPINN` with ``physics_form='forward'`` by default (its parameters,
+    network and prediction are the same).
+    """
+        + _FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 0.1}
 
 
 # ============================================================================ RTE

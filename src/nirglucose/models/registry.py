@@ -44,6 +44,8 @@ MODELS = {
     "optimized-pinn": "nirglucose.models.pinn",
     "rte-pinn": "nirglucose.models.pinn",
     "selective-rte-pinn": "nirglucose.models.pinn",
+    "original-pinn-fm": "nirglucose.models.pinn",
+    "optimized-pinn-fm": "nirglucose.models.pinn",
     "sdnn": "nirglucose.models.sdnn",
     "mean": "nirglucose.models.reference",
     "gp": "nirglucose.models.reference",
