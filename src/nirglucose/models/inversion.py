@@ -424,6 +424,44 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         out["coupling"] = np.exp(out.pop("log_coupling"))
         return out
 
+    def sample_log_ratios(self, X, glucose_mgdl, random_state=None) -> np.ndarray:
+        r"""Readings the fitted forward model generates for the physiology of ``X``.
+
+        Per row, the nuisances are drawn from their learned prior
+        :math:`N(\mu(x), \mathrm{diag}(s^2))` (x the row's measured physiology),
+        and :math:`y = a + b\,m(g, \theta) + \epsilon`,
+        :math:`\epsilon \sim N(0, S)`: the model this estimator inverts, run forwards.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like
+            Readings of the fitted device; only their physiology is used.
+        glucose_mgdl : array_like
+            (n,) glucose of each generated reading. [mg/dL]
+        random_state : int, numpy.random.Generator or None
+            Seeds the draws.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n, k) ln(adc / adc_ref) per LED (NaN where the drawn state is outside the
+            optics' domain, e.g. volume fractions summing past 1). [-]
+        """
+        self._require_fitted()
+        _, phys = self._observed(predict_input(self, X))
+        g = np.asarray(glucose_mgdl, dtype=float).ravel()
+        if len(g) != len(phys) or not np.all(np.isfinite(g)):
+            raise DataError(f"glucose_mgdl must be {len(phys)} finite values, got {len(g)}")
+        rng = np.random.default_rng(random_state)
+        mean, sd = self._prior(phys, g)
+        theta = mean[:, 1:] + sd[:, 1:] * rng.standard_normal(mean[:, 1:].shape)
+        noise = rng.standard_normal((len(g), len(self.offset_))) @ np.linalg.cholesky(
+            self.noise_cov_
+        ).T
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            m = self.forward_.log_ratio(g, theta)
+        return self.offset_ + self.gain_ * m + noise
+
     def glucose_likelihood(self, X, glucose_mgdl) -> tuple[np.ndarray, np.ndarray]:
         r"""Each reading's likelihood of glucose, the nuisances marginalised (Laplace).
 

@@ -51,6 +51,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 import torch
+from sklearn.utils import check_random_state
 
 from ..config import ScenarioConfig, resolve_config
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
@@ -88,8 +89,10 @@ __all__ = [
 #: (``'study'``, also accepted under its earlier name ``'absolute'``), its differential
 #: variant, and the forward model's likelihood.
 PHYSICS_FORMS = ("study", "absolute", "relative", "forward")
-#: Per-row keys of the ``'forward'`` term in a training batch.
+#: Per-row keys of the ``'forward'`` term in a training batch: each row's likelihood
+#: mode and information, then its collocation readings' scaled inputs and glucose.
 _FM_KEYS = ("fm_glucose_mgdl", "fm_information")
+_CO_KEYS = ("co_nir", "co_pmf", "co_glucose_mgdl", "co_valid")
 
 
 def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig | None, str]:
@@ -152,6 +155,7 @@ class _BeerLambertPINN(TorchRegressor):
         "absorptivity_per_cm_per_mm": None,
         "signal_gain": None,
         "forward_model": None,
+        "collocation": 0,
     }
 
     def _validate_extra_params(self) -> None:
@@ -163,6 +167,11 @@ class _BeerLambertPINN(TorchRegressor):
             )
         _positive_or_none(self, "absorptivity_per_cm_per_mm")
         _positive_or_none(self, "signal_gain")
+        c = self.collocation
+        if isinstance(c, bool) or not isinstance(c, int | np.integer) or c < 0:
+            raise ConfigError(
+                f"{type(self).__name__}: collocation={c!r}; must be an integer >= 0"
+            )
         if self.forward_model is not None and self.forward_model not in FORWARD_MODELS:
             raise ConfigError(
                 f"{type(self).__name__}: forward_model={self.forward_model!r}; "
@@ -220,6 +229,9 @@ class _BeerLambertPINN(TorchRegressor):
         except DataError as exc:  # no optics for this device: the term is off
             return {**out, "enabled": False, "constants_from": f"none: {exc}"}
         self._fm_inversion = inv
+        self._fm_draws = (np.asarray(y, float), np.random.default_rng(
+            check_random_state(self.random_state).randint(0, 2**31 - 1)
+        ))
         _, info = inv.glucose_likelihood(source, y)
         sd = 1.0 / np.sqrt(info[info > 0]) if np.any(info > 0) else np.array([np.inf])
         return {
@@ -239,7 +251,36 @@ class _BeerLambertPINN(TorchRegressor):
         if inv is None:  # the term is off: constant placeholders
             return {**rows, _FM_KEYS[0]: np.asarray(y, float), _FM_KEYS[1]: np.zeros(len(y))}
         mode, info = inv.glucose_likelihood(Xa, y)
-        return {**rows, _FM_KEYS[0]: mode, _FM_KEYS[1]: info}
+        rows = {**rows, _FM_KEYS[0]: mode, _FM_KEYS[1]: info}
+        return {**rows, **self._collocation_rows(inv, Xa)} if self.collocation else rows
+
+    def _collocation_rows(self, inv: PhysicsInversion, Xa: np.ndarray) -> dict[str, np.ndarray]:
+        """``collocation`` readings per row from the fitted forward model (the row's
+        physiology, glucose drawn from the training rows'), scaled like the inputs."""
+        pool, rng = self._fm_draws
+        c, n = int(self.collocation), len(Xa)
+        rep = np.repeat(Xa, c, axis=0)
+        glucose = rng.choice(pool, size=n * c)
+        log_ratio = inv.sample_log_ratios(rep, glucose, rng)
+        valid = np.all(np.isfinite(log_ratio), axis=1)
+        absorbance = np.where(valid[:, None], -log_ratio / math.log(10.0), 0.0)
+        _, pmf = self._nir_pmf(rep)
+        s = self.scaler_
+        return {
+            _CO_KEYS[0]: ((absorbance - s["nir_mean"]) / s["nir_scale"]).reshape(n, c, -1),
+            _CO_KEYS[1]: ((pmf - s["pmf_mean"]) / s["pmf_scale"]).reshape(n, c, -1),
+            _CO_KEYS[2]: glucose.reshape(n, c),
+            _CO_KEYS[3]: valid.reshape(n, c).astype(float),
+        }
+
+    def _collocation_loss(self, batch) -> torch.Tensor:
+        """Squared error of the network on the batch's forward-model readings, in the
+        MSE's standardised units (invalid draws weigh 0)."""
+        ph = self._phys
+        out = self.module_(batch[_CO_KEYS[0]].flatten(0, 1), batch[_CO_KEYS[1]].flatten(0, 1))
+        target = (batch[_CO_KEYS[2]].flatten() - ph["y_mean"]) / ph["y_scale"]
+        w = batch[_CO_KEYS[3]].flatten()
+        return (w * (self._glucose(out) - target) ** 2).sum() / w.sum().clamp_min(1.0)
 
     def fit(self, X: Any, y: Any = None, *, X_val: Any = None, y_val: Any = None):
         """Train the network (see :meth:`TorchRegressor.fit`)."""
@@ -247,6 +288,7 @@ class _BeerLambertPINN(TorchRegressor):
             return super().fit(X, y, X_val=X_val, y_val=y_val)
         finally:
             self.__dict__.pop("_fm_inversion", None)
+            self.__dict__.pop("_fm_draws", None)
 
     def _prepare_physics_tensors(self) -> None:
         p = self.physics_
@@ -270,6 +312,10 @@ class _BeerLambertPINN(TorchRegressor):
         c_hat = self._glucose(y_pred) * ph["y_scale"] + ph["y_mean"]
         if self.physics_form == "forward":
             physics = forward_likelihood_loss(c_hat, batch[_FM_KEYS[0]], batch[_FM_KEYS[1]])
+            terms["likelihood"] = physics
+            if _CO_KEYS[0] in batch and self.lambda_phys != 0:
+                terms["collocation"] = self._collocation_loss(batch)
+                physics = physics + terms["collocation"]
             terms["physics"] = physics
             return _with_physics(self, total, physics), terms
         physics = beer_lambert_loss(
@@ -334,6 +380,12 @@ class OriginalPINN(_BeerLambertPINN):
         The forward model of the 'forward' form; None takes the training Dataset's
         (``optics.model``; 'beer-lambert' for data without a scenario). Unused by the
         other forms.
+    collocation : int
+        'forward' form only: readings the fitted forward model generates per training
+        row (the row's measured physiology, nuisances drawn from their learned prior,
+        glucose drawn from the training rows', the model's noise), on which the
+        network's squared error (standardised units) joins the physics term: PINN
+        collocation points where no reference exists. 0 (default): none. [-]
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
