@@ -505,6 +505,43 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
         :math:`w = (bJ_g)^T\Sigma^{-1}(bJ_g)` and :math:`\hat g = g_0 + (bJ_g)^T
         \Sigma^{-1} r_0 / w`, :math:`r_0` the residual at :math:`g_0`.
         """
+        return self.likelihood_of(self.linearise(X, glucose_mgdl))
+
+    def likelihood_of(self, lin: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`glucose_likelihood` from a :meth:`linearise` result (mode, information)."""
+        theta, mean, sd, J = lin["theta"], lin["prior_mean"], lin["prior_sd"], lin["jacobian"]
+        g0 = theta[:, 0]
+        jg, jt = J[:, :, 0], J[:, :, 1:]
+        cov = self.noise_cov_ + np.einsum("nki,ni,nli->nkl", jt, sd[:, 1:] ** 2, jt)
+        r0 = lin["residual"] - np.einsum("nki,ni->nk", jt, mean[:, 1:] - theta[:, 1:])
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            sol = np.linalg.solve(cov, np.stack([jg, r0], axis=-1))
+            info = np.einsum("nk,nk->n", jg, sol[:, :, 0])
+            g_hat = g0 + np.einsum("nk,nk->n", jg, sol[:, :, 1]) / info
+        ok = np.isfinite(g_hat) & np.isfinite(info) & (info > 0)
+        return np.where(ok, g_hat, g0), np.where(ok, info, 0.0)
+
+    def linearise(self, X, glucose_mgdl) -> dict[str, np.ndarray]:
+        """The forward model about each reading's nuisance mode at the given glucose.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like
+            Readings of the fitted device (measured columns only are read).
+        glucose_mgdl : array_like
+            (n,) glucose held fixed while the nuisances are solved for. [mg/dL]
+
+        Returns
+        -------
+        dict of numpy.ndarray
+            ``theta`` (n, 1 + len(NUISANCES)): the glucose given, then the nuisances'
+            posterior mode (:data:`NUISANCES` units); ``residual`` (n, k): the measured
+            ln(adc / adc_ref) minus the calibrated model there, y - a - b m;
+            ``jacobian`` (n, k, 1 + len(NUISANCES)): b dm/dtheta there; ``prior_mean``
+            and ``prior_sd`` (n, 1 + len(NUISANCES)): the prior (nuisance widths times
+            ``prior_scale``; glucose's entries are the given value and the training
+            spread).
+        """
         self._require_fitted()
         self._check_params()
         obs, phys = self._observed(predict_input(self, X))
@@ -519,16 +556,13 @@ class PhysicsInversion(SchemaJsonMixin, RegressorMixin, BaseEstimator):
             self.forward_, obs, calib, self._root_w(), mean, sd, free=free, max_iter=self.max_iter
         )
         J = self.gain_[None, :, None] * model_jacobian(self.forward_, theta, sd)
-        jg, jt = J[:, :, 0], J[:, :, 1:]
-        cov = self.noise_cov_ + np.einsum("nki,ni,nli->nkl", jt, sd[:, 1:] ** 2, jt)
-        r0 = obs - self.offset_ - self.gain_ * m
-        r0 -= np.einsum("nki,ni->nk", jt, mean[:, 1:] - theta[:, 1:])
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            sol = np.linalg.solve(cov, np.stack([jg, r0], axis=-1))
-            info = np.einsum("nk,nk->n", jg, sol[:, :, 0])
-            g_hat = g0 + np.einsum("nk,nk->n", jg, sol[:, :, 1]) / info
-        ok = np.isfinite(g_hat) & np.isfinite(info) & (info > 0)
-        return np.where(ok, g_hat, g0), np.where(ok, info, 0.0)
+        return {
+            "theta": theta,
+            "residual": obs - self.offset_ - self.gain_ * m,
+            "jacobian": J,
+            "prior_mean": mean,
+            "prior_sd": sd,
+        }
 
     def predict(self, X) -> np.ndarray:
         """Glucose of each reading: the posterior mode. [mg/dL]"""

@@ -16,6 +16,8 @@ otherwise.
 * :func:`forward_likelihood_loss` — the Beer-Lambert PINNs' ``'forward'`` term: the
   negative log-likelihood of the measured log ratios given the predicted glucose under
   the package's forward model, nuisances marginalised (Laplace) [4]_.
+* :func:`state_mode_loss` — the RTE PINNs' ``'forward'`` state term: predicted tissue
+  state against each reading's posterior mode under the forward model [4]_.
 
 References
 ----------
@@ -53,6 +55,7 @@ __all__ = [
     "diffusion_reflectance_loss",
     "scattering_prior_loss",
     "forward_likelihood_loss",
+    "state_mode_loss",
 ]
 
 _LN10 = math.log(10.0)
@@ -351,3 +354,48 @@ def forward_likelihood_loss(
     """
     d = glucose_mgdl - likelihood_mode_mgdl
     return (information_per_mgdl2 * d * d).mean()
+
+
+
+def state_mode_loss(
+    state: torch.Tensor, mode: torch.Tensor, scale: torch.Tensor
+) -> torch.Tensor:
+    r"""Distance of predicted tissue state from the forward model's posterior mode.
+
+    Parameters
+    ----------
+    state : torch.Tensor
+        (n, p) predicted nuisances (their units).
+    mode : torch.Tensor
+        (n, p) each reading's posterior mode under the forward model at its reference
+        glucose (:meth:`~nirglucose.models.inversion.PhysicsInversion.linearise`).
+        [units]
+    scale : torch.Tensor
+        (p,) the modes' training spread. [units]
+
+    Returns
+    -------
+    torch.Tensor
+        Scalar :math:`\frac{1}{np}\sum_{i,j}[(\hat\theta_{ij} - \theta^*_{ij})/\sigma_j]^2`;
+        zero iff every prediction is its mode. [-]
+
+    Notes
+    -----
+    The reading's negative log-posterior, linearised at its mode, is the quadratic
+    :math:`(\hat\theta - \theta^*)^T H (\hat\theta - \theta^*)` with H the posterior
+    precision [4]_. This keeps its minimiser and weighs departures by the population's
+    spread instead of H: on a quiet device H is thousands of times larger, no network
+    matches a per-reading mode to that precision, and the term would swamp the MSE at
+    any weight.
+
+    Examples
+    --------
+    >>> import torch
+    >>> m = torch.tensor([[0.02, 0.7]])
+    >>> float(state_mode_loss(m, m, torch.tensor([0.01, 0.05])))
+    0.0
+    >>> float(state_mode_loss(m + torch.tensor([[0.01, 0.0]]), m, torch.tensor([0.01, 0.05])))
+    0.5
+    """
+    d = (state - mode) / scale
+    return (d * d).mean()

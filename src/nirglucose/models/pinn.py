@@ -51,24 +51,23 @@ from typing import Any, ClassVar
 
 import numpy as np
 import torch
-from sklearn.utils import check_random_state
 
 from ..config import ScenarioConfig, resolve_config
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError
 from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
 from ..optics.forward import FORWARD_MODELS
 from ..simulate.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
+from ._inversion_solver import NUISANCES
 from ._torch_base import TorchRegressor
-from .inversion import PhysicsInversion
+from .forward_term import BeerLambertForwardTerm, StateForwardTerm
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
     beer_lambert_loss,
     diffusion_reflectance_loss,
-    forward_likelihood_loss,
     glucose_absorptivity_per_cm_per_mgdl,
     scattering_prior_loss,
 )
@@ -82,6 +81,7 @@ __all__ = [
     "OriginalPINNForward",
     "OptimizedPINNForward",
     "PHYSICS_FORMS",
+    "RTE_PHYSICS_FORMS",
     "nominal_optics",
 ]
 
@@ -89,10 +89,9 @@ __all__ = [
 #: (``'study'``, also accepted under its earlier name ``'absolute'``), its differential
 #: variant, and the forward model's likelihood.
 PHYSICS_FORMS = ("study", "absolute", "relative", "forward")
-#: Per-row keys of the ``'forward'`` term in a training batch: each row's likelihood
-#: mode and information, then its collocation readings' scaled inputs and glucose.
-_FM_KEYS = ("fm_glucose_mgdl", "fm_information")
-_CO_KEYS = ("co_nir", "co_pmf", "co_glucose_mgdl", "co_valid")
+#: Valid ``physics_form`` values of the RTE PINNs: the study's reflectance tie, and
+#: predicted glucose and tissue state through the package's forward model.
+RTE_PHYSICS_FORMS = ("study", "forward")
 
 
 def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig | None, str]:
@@ -137,6 +136,14 @@ def _with_physics(est: Any, total: torch.Tensor, physics: torch.Tensor) -> torch
     return total + est.lambda_phys * physics
 
 
+def _forward_model_ok(est: Any) -> None:
+    if est.forward_model is not None and est.forward_model not in FORWARD_MODELS:
+        raise ConfigError(
+            f"{type(est).__name__}: forward_model={est.forward_model!r}; "
+            f"valid: None (the data's), {', '.join(FORWARD_MODELS)}"
+        )
+
+
 def _lambda_ok(est: Any) -> None:
     v = est.lambda_phys
     if not (isinstance(v, float | int) and math.isfinite(v) and v >= 0):
@@ -146,7 +153,7 @@ def _lambda_ok(est: Any) -> None:
 # ============================================================================ Beer-Lambert
 
 
-class _BeerLambertPINN(TorchRegressor):
+class _BeerLambertPINN(BeerLambertForwardTerm, TorchRegressor):
     """Shared physics of the Original and Optimized PINNs (not registered)."""
 
     own_params: ClassVar[dict[str, Any]] = {
@@ -172,11 +179,7 @@ class _BeerLambertPINN(TorchRegressor):
             raise ConfigError(
                 f"{type(self).__name__}: collocation={c!r}; must be an integer >= 0"
             )
-        if self.forward_model is not None and self.forward_model not in FORWARD_MODELS:
-            raise ConfigError(
-                f"{type(self).__name__}: forward_model={self.forward_model!r}; "
-                f"valid: None (the data's), {', '.join(FORWARD_MODELS)}"
-            )
+        _forward_model_ok(self)
 
     def _physics_constants(self, cfg: ScenarioConfig, origin: str) -> dict:
         peak = self.absorptivity_per_cm_per_mm
@@ -214,82 +217,6 @@ class _BeerLambertPINN(TorchRegressor):
             phys.update(self._fit_forward(source, y))
         return phys
 
-    def _fit_forward(self, source: Any, y: np.ndarray) -> dict:
-        """The ``'forward'`` term's model: a :class:`PhysicsInversion` fitted on the
-        training rows (kept for this fit only), or why the term is off."""
-        self.__dict__.pop("_fm_inversion", None)
-        cfg = source.config if isinstance(source, Dataset) else None
-        name = self.forward_model or (cfg.optics.model if cfg is not None else "beer-lambert")
-        out: dict[str, Any] = {"forward_model": name}
-        if self.schema_.is_plain:
-            return {**out, "enabled": False,
-                    "constants_from": "none: a plain array has no device (physics term off)"}
-        try:
-            inv = PhysicsInversion(forward_model=name).fit(source, y)
-        except DataError as exc:  # no optics for this device: the term is off
-            return {**out, "enabled": False, "constants_from": f"none: {exc}"}
-        self._fm_inversion = inv
-        self._fm_draws = (np.asarray(y, float), np.random.default_rng(
-            check_random_state(self.random_state).randint(0, 2**31 - 1)
-        ))
-        _, info = inv.glucose_likelihood(source, y)
-        sd = 1.0 / np.sqrt(info[info > 0]) if np.any(info > 0) else np.array([np.inf])
-        return {
-            **out,
-            "enabled": True,
-            "constants_from": "forward model of the " + ("dataset" if cfg else "paper preset"),
-            "likelihood_sd_median_mgdl": float(np.median(sd)),
-        }
-
-    def _training_rows(self, Xa: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
-        """Inputs, plus for the ``'forward'`` term each row's glucose likelihood (its
-        mode and information, linearised at the row's reference glucose)."""
-        rows = super()._training_rows(Xa, y)
-        if self.physics_form != "forward":
-            return rows
-        inv = self.__dict__.get("_fm_inversion")
-        if inv is None:  # the term is off: constant placeholders
-            return {**rows, _FM_KEYS[0]: np.asarray(y, float), _FM_KEYS[1]: np.zeros(len(y))}
-        mode, info = inv.glucose_likelihood(Xa, y)
-        rows = {**rows, _FM_KEYS[0]: mode, _FM_KEYS[1]: info}
-        return {**rows, **self._collocation_rows(inv, Xa)} if self.collocation else rows
-
-    def _collocation_rows(self, inv: PhysicsInversion, Xa: np.ndarray) -> dict[str, np.ndarray]:
-        """``collocation`` readings per row from the fitted forward model (the row's
-        physiology, glucose drawn from the training rows'), scaled like the inputs."""
-        pool, rng = self._fm_draws
-        c, n = int(self.collocation), len(Xa)
-        rep = np.repeat(Xa, c, axis=0)
-        glucose = rng.choice(pool, size=n * c)
-        log_ratio = inv.sample_log_ratios(rep, glucose, rng)
-        valid = np.all(np.isfinite(log_ratio), axis=1)
-        absorbance = np.where(valid[:, None], -log_ratio / math.log(10.0), 0.0)
-        _, pmf = self._nir_pmf(rep)
-        s = self.scaler_
-        return {
-            _CO_KEYS[0]: ((absorbance - s["nir_mean"]) / s["nir_scale"]).reshape(n, c, -1),
-            _CO_KEYS[1]: ((pmf - s["pmf_mean"]) / s["pmf_scale"]).reshape(n, c, -1),
-            _CO_KEYS[2]: glucose.reshape(n, c),
-            _CO_KEYS[3]: valid.reshape(n, c).astype(float),
-        }
-
-    def _collocation_loss(self, batch) -> torch.Tensor:
-        """Squared error of the network on the batch's forward-model readings, in the
-        MSE's standardised units (invalid draws weigh 0)."""
-        ph = self._phys
-        out = self.module_(batch[_CO_KEYS[0]].flatten(0, 1), batch[_CO_KEYS[1]].flatten(0, 1))
-        target = (batch[_CO_KEYS[2]].flatten() - ph["y_mean"]) / ph["y_scale"]
-        w = batch[_CO_KEYS[3]].flatten()
-        return (w * (self._glucose(out) - target) ** 2).sum() / w.sum().clamp_min(1.0)
-
-    def fit(self, X: Any, y: Any = None, *, X_val: Any = None, y_val: Any = None):
-        """Train the network (see :meth:`TorchRegressor.fit`)."""
-        try:
-            return super().fit(X, y, X_val=X_val, y_val=y_val)
-        finally:
-            self.__dict__.pop("_fm_inversion", None)
-            self.__dict__.pop("_fm_draws", None)
-
     def _prepare_physics_tensors(self) -> None:
         p = self.physics_
         self._phys = {
@@ -311,13 +238,8 @@ class _BeerLambertPINN(TorchRegressor):
             return total, terms
         c_hat = self._glucose(y_pred) * ph["y_scale"] + ph["y_mean"]
         if self.physics_form == "forward":
-            physics = forward_likelihood_loss(c_hat, batch[_FM_KEYS[0]], batch[_FM_KEYS[1]])
-            terms["likelihood"] = physics
-            if _CO_KEYS[0] in batch and self.lambda_phys != 0:
-                terms["collocation"] = self._collocation_loss(batch)
-                physics = physics + terms["collocation"]
-            terms["physics"] = physics
-            return _with_physics(self, total, physics), terms
+            terms.update(self._forward_loss(c_hat, batch))
+            return _with_physics(self, total, terms["physics"]), terms
         physics = beer_lambert_loss(
             batch["absorbance"],
             c_hat,
@@ -548,10 +470,15 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
     return (mua[0] * w).sum(axis=-1), (musp[0] * w).sum(axis=-1)
 
 
-class _RTEPINNBase(TorchRegressor):
+class _RTEPINNBase(StateForwardTerm, TorchRegressor):
     """Shared physics of the RTE-inspired PINNs (not registered)."""
 
-    own_params: ClassVar[dict[str, Any]] = {"lambda_phys": 0.1, "stability_weight": 0.1}
+    own_params: ClassVar[dict[str, Any]] = {
+        "lambda_phys": 0.1,
+        "stability_weight": 0.1,
+        "physics_form": "study",
+        "forward_model": None,
+    }
 
     #: Wavelengths the optical heads predict and the regulariser covers. [nm]
     REGULARISED_NM: ClassVar[tuple[float, ...]] = DEFAULT_LED_WAVELENGTHS_NM
@@ -561,6 +488,12 @@ class _RTEPINNBase(TorchRegressor):
         v = self.stability_weight
         if not (isinstance(v, float | int) and math.isfinite(v) and v >= 0):
             raise ConfigError(f"{type(self).__name__}: stability_weight={v!r}; must be >= 0")
+        if self.physics_form not in RTE_PHYSICS_FORMS:
+            raise ConfigError(
+                f"{type(self).__name__}: physics_form={self.physics_form!r}; "
+                f"valid: {', '.join(RTE_PHYSICS_FORMS)}"
+            )
+        _forward_model_ok(self)
 
     def _regularised(self, wavelengths_nm: tuple[float, ...]) -> list[int]:
         """Indices of the data's LEDs the optical heads cover (all of them here)."""
@@ -621,7 +554,10 @@ class _RTEPINNBase(TorchRegressor):
         cfg, origin = _scenario(source, schema.wavelengths_nm)
         if cfg is not None and tuple(cfg.leds.wavelengths_nm) != schema.wavelengths_nm:
             cfg, origin = _scenario(None, schema.wavelengths_nm)
-        return self._physics_from(cfg, origin, absorbance, schema.wavelengths_nm)
+        phys = self._physics_from(cfg, origin, absorbance, schema.wavelengths_nm)
+        if self.physics_form == "forward":  # replaces the reflectance tie
+            phys.update({"form": "forward", **self._fit_forward(source, y)})
+        return phys
 
     def _default_physics(self) -> dict:
         return self._physics_from(
@@ -639,27 +575,39 @@ class _RTEPINNBase(TorchRegressor):
             "rho": float(p["rho_cm"]),
             "area": float(p["detector_area_cm2"]),
             "n": float(p["n_tissue"]),
+            "y_mean": float(self.scaler_["y_mean"]),
+            "y_scale": float(self.scaler_["y_scale"]),
+            **self._state_tensors(),
         }
 
     def build_module(self) -> RTEPINNNet:
-        """:class:`~nirglucose.models.networks.RTEPINNNet` started at nominal optics."""
+        """:class:`~nirglucose.models.networks.RTEPINNNet` started at nominal optics
+        (with a state head for the 'forward' form)."""
         p = self._physics_or_default()
         return RTEPINNNet(
             p["nominal_mua_per_cm"],
             p["nominal_musp_per_cm"],
             **self._input_widths(),
             dropout=float(self.dropout),
+            n_state=len(NUISANCES) if self.physics_form == "forward" else 0,
         )
 
     def get_loss(self, y_pred, y_true, batch):
-        """MSE plus ``lambda_phys`` (reflectance residual + stability x scattering prior)."""
+        """MSE plus ``lambda_phys`` (reflectance residual + stability x scattering prior,
+        or the 'forward' form's state likelihood)."""
         total, terms = super().get_loss(y_pred, y_true, batch)
-        _, mua, musp = y_pred
+        mua, musp = y_pred[1], y_pred[2]
         ph = self._phys
         if not ph["enabled"]:
             zero = torch.zeros(())
-            terms.update({"reflectance": zero, "scattering_prior": zero, "physics": zero})
+            names = ("likelihood", "state") if self.physics_form == "forward" else (
+                "reflectance", "scattering_prior")
+            terms.update({**dict.fromkeys(names, zero), "physics": zero})
             return total, terms
+        if self.physics_form == "forward":
+            c_hat = y_pred[0] * ph["y_scale"] + ph["y_mean"]
+            terms.update(self._state_loss(c_hat, y_pred[3], batch))
+            return _with_physics(self, total, terms["physics"]), terms
         absorbance = batch["absorbance"].index_select(1, ph["idx"])
         reflectance = diffusion_reflectance_loss(
             absorbance,
@@ -682,8 +630,8 @@ class _RTEPINNBase(TorchRegressor):
         Xa = predict_input(self, X)
         t = self._tensors({k: v for k, v in self._transform(Xa).items() if k != "absorbance"})
         with torch.inference_mode():
-            _, mua, musp = self.module_(t["nir"], t["pmf"])
-        return mua.numpy().astype(np.float64), musp.numpy().astype(np.float64)
+            out = self.module_(t["nir"], t["pmf"])
+        return out[1].numpy().astype(np.float64), out[2].numpy().astype(np.float64)
 
 
 _RTE_DOC_PARAMS = """
