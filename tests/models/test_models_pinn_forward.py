@@ -4,12 +4,22 @@ under the package's forward model (models/pinn.py, physics_losses.py, inversion.
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 import torch
 
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError
-from nirglucose.models import OriginalPINN, load_model, make_model, tuned_params
+from nirglucose.evaluation.inverse import task_state
+from nirglucose.models import (
+    RTEPINN,
+    OriginalPINN,
+    SelectiveRTEPINN,
+    load_model,
+    make_model,
+    tuned_params,
+)
+from nirglucose.models._inversion_solver import NUISANCES
 from nirglucose.models.inversion import PhysicsInversion
 from nirglucose.models.physics_losses import forward_likelihood_loss
 from nirglucose.models.pinn import OptimizedPINNForward, OriginalPINNForward
@@ -73,7 +83,7 @@ def test_forward_loss_is_zero_at_the_mode_and_positive_elsewhere():
 def test_pinn_physics_term_is_zero_at_the_linearised_map(paper, inversion):
     """Through the estimator: predicting each training row's likelihood mode zeroes the
     term; any other prediction makes it positive."""
-    m = OriginalPINNForward(**FAST).fit(paper)
+    m = OriginalPINNForward(max_epochs=2, random_state=0).fit(paper)
     Xa, y, _ = m._measurements(paper, require_target=True)
     m.__dict__["_fm_inversion"] = inversion
     m.__dict__["_fm_draws"] = (y, np.random.default_rng(0))
@@ -162,3 +172,67 @@ def test_registered_with_their_twins_training(paper, tmp_path):
     back = load_model(tmp_path / "m.json")
     np.testing.assert_array_equal(back.predict(paper), fitted.predict(paper))
     assert back.physics_ == fitted.physics_
+
+
+# ----------------------------------------------------------------- the RTE PINNs
+
+
+RTE_FIT = {**FAST, "max_epochs": 100, "lr": 1e-2}
+
+
+@pytest.fixture(scope="module")
+def rte_forward(paper):
+    return RTEPINN(physics_form="forward", lambda_phys=1.0, **RTE_FIT).fit(paper)
+
+
+def test_rte_forward_state_head_tracks_the_forward_models_modes(paper, rte_forward):
+    """The state head learns the forward model's posterior modes of the training rows
+    (its target), better than their mean; the study form has no state columns."""
+    y = paper.frame["glucose_mgdl"].to_numpy()
+    modes = PhysicsInversion().fit(paper).linearise(paper, y)["theta"][:, 1:]
+    st = rte_forward.estimate_state(paper)
+    assert {"glucose_mgdl", "blood_fraction", "water_fraction", "melanin_fraction",
+            "skin_thickness_mm", "coupling"} <= set(st.columns)
+    melanin = modes[:, NUISANCES.index("melanin_fraction")]
+    assert np.mean((st["melanin_fraction"] - melanin) ** 2) < 0.5 * melanin.var()
+    np.testing.assert_allclose(st["glucose_mgdl"], rte_forward.predict(paper))
+    study = RTEPINN(max_epochs=2, random_state=0).fit(paper)
+    assert list(study.estimate_state(paper).columns) == ["glucose_mgdl"]
+    assert task_state(study, paper) is None
+    assert set(task_state(rte_forward, paper)) >= {"blood_fraction", "skin_thickness_mm"}
+
+
+def test_rte_forward_never_reads_truth_and_round_trips(paper, rte_forward, tmp_path):
+    frame = paper.frame.copy()
+    truth = [c for c in frame.columns if c.startswith("true_")]
+    frame[truth] = frame[truth].to_numpy()[::-1]
+    shuffled = ng.Dataset(frame, paper.config)
+    again = RTEPINN(physics_form="forward", lambda_phys=1.0, **RTE_FIT).fit(shuffled)
+    np.testing.assert_array_equal(again.predict(paper), rte_forward.predict(paper))
+    rte_forward.save(tmp_path / "rte.json")
+    back = load_model(tmp_path / "rte.json")
+    pd.testing.assert_frame_equal(back.estimate_state(paper), rte_forward.estimate_state(paper))
+    assert back.predict_one(*_one_reading(back, paper)) == pytest.approx(
+        float(back.predict(paper)[0]), abs=1e-3)
+
+
+def test_rte_forward_at_lambda_zero_is_its_plain_network(paper):
+    """λ = 0 leaves the term out of the graph: the state head trains on nothing, and
+    glucose equals the forward form's plain network (the ablation's pair)."""
+    a = RTEPINN(physics_form="forward", lambda_phys=0.0, **FAST).fit(paper)
+    b = RTEPINN(physics_form="forward", lambda_phys=0.0, **FAST).fit(paper)
+    c = RTEPINN(physics_form="forward", lambda_phys=1.0, **FAST).fit(paper)
+    np.testing.assert_array_equal(a.predict(paper), b.predict(paper))
+    assert np.abs(a.predict(paper) - c.predict(paper)).max() > 0.1
+
+
+def test_rte_bad_physics_form_raises(paper):
+    with pytest.raises(ConfigError, match="physics_form"):
+        SelectiveRTEPINN(physics_form="relative").fit(paper)
+
+
+def _one_reading(model, ds):
+    row = ds.frame.iloc[0]
+    sch = model.schema_
+    return ([row[f"adc_{w}"] for w in sch.labels], [row[f"adc_ref_{w}"] for w in sch.labels],
+            [row[c] for c in sch.physiology])
