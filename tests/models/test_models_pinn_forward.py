@@ -9,8 +9,8 @@ import pytest
 import torch
 
 import nirglucose as ng
-from nirglucose.exceptions import ConfigError
 from nirglucose.evaluation.inverse import task_state
+from nirglucose.exceptions import ConfigError
 from nirglucose.models import (
     RTEPINN,
     OriginalPINN,
