@@ -1,4 +1,5 @@
-"""Estimators by name: EBL, PLS, the oracle, four PINNs, a shallow DNN, three references.
+"""Estimators by name: EBL, PLS, the oracle, four PINNs (and each with the forward-model
+physics term, ``-fm``), a shallow DNN, three references.
 
 The reference learners are the no-skill mean, a Gaussian process and gradient boosting.
 
@@ -26,6 +27,8 @@ __all__ = [
     "SelectiveRTEPINN",
     "OriginalPINNForward",
     "OptimizedPINNForward",
+    "RTEPINNForward",
+    "SelectiveRTEPINNForward",
     "SDNN",
     "MeanReference",
     "GPReference",
@@ -42,6 +45,8 @@ _LAZY = {
     "SelectiveRTEPINN": "nirglucose.models.pinn",
     "OriginalPINNForward": "nirglucose.models.pinn",
     "OptimizedPINNForward": "nirglucose.models.pinn",
+    "RTEPINNForward": "nirglucose.models.pinn",
+    "SelectiveRTEPINNForward": "nirglucose.models.pinn",
     "SDNN": "nirglucose.models.sdnn",
     "MeanReference": "nirglucose.models.reference",
     "GPReference": "nirglucose.models.reference",

@@ -81,6 +81,8 @@ class ForwardTerm:
         if self.schema_.is_plain:
             return {**out, "enabled": False,
                     "constants_from": "none: a plain array has no device (physics term off)"}
+        if self.lambda_phys == 0:  # the term is left out of the loss: nothing to fit
+            return {**out, "enabled": False, "constants_from": "none: lambda_phys is 0"}
         try:
             inv = PhysicsInversion(forward_model=name).fit(source, y)
         except DataError as exc:  # no optics for this device: the term is off

@@ -9,6 +9,8 @@ estimator              registry name         physics term added to the MSE
 :class:`SelectiveRTEPINN` ``selective-rte-pinn`` the same at 1050 and 1150 nm only
 :class:`OriginalPINNForward` ``original-pinn-fm`` forward-model likelihood (``'forward'``)
 :class:`OptimizedPINNForward` ``optimized-pinn-fm`` the same, on the attention network
+:class:`RTEPINNForward` ``rte-pinn-fm``       glucose likelihood + a state head (``'forward'``)
+:class:`SelectiveRTEPINNForward` ``selective-rte-pinn-fm`` the same, selective network
 =====================  ====================  ==========================================
 
 The Beer-Lambert PINNs choose their term by ``physics_form``
@@ -80,6 +82,8 @@ __all__ = [
     "SelectiveRTEPINN",
     "OriginalPINNForward",
     "OptimizedPINNForward",
+    "RTEPINNForward",
+    "SelectiveRTEPINNForward",
     "PHYSICS_FORMS",
     "RTE_PHYSICS_FORMS",
     "nominal_optics",
@@ -642,6 +646,13 @@ _RTE_DOC_PARAMS = """
         exactly the plain network (bit-identical weights): the physics ablation. [-]
     stability_weight : float
         Weight of the scattering prior inside the physics term. [-]
+    physics_form : {'study', 'forward'}
+        'study' (default): the reflectance tie and scattering prior below. 'forward':
+        the forward model's glucose likelihood and a state head tied to each training
+        reading's posterior mode (see :class:`RTEPINNForward`); off (recorded in
+        ``physics_``) where the data has no optics.
+    forward_model : {None, 'beer-lambert', 'diffusion', 'rte-lut'}
+        The 'forward' form's model; None takes the training Dataset's.
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
@@ -716,3 +727,44 @@ class SelectiveRTEPINN(_RTEPINNBase):
             if idx:
                 return idx
         return [int(np.argmax(wavelengths_nm))]
+
+
+_RTE_FORWARD_NOTES = """
+    Notes
+    -----
+    The term: the glucose likelihood of the Beer-Lambert PINNs' 'forward' form
+    (:class:`OriginalPINNForward`) plus a state head that predicts the nuisances of
+    :data:`~nirglucose.models._inversion_solver.NUISANCES`, tied to each training
+    reading's posterior mode under the forward model at its reference glucose
+    (:func:`~nirglucose.models.physics_losses.state_mode_loss`); it replaces the
+    study's reflectance tie (the optics heads stay, as features of the glucose head).
+    ``estimate_state`` returns the state head's blood, saturation, water, fat, melanin,
+    thickness, LED shift and coupling (the benchmark's inverse table). Training
+    parameters: its study twin's until ``benchmarks/tune.py`` has tuned it.
+    """
+
+
+@register("rte-pinn-fm")
+class RTEPINNForward(RTEPINN):
+    __doc__ = (
+        """The RTE-inspired PINN with the forward model as its physics (and a state head).
+
+    :class:`RTEPINN` with ``physics_form='forward'`` by default.
+    """
+        + _RTE_FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 1.0}
+
+
+@register("selective-rte-pinn-fm")
+class SelectiveRTEPINNForward(SelectiveRTEPINN):
+    __doc__ = (
+        """The Selective RTE PINN with the forward model as its physics (and a state head).
+
+    :class:`SelectiveRTEPINN` with ``physics_form='forward'`` by default.
+    """
+        + _RTE_FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 1.0}

@@ -46,6 +46,8 @@ MODELS = {
     "selective-rte-pinn": "nirglucose.models.pinn",
     "original-pinn-fm": "nirglucose.models.pinn",
     "optimized-pinn-fm": "nirglucose.models.pinn",
+    "rte-pinn-fm": "nirglucose.models.pinn",
+    "selective-rte-pinn-fm": "nirglucose.models.pinn",
     "sdnn": "nirglucose.models.sdnn",
     "mean": "nirglucose.models.reference",
     "gp": "nirglucose.models.reference",

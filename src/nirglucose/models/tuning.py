@@ -64,7 +64,12 @@ LAMBDA_PHYS_GRID = (0.0, 0.01, 0.1, 1.0)
 #: forward-model PINNs are the study networks with another physics term, so they take
 #: the twin's tuned training parameters (same network, same data, same grid; their own
 #: ``lambda_phys`` default, as the twin's λ was chosen for the study's term).
-TUNED_AS = {"original-pinn-fm": "original-pinn", "optimized-pinn-fm": "optimized-pinn"}
+TUNED_AS = {
+    "original-pinn-fm": "original-pinn",
+    "optimized-pinn-fm": "optimized-pinn",
+    "rte-pinn-fm": "rte-pinn",
+    "selective-rte-pinn-fm": "selective-rte-pinn",
+}
 
 #: Training hyper-parameters shared by every network (same values, same draws).
 #: ``val_fraction`` 0.2 early-stops on a fifth of the training subjects (epoch 0, the
