@@ -16,10 +16,19 @@ seed. Each PINN runs with its tuned training parameters (``tuned_params``) and:
 
 Prints per preset and PINN: the tuning seed's λ curve, each variant's RMSE per seed,
 their mean, and the mean paired difference forward - no-physics and study -
-no-physics. Not a timed test. One JSON object on the last line.
+no-physics. With ``--inverse``: the inverse task (``inverse.csv`` of
+:func:`nirglucose.evaluation.run_benchmark`, the same folds) of the forward RTE PINNs
+(``rte-pinn-fm``, ``selective-rte-pinn-fm``, their default λ 1) beside
+``physics-inversion``, mean over the seeds: the RMSE of the recovered blood, water,
+melanin and skin thickness against the truth (read for scoring only), next to the
+truth's SD. Not a timed test. One JSON object on the last line.
+
+Cost on one core: about 4 min per Beer-Lambert PINN and preset with the default two
+seeds (the Optimized PINN about twice that), about 10 min per RTE PINN and preset;
+``--inverse`` about 3 min per preset and seed.
 
 Usage: python benchmarks/pinn_forward.py [--seeds 2] [--presets paper,wearable]
-       [--pinns original-pinn,optimized-pinn] [--collocation 0]
+       [--pinns original-pinn,optimized-pinn] [--collocation 0] [--inverse]
 """
 
 from __future__ import annotations
@@ -84,6 +93,36 @@ def _one_pinn(preset: str, pinn: str, seeds: list[int], tuning_seed: int, colloc
     }
 
 
+INVERSE_MODELS = ("rte-pinn-fm", "selective-rte-pinn-fm", "physics-inversion")
+INVERSE_QUANTITIES = ("blood_fraction", "water_fraction", "melanin_fraction",
+                      "skin_thickness_mm")
+
+
+def _inverse(preset: str, seeds: list[int]) -> dict:
+    """Mean over seeds of the inverse table's RMSE (and the truth's SD) per model."""
+    import pandas as pd
+
+    import nirglucose as ng
+    from nirglucose.evaluation import run_benchmark
+
+    rows = []
+    for seed in seeds:
+        ds = ng.simulate(preset, n_subjects=80, per_subject=3, seed=seed)
+        res = run_benchmark(ds, list(INVERSE_MODELS), n_splits=N_SPLITS, repeats=1, seed=seed,
+                            jobs=1, oracle_reference=False, drop_one_models="none",
+                            timing={"n_single": 2, "min_single": 1, "batch_rows": 50,
+                                    "batch_repeats": 1})
+        rmse = res.metrics.set_index("model")["rmse_mgdl"]
+        rows += [{**r, "glucose_rmse_mgdl": float(rmse[r["model"]])}
+                 for r in res.inverse.to_dict(orient="records")
+                 if r["quantity"] in INVERSE_QUANTITIES]
+    t = pd.DataFrame(rows)
+    g = t.groupby(["model", "quantity"])[["rmse", "truth_sd", "pearson_r",
+                                          "glucose_rmse_mgdl"]].mean()
+    return {f"{m} {q}": {k: float(f"{v:.4g}") for k, v in row.items()}
+            for (m, q), row in g.iterrows()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=2, help="seeds 0..N-1")
@@ -91,6 +130,7 @@ def main() -> None:
     ap.add_argument("--pinns", default="original-pinn,optimized-pinn")
     ap.add_argument("--tuning-seed", type=int, default=1000)
     ap.add_argument("--collocation", type=int, default=0)
+    ap.add_argument("--inverse", action="store_true", help="the RTE PINNs' inverse task")
     a = ap.parse_args()
     t0 = time.time()
     seeds = list(range(a.seeds))
@@ -99,7 +139,10 @@ def main() -> None:
                  "seeds": seeds, "tuning_seed": a.tuning_seed, "lambdas": list(LAMBDAS)}
     for preset in a.presets.split(","):
         out[preset] = {}
-        for pinn in a.pinns.split(","):
+        if a.inverse:
+            out[preset]["inverse"] = _inverse(preset, seeds)
+            print(json.dumps({preset: {"inverse": out[preset]["inverse"]}}), flush=True)
+        for pinn in filter(None, a.pinns.split(",")):
             r = _one_pinn(preset, pinn, seeds, a.tuning_seed, a.collocation)
             out[preset][pinn] = r
             print(json.dumps({preset: {pinn: r["rmse_mgdl_mean"]}}), flush=True)
