@@ -17,7 +17,7 @@ import sys
 _CHILD = """
 import resource, sys
 from nirglucose.config import resolve_config
-from nirglucose.simulate.simulator import simulate_frame
+from nirglucose.simulation.simulator import simulate_frame
 n = int(sys.argv[1])
 frame = simulate_frame(resolve_config("paper"), n, 3, 0)
 print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)

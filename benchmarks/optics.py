@@ -47,6 +47,7 @@ os.environ.setdefault("NIRGLUCOSE_BENCH_SNAPSHOTS", "200000")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import simulate as sim_bench  # noqa: E402  (benchmarks/simulate.py)
+
 from nirglucose.optics import layers, tissue  # noqa: E402
 from nirglucose.optics import lut as L  # noqa: E402
 from nirglucose.optics.lut import interpolate as LI  # noqa: E402
@@ -63,7 +64,7 @@ def _cohort(seed: int = 0) -> tuple[dict, np.ndarray, np.ndarray]:
     """
     import nirglucose as ng
     from nirglucose.constants import MGDL_PER_MMOLL_GLUCOSE
-    from nirglucose.simulate.simulator import _tables
+    from nirglucose.simulation.simulator import _tables
 
     cfg = ng.resolve_config("paper", {})
     frame = ng.simulate("paper", n_subjects=700, per_subject=3, seed=seed).frame
@@ -132,7 +133,7 @@ def _vs_diffusion(lut, points) -> dict:
 
 
 def _throughput(lut, cohort) -> dict:
-    from nirglucose.simulate.simulator import _OPTICS_SLICE_ROWS
+    from nirglucose.simulation.simulator import _OPTICS_SLICE_ROWS
 
     pts = LV.random_lut_points(lut, 200_000, rng=3)
     start = time.process_time()

@@ -27,7 +27,7 @@ PER_SUBJECT = 3
 
 def _simulate(preset: str, overrides: dict | None = None):
     import nirglucose as ng
-    from nirglucose.simulate.simulator import _tables, block_ranges, simulate_block
+    from nirglucose.simulation.simulator import _tables, block_ranges, simulate_block
 
     cfg = ng.resolve_config(preset, overrides or {})
     n_subjects = -(-N_SNAPSHOTS // PER_SUBJECT)

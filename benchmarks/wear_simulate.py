@@ -1,7 +1,7 @@
 """Wear simulation speed and memory: 100 subjects x 14 days, a reading every 5 min.
 
 403,200 readings (4032 per subject) written as partitioned Parquet by 2 worker
-processes, chunk by chunk (``nirglucose.simulate.wear.WEAR_CHUNK_SUBJECTS`` subjects a
+processes, chunk by chunk (``nirglucose.simulation.wear.WEAR_CHUNK_SUBJECTS`` subjects a
 chunk). Peak memory: ``resource.getrusage`` of this process (``ru_maxrss``) and of its
 worker processes (``RUSAGE_CHILDREN``, after the workers are shut down and reaped).
 
@@ -28,7 +28,7 @@ JOBS = int(os.environ.get("NIRGLUCOSE_BENCH_WEAR_JOBS", 2))
 
 def main() -> dict:
     import nirglucose as ng
-    from nirglucose.simulate import wear
+    from nirglucose.simulation import wear
 
     cfg = ng.resolve_config("paper")
     with tempfile.TemporaryDirectory() as tmp:

@@ -23,6 +23,12 @@ os.environ.setdefault("MPLBACKEND", "agg")
 
 import nirglucose  # noqa: E402
 
+# autosummary writes one page per documented name into ``generated/`` and never deletes
+# one: a page left from a renamed module would stay in the build (a duplicate target)
+import shutil  # noqa: E402
+
+shutil.rmtree(DOCS / "generated", ignore_errors=True)
+
 project = "nirglucose"
 author = "nirglucose developers"
 copyright = "nirglucose developers, MIT licence"  # noqa: A001

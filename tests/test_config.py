@@ -194,7 +194,7 @@ def test_one_led_value_is_a_key():
         resolve_config("paper", {"leds": THREE + THREE[:1]})
 
 
-#: Numbers that were module constants or inline literals of simulate/ before issue 22,
+#: Numbers that were module constants or inline literals of simulation/ before issue 22,
 #: each with a value that must change the data when swept.
 MOVED = {
     "physiology.heart_rate_bpm_mean": 90.0,
@@ -233,7 +233,7 @@ def test_moved_numbers_are_sweepable_recorded_and_described(key, value):
 
 def test_simulate_modules_hold_no_scenario_constants():
     from nirglucose import constants
-    from nirglucose.simulate import contact, glucose, hardware, physiology
+    from nirglucose.simulation import contact, glucose, hardware, physiology
 
     # physical constants and datasheet defaults live in nirglucose.constants, with sources
     for module in (physiology, contact, glucose, hardware):

@@ -12,7 +12,7 @@ from nirglucose.config import resolve_config
 from nirglucose.config.detector import band_responsivity_a_per_w, responsivity_curve
 from nirglucose.config.parts import DETECTOR_PARTS, LED_PARTS, detector_part, led_part
 from nirglucose.exceptions import ConfigError
-from nirglucose.simulate.hardware import dark_current_a, johnson_resistance_ohm
+from nirglucose.simulation.hardware import dark_current_a, johnson_resistance_ohm
 
 
 def test_catalogue_rows_load_with_their_tables():

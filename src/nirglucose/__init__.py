@@ -11,14 +11,14 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-# The simulator subpackage first: importing it later would rebind the package attribute
-# ``simulate`` from the function below to the subpackage (nothing else imports it now).
-from . import simulate as _simulate_package  # noqa: F401
+from . import _renamed
 from ._version import __version__
 from .api import simulate, simulate_wear
 from .config import PRESETS, ScenarioConfig, resolve_config
 from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, DataError, NirGlucoseError, NotFittedError
+
+_renamed.install()  # ``nirglucose.simulate.*`` imports: the renamed modules, with a warning
 
 if TYPE_CHECKING:  # the lazy attributes below, as the type checker sees them
     from .prediction import PredictionResult, predict

@@ -57,7 +57,7 @@ def simulate(
     (8, 'i')
     """
     from .resources import check_simulation_size
-    from .simulate.simulator import simulate_frame
+    from .simulation.simulator import simulate_frame
 
     if wear_days is not None or every_min is not None:
         if wear_days is None:
@@ -105,7 +105,7 @@ def simulate_wear(
 
     Glucose follows the UVA/Padova meal model (plasma glucose in ``glucose_mgdl``, the
     optics seeing the interstitial glucose), the device drifts and is re-seated daily,
-    the environment and heart rate follow the day (:mod:`nirglucose.simulate.wear`).
+    the environment and heart rate follow the day (:mod:`nirglucose.simulation.wear`).
     Each row carries ``time_min``, ``wear_day`` and ``seating_id``.
 
     Parameters
@@ -143,7 +143,7 @@ def simulate_wear(
     (24, ['time_min', 'wear_day', 'seating_id'])
     """
     from .resources import check_simulation_size
-    from .simulate import wear
+    from .simulation import wear
 
     check_positive_int("n_subjects", n_subjects)
     n_t = wear.readings_per_subject(wear_days, every_min)

@@ -22,7 +22,7 @@ __all__ = [
 ]
 
 #: The measured physiological vector, in the study's order (the simulator's
-#: :func:`~nirglucose.simulate.measurement.measure_physiology` fills it).
+#: :func:`~nirglucose.simulation.measurement.measure_physiology` fills it).
 PMF_COLUMNS = (
     "age_yr",
     "bmi_kgm2",
@@ -83,7 +83,7 @@ DEFAULT_ADC_BITS = 12
 #: 20-600 mg/dL). Reference glucose outside it is refused. [mg/dL]
 GLUCOSE_REPORTING_RANGE_MGDL = (20.0, 600.0)
 
-#: Time columns of a wear simulation (:mod:`nirglucose.simulate.wear`): minutes since
+#: Time columns of a wear simulation (:mod:`nirglucose.simulation.wear`): minutes since
 #: 00:00 of the wear's first day, the day of the wear (0 first) and the device's
 #: placement (0 first, +1 at each re-seating).
 WEAR_COLUMNS = ("time_min", "wear_day", "seating_id")

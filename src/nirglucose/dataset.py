@@ -321,7 +321,7 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
     ----------
     path : str or path-like
         A directory written by
-        :func:`~nirglucose.simulate.partitioned.write_partitioned` (or any directory
+        :func:`~nirglucose.simulation.partitioned.write_partitioned` (or any directory
         of Parquet files of the dataset schema, read in name order).
 
     Returns

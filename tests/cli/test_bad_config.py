@@ -9,7 +9,7 @@ from cli_helpers import assert_one_line_error
 
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError
-from nirglucose.simulate.hardware import adc_convert
+from nirglucose.simulation.hardware import adc_convert
 
 BAD_SETS = [
     ("noise_scale=Infinity", ["noise_scale", "finite"]),

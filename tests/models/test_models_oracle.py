@@ -65,7 +65,7 @@ def test_noise_free_error_is_quantisation_only(noise_free):
 
 def test_round_trip_forward_inverse_over_a_glucose_grid(noise_free):
     """Simulate at a grid of glucose values through the same nuisance state; invert."""
-    from nirglucose.simulate.simulator import detected_fraction_given_glucose
+    from nirglucose.simulation.simulator import detected_fraction_given_glucose
 
     train, test = noise_free
     o = Oracle(prior=False, tol=1e-6).fit(train)

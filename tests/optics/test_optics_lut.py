@@ -267,7 +267,7 @@ def test_simulator_runs_with_rte_lut(monkeypatch):
     np.testing.assert_array_equal(a.frame["glucose_mgdl"], d.frame["glucose_mgdl"])
     assert not np.allclose(frac, d.frame[cols].to_numpy())
     # the oracle's forward model reproduces the simulated fractions
-    from nirglucose.simulate.simulator import detected_fraction_given_glucose
+    from nirglucose.simulation.simulator import detected_fraction_given_glucose
 
     again = detected_fraction_given_glucose(cfg, a.frame, a.frame["glucose_mgdl"].to_numpy())
     np.testing.assert_allclose(again, frac, rtol=1e-9)

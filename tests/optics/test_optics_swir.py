@@ -206,6 +206,7 @@ def test_rte_lut_refuses_the_water_band_with_one_config_error(monkeypatch, tmp_p
             ng.simulate("wearable", 2, 1, 0, overrides={
                 "leds": leds, "optics.model": "rte-lut", "optics.lut_solver": "diffusion"})
     assert "\n" not in str(err.value)
+    assert "np.float64" not in str(err.value)  # a plain number, not numpy's repr
 
 
 # --------------------------------------------------------------------- end to end

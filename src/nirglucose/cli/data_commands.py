@@ -64,12 +64,12 @@ def simulate(
         return
     _check_simulate_out(out, subjects, per_subject)
     if not out.suffix:
-        from ..simulate.partitioned import write_partitioned
+        from ..simulation.partitioned import write_partitioned
 
         n = write_partitioned(cfg, out, subjects, per_subject, seed, n_jobs=jobs)
         _say(f"wrote {n} snapshots to {out}/ (partitioned Parquet)", err=False)
         return
-    from ..simulate.simulator import simulate_frame
+    from ..simulation.simulator import simulate_frame
 
     frame = simulate_frame(cfg, subjects, per_subject, seed, n_jobs=jobs)
     ds = Dataset(frame, config=cfg, seed=seed)
@@ -83,7 +83,7 @@ def _simulate_wear(cfg, out: Path, subjects: int, per_subject: int, seed: int, j
     """``simulate --wear-days D --every-min M``: the wear simulation, written chunk by chunk
     to a directory, or in memory to a file."""
     from ..dataset import Dataset
-    from ..simulate import wear
+    from ..simulation import wear
 
     if wear_days is None:
         raise UserError("--every-min applies to a wear simulation; give --wear-days too")

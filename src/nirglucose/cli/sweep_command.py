@@ -45,7 +45,8 @@ StudyOption = Annotated[
     str | None,
     typer.Option(help=f"Built-in study: {_STUDY_NAMES}, wear (calibration schedule x days of "
                  "wear x preset: --vary wear_days=1,3,7, --preset paper,wearable; each task a "
-                 "worn run of --subjects subjects, a reading every 15 min)."),
+                 "worn run of --subjects subjects, a reading every 15 min; --jobs and "
+                 "--scheduler as for the other studies)."),
 ]
 SweepPresetOption = Annotated[
     str | None,
@@ -105,7 +106,7 @@ def sweep(
         from .wear_command import wear_sweep
 
         return wear_sweep(out, vary, preset, seeds or 1, seed, models, subjects, folds,
-                          resamples, set_)
+                          resamples, set_, jobs=_jobs(jobs), scheduler=scheduler)
     if seeds is None:
         seeds = 1 if study == "data-size" else 5
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),

@@ -134,7 +134,8 @@ def _print(res, name: str, out: Path) -> None:
 
 
 def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects: int,
-               folds: int, resamples: int, set_) -> None:
+               folds: int, resamples: int, set_, jobs: int | None = 1,
+               scheduler: str | None = None) -> None:
     """``sweep --study wear``: :func:`nirglucose.evaluation.wear_sweep.run_wear_sweep`."""
     from ..evaluation.wear_sweep import WEAR_DAYS, WEAR_PRESETS, run_wear_sweep
 
@@ -169,7 +170,7 @@ def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects:
                                  seeds=list(range(seed, seed + seeds)),
                                  models=_model_names(models) or _default_models(),
                                  n_subjects=subjects, folds=folds, n_boot=resamples,
-                                 on_task=on_task)
+                                 on_task=on_task, jobs=jobs, scheduler=scheduler)
     best = summary[summary["variant"] == "raw"].pivot_table(
         index=["preset", "wear_days", "model"], columns="schedule", values="rmse_mgdl")
     out_console.print(escape(best.round(1).to_string()))

@@ -251,7 +251,7 @@ def _population_key(cfg: ScenarioConfig) -> str:
 @lru_cache(maxsize=16)
 def _pilot(population_json: str) -> _Pilot:
     """Nuisance states, temperatures and the nuisance prior from a pilot simulation."""
-    from ..simulate.simulator import simulate_frame
+    from ..simulation.simulator import simulate_frame
 
     cfg = ScenarioConfig.model_validate(json.loads(population_json))
     f = simulate_frame(cfg, PILOT_SUBJECTS, PILOT_PER_SUBJECT, PILOT_SEED)
@@ -319,9 +319,9 @@ def noise_covariance(cfg: ScenarioConfig, log_ratio: np.ndarray, board_c) -> tup
     Hamamatsu [3]_), the reference's zero where it saturates; without a monitor
     photodiode 2 flicker^2 and the LED thermal drift a^2 (2 sd_junction^2) per channel,
     and a^2 E[dT_ambient^2] + b^2 var(dt) / 10^6 common (the coefficients of
-    :func:`nirglucose.simulate.hardware.led_power_w`).
+    :func:`nirglucose.simulation.hardware.led_power_w`).
     """
-    from ..simulate.hardware import dark_current_a, johnson_resistance_ohm
+    from ..simulation.hardware import dark_current_a, johnson_resistance_ohm
 
     hw = cfg.hardware
     full = 2**hw.adc_bits - 1

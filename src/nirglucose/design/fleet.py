@@ -279,7 +279,7 @@ def apply_adc_offset(frame: pd.DataFrame, offset_lsb: int, adc_bits: int) -> pd.
     """Add a static ADC offset to every code (``adc_*`` and ``adc_ref_*``), clipped.
 
     The offset is added to the converter's output like the simulator's offset drift
-    (:func:`~nirglucose.simulate.hardware.adc_convert`: round(V/Vref FS + INL +
+    (:func:`~nirglucose.simulation.hardware.adc_convert`: round(V/Vref FS + INL +
     offset), clipped to 0 .. 2^bits - 1); an integer offset commutes with the rounding.
 
     Parameters

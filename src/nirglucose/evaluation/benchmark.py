@@ -19,6 +19,11 @@ Tasks
     the digest of the whole package source); a rerun loads finished tasks instead of
     recomputing them, and a corrupt or mismatching file is recomputed.
 
+Estimator objects
+    Besides registered names, ``models`` takes unfitted estimator objects and
+    ``(label, estimator)`` pairs (:mod:`~nirglucose.evaluation.estimators`): each task
+    fits a clone as given; the task key covers the object's class and parameters.
+
 Validation
     Under ``paper-split`` the validation part (20 % of subjects) is passed as
     ``fit(train, X_val=..., y_val=...)`` to estimators whose ``fit`` takes ``X_val``
@@ -68,7 +73,6 @@ Scoring
 
 from __future__ import annotations
 
-import inspect
 import json
 import sys
 import time
@@ -113,6 +117,19 @@ from .drop_one import (
     resolve_drop_one_models,
     without_led,
 )
+from .estimators import (
+    build_estimator,
+    check_object_params,
+    describe_entries,
+    estimator_identity,
+    fit_history,
+    fit_model,
+    measured_frame,
+    predict_model,
+    resolve_entries,
+    takes_dataset,
+)
+from .estimators import seeded_params as seeded_params  # re-exported: sweep, fleet, CLI
 from .inverse import inverse_table, task_state
 from .progress import task_hooks
 from .protocol import Protocol, resolve_protocol
@@ -139,28 +156,6 @@ __all__ = [
 ]
 
 # --------------------------------------------------------------------------- tasks
-def _history(model: Any) -> list[dict[str, Any]]:
-    hist = getattr(model, "history_", None) or []
-    out = []
-    for row in hist:
-        if isinstance(row, dict):
-            out.append(
-                {
-                    str(k): (
-                        float(v)
-                        if isinstance(v, float | np.floating)
-                        else int(v)
-                        if isinstance(v, int | np.integer)
-                        else v
-                        if isinstance(v, str | bool | None)
-                        else repr(v)
-                    )
-                    for k, v in row.items()
-                }
-            )
-    return out
-
-
 @contextmanager
 def _one_thread_torch():
     """Torch (when loaded) on one thread inside a task: the same arithmetic for any ``jobs``."""
@@ -176,59 +171,49 @@ def _one_thread_torch():
         torch.set_num_threads(saved)
 
 
-def _constructor_params(cls: type, spec: Mapping[str, Any]) -> tuple[dict[str, Any], int]:
-    """The task's constructor arguments (``random_state`` seeded from the task) and seed."""
-    params = dict(spec["params"])
+def _task_model(maker: Any, spec: Mapping[str, Any]) -> Any:
+    """The task's new estimator (:func:`~nirglucose.evaluation.estimators.build_estimator`),
+    seeded from ``(seed, model, repeat, fold)``."""
     # an ablated PINN draws the same seeds as its original: a paired comparison
     seed_name = spec.get("seed_model", spec["model"])
     task_seed = tasks.derived_seed(spec["seed"], seed_name, spec["repeat"], spec["fold"])
-    return seeded_params(cls, params, task_seed), task_seed
-
-
-def seeded_params(cls: type, params: Mapping[str, Any], seed: int) -> dict[str, Any]:
-    """``params`` with ``random_state=seed`` added when ``cls`` takes one and none is given."""
-    params = dict(params)
-    if "random_state" in inspect.signature(cls).parameters and "random_state" not in params:
-        params["random_state"] = seed
-    return params
+    return build_estimator(maker, spec["params"], task_seed)
 
 
 def _run_task(
-    cls: type,
+    maker: Any,
     spec: dict[str, Any],
     dataset: Dataset,
     split: Split,
     timing: dict[str, Any],
 ) -> dict[str, Any]:
-    """Fit one model on one split and score it; the JSON-able task result."""
+    """Fit one model (a registered class or the caller's estimator object) on one split
+    and score it; the JSON-able task result."""
     if spec.get("drop_nm") is not None:
-        return _run_drop_task(cls, spec, dataset, split)
-    params, _ = _constructor_params(cls, spec)
+        return _run_drop_task(maker, spec, dataset, split)
     train, test = dataset.rows(split.train), dataset.rows(split.test)
-    fit_kwargs: dict[str, Any] = {}
-    if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
-        val = dataset.rows(split.val)
-        fit_kwargs = {"X_val": val, "y_val": val.frame["glucose_mgdl"].to_numpy(float)}
+    val = None if split.val is None else dataset.rows(split.val)
     cpu0, wall0 = time.process_time(), time.perf_counter()
     with _one_thread_torch():
-        model = cls(**params)
+        model = _task_model(maker, spec)
         t0 = time.perf_counter()
-        model.fit(train, **fit_kwargs)
+        fit_model(model, train, val)
         fit_time = time.perf_counter() - t0
-        pred = np.asarray(model.predict(test), dtype=float).ravel()
+        pred = predict_model(model, test)
         if pred.shape != (len(split.test),):
             raise DataError(
                 f"model {spec['model']!r} returned {pred.shape} predictions for "
                 f"{len(split.test)} rows"
             )
-        val_pred = None
-        if split.val is not None:  # calibrates the conformal intervals of paper-split
-            val_pred = np.asarray(model.predict(dataset.rows(split.val)), dtype=float).ravel()
+        # the validation predictions calibrate the conformal intervals of paper-split
+        val_pred = None if val is None else predict_model(model, val)
         latency: dict[str, Any] = {}
         if spec["timed"]:
-            form, data = timing_inputs(model, test)
+            # another library's estimator is timed on what it is fed: the measured columns
+            form, data = (timing_inputs(model, test) if takes_dataset(model)
+                          else ("frame", measured_frame(test)))
             latency = {**measure_latency(model, data, **timing), "latency_input": form}
-        state = task_state(model, test)
+        state = task_state(model, test) if takes_dataset(model) else None
     return {
         "predicted_mgdl": [float(v) for v in pred],
         "val_predicted_mgdl": None if val_pred is None else [float(v) for v in val_pred],
@@ -237,14 +222,14 @@ def _run_task(
         "fit_time_s": fit_time,
         "task_wall_s": time.perf_counter() - wall0,
         "task_cpu_s": time.process_time() - cpu0,
-        "history": _history(model),
+        "history": fit_history(model),
         "state": state,
         "timing": latency,
     }
 
 
 def _run_drop_task(
-    cls: type, spec: dict[str, Any], dataset: Dataset, split: Split
+    maker: Any, spec: dict[str, Any], dataset: Dataset, split: Split
 ) -> dict[str, Any]:
     """Refit one model on one split without the LED ``spec["drop_nm"]``; score it.
 
@@ -252,18 +237,14 @@ def _run_drop_task(
     (``seed_model``, ``repeat``, ``fold``), the validation part (``paper-split``) goes
     without the LED too, and the held-out rows are the same: a paired comparison.
     """
-    params, _ = _constructor_params(cls, spec)
     data = without_led(dataset, spec["drop_nm"])
     train, test = data.rows(split.train), data.rows(split.test)
-    fit_kwargs: dict[str, Any] = {}
-    if split.val is not None and "X_val" in inspect.signature(cls.fit).parameters:
-        val = data.rows(split.val)
-        fit_kwargs = {"X_val": val, "y_val": val.frame["glucose_mgdl"].to_numpy(float)}
+    val = None if split.val is None else data.rows(split.val)
     cpu0, wall0 = time.process_time(), time.perf_counter()
     with _one_thread_torch():
-        model = cls(**params).fit(train, **fit_kwargs)
+        model = fit_model(_task_model(maker, spec), train, val)
         fit_time = time.perf_counter() - wall0
-        pred = np.asarray(model.predict(test), dtype=float).ravel()
+        pred = predict_model(model, test)
     if pred.shape != (len(split.test),):
         raise DataError(
             f"model {spec['model']!r} without the {spec['drop_nm']:g} nm LED returned "
@@ -289,28 +270,6 @@ def _task_tag(spec: Mapping[str, Any]) -> str:
 
 
 # --------------------------------------------------------------------------- plan
-def resolve_models(models: Sequence[str] | str | None, default: Sequence[str]) -> list[str]:
-    """Registry names from a list or a comma-separated string, ``default`` when None.
-
-    Raises
-    ------
-    ConfigError
-        No models (none given, or ``default`` empty), or an unknown name.
-    """
-    if models is None:
-        if not default:
-            raise ConfigError("no models are registered")
-        models = default
-    if isinstance(models, str):
-        models = [m.strip() for m in models.split(",") if m.strip()]
-    names = list(dict.fromkeys(models))
-    if not names:
-        raise ConfigError(f"no models given; valid: {', '.join(available_models())}")
-    for name in names:
-        get_model_class(name)  # raises ConfigError listing the valid names
-    return names
-
-
 def _model_params(name: str, preset: str | None) -> dict[str, Any]:
     """Tuned constructor arguments of model ``name`` on ``preset``; without a preset
     (user data) :func:`~nirglucose.models.tuning.untuned_params`.
@@ -327,7 +286,8 @@ def _model_params(name: str, preset: str | None) -> dict[str, Any]:
 
 
 def _variants(
-    names: list[str], ablation: bool, params: Mapping[str, dict[str, Any]], preset: str | None
+    names: list[str], ablation: bool, params: Mapping[str, dict[str, Any]], preset: str | None,
+    objects: Mapping[str, Any],
 ) -> tuple[dict[str, tuple[str, dict[str, Any]]], list[dict[str, Any]]]:
     """Row name -> (registered model, forced parameters), and the ablation's pairs.
 
@@ -336,7 +296,7 @@ def _variants(
     caller did) the PINN *is* that fit: the pair is kept untested, and the PINN is also
     run at the best λ > 0 of the tuning's validation curve
     (:func:`~nirglucose.models.tuning.best_positive_lambda`) as ``<name>/lambda=<λ>``,
-    paired against ``<name>/no-physics``.
+    paired against ``<name>/no-physics``. Estimator objects (``objects``) are not ablated.
     """
     from ..models.registry import is_pinn
     from ..models.tuning import best_positive_lambda
@@ -345,7 +305,7 @@ def _variants(
     pairs: list[dict[str, Any]] = []
     if not ablation:
         return out, pairs
-    for n in (n for n in names if is_pinn(n)):
+    for n in (n for n in names if n not in objects and is_pinn(n)):
         off = n + NO_PHYSICS
         out[off] = (n, {"lambda_phys": 0.0})
         lam = params[n].get("lambda_phys")
@@ -365,12 +325,17 @@ def _variants(
 
 @dataclass(frozen=True)
 class _Task:
-    """One planned task: its key, specification, split and estimator class."""
+    """One planned task: its key, specification, split and estimator (a registered class,
+    or the caller's object, cloned by the task)."""
 
     key: str
     spec: dict[str, Any]
     split: Split
-    cls: type
+    maker: Any
+
+
+def _class_of(maker: Any) -> type:
+    return maker if isinstance(maker, type) else type(maker)
 
 
 @dataclass(frozen=True)
@@ -391,6 +356,8 @@ class _Plan:
     #: The drop-one-LED refits (models × first-repeat folds × LEDs).
     drop_tasks: list[_Task]
     drop_one_models: list[str]
+    #: Label -> the caller's estimator object (rows given as objects).
+    objects: dict[str, Any]
 
     def specs(self) -> dict[str, dict[str, Any]]:
         """Task key -> specification, in plan order (a shared fit: its first row's)."""
@@ -413,18 +380,21 @@ def _as_dataset(dataset: Dataset | pd.DataFrame) -> Dataset:
 
 def _row_params(
     names: list[str],
+    objects: Mapping[str, Any],
     explicit: Mapping[str, dict[str, Any]] | None,
     preset: str | None,
     ablation: bool,
 ) -> tuple[list[str], dict[str, str], dict[str, dict[str, Any]], list[dict[str, Any]]]:
-    """Rows (PINNs two or three times under ablation), each row's registered model and
-    parameters, and the ablation's pairs (:func:`_variants`)."""
+    """Rows (PINNs two or three times under ablation), each row's registered model (or
+    estimator object's label) and parameters (an object's: ``explicit`` only, it is
+    fitted as given), and the ablation's pairs (:func:`_variants`)."""
     explicit = dict(explicit or {})
     unknown = sorted(set(explicit) - set(names) - {ORACLE})
     if unknown:
         raise ConfigError(f"model_params for models not benchmarked: {unknown}; models: {names}")
-    params = {n: {**_model_params(n, preset), **explicit.get(n, {})} for n in [*names, ORACLE]}
-    variants, pairs = _variants(names, ablation, params, preset)
+    params = {n: {**({} if n in objects else _model_params(n, preset)), **explicit.get(n, {})}
+              for n in [*names, ORACLE]}
+    variants, pairs = _variants(names, ablation, params, preset, objects)
     for row, (base, forced) in variants.items():
         if row != base:
             params[row] = {**params[base], **forced}
@@ -463,18 +433,26 @@ def _oracle_rows(
     return [], note
 
 
+def _rows(models: Any, references: bool) -> tuple[list[str], dict[str, Any]]:
+    """The rows' labels (the references last) and label -> estimator object."""
+    entries = resolve_entries(models, available_models())
+    names = [e.label for e in entries]
+    if references:
+        names += [m for m in REFERENCE_MODELS if m not in names]
+    return names, {e.label: e.estimator for e in entries if e.estimator is not None}
+
+
 def _plan(
     dataset: Dataset,
-    models: Sequence[str] | str | None,
+    models: Sequence[Any] | str | None,
     opts: dict[str, Any],
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
-    names = resolve_models(models, available_models())
-    if opts["references"]:
-        names += [m for m in REFERENCE_MODELS if m not in names]
+    names, objects = _rows(models, opts["references"])
+    check_object_params(objects, opts["model_params"] or {})
     preset = getattr(dataset.config, "preset", None)
     names, base_of, params, pairs = _row_params(
-        names, opts["model_params"], preset, opts["ablation"]
+        names, objects, opts["model_params"], preset, opts["ablation"]
     )
     aux, oracle_note = _oracle_rows(dataset, names, opts["oracle_reference"])
     base_of.update({a: a for a in aux})
@@ -492,14 +470,17 @@ def _plan(
         "seed": int(opts["seed"]),
         "timing": tasks.canonical(dict(opts["timing"])),
     }
-    classes = {n: get_model_class(base_of[n]) for n in [*names, *aux]}
+    makers = {n: objects[n] if n in objects else get_model_class(base_of[n])
+              for n in [*names, *aux]}
+    ident = {n: {"estimator": estimator_identity(o)} for n, o in objects.items()}
     planned = []
     for split in splits:
         for name in [*names, *aux]:
             spec = tasks.stamp(
                 {
                     **common,
-                    "code": tasks.external_code_digest(classes[name]),
+                    "code": tasks.external_code_digest(_class_of(makers[name])),
+                    **ident.get(name, {}),  # an estimator object: its class and parameters
                     "model": name,
                     "seed_model": base_of[name],
                     "params": tasks.canonical(dict(params.get(name, {}))),
@@ -512,14 +493,14 @@ def _plan(
             # that fit's task: the same model, seeds and parameters, fitted once
             same = base_of[name] != name and params.get(name) == params.get(base_of[name])
             key = tasks.task_key({**spec, "model": base_of[name]} if same else spec)
-            planned.append(_Task(key, spec, split, classes[name]))
+            planned.append(_Task(key, spec, split, makers[name]))
     drop_models = resolve_drop_one_models(opts["drop_one_models"], names)
     if opts["drop_one_models"] is None and len(led_wavelengths(dataset)) < 2:
         drop_models = []  # the default asks nothing of a one-LED device; a request is refused
     drops = _drop_tasks(dataset, drop_models, splits, planned)
     return _Plan(
         names, aux, params, oracle_note, protocol, n_eff, r_eff, data_hash, splits, planned,
-        pairs, drops, drop_models,
+        pairs, drops, drop_models, objects,
     )
 
 
@@ -545,7 +526,7 @@ def _drop_tasks(
             base = own[(name, split.repeat, split.fold)]
             for w in wavelengths:
                 spec = {**base.spec, "timed": False, "drop_nm": w}
-                out.append(_Task(tasks.task_key(spec), spec, split, base.cls))
+                out.append(_Task(tasks.task_key(spec), spec, split, base.maker))
     return out
 
 
@@ -562,7 +543,7 @@ def _execute(
     for t in [*plan.tasks, *plan.drop_tasks]:  # a shared fit runs as its first row
         by_key.setdefault(t.key, t)
     items = [
-        (by_key[k].cls, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
+        (by_key[k].maker, by_key[k].spec, dataset, by_key[k].split, opts["timing"]) for k in pending
     ]
     hooks = task_hooks(
         "benchmark", len(by_key), len(cache.results), "cached", show=opts["progress"],
@@ -600,6 +581,7 @@ def _meta(
         "version": __version__,
         "config": None if dataset.config is None else json.loads(dataset.config.to_json()),
         "models": plan.names,
+        "estimators": describe_entries(plan.objects),  # rows given as objects: fitted as given
         "auxiliary_models": plan.aux,
         "model_params": tasks.canonical({k: v for k, v in plan.model_params.items() if v}),
         "references": [m for m in REFERENCE_MODELS if m in plan.names],
@@ -688,7 +670,7 @@ def _checked_options(proto: Protocol, **rest: Any) -> dict[str, Any]:
 
 def run_benchmark(
     dataset: Dataset | pd.DataFrame,
-    models: Sequence[str] | str | None = None,
+    models: Sequence[Any] | str | None = None,
     *,
     protocol: str | Protocol = "grouped-cv",
     n_splits: int = 5,
@@ -714,8 +696,19 @@ def run_benchmark(
     ----------
     dataset : Dataset or pandas.DataFrame
         Snapshots with ``subject_id`` and ``glucose_mgdl``.
-    models : sequence of str or comma-separated str, optional
-        Registry names (default: every registered model).
+    models : sequence, comma-separated str or estimator, optional
+        Registry names (default: every registered model) and, as scikit-learn's
+        ``cross_validate`` takes, unfitted estimator objects (anything with ``fit``,
+        ``predict`` and ``get_params``) or ``(label, estimator)`` pairs
+        (:mod:`~nirglucose.evaluation.estimators`). An object's row is labelled by the
+        pair's label, else its class's registry name, else its class name; two rows
+        with one label are refused. Each task fits its own ``sklearn.base.clone`` (the
+        caller's object stays unfitted), with the task's seed in every ``random_state``
+        left None; it is fitted as given (no tuning grid or tuned parameters, no
+        physics ablation; ``model_params[label]`` applies through ``set_params``), which
+        ``meta["estimators"]`` records. The package's own estimators take the Dataset,
+        as registered names do; any other gets ``fit(X, y)`` with ``X`` the measured
+        columns. With ``jobs > 1`` the objects are pickled to the worker processes.
     protocol : {"grouped-cv", "paper-split"} or Protocol
         The splitter (:mod:`~nirglucose.evaluation.splits`), or the whole protocol as one
         :class:`~nirglucose.evaluation.protocol.Protocol` (the keywords it holds unset).
@@ -730,7 +723,8 @@ def run_benchmark(
     progress : bool
         Show a rich progress bar on stderr.
     model_params : dict, optional
-        Model name -> constructor keyword arguments (over the preset's tuned ones).
+        Model name (row label) -> constructor keyword arguments (over the preset's
+        tuned ones), or ``set_params`` arguments of an estimator object.
     n_boot : int
         Bootstrap resamples for intervals and paired tests.
     alpha : float

@@ -18,7 +18,7 @@ Determinism
     sweep seed, splits and models from ``run_benchmark``'s seeding), never from the
     order or the place it ran, so results are identical for ``jobs=1``, a process
     pool or a Dask cluster. The same seed in every scenario gives common random
-    numbers: with :mod:`~nirglucose.simulate._random`'s per-source streams, switching
+    numbers: with :mod:`~nirglucose.simulation._random`'s per-source streams, switching
     one noise source off leaves every other draw unchanged, so scenario differences
     are paired.
 
@@ -69,15 +69,18 @@ from ..exceptions import ConfigError, DataError, check_positive_int
 from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks
-from .benchmark import (
-    METRIC_COLUMNS,
-    _model_params,
-    resolve_models,
-    run_benchmark,
-    seeded_params,
-)
+from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
+from .estimators import (
+    build_estimator,
+    check_object_params,
+    describe_entries,
+    estimator_identity,
+    fit_model,
+    predict_model,
+    resolve_entries,
+)
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .fleet import fleet_metrics, fleet_table
 from .progress import task_hooks
@@ -237,12 +240,15 @@ def plan_sweep(
     n_boot: int = _DEFAULT_N_BOOT,
     model_params: Mapping[str, Mapping[str, Any]] | None = None,
     calibration: int = 0,
+    estimators: Mapping[str, Any] | None = None,
 ) -> list[dict[str, Any]]:
     """One task specification per scenario × seed × model, in that nesting order.
 
     Every configuration is resolved here, so a bad value fails before anything runs.
     ``calibration`` (personal calibration readings) joins the cross-validated tasks'
-    specifications only when non-zero.
+    specifications only when non-zero. ``estimators`` (label -> estimator object) puts
+    each object's :func:`~nirglucose.evaluation.estimators.estimator_identity` in its
+    tasks' specifications (the cache key); the object travels beside them.
 
     Returns
     -------
@@ -255,6 +261,7 @@ def plan_sweep(
     params = dict(model_params or {})
     n_eff, r_eff = effective_layout(protocol, n_splits, repeats)
     layout = {"protocol": protocol, "n_splits": n_eff, "repeats": r_eff}
+    ident = {k: {"estimator": estimator_identity(v)} for k, v in (estimators or {}).items()}
     specs = []
     for sc in scenarios:
         fields = _scenario_fields(sc, preset, n_subjects, base, layout)
@@ -268,6 +275,7 @@ def plan_sweep(
                     "per_subject": int(per_subject),
                     "seed": int(seed),
                     "model": model,
+                    **ident.get(model, {}),
                     "model_params": tasks.canonical(
                         {**params.get(model, {}), **own.get(model, {})}
                     ),
@@ -285,10 +293,10 @@ def _filtered(ds: Dataset, filt: Mapping[str, Any] | None) -> Dataset:
     return ds.rows(mask)
 
 
-def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
+def _cv_metrics(spec: Mapping[str, Any], ds: Dataset, estimator: Any = None) -> dict[str, Any]:
     res = run_benchmark(
         ds,
-        [spec["model"]],
+        [spec["model"] if estimator is None else (spec["model"], estimator)],
         protocol=spec["protocol"],
         n_splits=spec["n_splits"],
         repeats=spec["repeats"],
@@ -316,18 +324,22 @@ def _cv_metrics(spec: Mapping[str, Any], ds: Dataset) -> dict[str, Any]:
     return out
 
 
-def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> dict[str, Any]:
+def _shift_metrics(
+    spec: Mapping[str, Any], train: Dataset, test: Dataset, estimator: Any = None
+) -> dict[str, Any]:
     if len(train) == 0 or len(test) == 0:
         raise DataError(
             f"the {spec['model']!r} shift task has an empty training or test "
             f"cohort ({len(train)} / {len(test)} rows); simulate more subjects"
         )
-    cls = get_model_class(spec["model"])
-    # the preset's tuned parameters (the benchmark's one hook), then the sweep's own
-    params = {**_model_params(spec["model"], spec["preset"]), **spec["model_params"]}
+    maker = get_model_class(spec["model"]) if estimator is None else estimator
+    # the preset's tuned parameters (the benchmark's one hook), then the sweep's own; an
+    # estimator object is fitted as given
+    tuned = _model_params(spec["model"], spec["preset"]) if estimator is None else {}
+    params = {**tuned, **spec["model_params"]}
     seed = tasks.derived_seed(spec["seed"], f"model|{spec['model']}")
-    model = cls(**seeded_params(cls, params, seed)).fit(train)
-    raw = np.asarray(model.predict(test), dtype=float).ravel()
+    model = fit_model(build_estimator(maker, params, seed), train)
+    raw = predict_model(model, test)
     y = scored(raw, fallback_mgdl(train))
     ref = test.frame["glucose_mgdl"].to_numpy(float)
     point = summary(ref, y)
@@ -344,13 +356,15 @@ def _shift_metrics(spec: Mapping[str, Any], train: Dataset, test: Dataset) -> di
     return {k: out[k] for k in (*SWEEP_METRICS, "n_train") if k in out}
 
 
-def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
+def run_sweep_task(spec: Mapping[str, Any], estimator: Any = None) -> dict[str, Any]:
     """Run one sweep task (module level, so any worker process can run it).
 
     Parameters
     ----------
     spec : dict
         One task specification of :func:`plan_sweep`.
+    estimator : estimator, optional
+        The task's estimator object (cloned, never fitted); None for a registered name.
 
     Returns
     -------
@@ -368,10 +382,9 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
             overrides=spec["overrides"],
         )
         if ds is None:
-
             metrics = fleet_metrics(spec)
         elif spec["kind"] == "cv":
-            metrics = _cv_metrics(spec, _filtered(ds, spec["train_filter"]))
+            metrics = _cv_metrics(spec, _filtered(ds, spec["train_filter"]), estimator)
         else:
             test = simulate(
                 spec["preset"],
@@ -380,9 +393,8 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
                 tasks.derived_seed(spec["seed"], "test-cohort"),
                 overrides=spec["test_overrides"],
             )
-            metrics = _shift_metrics(
-                spec, _filtered(ds, spec["train_filter"]), _filtered(test, spec["test_filter"])
-            )
+            metrics = _shift_metrics(spec, _filtered(ds, spec["train_filter"]),
+                                     _filtered(test, spec["test_filter"]), estimator)
     clean = {  # numbers only: text columns (e.g. how MACs were counted) are not swept
         k: (None if v is None or (isinstance(v, float) and not math.isfinite(v)) else float(v))
         for k, v in metrics.items() if not isinstance(v, str)
@@ -394,6 +406,11 @@ def run_sweep_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         "warnings": list(dict.fromkeys(str(w.message).replace("\n", " ") for w in caught)),
         "wall_s": time.perf_counter() - t0,
     }
+
+
+def _run_sweep_item(item: tuple[Mapping[str, Any], Any]) -> dict[str, Any]:
+    """:func:`run_sweep_task` of one ``(spec, estimator)`` pair (what the executors map)."""
+    return run_sweep_task(*item)
 
 
 def _valid_result(spec: Mapping[str, Any], result: Any) -> bool:
@@ -511,8 +528,10 @@ def _execute(
     scheduler: Any,
     progress: bool,
     on_task: Callable[[dict[str, Any], bool], None] | None,
+    objects: Mapping[str, Any],
 ) -> None:
-    """Run the pending tasks (here, on local processes or on Dask) into ``cache``."""
+    """Run the pending tasks (here, on local processes or on Dask) into ``cache``; a task
+    of an estimator object (``objects``: label -> object) gets the object beside its spec."""
     check_scheduler(scheduler)  # one line, before the progress starts
     hooks = task_hooks(
         "sweep", len(specs), len(cache.results), "reused", show=progress,
@@ -520,8 +539,8 @@ def _execute(
     )
     with hooks as done:
         stream = run_unordered(
-            run_sweep_task,
-            [specs[k] for k in pending],
+            _run_sweep_item,
+            [(specs[k], objects.get(specs[k]["model"])) for k in pending],
             jobs=jobs,
             scheduler=scheduler,
             keys=[f"nirglucose-sweep-{k}" for k in pending],
@@ -585,7 +604,6 @@ def _effects(study: str | None, frame: pd.DataFrame, summary: pd.DataFrame) -> p
     if study == "wavelengths":
         return wavelength_designs(frame)
     if study == "fleet":
-
         return fleet_table(frame)
     return None
 
@@ -615,6 +633,7 @@ def _sweep_meta(
             else []
         ),
         **{k: opts[k] for k in ("seeds", "models", "protocol", "n_splits", "repeats")},
+        "estimators": opts["estimators"],  # rows given as estimator objects: fitted as given
         **{k: opts[k] for k in ("n_subjects", "per_subject", "n_boot")},
         "version": __version__,
         "task_format": TASK_FORMAT,
@@ -646,13 +665,28 @@ def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int]
     return proto
 
 
+def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
+                  params: Mapping[str, Any] | None) -> tuple[list[str], dict[str, Any]]:
+    """The rows' labels (a study's subject first) and label -> estimator object."""
+    entries = resolve_entries(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
+    labels = [e.label for e in entries]
+    objects = {e.label: e.estimator for e in entries if e.estimator is not None}
+    check_object_params(objects, params or {})
+    if objects and any(sc.kind == "fleet" for sc in scenarios):
+        raise ConfigError(f"the fleet study takes registered model names, not estimator "
+                          f"objects ({', '.join(objects)}); run the objects in a grid study")
+    if study == "mismatch" and MISMATCH_SUBJECT not in labels:
+        labels = [MISMATCH_SUBJECT, *labels]  # the study's subject always runs
+    return labels, objects
+
+
 def run_sweep(
     vary: Mapping[str, Sequence[Any]] | None = None,
     *,
     study: str | None = None,
     preset: str | None = None,
     seeds: int | Sequence[int] = 5,
-    models: Sequence[str] | str | None = None,
+    models: Sequence[Any] | str | None = None,
     overrides: Mapping[str, Any] | None = None,
     protocol: str | Protocol = "grouped-cv",
     n_splits: int = 5,
@@ -682,9 +716,14 @@ def run_sweep(
         ``data-size`` study a comma-separated list (default :data:`DATA_SIZE_PRESETS`).
     seeds : int or sequence of int
         Number of seeds (0, 1, ...) or the seeds themselves.
-    models : sequence of str or comma-separated str, optional
+    models : sequence or comma-separated str, optional
         Registry names (default :data:`DEFAULT_MODELS`; a study of
-        :data:`~nirglucose.evaluation.studies.STUDY_MODELS`: its own).
+        :data:`~nirglucose.evaluation.studies.STUDY_MODELS`: its own), unfitted
+        estimator objects and ``(label, estimator)`` pairs, as ``run_benchmark``
+        takes them (:mod:`~nirglucose.evaluation.estimators`; the fleet study takes
+        names only). Objects are pickled to local workers, as joblib sends them; a
+        Dask cluster needs them picklable (cloudpickle), their classes importable
+        there (or defined in ``__main__``). The cache keys on class path + parameters.
     overrides : mapping, optional
         Dotted overrides shared by every scenario (``--set``).
     protocol, n_splits, repeats : str, int, int
@@ -726,9 +765,7 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    models = resolve_models(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
-    if study == "mismatch" and MISMATCH_SUBJECT not in models:
-        models = [MISMATCH_SUBJECT, *models]  # the study's subject always runs
+    models, objects = _sweep_models(models, study, scenarios, model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
@@ -737,7 +774,7 @@ def run_sweep(
         scenarios, preset=preset, seeds=seed_list, models=models, base_overrides=base,
         protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
         n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
-        model_params=model_params, calibration=proto.calibration,
+        model_params=model_params, calibration=proto.calibration, estimators=objects,
     )
     keys = [tasks.task_key(s) for s in specs]
     spec_of = dict(zip(keys, specs, strict=True))
@@ -746,7 +783,7 @@ def run_sweep(
         spec_of, _task_tag, None if on_task is None else lambda spec: on_task(spec, True)
     )
     _execute(cache, pending, spec_of, jobs=jobs, scheduler=scheduler, progress=progress,
-             on_task=on_task)
+             on_task=on_task, objects=objects)
     label_columns = list(dict.fromkeys(k for s in scenarios for k in s.labels))
     frame = _frame(scenarios, seed_list, models, [cache.results[k] for k in keys],
                    study or "grid", label_columns)
@@ -755,7 +792,7 @@ def run_sweep(
                 protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
                 n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
                 label_columns=label_columns, backend=backend, n_workers=n_workers,
-                scheduler=scheduler, t_start=t_start)
+                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects))
     result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
                          meta=_sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:

@@ -1,6 +1,6 @@
 """Calibration schedules of a worn device: how often must a user calibrate?
 
-A device worn for days (:mod:`nirglucose.simulate.wear`) drifts: the LED ages, the
+A device worn for days (:mod:`nirglucose.simulation.wear`) drifts: the LED ages, the
 skin's temperature follows the day, each re-seating changes the contact. A schedule
 says when the user takes a fingerstick; each fingerstick's reference glucose sets a
 one-point offset (the reference minus the model's prediction at that reading), applied

@@ -5,8 +5,14 @@ of days, a seed) and runs the worn benchmark on it
 (:func:`~.wear_benchmark.run_wear_benchmark`), which scores every calibration schedule
 on the same held-out readings. Tasks are cached in ``OUT/.tasks`` like every other
 task (:class:`~.tasks.TaskCache`: the spec, the package's source digest and a checksum),
-so an interrupted sweep resumes; they run one after another in this process (a worn
-task holds its own subject-parallel simulation).
+so an interrupted sweep resumes. The pending tasks run where the other sweeps' run
+(:func:`~.executors.run_unordered`): in this process (``jobs=1``, the default), on a
+pool of local processes (``jobs=N``) or on a Dask cluster (``scheduler``); each task
+simulates its subjects in one process (``n_jobs=1``), seeded from its own specification,
+so every backend gives the same rows. A task's memory is that of one worn run
+(``n_subjects`` x days x 96 readings at 15 min, 672 rows a subject-week), and
+its result, a few dozen table rows, travels back to this process, which alone writes
+the cache.
 
 Outputs: ``wear_sweep.csv`` (one row per preset, days, seed, model, variant and
 schedule) and ``wear_summary.csv`` (mean RMSE over seeds with its Student-t 95 %
@@ -17,28 +23,35 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .._version import __version__
+from ..api import simulate_wear
 from ..dataset import atomic_write
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, DataError
 from . import tasks
-from .wear_benchmark import WEAR_MODELS
+from .executors import check_scheduler, resolve_backend, run_unordered
+from .wear_benchmark import WEAR_MODELS, run_wear_benchmark
 from .wear_calibration import SCHEDULES
 
-__all__ = ["WEAR_DAYS", "WEAR_PRESETS", "run_wear_sweep"]
+__all__ = ["WEAR_DAYS", "WEAR_PRESETS", "run_wear_sweep", "run_wear_task"]
 
 #: Default grid of the study: days of wear and presets.
 WEAR_DAYS: tuple[int, ...] = (1, 3, 7)
 WEAR_PRESETS: tuple[str, ...] = ("paper", "wearable")
 
 
-def _task(spec: dict) -> dict:
-    from ..api import simulate_wear
-    from .wear_benchmark import run_wear_benchmark
+def run_wear_task(spec: dict) -> dict:
+    """One task of the study: simulate the worn run of ``spec`` and score its schedules.
 
+    Module-level and seeded only from ``spec`` (a Dask or process-pool worker runs it).
+    Returns ``{"rows": {column: values}, "version": ...}``: the schedule table's columns
+    and the package version that computed them.
+    """
     ds = simulate_wear(spec["preset"], spec["n_subjects"], spec["wear_days"],
                        spec["every_min"], spec["seed"])
     res = run_wear_benchmark(ds, spec["models"], preset=spec["preset"],
@@ -46,7 +59,7 @@ def _task(spec: dict) -> dict:
                              schedules=spec["schedules"], n_boot=spec["n_boot"])
     cols = ["model", "variant", "schedule", "rmse_mgdl", "rmse_ci_low", "rmse_ci_high",
             "mard_pct", "fingersticks_per_day", "n_scored", "n_subjects"]
-    return {"rows": res.schedules[cols].to_dict(orient="list")}
+    return {"rows": res.schedules[cols].to_dict(orient="list"), "version": __version__}
 
 
 def run_wear_sweep(
@@ -62,6 +75,8 @@ def run_wear_sweep(
     folds: int = 5,
     n_boot: int = 1000,
     on_task: Callable[[dict, bool], None] | None = None,
+    jobs: int | None = 1,
+    scheduler: Any = None,
 ) -> pd.DataFrame:
     """Run (or resume) the wear study; returns the summary (module docstring).
 
@@ -77,7 +92,20 @@ def run_wear_sweep(
         Subjects per worn run, minutes between readings, subject-grouped folds and
         bootstrap resamples.
     on_task : callable, optional
-        ``on_task(spec, cached)`` after each task.
+        ``on_task(spec, cached)`` after each task (cached ones first, then the others
+        as they finish).
+    jobs : int or None
+        Local worker processes for the pending tasks (1: this process; None: every
+        core), as in :func:`~.sweep.run_sweep`.
+    scheduler : str or distributed.Client, optional
+        Dask scheduler address (``tcp://host:8786``), ``"local"`` (a Dask cluster of
+        ``jobs`` processes) or a client: run the pending tasks there.
+
+    Raises
+    ------
+    ConfigError
+        Unknown preset or schedule, bad days, bad ``jobs`` / ``scheduler`` or a
+        scheduler that does not answer (before any task runs).
     """
     from ..config import resolve_config
 
@@ -89,33 +117,55 @@ def run_wear_sweep(
     unknown = [s for s in schedules if s not in SCHEDULES]
     if unknown:
         raise ConfigError(f"unknown calibration schedule(s) {unknown}; known: {list(SCHEDULES)}")
+    resolve_backend(jobs, scheduler)  # bad jobs / scheduler: one line, before anything runs
+    check_scheduler(scheduler)
+    specs = _plan(presets, wear_days, seeds, {
+        "n_subjects": int(n_subjects), "every_min": int(every_min), "folds": int(folds),
+        "models": list(models), "schedules": list(schedules), "n_boot": int(n_boot)})
     cache = tasks.TaskCache(out, valid=lambda spec, res: "rows" in res)
-    frames = []
-    for preset in presets:
-        for days in wear_days:
-            for seed in seeds:
-                spec = tasks.stamp({"model": "wear", "preset": preset, "wear_days": int(days),
-                                    "seed": int(seed), "n_subjects": int(n_subjects),
-                                    "every_min": int(every_min), "folds": int(folds),
-                                    "models": list(models), "schedules": list(schedules),
-                                    "n_boot": int(n_boot)})
-                key = tasks.task_key(spec)
-                path = cache.path(key, spec, f"{preset}-{days}d-s{seed}")
-                result = cache.load(path, spec)
-                cached = result is not None
-                if result is None:
-                    result = _task(spec)
-                    cache.save(path, spec, result)
-                if on_task is not None:
-                    on_task(spec, cached)
-                frames.append(pd.DataFrame(result["rows"]).assign(
-                    preset=preset, wear_days=int(days), seed=int(seed)))
+    pending = cache.lookup(specs, _tag, on_cached=(
+        None if on_task is None else lambda spec: on_task(dict(spec), True)))
+    stream = run_unordered(run_wear_task, [specs[k] for k in pending], jobs=jobs,
+                           scheduler=scheduler,
+                           keys=[f"nirglucose-wear-{k}" for k in pending])
+    try:
+        cache.collect(stream, pending, specs, _tag, check=_check_worker, on_done=(
+            None if on_task is None else lambda spec, _res: on_task(dict(spec), False)))
+    finally:
+        stream.close()
+    frames = [pd.DataFrame(cache.results[key]["rows"]).assign(
+        preset=spec["preset"], wear_days=spec["wear_days"], seed=spec["seed"])
+        for key, spec in specs.items()]
     sweep = pd.concat(frames, ignore_index=True)
     summary = _summary(sweep)
     out = Path(out)
     atomic_write(out / "wear_sweep.csv", lambda tmp: sweep.to_csv(tmp, index=False))
     atomic_write(out / "wear_summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
     return summary
+
+
+def _plan(presets, wear_days, seeds, common: dict) -> dict[str, dict]:
+    """The grid's task specifications, stamped (:func:`.tasks.stamp`), by task key."""
+    specs = {}
+    for preset in presets:
+        for days in wear_days:
+            for seed in seeds:
+                spec = tasks.stamp({"model": "wear", "preset": preset,
+                                    "wear_days": int(days), "seed": int(seed), **common})
+                specs[tasks.task_key(spec)] = spec
+    return specs
+
+
+def _check_worker(spec, result) -> None:
+    """Refuse a result computed by another nirglucose version (a Dask worker's)."""
+    if result.get("version") != spec["version"]:
+        raise DataError(f"a worker runs nirglucose {result.get('version')}, this process "
+                        f"{spec['version']}; install the same version on every worker")
+
+
+def _tag(spec) -> str:
+    """A task file's readable part: ``<preset>-<days>d-s<seed>``."""
+    return f"{spec['preset']}-{spec['wear_days']}d-s{spec['seed']}"
 
 
 def _summary(sweep: pd.DataFrame) -> pd.DataFrame:

@@ -28,7 +28,7 @@ from ..config import ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import tissue
 from ..optics.forward import FORWARD_MODELS
-from ..simulate.simulator import _band_detected_fraction, _tables
+from ..simulation.simulator import _band_detected_fraction, _tables
 
 __all__ = [
     "NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel", "map_estimate", "posterior_variance",

@@ -53,7 +53,7 @@ from ..constants import LED_REFERENCE_TEMPERATURE_C
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, unknown_name
 from ..optics.forward import FORWARD_MODELS
-from ..simulate.physiology import melanin_fraction_from_fitzpatrick, subcutis_fat_fraction
+from ..simulation.physiology import melanin_fraction_from_fitzpatrick, subcutis_fat_fraction
 from ._base import SchemaJsonMixin, fit_input, predict_input
 from ._checks import require_fitted
 from ._inversion_solver import (
@@ -106,7 +106,7 @@ def _led_shift_start_nm(cfg: ScenarioConfig, skin_c) -> np.ndarray | float:
     Ambient from the skin's documented response to it (``physiology.skin_temp_*``,
     inverted), the junction ``hardware.led_self_heating_c`` above ambient, and the
     datasheet coefficient ``hardware.led_wavelength_shift_nm_per_c`` about the 25 degC
-    reference (:func:`nirglucose.simulate.hardware.led_peak_shift_nm`), scaled by the
+    reference (:func:`nirglucose.simulation.hardware.led_peak_shift_nm`), scaled by the
     scenario's ``led_wavelength_shift`` switch.
     """
     p, hw = cfg.physiology, cfg.hardware
@@ -124,12 +124,12 @@ def _led_shift_start_nm(cfg: ScenarioConfig, skin_c) -> np.ndarray | float:
 def prior_start(cfg: ScenarioConfig, schema, phys: np.ndarray) -> np.ndarray:
     """The physical start of each nuisance's prior mean from the measured columns.
 
-    Each from the scenario's documented relations (:mod:`nirglucose.simulate.physiology`,
-    :mod:`nirglucose.simulate.measurement`) and population values where the device
+    Each from the scenario's documented relations (:mod:`nirglucose.simulation.physiology`,
+    :mod:`nirglucose.simulation.measurement`) and population values where the device
     does not measure it: PPG ``blood_volume_pct`` (else ``physiology.blood_fraction_median``)
     and ``spo2_pct`` (else ``physiology.saturation_mean``); water =
     ``physiology.water_fraction_nominal`` x hydration / 100; fat from BMI
-    (:func:`~nirglucose.simulate.physiology.subcutis_fat_fraction`); melanin as measured
+    (:func:`~nirglucose.simulation.physiology.subcutis_fat_fraction`); melanin as measured
     (else the middle of the Fitzpatrick type's range); skin thickness as measured (else
     ``physiology.skin_thickness_mm_mean``); LED shift from skin temperature; coupling 1.
 

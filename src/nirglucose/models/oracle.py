@@ -48,7 +48,7 @@ from ..config import ScenarioConfig
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
 from ..schema import DeviceSchema, check_fit_size, check_reference_glucose
-from ..simulate.simulator import _tables, detected_fraction_given_glucose
+from ..simulation.simulator import _tables, detected_fraction_given_glucose
 from ._checks import require_fitted
 from ._json_io import JsonModelMixin
 from .registry import register

@@ -61,7 +61,7 @@ from ..exceptions import ConfigError
 from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
 from ..optics.forward import FORWARD_MODELS
-from ..simulate.simulator import nominal_tissue, scenario_band_spectra
+from ..simulation.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
 from ._inversion_solver import NUISANCES
 from ._torch_base import TorchRegressor

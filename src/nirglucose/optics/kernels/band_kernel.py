@@ -6,7 +6,7 @@ power integrated over its emission band. The NumPy composition of
 :func:`nirglucose.optics.forward.detected_fraction` and the band weights makes about 40
 passes over (snapshots x LEDs x band nodes) arrays; this module does the same algebra in
 one compiled pass per snapshot (numba), with no temporaries. It is an implementation
-detail of :mod:`nirglucose.simulate.simulator`: the physics, units and citations live in
+detail of :mod:`nirglucose.simulation.simulator`: the physics, units and citations live in
 the NumPy functions above, which stay the reference (a test holds the two equal to
 1e-12 relative).
 

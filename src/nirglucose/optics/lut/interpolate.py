@@ -80,7 +80,7 @@ def _cell_coords(
                 bad = float("nan")
             hint = " (mus'_dermis x skin thickness)" if name == "skin_transport_thickness" else ""
             raise ConfigError(
-                f"{name}{hint} = {bad!r} is outside the look-up table; valid range is "
+                f"{name}{hint} = {float(bad):.6g} is outside the look-up table; valid range is "
                 f"[{lo:.6g}, {hi:.6g}] [{unit}] (use another grid or forward model)"
             )
         j = pos.astype(np.intp)

@@ -39,7 +39,7 @@ NOISE_LAYER: Final[dict[str, str]] = {
 
 #: Noise sources a device capability neutralises although they are switched on:
 #: source -> (capability, what the diagram says), from the simulator's layers
-#: (simulate/measurement.py, contact.py, hardware.py).
+#: (simulation/measurement.py, contact.py, hardware.py).
 NEUTRALISED_BY: Final[dict[str, tuple[str, str]]] = {
     "pmf_measurement": ("exact_physiology", "exact physiology: device.physiology = exact"),
     "contact_pressure": ("constant_force_probe", "constant-force probe"),
@@ -289,7 +289,7 @@ def pipeline_columns(config) -> list[list[dict[str, Any]]]:
 def _measured_lines(config) -> list[str]:
     """What the device records and knows, from its capabilities (``device.*``)."""
     from ...config import device_capabilities
-    from ...simulate.measurement import PMF_COLUMNS, PPG_COLUMNS
+    from ...simulation.measurement import PMF_COLUMNS, PPG_COLUMNS
 
     caps = device_capabilities(config)
     n_phys = len(PMF_COLUMNS) + (len(PPG_COLUMNS) if "ppg_perfusion_spo2" in caps else 0)

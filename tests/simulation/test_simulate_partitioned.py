@@ -10,13 +10,13 @@ import pytest
 import nirglucose as ng
 from nirglucose.dataset import scan_dataset
 from nirglucose.exceptions import DataError
-from nirglucose.simulate import _random
-from nirglucose.simulate.partitioned import (
+from nirglucose.simulation import _random
+from nirglucose.simulation.partitioned import (
     MANIFEST,
     PartitionedDataset,
     write_partitioned,
 )
-from nirglucose.simulate.simulator import simulate_frame
+from nirglucose.simulation.simulator import simulate_frame
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ import pytest
 
 import nirglucose as ng
 from nirglucose.config import DEVICE_CAPABILITIES, resolve_config
-from nirglucose.simulate.measurement import PMF_COLUMNS, PPG_COLUMNS
+from nirglucose.simulation.measurement import PMF_COLUMNS, PPG_COLUMNS
 
 WL = ("850", "940", "1050", "1150")
 N_SUBJECTS, PER = 500, 4
@@ -176,8 +176,8 @@ def test_wearable_is_byte_identical_to_the_former_paper():
 def test_paper_is_deterministic_across_chunks_and_workers(monkeypatch):
     # test_simulate_determinism covers `paper` too; here the PPG stream and the
     # monitor's streams are checked across blocks and workers explicitly
-    from nirglucose.simulate import _random
-    from nirglucose.simulate.simulator import block_ranges, simulate_frame
+    from nirglucose.simulation import _random
+    from nirglucose.simulation.simulator import block_ranges, simulate_frame
 
     monkeypatch.setattr(_random, "BLOCK_SUBJECTS", 10)
     cfg = resolve_config("paper", {"device.physiology": "measured"})

@@ -13,7 +13,9 @@ bolus of carbohydrate / carbohydrate-ratio units at the meal's start (standard c
 counting, ADA Standards of Care 2024, section 9 [3]_), the ratio the virtual patient's
 own (``carb_ratio_g_per_u``), the carbohydrate as the patient estimates it: adults with
 type 1 diabetes misjudge a meal's carbohydrate by about 20 % on average (Brazeau et al.
-2013 [5]_), taken here as a log-normal factor of log-SD :data:`CARB_COUNT_LOG_SD`.
+2013 [5]_), taken here as a log-normal factor whose mean absolute relative error is that
+20 % (log-SD :data:`CARB_COUNT_LOG_SD`, from :func:`.therapy.carb_count_log_sd`; the
+other departures from ideal therapy are in :mod:`.therapy`).
 1 U of insulin = 6.00 nmol (Vølund 1993 [4]_).
 
 References
@@ -36,6 +38,7 @@ import numpy as np
 
 from .. import portable as pm
 from ._random import truncated_normal
+from .therapy import carb_count_log_sd
 
 __all__ = [
     "DAILY_MEALS",
@@ -60,9 +63,9 @@ MEAL_TIME_LIMIT_MIN = 90.0
 MEAL_SIZE_LOG_SD = 0.2
 #: Insulin per unit [4]_. [pmol/U]
 INSULIN_PMOL_PER_UNIT = 6000.0
-#: SD of ln(estimated / true carbohydrate) of a type 1 patient's carb count: about the
-#: 20 % mean error of Brazeau et al. [5]_. [-]
-CARB_COUNT_LOG_SD = 0.2
+#: SD of ln(estimated / true carbohydrate) of a type 1 patient's carb count: the log-SD
+#: whose mean absolute relative error is the 20 % of Brazeau et al. [5]_ (0.246). [-]
+CARB_COUNT_LOG_SD = carb_count_log_sd()
 
 
 def draw_meals(rng, n_days: int) -> tuple[np.ndarray, np.ndarray]:

@@ -6,9 +6,9 @@ import pandas as pd
 import pytest
 
 import nirglucose as ng
-from nirglucose.simulate import _random
-from nirglucose.simulate.partitioned import write_partitioned
-from nirglucose.simulate.simulator import block_ranges, simulate_frame
+from nirglucose.simulation import _random
+from nirglucose.simulation.partitioned import write_partitioned
+from nirglucose.simulation.simulator import block_ranges, simulate_frame
 
 
 def test_same_seed_byte_identical_parquet(tmp_path):

@@ -8,8 +8,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nirglucose.exceptions import ConfigError
-from nirglucose.simulate import uva_padova as uva
-from nirglucose.simulate.meal_scenario import INSULIN_PMOL_PER_UNIT, meal_grid_mg
+from nirglucose.simulation import uva_padova as uva
+from nirglucose.simulation.meal_scenario import INSULIN_PMOL_PER_UNIT, meal_grid_mg
 
 #: Basal plasma glucose of the paper's average subjects (Dalla Man et al. 2007, Results)
 #: [mg/dL], independent of the parameter table the model reads.

@@ -1,7 +1,7 @@
 """Large datasets: partitioned Parquet written block by block in bounded memory.
 
 :func:`write_partitioned` writes one ``part-NNNNNN.parquet`` per block of
-:data:`~nirglucose.simulate._random.BLOCK_SUBJECTS` subjects, each block simulated
+:data:`~nirglucose.simulation._random.BLOCK_SUBJECTS` subjects, each block simulated
 from its own :class:`numpy.random.SeedSequence` streams, so the parts are
 byte-identical whatever the number of worker processes or the order they finish in.
 A worker holds one block at a time (about ``BLOCK_SUBJECTS × per_subject`` rows), so

@@ -10,8 +10,8 @@ import nirglucose as ng
 from nirglucose.cli import main
 from nirglucose.dataset import COLUMN_UNITS, WEAR_COLUMNS
 from nirglucose.exceptions import ConfigError
-from nirglucose.simulate import wear
-from nirglucose.simulate.interstitial import interstitial_glucose_mgdl
+from nirglucose.simulation import wear
+from nirglucose.simulation.interstitial import interstitial_glucose_mgdl
 
 #: The basic wearable: hand-placed contact (pressure and coupling vary between seatings)
 #: and no monitor photodiode (LED drift reaches the readings).

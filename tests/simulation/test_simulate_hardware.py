@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from nirglucose.simulate import hardware
+from nirglucose.simulation import hardware
 
 
 @given(

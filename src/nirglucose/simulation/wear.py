@@ -46,7 +46,7 @@ from ..config import ScenarioConfig
 from ..constants import MINUTES_PER_DAY
 from ..dataset import _META_KEY, MANIFEST, atomic_write
 from ..exceptions import ConfigError
-from . import contact, diurnal, environment, hardware, measurement, physiology
+from . import contact, diurnal, environment, hardware, measurement, physiology, therapy
 from . import meal_scenario as meals
 from . import uva_padova as uva
 from ._random import BLOCK_SUBJECTS, RandomStreams, SubjectStreams
@@ -172,36 +172,46 @@ def subject_profiles(cfg: ScenarioConfig, seed: int, first: int, n: int, n_subje
 
 
 def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_codes,
-                         wear_days: int) -> dict:
+                         wear_days: int,
+                         therapy_errors=therapy.THERAPY_ERRORS) -> dict:
     """Plasma glucose every minute of the wear and the meals behind it.
 
     Each subject's meals (stream ``wear.meals``) and, for type 1, virtual patient
-    (stream ``wear.patient``, uniform over the adults) and carb-count errors (stream
-    ``wear.carb_count``) come from its own streams;
+    (stream ``wear.patient``, uniform over the adults) and the therapy's departures from
+    the ideal (:mod:`.therapy`: carb-count errors, stream ``wear.carb_count``; missed
+    boluses, ``wear.missed_bolus``; the day's insulin sensitivity,
+    ``wear.insulin_sensitivity``) come from its own streams;
     subjects of one model kind are integrated together, element-wise
-    (:func:`.uva_padova.integrate`).
+    (:func:`.uva_padova.integrate`). ``therapy_errors`` names the departures drawn
+    (default all of :data:`.therapy.THERAPY_ERRORS`; leave one out to ablate it: its
+    stream is then not read, and the others' draws do not move).
 
     Returns
     -------
     dict
         ``blood_mgdl`` (n, wear_days * 1440) [mg/dL]; ``meal_min`` list of (meals,)
-        int arrays [min]; ``patient`` (n,) type 1 patient name or "".
+        int arrays [min]; ``patient`` (n,) type 1 patient name or "";
+        ``bolus_missed`` list of (meals,) bool arrays (all False but for type 1);
+        ``sensitivity`` (n, wear_days) the day's insulin-sensitivity factor (1 but for
+        type 1). [-]
     """
     names = list(cfg.glucose.status_probs)
+    errors = therapy.check_therapy_errors(therapy_errors)
     n, n_min = len(subject_ids), wear_days * MINUTES_PER_DAY
     patient_names, pcols = uva.type1_patients()
     meal_grid, meal_min, patient = np.zeros((n, n_min)), [], np.full(n, "", dtype=object)
-    bolus = np.zeros((n, n_min))
+    bolus, missed, si_day = np.zeros((n, n_min)), [], np.ones((n, wear_days))
     for i, sid in enumerate(subject_ids):
         streams = SubjectStreams(seed, int(sid))
         minute, carbs = meals.draw_meals(streams("wear.meals"), wear_days)
         meal_min.append(minute)
         meal_grid[i] = meals.meal_grid_mg(minute, 1000.0 * carbs, n_min)
         k = int(streams("wear.patient").integers(len(patient_names)))
+        missed.append(np.zeros(minute.size, dtype=bool))
         if names[status_codes[i]] == "type1":
             patient[i] = patient_names[k]
-            counted = meals.estimated_carbs_g(streams("wear.carb_count"), carbs)
-            units = meals.bolus_units(counted, pcols["carb_ratio_g_per_u"][k])
+            units, missed[i], si_day[i] = _type1_therapy(
+                streams, carbs, {c: v[k] for c, v in pcols.items()}, wear_days, errors)
             bolus[i] = meals.meal_grid_mg(
                 minute, units * meals.INSULIN_PMOL_PER_UNIT / pcols["BW"][k], n_min)
     blood = np.empty((n, n_min))
@@ -209,13 +219,28 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
     if is_t1.any():
         rows = [patient_names.index(p) for p in patient[is_t1]]
         p = {k: v[rows] for k, v in pcols.items()}
+        si = np.stack([therapy.sensitivity_per_minute(f, n_min) for f in si_day[is_t1]])
         blood[is_t1] = uva.integrate("type1", p, uva.basal_type1(p), meal_grid[is_t1],
-                                     bolus[is_t1])
+                                     bolus[is_t1], sensitivity=si)
     if (~is_t1).any():
         sets = [uva.parameters_2007(names[c]) for c in status_codes[~is_t1]]
         p, x0 = uva.basal_2007({k: np.array([s[k] for s in sets]) for k in sets[0]})
         blood[~is_t1] = uva.integrate("meal_2007", p, x0, meal_grid[~is_t1])
-    return {"blood_mgdl": blood, "meal_min": meal_min, "patient": patient}
+    return {"blood_mgdl": blood, "meal_min": meal_min, "patient": patient,
+            "bolus_missed": missed, "sensitivity": si_day}
+
+
+def _type1_therapy(streams, carbs_g, patient: dict, wear_days: int, errors) -> tuple:
+    """One type 1 subject's meal boluses [U], which were missed, and each day's insulin
+    sensitivity factor, with the therapy errors named in ``errors`` (:mod:`.therapy`)."""
+    counted = (meals.estimated_carbs_g(streams("wear.carb_count"), carbs_g)
+               if "carb_count" in errors else carbs_g)
+    missed = (therapy.draw_missed_boluses(streams("wear.missed_bolus"), wear_days)
+              if "missed_bolus" in errors else np.zeros(len(carbs_g), dtype=bool))
+    si_day = (therapy.draw_daily_sensitivity(streams("wear.insulin_sensitivity"), wear_days)
+              if "sensitivity" in errors else np.ones(wear_days))
+    units = np.where(missed, 0.0, meals.bolus_units(counted, patient["carb_ratio_g_per_u"]))
+    return units, missed, si_day
 
 
 def _wear_environment(cfg: ScenarioConfig, streams, times_min, options: WearOptions) -> dict:

@@ -27,7 +27,7 @@ stages with ``np.dot`` (BLAS, whose kernel and hence last bits depend on the CPU
 step keeps every subject's bits independent of its neighbours and of the CPU. The
 fastest rate of either model is below 1.3 /min (``kabs``, ``m1 + m30``), so λh < 1.3,
 inside RK4's stability region (abs(λh) < 2.78) with a local error of order (λh)^5/120;
-``tests/simulate/test_uva_padova.py`` checks the trajectories against ``solve_ivp``
+``tests/simulation/test_uva_padova.py`` checks the trajectories against ``solve_ivp``
 (LSODA, rtol 1e-8).
 
 References
@@ -281,7 +281,8 @@ def rhs_type1(x: np.ndarray, p: dict, dose_mg, insulin_pmol_per_kg_min) -> np.nd
 
 
 def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
-              bolus_pmol_per_kg: np.ndarray | None = None) -> np.ndarray:
+              bolus_pmol_per_kg: np.ndarray | None = None,
+              sensitivity: np.ndarray | None = None) -> np.ndarray:
     """Plasma glucose every minute, by fixed-step RK4 (module docstring).
 
     Parameters
@@ -300,6 +301,11 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     bolus_pmol_per_kg : numpy.ndarray, optional
         Insulin bolus at the start of each minute (type 1), (n, n_min); it enters
         Isc1. [pmol/kg]
+    sensitivity : numpy.ndarray, optional
+        Insulin-sensitivity factor at each minute (type 1), (n, n_min): both insulin
+        actions, ``Vmx`` and ``kp3``, are multiplied by it during that minute (the
+        time-varying insulin sensitivity of the S2017 simulator, Visentin et al. 2018,
+        J. Diabetes Sci. Technol. 12(2), 273-281; :mod:`.therapy`). Default 1. [-]
 
     Returns
     -------
@@ -313,6 +319,8 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     n, n_min = meals_mg.shape
     if kind == "type1":
         u = p["u2ss"]
+        base = p
+        p = dict(p)
 
         def f(x, dose):
             return rhs_type1(x, p, dose, u)
@@ -327,8 +335,13 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     terms = _emptying_terms(dose, p["b"], p["d"])
     out = np.empty((n, n_min))
     h = STEP_MIN
+    factor = None
     for k in range(n_min):
         out[:, k] = x[gp_row] / vg
+        if sensitivity is not None and kind == "type1" and (
+                factor is None or (sensitivity[:, k] != factor).any()):
+            factor = sensitivity[:, k].copy()
+            p["Vmx"], p["kp3"] = base["Vmx"] * factor, base["kp3"] * factor
         meal = meals_mg[:, k]
         if meal.any() or eating.any():
             x[0] += meal

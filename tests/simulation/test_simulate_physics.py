@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 import nirglucose as ng
 from nirglucose.dataset import adc_columns
-from nirglucose.simulate.simulator import detected_fraction_given_glucose
+from nirglucose.simulation.simulator import detected_fraction_given_glucose
 
 QUIET = {"noise_scale": 0.0}
 
