@@ -9,7 +9,10 @@ SEED   ?= 0
 OUT    ?= results
 # every registered model but the two GP hybrids (ebl+gp, physics-inversion+gp: each fit is
 # several backbone fits and a GP, 2.5 min more on 2 cores; benchmarks/physics_inversion.py
-# runs them); tests/test_makefile.py keeps this list equal to the registry minus those
+# runs them) and the forward-model PINNs (original-pinn-fm, optimized-pinn-fm, rte-pinn-fm,
+# selective-rte-pinn-fm: a physics-inversion fit per task; benchmarks/pinn_forward.py
+# runs them);
+# tests/test_makefile.py keeps this list equal to the registry minus those
 MODELS ?= ebl,pls,oracle,physics-inversion,original-pinn,optimized-pinn,rte-pinn,selective-rte-pinn,sdnn,mean,gp,gbr
 
 .PHONY: run test install lint bench docs clean

@@ -13,7 +13,8 @@ from nirglucose.exceptions import DataError
 from nirglucose.models import available_models, get_model_class, load_model, make_model
 from nirglucose.schema import DeviceSchema, MeasurementTransformer, meter_flags
 
-NETWORKS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn", "sdnn")
+NETWORKS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn", "sdnn",
+            "original-pinn-fm", "optimized-pinn-fm", "rte-pinn-fm", "selective-rte-pinn-fm")
 REFERENCES = ("mean", "gp", "gbr")
 FAST_NET = {"max_epochs": 3, "batch_size": 16, "random_state": 0}
 FAST = {name: FAST_NET for name in NETWORKS} | {

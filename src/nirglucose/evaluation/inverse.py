@@ -9,8 +9,10 @@ estimator -- as ``inverse.csv``: per model and quantity the RMSE (subject-cluste
 bootstrap 95 % CI), the bias, Pearson's r and the truth's SD (an estimator that
 always says the population mean has RMSE about that SD).
 
-The RTE PINNs predict optical properties (absorption and reduced scattering at the
-LEDs, ``predict_optics``), not these tissue fractions, so they have no row here.
+The RTE PINNs with the study's physics predict optical properties (absorption and
+reduced scattering at the LEDs, ``predict_optics``), not these tissue fractions, so
+they have no row here; with ``physics_form='forward'`` a state head predicts the
+tissue state (:mod:`nirglucose.models.forward_term`) and they do.
 """
 
 from __future__ import annotations
@@ -53,16 +55,17 @@ INVERSE_COLUMNS = (
 
 def task_state(model: Any, test: Any) -> dict[str, list[float]] | None:
     """A fitted model's tissue-state estimates of the test rows (JSON-able), or None
-    when it predicts no state (no ``estimate_state``)."""
+    when it predicts no state (no ``estimate_state``, or one without state columns)."""
     estimate = getattr(model, "estimate_state", None)
     if estimate is None:
         return None
     state = estimate(test)
-    return {
+    out = {
         q: [float(v) for v in state[q].to_numpy(float)]
         for q in INVERSE_QUANTITIES
         if q in state.columns
     }
+    return out or None  # glucose only (e.g. an RTE PINN without its state head)
 
 
 def _truth(frame: pd.DataFrame, column: str) -> np.ndarray | None:

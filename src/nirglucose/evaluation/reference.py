@@ -102,6 +102,10 @@ MODEL_LABELS: dict[str, str] = {
     "physics-inversion": "Physics inversion (forward model)",
     "ebl+gp": "EBL + residual GP",
     "physics-inversion+gp": "Physics inversion + residual GP",
+    "original-pinn-fm": "Original PINN, forward-model physics",
+    "optimized-pinn-fm": "Optimized PINN, forward-model physics",
+    "rte-pinn-fm": "RTE-inspired PINN, forward-model physics",
+    "selective-rte-pinn-fm": "Selective RTE PINN, forward-model physics",
 }
 
 #: The study's ranking by RMSE, best first.

@@ -61,7 +61,8 @@ __all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "ML_OPSET", "export_onnx", "o
 OPSET = 17
 #: Registered models with an ONNX path.
 ONNX_MODELS = ("ebl", "sdnn", "original-pinn", "optimized-pinn", "rte-pinn",
-               "selective-rte-pinn", "gp", "pls", "mean", "ebl+gp", "gbr")
+               "selective-rte-pinn", "original-pinn-fm", "optimized-pinn-fm", "rte-pinn-fm",
+               "selective-rte-pinn-fm", "gp", "pls", "mean", "ebl+gp", "gbr")
 #: Operator-set version of the ONNX-ML domain (``TreeEnsembleRegressor``) for ``gbr``.
 ML_OPSET = 3
 #: Registered models without one, and why.

@@ -1,4 +1,5 @@
-"""Estimators by name: EBL, PLS, the oracle, four PINNs, a shallow DNN, three references.
+"""Estimators by name: EBL, PLS, the oracle, four PINNs (and each with the forward-model
+physics term, ``-fm``), a shallow DNN, three references.
 
 The reference learners are the no-skill mean, a Gaussian process and gradient boosting.
 
@@ -24,6 +25,10 @@ __all__ = [
     "OptimizedPINN",
     "RTEPINN",
     "SelectiveRTEPINN",
+    "OriginalPINNForward",
+    "OptimizedPINNForward",
+    "RTEPINNForward",
+    "SelectiveRTEPINNForward",
     "SDNN",
     "MeanReference",
     "GPReference",
@@ -38,6 +43,10 @@ _LAZY = {
     "OptimizedPINN": "nirglucose.models.pinn",
     "RTEPINN": "nirglucose.models.pinn",
     "SelectiveRTEPINN": "nirglucose.models.pinn",
+    "OriginalPINNForward": "nirglucose.models.pinn",
+    "OptimizedPINNForward": "nirglucose.models.pinn",
+    "RTEPINNForward": "nirglucose.models.pinn",
+    "SelectiveRTEPINNForward": "nirglucose.models.pinn",
     "SDNN": "nirglucose.models.sdnn",
     "MeanReference": "nirglucose.models.reference",
     "GPReference": "nirglucose.models.reference",

@@ -30,6 +30,7 @@ from ..simulation.forward_model import NUISANCES, PHYSICAL_BOUNDS, ForwardModel
 
 __all__ = [
     "NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel", "map_estimate", "posterior_variance",
+    "model_jacobian",
 ]
 
 #: Forward-difference step of the Jacobian, in prior standard deviations. [-]
@@ -133,3 +134,32 @@ def posterior_variance(fm, y, calib, root_w, mean, sd, theta, *, free):
     out = np.zeros((n, p))
     out[:, idx] = diag * sd[:, idx] ** 2
     return out, len(idx) - diag.sum(axis=1)
+
+
+def model_jacobian(fm, theta, sd):
+    """Forward-difference Jacobian of the model's log ratio at ``theta``, unwhitened.
+
+    Parameters
+    ----------
+    fm : ForwardModel
+        The assumed forward model.
+    theta : numpy.ndarray
+        (n, 1 + len(NUISANCES)) glucose [mg/dL] then the nuisances in their units.
+    sd : numpy.ndarray
+        (n, 1 + len(NUISANCES)) scale of each unknown: the step is ``1e-4 sd`` (the
+        solver's step in prior standard deviations). [units of ``theta``]
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, k, 1 + len(NUISANCES)) d ln(adc / adc_ref) / d theta. [1/units of ``theta``]
+    """
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        m0 = fm.log_ratio(theta[:, 0], theta[:, 1:])
+        J = np.empty((*m0.shape, theta.shape[1]))
+        for col in range(theta.shape[1]):
+            h = _STEP_SD * sd[:, col]
+            tp = theta.copy()
+            tp[:, col] += h
+            J[:, :, col] = (fm.log_ratio(tp[:, 0], tp[:, 1:]) - m0) / h[:, None]
+    return J

@@ -364,6 +364,13 @@ class TorchRegressor(
         """Constants of the physics terms, from the training data and its scenario."""
         return {}
 
+    def _training_rows(self, Xa: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+        """Per-row arrays of a training or validation batch: the scaled inputs
+        (:meth:`_transform`) plus any per-row constants a physics term needs (a
+        subclass adds them, keyed by name; they are batched with their rows).
+        Prediction never calls this."""
+        return self._transform(Xa)
+
     def _default_physics(self) -> dict:
         """``physics_`` used to build an unfitted module (for ``n_parameters``)."""
         return {}
@@ -481,13 +488,13 @@ class TorchRegressor(
         (Xt, yt), (Xv, yv) = self._train_val_rows(Xa, y, groups, X_val, y_val, split_seed)
         refit = bool(self.refit) and X_val is None and Xv is not None
         self._fit_scaling(X, Xa, y)
-        train = self._tensors({**self._transform(Xt), "y": self._scale_y(yt)})
+        train = self._tensors({**self._training_rows(Xt, yt), "y": self._scale_y(yt)})
         val = None
         if Xv is not None and len(Xv):
-            val = self._tensors({**self._transform(Xv), "y": self._scale_y(yv)})
+            val = self._tensors({**self._training_rows(Xv, yv), "y": self._scale_y(yv)})
         every = None
         if refit:
-            every = self._tensors({**self._transform(Xa), "y": self._scale_y(y)})
+            every = self._tensors({**self._training_rows(Xa, y), "y": self._scale_y(y)})
         # Subnormal floats (weights, gradients and Adam moments that strong weight decay
         # drives towards 0) are 10-100x slower on x86 CPUs: flush them to 0 while
         # training (RTE PINN at weight_decay=10: 2.8 -> 1.1 s per fit). Restored after.

@@ -56,7 +56,13 @@ from ..fitted import require_fitted
 from ..optics.forward import FORWARD_MODELS
 from ..simulation.physiology import melanin_fraction_from_fitzpatrick, subcutis_fat_fraction
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._inversion_solver import NUISANCES, ForwardModel, map_estimate, posterior_variance
+from ._inversion_solver import (
+    NUISANCES,
+    ForwardModel,
+    map_estimate,
+    model_jacobian,
+    posterior_variance,
+)
 from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from .registry import register
 
@@ -410,6 +416,146 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         out["blood_fraction"] = np.exp(out.pop("log_blood_fraction"))
         out["coupling"] = np.exp(out.pop("log_coupling"))
         return out
+
+    def sample_log_ratios(self, X, glucose_mgdl, random_state=None) -> np.ndarray:
+        r"""Readings the fitted forward model generates for the physiology of ``X``.
+
+        Per row, the nuisances are drawn from their learned prior
+        :math:`N(\mu(x), \mathrm{diag}(s^2))` (x the row's measured physiology),
+        and :math:`y = a + b\,m(g, \theta) + \epsilon`,
+        :math:`\epsilon \sim N(0, S)`: the model this estimator inverts, run forwards.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like
+            Readings of the fitted device; only their physiology is used.
+        glucose_mgdl : array_like
+            (n,) glucose of each generated reading. [mg/dL]
+        random_state : int, numpy.random.Generator or None
+            Seeds the draws.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n, k) ln(adc / adc_ref) per LED (NaN where the drawn state is outside the
+            optics' domain, e.g. volume fractions summing past 1). [-]
+        """
+        self._require_fitted()
+        _, phys = self._observed(predict_input(self, X))
+        g = np.asarray(glucose_mgdl, dtype=float).ravel()
+        if len(g) != len(phys) or not np.all(np.isfinite(g)):
+            raise DataError(f"glucose_mgdl must be {len(phys)} finite values, got {len(g)}")
+        rng = np.random.default_rng(random_state)
+        mean, sd = self._prior(phys, g)
+        theta = mean[:, 1:] + sd[:, 1:] * rng.standard_normal(mean[:, 1:].shape)
+        noise = rng.standard_normal((len(g), len(self.offset_))) @ np.linalg.cholesky(
+            self.noise_cov_
+        ).T
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            m = self.forward_.log_ratio(g, theta)
+        return self.offset_ + self.gain_ * m + noise
+
+    def glucose_likelihood(self, X, glucose_mgdl) -> tuple[np.ndarray, np.ndarray]:
+        r"""Each reading's likelihood of glucose, the nuisances marginalised (Laplace).
+
+        The measured log ratios y of a reading, as a function of its glucose g alone:
+        the forward model is linearised about ``glucose_mgdl`` and the nuisances' mode
+        there, and the nuisances are integrated out under their prior (Bishop 2006,
+        4.4 and 2.3.3 [2]_), which leaves a Gaussian in g.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like
+            Readings of the fitted device (measured columns only are read).
+        glucose_mgdl : array_like
+            (n,) where to linearise, e.g. the reference glucose of training rows
+            (glucose's optical effect is linear, so the point matters little). [mg/dL]
+
+        Returns
+        -------
+        glucose_mgdl : numpy.ndarray
+            (n,) the likelihood's mode :math:`\hat g`. [mg/dL]
+        information_per_mgdl2 : numpy.ndarray
+            (n,) its curvature :math:`w = J_g^T\Sigma^{-1}J_g` (0 where the forward
+            model cannot be evaluated). [1/(mg/dL)^2]
+
+        Notes
+        -----
+        With :math:`\hat\theta` the nuisances' mode at :math:`g_0`, :math:`m` the
+        forward model, :math:`(a, b)` the calibration, S the residual covariance and
+        :math:`s` the prior widths (times ``prior_scale``):
+
+        .. math::
+
+            y \approx a + b\,[m(g_0, \hat\theta) + J_g (g - g_0)
+                + J_\theta(\theta - \hat\theta)],\quad
+            \theta \sim N(\mu(x), \mathrm{diag}(s^2))
+            \Rightarrow y \sim N(a + b\,[m + J_\theta(\mu - \hat\theta)]
+                + bJ_g(g - g_0),\ \Sigma),
+
+        :math:`\Sigma = S + b J_\theta \mathrm{diag}(s^2) J_\theta^T b`. Then
+        :math:`-2\ln p(y \mid g) = w (g - \hat g)^2 + \mathrm{const}` with
+        :math:`w = (bJ_g)^T\Sigma^{-1}(bJ_g)` and :math:`\hat g = g_0 + (bJ_g)^T
+        \Sigma^{-1} r_0 / w`, :math:`r_0` the residual at :math:`g_0`.
+        """
+        return self.likelihood_of(self.linearise(X, glucose_mgdl))
+
+    def likelihood_of(self, lin: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`glucose_likelihood` from a :meth:`linearise` result (mode, information)."""
+        theta, mean, sd, J = lin["theta"], lin["prior_mean"], lin["prior_sd"], lin["jacobian"]
+        g0 = theta[:, 0]
+        jg, jt = J[:, :, 0], J[:, :, 1:]
+        cov = self.noise_cov_ + np.einsum("nki,ni,nli->nkl", jt, sd[:, 1:] ** 2, jt)
+        r0 = lin["residual"] - np.einsum("nki,ni->nk", jt, mean[:, 1:] - theta[:, 1:])
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            sol = np.linalg.solve(cov, np.stack([jg, r0], axis=-1))
+            info = np.einsum("nk,nk->n", jg, sol[:, :, 0])
+            g_hat = g0 + np.einsum("nk,nk->n", jg, sol[:, :, 1]) / info
+        ok = np.isfinite(g_hat) & np.isfinite(info) & (info > 0)
+        return np.where(ok, g_hat, g0), np.where(ok, info, 0.0)
+
+    def linearise(self, X, glucose_mgdl) -> dict[str, np.ndarray]:
+        """The forward model about each reading's nuisance mode at the given glucose.
+
+        Parameters
+        ----------
+        X : Dataset, pandas.DataFrame or array_like
+            Readings of the fitted device (measured columns only are read).
+        glucose_mgdl : array_like
+            (n,) glucose held fixed while the nuisances are solved for. [mg/dL]
+
+        Returns
+        -------
+        dict of numpy.ndarray
+            ``theta`` (n, 1 + len(NUISANCES)): the glucose given, then the nuisances'
+            posterior mode (:data:`NUISANCES` units); ``residual`` (n, k): the measured
+            ln(adc / adc_ref) minus the calibrated model there, y - a - b m;
+            ``jacobian`` (n, k, 1 + len(NUISANCES)): b dm/dtheta there; ``prior_mean``
+            and ``prior_sd`` (n, 1 + len(NUISANCES)): the prior (nuisance widths times
+            ``prior_scale``; glucose's entries are the given value and the training
+            spread).
+        """
+        self._require_fitted()
+        self._validate_params()
+        obs, phys = self._observed(predict_input(self, X))
+        g0 = np.asarray(glucose_mgdl, dtype=float).ravel()
+        if len(g0) != len(obs) or not np.all(np.isfinite(g0)):
+            raise DataError(f"glucose_mgdl must be {len(obs)} finite values, got {len(g0)}")
+        mean, sd = self._prior(phys, g0)
+        sd[:, 1:] *= float(self.prior_scale)
+        calib = (self.offset_, self.gain_)
+        free = np.array([False] + [True] * len(NUISANCES))
+        theta, m = map_estimate(
+            self.forward_, obs, calib, self._root_w(), mean, sd, free=free, max_iter=self.max_iter
+        )
+        J = self.gain_[None, :, None] * model_jacobian(self.forward_, theta, sd)
+        return {
+            "theta": theta,
+            "residual": obs - self.offset_ - self.gain_ * m,
+            "jacobian": J,
+            "prior_mean": mean,
+            "prior_sd": sd,
+        }
 
     def predict(self, X) -> np.ndarray:
         """Glucose of each reading: the posterior mode. [mg/dL]"""

@@ -334,6 +334,11 @@ class RTEPINNNet(nn.Module):
     dropout : float
         Dropout probability after each hidden activation of the branches, the trunk
         and the glucose head (0 adds no Dropout layer; the optics head has none). [-]
+    n_state : int
+        Width of an optional state head 128 -> 64 -> n_state on the trunk plus a linear
+        map from the inputs (the standardised tissue state of the 'forward' physics
+        form, much of which the physiological vector nearly measures; the fourth output
+        of :meth:`forward`); 0 (default) builds none. [-]
 
     Notes
     -----
@@ -352,6 +357,7 @@ class RTEPINNNet(nn.Module):
         n_nir: int = 4,
         n_pmf: int = 12,
         dropout: float = 0.0,
+        n_state: int = 0,
     ) -> None:
         super().__init__()
         k = len(nominal_mua_per_cm)
@@ -371,22 +377,37 @@ class RTEPINNNet(nn.Module):
             last = self.optics[-1]
             last.bias.copy_(_softplus_inverse(torch.cat((mua0, musp0)).clamp_min(1e-3)))
             last.weight.mul_(0.1)
+        # built last, so the other layers draw the same initial weights with or without it
+        self.n_state = int(n_state)
+        self.state = mlp((128, 64, self.n_state), final_activation=False) if n_state else None
+        # and a linear path from the inputs: much of the state is (nearly) measured
+        self.state_skip = nn.Linear(n_nir + n_pmf, self.n_state) if n_state else None
+        if self.state is not None:
+            with torch.no_grad():  # start at the state's training mean (standardised 0)
+                self.state[-1].weight.mul_(0.1)
+                self.state[-1].bias.zero_()
 
     def forward(
         self, x_nir: torch.Tensor, x_pmf: torch.Tensor
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    ) -> tuple[torch.Tensor, ...]:
         h = self.trunk(torch.cat((self.nir(x_nir), self.pmf(x_pmf)), dim=-1))
         raw = nn.functional.softplus(self.optics(h))
         k = self.n_wavelengths
         mua = raw[:, :k] + self.mua_floor
         musp = raw[:, k:] + self.musp_floor
         g = self.glucose(torch.cat((h, torch.log(mua), torch.log(musp)), dim=-1)).squeeze(-1)
+        if self.state is not None:
+            return g, mua, musp, self.state(h) + self.state_skip(torch.cat((x_nir, x_pmf), -1))
         return g, mua, musp
 
     def numpy_forward(self) -> NumpyForward:
         """NumPy closure of :meth:`forward` (eval mode, current weights)."""
         branches = numpy_mlp(self.nir, self.pmf)
         trunk, optics, glucose = (numpy_mlp(m) for m in (self.trunk, self.optics, self.glucose))
+        state = numpy_mlp(self.state) if self.state is not None else None
+        if self.state_skip is not None:
+            skip_w = self.state_skip.weight.detach().numpy().T.copy()
+            skip_b = self.state_skip.bias.detach().numpy().copy()
         k = self.n_wavelengths
         mua_floor, musp_floor = np.float32(self.mua_floor), np.float32(self.musp_floor)
 
@@ -395,6 +416,8 @@ class RTEPINNNet(nn.Module):
             raw = np.logaddexp(np.float32(0.0), optics(h))  # softplus
             mua, musp = raw[:, :k] + mua_floor, raw[:, k:] + musp_floor
             g = glucose(np.concatenate((h, np.log(mua), np.log(musp)), axis=-1))[:, 0]
+            if state is not None:
+                return g, mua, musp, state(h) + (x @ skip_w + skip_b)
             return g, mua, musp
 
         return run

@@ -13,6 +13,11 @@ otherwise.
   'diffusion' forward model evaluates [2]_.
 * :func:`scattering_prior_loss` — the RTE PINNs' stability term: ``mus'`` near the
   Jacques (2013) power law [3]_.
+* :func:`forward_likelihood_loss` — the Beer-Lambert PINNs' ``'forward'`` term: the
+  negative log-likelihood of the measured log ratios given the predicted glucose under
+  the package's forward model, nuisances marginalised (Laplace) [4]_.
+* :func:`state_mode_loss` — the RTE PINNs' ``'forward'`` state term: predicted tissue
+  state against each reading's posterior mode under the forward model [4]_.
 
 References
 ----------
@@ -25,6 +30,8 @@ References
    :doi:`10.1118/1.596777`
 .. [3] S. L. Jacques, "Optical properties of biological tissues: a review",
    Phys. Med. Biol. 58, R37-R61 (2013). :doi:`10.1088/0031-9155/58/11/R37`
+.. [4] C. M. Bishop, "Pattern Recognition and Machine Learning", Springer (2006),
+   sec. 4.4 (the Laplace approximation) and 2.3.3 (linear-Gaussian marginals).
 """
 
 from __future__ import annotations
@@ -47,6 +54,8 @@ __all__ = [
     "diffusion_absorbance",
     "diffusion_reflectance_loss",
     "scattering_prior_loss",
+    "forward_likelihood_loss",
+    "state_mode_loss",
 ]
 
 _LN10 = math.log(10.0)
@@ -292,3 +301,101 @@ def scattering_prior_loss(
     prior = torch.as_tensor(prior_musp_per_cm, dtype=musp_per_cm.dtype, device=musp_per_cm.device)
     d = torch.log(musp_per_cm) - torch.log(prior)
     return (d * d).sum(dim=-1).mean()
+
+
+def forward_likelihood_loss(
+    glucose_mgdl: torch.Tensor,
+    likelihood_mode_mgdl: torch.Tensor,
+    information_per_mgdl2: torch.Tensor,
+) -> torch.Tensor:
+    r"""Forward-model term: the readings' negative log-likelihood at the predicted glucose.
+
+    Parameters
+    ----------
+    glucose_mgdl : torch.Tensor
+        Predicted glucose :math:`\hat c_i`, (n,). [mg/dL]
+    likelihood_mode_mgdl : torch.Tensor
+        Mode :math:`\hat g_i` of each reading's glucose likelihood under the forward
+        model, (n,) (:meth:`~nirglucose.models.inversion.PhysicsInversion.glucose_likelihood`).
+        [mg/dL]
+    information_per_mgdl2 : torch.Tensor
+        Its curvature :math:`w_i = J_g^T\Sigma_i^{-1}J_g`, (n,), >= 0. [1/(mg/dL)^2]
+
+    Returns
+    -------
+    torch.Tensor
+        Scalar :math:`\frac1n\sum_i w_i(\hat c_i - \hat g_i)^2`; zero iff every
+        prediction with :math:`w_i > 0` is its likelihood's mode. [-]
+
+    Notes
+    -----
+    With the forward model linearised in glucose and the nuisances marginalised under
+    their prior (Laplace [4]_), the measured log ratios :math:`y_i` of a reading are
+    Gaussian, :math:`y_i \sim N(\bar y_i + J_{g,i}(c - c_{0,i}), \Sigma_i)`, and
+
+    .. math::
+
+        r_i^T\Sigma_i^{-1}r_i - \min_c r_i^T\Sigma_i^{-1}r_i = w_i(c - \hat g_i)^2,
+        \qquad r_i = y_i - \bar y_i - J_{g,i}(c - c_{0,i}),
+
+    so this loss is :math:`-2\ln p(y_i \mid \hat c_i)` averaged over readings, less
+    its minimum (a constant: the gradients are those of the likelihood). Each reading
+    weighs by how much its absorbances say about glucose: little on a device whose
+    nuisances swamp glucose's signal.
+
+    Examples
+    --------
+    >>> import torch
+    >>> g = torch.tensor([100.0, 150.0])
+    >>> float(forward_likelihood_loss(g, g, torch.tensor([0.5, 0.1])))
+    0.0
+    >>> float(forward_likelihood_loss(g + 2.0, g, torch.tensor([0.5, 0.1])))
+    1.2000000476837158
+    """
+    d = glucose_mgdl - likelihood_mode_mgdl
+    return (information_per_mgdl2 * d * d).mean()
+
+
+
+def state_mode_loss(
+    state: torch.Tensor, mode: torch.Tensor, scale: torch.Tensor
+) -> torch.Tensor:
+    r"""Distance of predicted tissue state from the forward model's posterior mode.
+
+    Parameters
+    ----------
+    state : torch.Tensor
+        (n, p) predicted nuisances (their units).
+    mode : torch.Tensor
+        (n, p) each reading's posterior mode under the forward model at its reference
+        glucose (:meth:`~nirglucose.models.inversion.PhysicsInversion.linearise`).
+        [units]
+    scale : torch.Tensor
+        (p,) the modes' training spread. [units]
+
+    Returns
+    -------
+    torch.Tensor
+        Scalar :math:`\frac{1}{np}\sum_{i,j}[(\hat\theta_{ij} - \theta^*_{ij})/\sigma_j]^2`;
+        zero iff every prediction is its mode. [-]
+
+    Notes
+    -----
+    The reading's negative log-posterior, linearised at its mode, is the quadratic
+    :math:`(\hat\theta - \theta^*)^T H (\hat\theta - \theta^*)` with H the posterior
+    precision [4]_. This keeps its minimiser and weighs departures by the population's
+    spread instead of H: on a quiet device H is thousands of times larger, no network
+    matches a per-reading mode to that precision, and the term would swamp the MSE at
+    any weight.
+
+    Examples
+    --------
+    >>> import torch
+    >>> m = torch.tensor([[0.02, 0.7]])
+    >>> float(state_mode_loss(m, m, torch.tensor([0.01, 0.05])))
+    0.0
+    >>> float(state_mode_loss(m + torch.tensor([[0.01, 0.0]]), m, torch.tensor([0.01, 0.05])))
+    0.5
+    """
+    d = (state - mode) / scale
+    return (d * d).mean()

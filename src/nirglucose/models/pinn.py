@@ -7,7 +7,19 @@ estimator              registry name         physics term added to the MSE
 :class:`OptimizedPINN` ``optimized-pinn``    the same, on an attention network
 :class:`RTEPINN`       ``rte-pinn``          diffusion-theory reflectance + mus' prior
 :class:`SelectiveRTEPINN` ``selective-rte-pinn`` the same at 1050 and 1150 nm only
+:class:`OriginalPINNForward` ``original-pinn-fm`` forward-model likelihood (``'forward'``)
+:class:`OptimizedPINNForward` ``optimized-pinn-fm`` the same, on the attention network
+:class:`RTEPINNForward` ``rte-pinn-fm``       glucose likelihood + a state head (``'forward'``)
+:class:`SelectiveRTEPINNForward` ``selective-rte-pinn-fm`` the same, selective network
 =====================  ====================  ==========================================
+
+The Beer-Lambert PINNs choose their term by ``physics_form``
+(:data:`PHYSICS_FORMS`): ``'study'`` (the default, alias ``'absolute'``) is the study's
+residual, kept so the reproduction stays; ``'forward'`` ties the predicted glucose to
+the measured absorbances through the package's own forward model
+(:meth:`~nirglucose.models.inversion.PhysicsInversion.glucose_likelihood`,
+:func:`~nirglucose.models.physics_losses.forward_likelihood_loss`); the ``-fm``
+estimators are the study networks with that form by default.
 
 All share :class:`~nirglucose.models._torch_base.TorchRegressor`'s one training loop;
 each adds its residual in ``get_loss`` by calling the parent (the skorch habit).
@@ -47,10 +59,13 @@ from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
+from ..optics.forward import FORWARD_MODELS
 from ..simulation.simulator import nominal_tissue, scenario_band_spectra
 from ._base import predict_input
+from ._inversion_solver import NUISANCES
 from ._params import Integral, Interval, ParameterError, Real, StrOptions
 from ._torch_base import TorchRegressor
+from .forward_term import BeerLambertForwardTerm, StateForwardTerm
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
     beer_lambert_loss,
@@ -65,12 +80,22 @@ __all__ = [
     "OptimizedPINN",
     "RTEPINN",
     "SelectiveRTEPINN",
+    "OriginalPINNForward",
+    "OptimizedPINNForward",
+    "RTEPINNForward",
+    "SelectiveRTEPINNForward",
     "PHYSICS_FORMS",
+    "RTE_PHYSICS_FORMS",
     "nominal_optics",
 ]
 
-#: Valid ``physics_form`` values of the Beer-Lambert PINNs.
-PHYSICS_FORMS = ("absolute", "relative")
+#: Valid ``physics_form`` values of the Beer-Lambert PINNs: the study's residual
+#: (``'study'``, also accepted under its earlier name ``'absolute'``), its differential
+#: variant, and the forward model's likelihood.
+PHYSICS_FORMS = ("study", "absolute", "relative", "forward")
+#: Valid ``physics_form`` values of the RTE PINNs: the study's reflectance tie, and
+#: predicted glucose and tissue state through the package's forward model.
+RTE_PHYSICS_FORMS = ("study", "forward")
 
 
 def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig | None, str]:
@@ -118,14 +143,16 @@ _POSITIVE_OR_NONE = [None, Interval(Real, 0, None, closed="neither")]
 # ============================================================================ Beer-Lambert
 
 
-class _BeerLambertPINN(TorchRegressor):
+class _BeerLambertPINN(BeerLambertForwardTerm, TorchRegressor):
     """Shared physics of the Original and Optimized PINNs (not registered)."""
 
     own_params: ClassVar[dict[str, Any]] = {
         "lambda_phys": 0.01,
-        "physics_form": "absolute",
+        "physics_form": "study",
         "absorptivity_per_cm_per_mm": None,
         "signal_gain": None,
+        "forward_model": None,
+        "collocation": 0,
     }
 
     _parameter_constraints: ClassVar[dict[str, Any]] = {
@@ -134,6 +161,8 @@ class _BeerLambertPINN(TorchRegressor):
         "physics_form": [StrOptions(set(PHYSICS_FORMS))],
         "absorptivity_per_cm_per_mm": _POSITIVE_OR_NONE,
         "signal_gain": _POSITIVE_OR_NONE,
+        "forward_model": [None, StrOptions(set(FORWARD_MODELS))],
+        "collocation": [Interval(Integral, 0, None, closed="left")],
     }
 
     def _physics_constants(self, cfg: ScenarioConfig, origin: str) -> dict:
@@ -168,6 +197,8 @@ class _BeerLambertPINN(TorchRegressor):
         if self.physics_form == "relative":
             phys["absorbance_ref"] = absorbance.mean(axis=0).tolist()
             phys["glucose_ref_mgdl"] = float(y.mean())
+        if self.physics_form == "forward":
+            phys.update(self._fit_forward(source, y))
         return phys
 
     def _prepare_physics_tensors(self) -> None:
@@ -190,6 +221,9 @@ class _BeerLambertPINN(TorchRegressor):
             terms["physics"] = torch.zeros(())
             return total, terms
         c_hat = self._glucose(y_pred) * ph["y_scale"] + ph["y_mean"]
+        if self.physics_form == "forward":
+            terms.update(self._forward_loss(c_hat, batch))
+            return _with_physics(self, total, terms["physics"]), terms
         physics = beer_lambert_loss(
             batch["absorbance"],
             c_hat,
@@ -231,14 +265,33 @@ class OriginalPINN(_BeerLambertPINN):
         Weight of the physics term, ``<< 1`` in the study; a tuned hyper-parameter
         (grid includes 0). 0 trains exactly the plain network (same initialisation,
         same data path, bit-identical weights): the physics ablation. [-]
-    physics_form : {'absolute', 'relative'}
-        'absolute' (default) is the study's residual. 'relative' subtracts the training
-        means from both sides, :math:`(A - \bar A) - \varepsilon(\hat c - \bar c)l`
-        (differential Beer-Lambert), which removes the tissue's constant background.
+    physics_form : {'study', 'absolute', 'relative', 'forward'}
+        'study' (default; 'absolute' is the same, its earlier name) is the study's
+        residual above. 'relative' subtracts the training means from both sides,
+        :math:`(A - \bar A) - \varepsilon(\hat c - \bar c)l` (differential
+        Beer-Lambert), which removes the tissue's constant background. 'forward' is the
+        negative log-likelihood of each training reading's measured log ratios at the
+        predicted glucose under the package's forward model, the nuisances (blood,
+        water, fat, melanin, thickness, LED shift, coupling) marginalised by Laplace
+        (:func:`~nirglucose.models.physics_losses.forward_likelihood_loss`; the model
+        is a :class:`~nirglucose.models.inversion.PhysicsInversion` fitted on the
+        training rows' measured columns and reference glucose, never ``true_*``). Off
+        (recorded in ``physics_``) where the data has no optics: a plain array, or
+        LEDs the scenario does not describe. Prediction is the same for every form.
     absorptivity_per_cm_per_mm, signal_gain : float or None
         Glucose peak absorption [1/(cm mM)] and signal gain [-] for
         :math:`\varepsilon`; None takes them from the training Dataset's scenario (the
         ``paper`` preset when the data carries none).
+    forward_model : {None, 'beer-lambert', 'diffusion', 'rte-lut'}
+        The forward model of the 'forward' form; None takes the training Dataset's
+        (``optics.model``; 'beer-lambert' for data without a scenario). Unused by the
+        other forms.
+    collocation : int
+        'forward' form only: readings the fitted forward model generates per training
+        row (the row's measured physiology, nuisances drawn from their learned prior,
+        glucose drawn from the training rows', the model's noise), on which the
+        network's squared error (standardised units) joins the physics term: PINN
+        collocation points where no reference exists. 0 (default): none. [-]
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
@@ -286,7 +339,7 @@ class OptimizedPINN(_BeerLambertPINN):
     dropout : float
         Dropout probability (0.1 by default: with weight decay, part of the study's
         "optimisation"). [-]
-    lambda_phys, physics_form, absorptivity_per_cm_per_mm, signal_gain
+    lambda_phys, physics_form, absorptivity_per_cm_per_mm, signal_gain, forward_model
         As in :class:`OriginalPINN`.
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
@@ -313,6 +366,51 @@ class OptimizedPINN(_BeerLambertPINN):
         return OptimizedPINNNet(
             int(self.d_model), int(self.n_heads), float(self.dropout), **self._input_widths()
         )
+
+
+_FORWARD_NOTES = """
+    Notes
+    -----
+    The term per training reading i is :math:`w_i(\\hat c_i - \\hat g_i)^2`,
+    :math:`-2\\ln p(y_i \\mid \\hat c_i)` less its minimum: :math:`\\hat g_i` and
+    :math:`w_i` are the mode and curvature of the reading's glucose likelihood
+    (:meth:`~nirglucose.models.inversion.PhysicsInversion.glucose_likelihood`,
+    linearised at its reference glucose and nuisance mode), computed once per fit. The
+    weight :math:`\\lambda_\\mathrm{phys}` multiplies it in the MSE's standardised
+    units, so 1 puts one standard deviation of the likelihood on a par with one of the
+    training glucose; a device whose nuisances swamp glucose's signal gets small
+    :math:`w_i` and hence a weak term. Its grid is the study PINNs'
+    (:data:`~nirglucose.models.tuning.LAMBDA_PHYS_GRID`, 0 included); the training
+    parameters are its study twin's until ``benchmarks/tune.py`` has tuned it.
+    """
+
+
+@register("original-pinn-fm")
+class OriginalPINNForward(OriginalPINN):
+    __doc__ = (
+        """The Original PINN with the forward-model likelihood as its physics term.
+
+    :class:`OriginalPINN` with ``physics_form='forward'`` by default (its parameters,
+    network and prediction are the same).
+    """
+        + _FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 0.1}
+
+
+@register("optimized-pinn-fm")
+class OptimizedPINNForward(OptimizedPINN):
+    __doc__ = (
+        """The Optimized PINN with the forward-model likelihood as its physics term.
+
+    :class:`OptimizedPINN` with ``physics_form='forward'`` by default (its parameters,
+    network and prediction are the same).
+    """
+        + _FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 0.1}
 
 
 # ============================================================================ RTE
@@ -353,10 +451,15 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
     return (mua[0] * w).sum(axis=-1), (musp[0] * w).sum(axis=-1)
 
 
-class _RTEPINNBase(TorchRegressor):
+class _RTEPINNBase(StateForwardTerm, TorchRegressor):
     """Shared physics of the RTE-inspired PINNs (not registered)."""
 
-    own_params: ClassVar[dict[str, Any]] = {"lambda_phys": 0.1, "stability_weight": 0.1}
+    own_params: ClassVar[dict[str, Any]] = {
+        "lambda_phys": 0.1,
+        "stability_weight": 0.1,
+        "physics_form": "study",
+        "forward_model": None,
+    }
 
     #: Wavelengths the optical heads predict and the regulariser covers. [nm]
     REGULARISED_NM: ClassVar[tuple[float, ...]] = DEFAULT_LED_WAVELENGTHS_NM
@@ -365,6 +468,8 @@ class _RTEPINNBase(TorchRegressor):
         **TorchRegressor._parameter_constraints,
         "lambda_phys": _LAMBDA_PHYS,
         "stability_weight": [Interval(Real, 0, None, closed="left")],
+        "physics_form": [StrOptions(set(RTE_PHYSICS_FORMS))],
+        "forward_model": [None, StrOptions(set(FORWARD_MODELS))],
     }
 
     def _regularised(self, wavelengths_nm: tuple[float, ...]) -> list[int]:
@@ -426,7 +531,10 @@ class _RTEPINNBase(TorchRegressor):
         cfg, origin = _scenario(source, schema.wavelengths_nm)
         if cfg is not None and tuple(cfg.leds.wavelengths_nm) != schema.wavelengths_nm:
             cfg, origin = _scenario(None, schema.wavelengths_nm)
-        return self._physics_from(cfg, origin, absorbance, schema.wavelengths_nm)
+        phys = self._physics_from(cfg, origin, absorbance, schema.wavelengths_nm)
+        if self.physics_form == "forward":  # replaces the reflectance tie
+            phys.update({"form": "forward", **self._fit_forward(source, y)})
+        return phys
 
     def _default_physics(self) -> dict:
         return self._physics_from(
@@ -444,27 +552,39 @@ class _RTEPINNBase(TorchRegressor):
             "rho": float(p["rho_cm"]),
             "area": float(p["detector_area_cm2"]),
             "n": float(p["n_tissue"]),
+            "y_mean": float(self.scaler_["y_mean"]),
+            "y_scale": float(self.scaler_["y_scale"]),
+            **self._state_tensors(),
         }
 
     def build_module(self) -> RTEPINNNet:
-        """:class:`~nirglucose.models.networks.RTEPINNNet` started at nominal optics."""
+        """:class:`~nirglucose.models.networks.RTEPINNNet` started at nominal optics
+        (with a state head for the 'forward' form)."""
         p = self._physics_or_default()
         return RTEPINNNet(
             p["nominal_mua_per_cm"],
             p["nominal_musp_per_cm"],
             **self._input_widths(),
             dropout=float(self.dropout),
+            n_state=len(NUISANCES) if self.physics_form == "forward" else 0,
         )
 
     def get_loss(self, y_pred, y_true, batch):
-        """MSE plus ``lambda_phys`` (reflectance residual + stability x scattering prior)."""
+        """MSE plus ``lambda_phys`` (reflectance residual + stability x scattering prior,
+        or the 'forward' form's state likelihood)."""
         total, terms = super().get_loss(y_pred, y_true, batch)
-        _, mua, musp = y_pred
+        mua, musp = y_pred[1], y_pred[2]
         ph = self._phys
         if not ph["enabled"]:
             zero = torch.zeros(())
-            terms.update({"reflectance": zero, "scattering_prior": zero, "physics": zero})
+            names = ("likelihood", "state") if self.physics_form == "forward" else (
+                "reflectance", "scattering_prior")
+            terms.update({**dict.fromkeys(names, zero), "physics": zero})
             return total, terms
+        if self.physics_form == "forward":
+            c_hat = y_pred[0] * ph["y_scale"] + ph["y_mean"]
+            terms.update(self._state_loss(c_hat, y_pred[3], batch))
+            return _with_physics(self, total, terms["physics"]), terms
         absorbance = batch["absorbance"].index_select(1, ph["idx"])
         reflectance = diffusion_reflectance_loss(
             absorbance,
@@ -487,8 +607,8 @@ class _RTEPINNBase(TorchRegressor):
         Xa = predict_input(self, X)
         t = self._tensors({k: v for k, v in self._transform(Xa).items() if k != "absorbance"})
         with torch.inference_mode():
-            _, mua, musp = self.module_(t["nir"], t["pmf"])
-        return mua.numpy().astype(np.float64), musp.numpy().astype(np.float64)
+            out = self.module_(t["nir"], t["pmf"])
+        return out[1].numpy().astype(np.float64), out[2].numpy().astype(np.float64)
 
 
 _RTE_DOC_PARAMS = """
@@ -499,6 +619,13 @@ _RTE_DOC_PARAMS = """
         exactly the plain network (bit-identical weights): the physics ablation. [-]
     stability_weight : float
         Weight of the scattering prior inside the physics term. [-]
+    physics_form : {'study', 'forward'}
+        'study' (default): the reflectance tie and scattering prior below. 'forward':
+        the forward model's glucose likelihood and a state head tied to each training
+        reading's posterior mode (see :class:`RTEPINNForward`); off (recorded in
+        ``physics_``) where the data has no optics.
+    forward_model : {None, 'beer-lambert', 'diffusion', 'rte-lut'}
+        The 'forward' form's model; None takes the training Dataset's.
     max_epochs, batch_size, lr, weight_decay, dropout, whiten_inputs, patience,
     val_fraction, lr_schedule, refit, random_state
         Training, see :class:`~nirglucose.models._torch_base.TorchRegressor`.
@@ -573,3 +700,44 @@ class SelectiveRTEPINN(_RTEPINNBase):
             if idx:
                 return idx
         return [int(np.argmax(wavelengths_nm))]
+
+
+_RTE_FORWARD_NOTES = """
+    Notes
+    -----
+    The term: the glucose likelihood of the Beer-Lambert PINNs' 'forward' form
+    (:class:`OriginalPINNForward`) plus a state head that predicts the nuisances of
+    :data:`~nirglucose.models._inversion_solver.NUISANCES`, tied to each training
+    reading's posterior mode under the forward model at its reference glucose
+    (:func:`~nirglucose.models.physics_losses.state_mode_loss`); it replaces the
+    study's reflectance tie (the optics heads stay, as features of the glucose head).
+    ``estimate_state`` returns the state head's blood, saturation, water, fat, melanin,
+    thickness, LED shift and coupling (the benchmark's inverse table). Training
+    parameters: its study twin's until ``benchmarks/tune.py`` has tuned it.
+    """
+
+
+@register("rte-pinn-fm")
+class RTEPINNForward(RTEPINN):
+    __doc__ = (
+        """The RTE-inspired PINN with the forward model as its physics (and a state head).
+
+    :class:`RTEPINN` with ``physics_form='forward'`` by default.
+    """
+        + _RTE_FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 1.0}
+
+
+@register("selective-rte-pinn-fm")
+class SelectiveRTEPINNForward(SelectiveRTEPINN):
+    __doc__ = (
+        """The Selective RTE PINN with the forward model as its physics (and a state head).
+
+    :class:`SelectiveRTEPINN` with ``physics_form='forward'`` by default.
+    """
+        + _RTE_FORWARD_NOTES
+    )
+
+    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 1.0}

@@ -83,6 +83,11 @@ MODEL_COLORS: dict[str, str] = {
     "physics-inversion": "#332288",
     "ebl+gp": "#44AA99",
     "physics-inversion+gp": "#CC6677",
+    # the PINNs with the forward-model physics term: the rest of Tol's muted set
+    "original-pinn-fm": "#AA4499",
+    "optimized-pinn-fm": "#DDCC77",
+    "rte-pinn-fm": "#117733",
+    "selective-rte-pinn-fm": "#88CCEE",
 }
 
 #: Marker of each registered model (a second cue besides colour).
@@ -101,6 +106,11 @@ MODEL_MARKERS: dict[str, str] = {
     "physics-inversion": "8",
     "ebl+gp": "H",
     "physics-inversion+gp": ">",
+    # a forward-model PINN: its study twin's marker (the colour tells them apart)
+    "original-pinn-fm": "^",
+    "optimized-pinn-fm": "v",
+    "rte-pinn-fm": "D",
+    "selective-rte-pinn-fm": "P",
 }
 
 #: Colour of each diabetes status of the simulated cohort: four shades of brown, a hue
