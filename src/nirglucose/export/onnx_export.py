@@ -18,7 +18,7 @@ standardisation, then its network (the torch networks), its physics features and
 coefficients (``ebl``: :func:`_features_torch`, the twin of
 :func:`nirglucose.features.compute_features`), its Gaussian-process posterior mean
 (``gp``), its folded linear map (``pls``), its constant (``mean``), or EBL then the GP
-on EBL's residual (``ebl+gp``). Float32
+on EBL's residual stacked with their learned weights (``ebl+gp``). Float32
 throughout; the tests hold it to the Python prediction within 0.05 mg/dL.
 
 Gradient boosting (``gbr``): the traced part computes the trees' inputs (absorbances,
@@ -163,9 +163,11 @@ def _glucose_torch(torch, model, a, pmf):
         return _linear(torch, torch.cat([a, pmf], dim=1), model.coef_, model.intercept_)
     if name == "gp":
         return _gp_mean(torch, model, torch.cat([a, pmf], dim=1))
-    if name == "ebl+gp":  # the backbone, then the GP on [inputs, backbone] (its predict)
+    if name == "ebl+gp":  # the stack of the backbone and the GP on [inputs, backbone]
         base = _glucose_torch(torch, model.backbone_, a, pmf)
-        return base + _gp_mean(torch, model.residual_, torch.cat([a, pmf, base[:, None]], 1))
+        gp = _gp_mean(torch, model.residual_, torch.cat([a, pmf, base[:, None]], 1))
+        y_mean, weight = float(model.y_mean_), float(model.backbone_weight_)
+        return y_mean + weight * (base - y_mean) + float(model.shrinkage_) * gp
     return _network(torch, model, model.module_.eval(), a, pmf)
 
 

@@ -6,8 +6,22 @@ learns what the backbone leaves, y - f_backbone(x), from the device's absorbance
 physiology together with the backbone's own prediction (stacking, Wolpert 1992 [1]_).
 The residual learner is trained on the backbone's out-of-fold predictions over
 subject-grouped folds (``cv``), so it learns the backbone's error on subjects it has
-not seen, as at prediction; the backbone is then refitted on every training row. This
-is the study's future work, "hybrid approaches that combine physics-based feature
+not seen, as at prediction; the backbone is then refitted on every training row.
+
+Where the residual holds no signal the GP only adds noise, and where the backbone holds
+none it can be worse than the training mean, so the hybrid is a stack (Breiman 1996
+[3]_)::
+
+    y_mean + a * (f_backbone(x) - y_mean) + s * GP(x)
+
+On the training rows only, the GP is cross-fitted over the same subject-grouped folds,
+giving out-of-fold residual predictions ``r_hat`` next to the backbone's out-of-fold
+glucose; ``s`` in [0, 1] is the least-squares weight of ``r_hat`` in the backbone's
+out-of-fold residual, and ``a`` is 1, or 0 (with ``s`` 0: the training mean) where the
+training mean has the smaller out-of-fold error. ``s`` near 0: the backbone alone;
+``s`` 1: the full hybrid.
+
+This is the study's future work, "hybrid approaches that combine physics-based feature
 engineering with selective neural network components" [2]_, with a GP as the learned part.
 
 References
@@ -16,10 +30,13 @@ References
    doi:10.1016/S0893-6080(05)80023-1
 .. [2] R. Gani, "Physics-Informed Neural Networks vs. Physics Models for Non-Invasive
    Glucose Monitoring", University College London (the study this package extends).
+.. [3] L. Breiman, "Stacked regressions", Machine Learning 24, 49-64 (1996),
+   doi:10.1007/BF00117832
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -36,7 +53,12 @@ from ._params import Integral, Interval, ValidatedParamsMixin
 from .reference import GP_RANDOM_STATE
 from .registry import get_model_class, make_model, register
 
-__all__ = ["EBLGP", "PhysicsInversionGP"]
+__all__ = ["EBLGP", "PhysicsInversionGP", "SHRINKAGE_FOLDS"]
+
+#: Subject-grouped folds the stacking weight is learned over when ``cv`` is 0 or 1 (the
+#: GP learns in-sample residuals, so there are no folds to reuse): the hybrids' default
+#: ``cv`` and the tuning's grouped 3-fold CV (``benchmarks/tune.py``).
+SHRINKAGE_FOLDS = 3
 
 
 def _rows(X, idx: np.ndarray):
@@ -46,6 +68,26 @@ def _rows(X, idx: np.ndarray):
     if hasattr(X, "iloc"):
         return X.iloc[idx].reset_index(drop=True)
     return np.asarray(X)[idx]
+
+
+def _stacking_weights(z: np.ndarray, b: np.ndarray, r_hat: np.ndarray) -> tuple[float, float]:
+    """The stack's weights ``(a, s)`` from out-of-fold predictions: ``(1, s)`` with
+    ``s = clip(<z - b, r_hat> / <r_hat, r_hat>, 0, 1)``, or ``(0, 0)`` (the training
+    mean) where that has the larger squared error.
+
+    ``z`` is glucose minus its training mean, ``b`` the backbone's out-of-fold glucose
+    minus that mean, ``r_hat`` the residual GP's out-of-fold prediction of ``z - b``.
+    ``s`` is the least-squares weight of ``r_hat`` under non-negativity, capped at 1 so
+    the GP is never amplified (L. Breiman, "Stacked regressions", Machine Learning 24,
+    49-64 (1996), doi:10.1007/BF00117832); the choice between that stack and the mean is
+    by the same out-of-fold error. Sums are exactly rounded (:func:`math.fsum`).
+    """
+    den = math.fsum(r_hat * r_hat)
+    s = 0.0 if den <= 0.0 else float(np.clip(math.fsum((z - b) * r_hat) / den, 0.0, 1.0))
+    err = z - b - s * r_hat
+    if math.fsum(err * err) <= math.fsum(z * z):
+        return 1.0, s
+    return 0.0, 0.0
 
 
 def _nested_doc(model) -> dict:
@@ -84,13 +126,32 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
         model's).
     cv : int
         Subject-grouped folds of the out-of-fold backbone predictions the GP learns
-        from; 0 or 1 learns from the backbone's in-sample residuals. [-]
+        from, and of the cross-fit that learns the stacking weights; 0 or 1 learns
+        from the backbone's in-sample residuals (the weights then from
+        :data:`SHRINKAGE_FOLDS` folds of the whole fit). [-]
     random_state : int, optional
         Seed of the GP's row subset and restarts.
+
+    Attributes
+    ----------
+    backbone_ : estimator
+        The backbone fitted on every training row.
+    residual_ : GPReference
+        The GP on the backbone's residuals.
+    y_mean_ : float
+        Training mean of glucose, the stack's constant. [mg/dL]
+    backbone_weight_ : float
+        Weight of the backbone's glucose about ``y_mean_``: 1, or 0 where the training
+        mean has a smaller out-of-fold error than backbone plus weighted GP. [-]
+    shrinkage_ : float
+        Stacking weight of the GP's residual, in [0, 1]: 0 where its cross-fitted
+        predictions explain none of the residual. Both weights are 1 with too few
+        subjects for folds (the hybrid before issue 29). [-]
     """
 
     backbone_name = ""
-    _STATE = {"schema_": "json", "backbone_": "json", "residual_": "json"}
+    _STATE = {"schema_": "json", "backbone_": "json", "residual_": "json",
+              "y_mean_": None, "backbone_weight_": None, "shrinkage_": None}
     _parameter_constraints: ClassVar[dict[str, Any]] = {
         "backbone_params": [None, dict],
         "gp_params": [None, dict],
@@ -114,19 +175,45 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
         params = {"random_state": self.random_state, **(self.gp_params or {})}
         return make_model("gp", **params)
 
-    def _out_of_fold(self, X, y: np.ndarray, groups) -> np.ndarray:
-        """The backbone's predictions of rows whose subjects it was not fitted on."""
+    def _folds(self, y: np.ndarray, groups, n_splits: int) -> list | None:
+        """Subject-grouped ``(train, test)`` folds, or None without enough subjects."""
         n_groups = 0 if groups is None else len(np.unique(groups))
-        if self.cv < 2 or n_groups < self.cv:
+        if n_splits < 2 or n_groups < n_splits:
             return None
+        return list(GroupKFold(n_splits=n_splits).split(np.zeros(len(y)), y, groups))
+
+    def _out_of_fold(self, X, y: np.ndarray, groups, folds) -> np.ndarray:
+        """The backbone's predictions of rows whose subjects it was not fitted on."""
         oof = np.empty(len(y))
-        for tr, te in GroupKFold(n_splits=int(self.cv)).split(np.zeros(len(y)), y, groups):
+        for tr, te in folds:
             part = self._backbone().fit(_rows(X, tr), y[tr], groups[tr])
             oof[te] = part.predict(_rows(X, te))
         return oof
 
+    def _cross_fit_residual(self, X, A, y, groups, folds, oof) -> tuple:
+        """``(base, r_hat)``: each row's backbone glucose and the residual GP's
+        prediction of its residual, both from fits on the other folds' rows only.
+
+        With ``oof`` (the backbone's out-of-fold predictions over ``folds``) only the GP
+        is refitted per fold; without it (``cv`` < 2) the backbone and the GP on its
+        in-sample residuals are, as :meth:`fit` does on every row.
+        """
+        base, r_hat = np.empty(len(y)), np.empty(len(y))
+        for tr, te in folds:
+            if oof is not None:
+                base_tr, base_te = oof[tr], oof[te]
+            else:
+                part = self._backbone().fit(_rows(X, tr), y[tr], groups[tr])
+                base_tr, base_te = part.predict(_rows(X, tr)), part.predict(_rows(X, te))
+            gp = self._gp().fit(np.column_stack([A[tr], base_tr]), y[tr] - base_tr)
+            base[te] = base_te
+            r_hat[te] = gp.predict(np.column_stack([A[te], base_te]))
+        return base, r_hat
+
     def fit(self, X, y=None, groups=None):
-        """Fit the backbone on every row and the GP on its out-of-fold residuals.
+        """Fit the backbone on every row, the GP on its out-of-fold residuals and the
+        stacking weights (``backbone_weight_``, ``shrinkage_``) on out-of-fold
+        predictions of both.
 
         Parameters
         ----------
@@ -145,22 +232,32 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
         self.schema_, Xa, y, groups = fit_input(self, X, y, groups)
         if self.schema_.is_plain:
             raise DataError(f"{self.registry_name} needs a device's ADC columns, not a plain array")
-        oof = self._out_of_fold(X, y, groups)
+        A = self.schema_.stacked(Xa)
+        folds = self._folds(y, groups, int(self.cv))
+        oof = None if folds is None else self._out_of_fold(X, y, groups, folds)
         self.backbone_ = self._backbone().fit(X, y, groups)
-        if oof is None:
-            oof = self.backbone_.predict(X)
-        U = np.column_stack([self.schema_.stacked(Xa), oof])
-        self.residual_ = self._gp().fit(U, y - oof)
+        base = self.backbone_.predict(X) if oof is None else oof
+        self.residual_ = self._gp().fit(np.column_stack([A, base]), y - base)
+        if folds is None:
+            folds = self._folds(y, groups, SHRINKAGE_FOLDS)
+        self.y_mean_ = float(np.mean(y))
+        self.backbone_weight_, self.shrinkage_ = 1.0, 1.0  # no folds: the plain hybrid
+        if folds is not None:
+            base, r_hat = self._cross_fit_residual(X, A, y, groups, folds, oof)
+            self.backbone_weight_, self.shrinkage_ = _stacking_weights(
+                y - self.y_mean_, base - self.y_mean_, r_hat)
         self._restore_schema()
         return self
 
     def predict(self, X) -> np.ndarray:
-        """The backbone's glucose plus the GP's residual. [mg/dL]"""
+        """The stacked glucose: ``y_mean_ + backbone_weight_ * (backbone - y_mean_) +
+        shrinkage_ * GP residual``. [mg/dL]"""
         self._require_fitted()
         Xa = predict_input(self, X)
         base = np.asarray(self.backbone_.predict(X), dtype=float).ravel()
         U = np.column_stack([self.schema_.stacked(Xa), base])
-        return base + self.residual_.predict(U)
+        stacked = self.y_mean_ + self.backbone_weight_ * (base - self.y_mean_)
+        return stacked + self.shrinkage_ * self.residual_.predict(U)
 
     @property
     def n_parameters(self) -> int:
@@ -179,6 +276,10 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
 
     def _restore(self) -> None:
         self._restore_schema()
+        for key in ("backbone_weight_", "shrinkage_"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise DataError(f"the hybrid's saved {key} is {getattr(self, key)!r}, "
+                                "outside [0, 1]; refit the model")
         if isinstance(self.backbone_, dict):
             self.backbone_ = _nested_model(self.backbone_name, self.backbone_)
         if isinstance(self.residual_, dict):
