@@ -4,8 +4,9 @@ Protocol: ``nirglucose.simulate(preset, 80, 3, seed=1000)`` for ``field`` (the r
 holds no signal) and ``paper`` (it does); subject-grouped 3-fold CV (scikit-learn
 ``GroupKFold`` over ``subject_id``); pooled RMSE over the held-out rows. Models:
 ``mean``, ``ebl``, ``physics-inversion`` and both hybrids with their tuned parameters
-(``tuned_params``), and a hybrid tuned to ``cv`` 0 again with ``cv=3``. Per hybrid fit: the learned stacking weights ``(backbone_weight_,
-shrinkage_)`` (absent before issue 29's fix) and the mean fit wall time.
+(``tuned_params``), and a hybrid tuned to ``cv`` 0 again with ``cv=3``. Per hybrid fit:
+the learned stacking weights ``(backbone_weight_, shrinkage_)`` (absent before issue
+29's fix) and the mean fit wall time.
 
 Not a timed test. Prints one JSON object on its last line.
 
