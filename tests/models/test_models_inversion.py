@@ -11,6 +11,7 @@ import pytest
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models import Oracle, load_model, make_model
+from nirglucose.models._base import predict_input
 from nirglucose.models._inversion_solver import NUISANCES
 from nirglucose.models.hybrid import EBLGP, PhysicsInversionGP
 from nirglucose.models.inversion import PhysicsInversion
@@ -123,7 +124,12 @@ def test_hybrids_round_trip_and_learn_a_residual(paper, cls, tmp_path):
     m = cls(random_state=0, **params).fit(train)
     pred = m.predict(test)
     backbone = m.backbone_.predict(test)
-    assert np.isfinite(pred).all() and not np.allclose(pred, backbone)  # the GP adds
+    gp = m.residual_.predict(np.column_stack([m.schema_.stacked(predict_input(m, test)),
+                                              backbone]))
+    assert np.isfinite(pred).all() and not np.allclose(gp, 0.0)  # the GP learned a residual
+    # the prediction is the stack of the two (issue 29; weights in test_models_hybrid.py)
+    stack = m.y_mean_ + m.backbone_weight_ * (backbone - m.y_mean_) + m.shrinkage_ * gp
+    np.testing.assert_allclose(pred, stack, rtol=1e-12)
     back = load_model(m.save(tmp_path / "h.json"))
     np.testing.assert_allclose(back.predict(test), pred, rtol=1e-9)
     assert back.n_parameters == m.n_parameters
