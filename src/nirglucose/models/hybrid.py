@@ -145,8 +145,8 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
         mean has a smaller out-of-fold error than backbone plus weighted GP. [-]
     shrinkage_ : float
         Stacking weight of the GP's residual, in [0, 1]: 0 where its cross-fitted
-        predictions explain none of the residual. Both weights are 1 with too few
-        subjects for folds (the hybrid before issue 29). [-]
+        predictions explain none of the residual. Both weights are 1 without subject
+        ids or with fewer subjects than folds (the plain hybrid, as before issue 29). [-]
     """
 
     backbone_name = ""
