@@ -163,10 +163,15 @@ def test_bad_forward_parameters_raise_one_clear_error(paper, params):
 def test_registered_with_their_twins_training(paper, tmp_path):
     m = make_model("optimized-pinn-fm")
     assert isinstance(m, OptimizedPINNForward) and m.physics_form == "forward"
-    twin = tuned_params("original-pinn", "paper")
-    fm = tuned_params("original-pinn-fm", "paper")
+    # where the forward-model PINN was not tuned itself (lab), its twin's training
+    # settings without the twin's physics weight ...
+    twin = tuned_params("original-pinn", "lab")
+    fm = tuned_params("original-pinn-fm", "lab")
     assert "lambda_phys" not in fm
     assert fm == {k: v for k, v in twin.items() if k != "lambda_phys"}
+    # ... and where it was (paper, wearable), its own, physics weight included
+    own = tuned_params("original-pinn-fm", "paper")
+    assert "lambda_phys" in own and set(own) >= set(fm)
     fitted = OriginalPINNForward(max_epochs=2, random_state=0).fit(paper)
     fitted.save(tmp_path / "m.json")
     back = load_model(tmp_path / "m.json")
