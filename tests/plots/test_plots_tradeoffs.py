@@ -61,6 +61,20 @@ def test_physics_depth_one_bubble_per_model():
     assert ax.get_ylabel() == "RMSE [mg/dL]"
 
 
+def test_physics_depth_ticks_only_the_levels_drawn():
+    from nirglucose.report.figures import PHYSICS_DEPTH, PHYSICS_DEPTH_LABELS
+
+    # the forward-model PINNs sit between the features and the inversion
+    assert PHYSICS_DEPTH["ebl"] < PHYSICS_DEPTH["original-pinn-fm"] < PHYSICS_DEPTH["oracle"]
+    t = pd.DataFrame({"model": ["ebl", "original-pinn-fm"], "physics_depth": [4, 4.5],
+                      "rmse_mgdl": [13.6, 18.0], "n_parameters": [67, 20_000]})
+    ax = Figure().add_subplot()
+    plot_physics_depth(t, depth_labels=PHYSICS_DEPTH_LABELS, ax=ax)
+    assert list(ax.get_xticks()) == [4.0, 4.5]
+    assert [x.get_text() for x in ax.get_xticklabels()] == [
+        PHYSICS_DEPTH_LABELS[4], PHYSICS_DEPTH_LABELS[4.5]]
+
+
 def test_efficiency_front_line():
     ax = Figure().add_subplot()
     out = plot_efficiency([56, 17, 163_000, 3_713], [13.6, 20.0, 14.6, 35.1], MODELS,

@@ -206,7 +206,7 @@ def figure_radar_grid(scores: pd.DataFrame, *, ncols: int = 3) -> Figure:
 def plot_physics_depth(
     table: pd.DataFrame,
     *,
-    depth_labels: Mapping[int, str] | None = None,
+    depth_labels: Mapping[float, str] | None = None,
     references: Mapping[str, float] | None = None,
     title: str | None = None,
     ax: Axes | None = None,
@@ -220,7 +220,7 @@ def plot_physics_depth(
         ``rmse_mgdl`` and ``n_parameters``; optionally ``on_front`` (bool: on the
         parameters–RMSE Pareto front, computed by the caller) and ``x_offset`` (a
         horizontal nudge separating models of the same depth). [-, -, mg/dL, -]
-    depth_labels : mapping of int to str, optional
+    depth_labels : mapping of float to str, optional
         Tick label of each depth level.
     references : mapping of str to float, optional
         Reference rows (the oracle's bound, the no-skill mean) drawn as horizontal
@@ -243,7 +243,8 @@ def plot_physics_depth(
     pmax = float(np.nanmax(t["n_parameters"].to_numpy(float))) if len(t) else 1.0
     front = t["on_front"].to_numpy(bool) if "on_front" in t else np.zeros(len(t), bool)
     _draw_bubbles(ax, t, pmax, front)
-    levels = sorted(depth_labels) if depth_labels else sorted(set(t["physics_depth"]))
+    present = set(t["physics_depth"])  # a level no drawn model has gets no tick
+    levels = sorted(v for v in (depth_labels or present) if v in present)
     ax.set_xticks(levels)
     ax.set_xticklabels([(depth_labels or {}).get(v, str(v)) for v in levels], fontsize=7.5)
     if levels:  # most physics on the left, as the study orders its methods
