@@ -21,16 +21,15 @@ from ..small_data import significance_withheld
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
-    LAMBDA_ROW,
     METRIC_COLUMNS,
     NO_PHYSICS,
     ORACLE,
     PREDICTION_COLUMNS,
     BenchmarkResult,
-    ablation_base,
 )
 from .conformal import LEVELS, coverage_summary, out_of_fold_intervals
-from .reference import MODEL_LABELS, STUDY_ORDER
+from .finding import label
+from .reference import STUDY_ORDER
 from .stats import cluster_bootstrap_metrics, compare_models
 
 __all__ = ["aggregate", "count_invalid", "fallback_mgdl", "scored"]
@@ -230,7 +229,7 @@ def _metric_row(
         **point,
         **{k: v for k, v in ci.items() if "_ci_" in k},
         "model": name,
-        "label": _label(name),
+        "label": label(name),
         "n_parameters": int(first["n_parameters"]),
         "latency_single_ms": t.get("latency_single_ms", np.nan),
         "latency_single_p90_ms": t.get("latency_single_p90_ms", np.nan),
@@ -248,15 +247,6 @@ def _metric_row(
         "coverage80_pct": cov[0.8]["coverage"],
         "width80_mgdl": cov[0.8]["width"],
     }
-
-
-def _label(name: str) -> str:
-    base = ablation_base(name)
-    if base is None:
-        return MODEL_LABELS.get(name, name)
-    if name.endswith(NO_PHYSICS):
-        return f"{MODEL_LABELS.get(base, base)} (no physics)"
-    return f"{MODEL_LABELS.get(base, base)} (λ = {name.split(LAMBDA_ROW)[1]})"
 
 
 def _verdict(pair: dict[str, Any], row: pd.Series | None) -> str:

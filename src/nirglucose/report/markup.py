@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from ..evaluation.reference import MODEL_LABELS
 from ..formatting import format_number
 
 if TYPE_CHECKING:
@@ -110,11 +111,9 @@ def markdown_to_html(text: str, *, skip_tables: bool = False, skip_h1: bool = Fa
 
 def model_label(model: str, metrics_row: pd.Series | None = None) -> str:
     """The model's label: the run's own (``metrics.csv``'s ``label``) or the plots'."""
-    from ..plots.style import model_label as plain_label  # matplotlib: lazy
-
     if metrics_row is not None and isinstance(metrics_row.get("label"), str):
         return metrics_row["label"]
-    return plain_label(model)
+    return MODEL_LABELS.get(model, model)
 
 
 def user_data_md(md: str) -> str:

@@ -17,11 +17,10 @@ from pathlib import Path
 import pandas as pd
 
 from ..dataset import atomic_write
-from ..evaluation.reference import MODEL_LABELS
 from ..evaluation.wear_calibration import apply_schedule
 from ..exceptions import DataError
 from ..formatting import format_number
-from ..plots.style import figure_bytes
+from ..plots.style import figure_bytes, model_label
 from ..plots.wear import figure_wear_traces, plot_error_by_day
 
 __all__ = ["is_wear_results", "build_wear_report"]
@@ -39,10 +38,6 @@ def is_wear_results(directory: str | Path) -> bool:
     """Whether ``directory`` holds a worn run's files (and no snapshot benchmark)."""
     d = Path(directory)
     return (d / "wear_schedules.csv").is_file() and not (d / "metrics.json").is_file()
-
-
-def _label(model: str) -> str:
-    return MODEL_LABELS.get(model, model)
 
 
 def _img(fig, alt: str) -> str:
@@ -67,7 +62,8 @@ def _findings(s: pd.DataFrame, st: pd.DataFrame) -> list[str]:
     models = raw[~raw["model"].isin(_REFERENCE)]
     if len(models):
         best = models.loc[models["rmse_mgdl"].idxmin()]
-        out.append(f"Best model and schedule: {_label(best['model'])} with {best['schedule']}, "
+        out.append(f"Best model and schedule: {model_label(best['model'])} with "
+                   f"{best['schedule']}, "
                    f"RMSE {format_number(best['rmse_mgdl'])} mg/dL "
                    f"[{format_number(best['rmse_ci_low'])}, {format_number(best['rmse_ci_high'])}]"
                    f" ({n_subj} subjects, subject bootstrap).")
@@ -83,7 +79,8 @@ def _findings(s: pd.DataFrame, st: pd.DataFrame) -> list[str]:
         if "factory" in r.index and len(r) > 1:
             b = r.drop(index="factory")["rmse_mgdl"].idxmin()
             overlap = r.loc[b, "rmse_ci_high"] >= r.loc["factory", "rmse_ci_low"]
-            out.append(f"{_label(model)}: factory {format_number(r.loc['factory', 'rmse_mgdl'])}"
+            factory = format_number(r.loc["factory", "rmse_mgdl"])
+            out.append(f"{model_label(model)}: factory {factory}"
                        f", best schedule {b} {format_number(r.loc[b, 'rmse_mgdl'])} mg/dL"
                        + (" (intervals overlap: not shown to differ)." if overlap else "."))
     sm = s.pivot_table(index=["model", "schedule"], columns="variant", values="rmse_mgdl")
@@ -96,7 +93,7 @@ def _findings(s: pd.DataFrame, st: pd.DataFrame) -> list[str]:
     if len(passed):
         top = passed.loc[passed["icgm_passed"].idxmax()]
         out.append(f"iCGM criteria: at most {int(top['icgm_passed'])} of "
-                   f"{int(top['icgm_criteria'])} met by a model ({_label(top['model'])}, "
+                   f"{int(top['icgm_criteria'])} met by a model ({model_label(top['model'])}, "
                    f"{top['schedule']}).")
     low = int(st["n_below_70"].max())
     out.append(f"{low} scored readings are below 70 mg/dL"
@@ -111,11 +108,11 @@ def _figures(pred: pd.DataFrame, by_day: pd.DataFrame, model: str, sched: str) -
     traces = pd.concat([g, apply_schedule(g, sched)], axis=1)
     return {
         "traces": (figure_wear_traces(traces, model=model, schedule=sched),
-                   f"Reference and {_label(model)} calibrated {sched} over the days for three "
+                   f"Reference and {model_label(model)} calibrated {sched} over the days for three "
                    "held-out subjects; fingersticks marked"),
         "by_day": (plot_error_by_day(by_day[(by_day["model"] == model)
                                             & (by_day["variant"] == "raw")]).figure,
-                   f"{_label(model)}: RMSE by whole days since the last calibration, per "
+                   f"{model_label(model)}: RMSE by whole days since the last calibration, per "
                    "schedule"),
     }
 
@@ -172,7 +169,7 @@ def build_wear_report(results_dir: str | Path, out_path: str | Path, *,
         f"{_table(s)}"
         "<h2>The standards of a worn monitor</h2>"
         f"{_table(st)}"
-        f"<h3>iCGM criteria: {html.escape(_label(model))}, {html.escape(sched)}</h3>"
+        f"<h3>iCGM criteria: {html.escape(model_label(model))}, {html.escape(sched)}</h3>"
         f"{_table(crit.drop(columns=['model', 'variant', 'schedule']))}"
         "<p>Agreement rates are judged on their one-sided 95 % lower bound, clustered by "
         "subject (21 CFR 862.1355 special controls).</p>"
