@@ -20,8 +20,10 @@ Protocol (a hold-out check: these points and seeds took part in no choice of the
   group, in ``--workers`` processes; each (group, seed) solve is saved in ``--work``
   (default ``optics-reference/`` in the nirglucose cache directory) as it finishes, so
   an interrupted run resumes;
-* the table: the default ``rte-lut`` table, from ``NIRGLUCOSE_BENCH_LUT_CACHE`` when set
-  (else the user cache; a cold cache builds it: about 2 hours of CPU).
+* the table: the ``rte-lut`` table of ``--grid`` (default ``default``; ``swir`` for
+  1160-1700 nm, whose results are also given per dermal absorption bin), from
+  ``NIRGLUCOSE_BENCH_LUT_CACHE`` when set (else the user cache; a cold cache builds it:
+  about 2 hours of CPU for the default grid).
 
 The default (8 + 1 groups x 12 points, 4 seeds x 4 000 000 photons: reference standard
 error about 0.15 %) takes about 150 CPU-minutes on the development machine (measured:
@@ -30,8 +32,8 @@ about 4 CPU-minutes a group and seed, one Monte Carlo run each).
 
 Usage::
 
-    python benchmarks/optics_reference.py [--groups 8] [--thin-groups 1] [--per-group 12]
-        [--rng 31] [--seeds 1001,1002,1003,1004] [--photons 4000000] [--workers 2]
+    python benchmarks/optics_reference.py [--grid default] [--groups 8] [--thin-groups 1]
+        [--per-group 12] [--rng 31] [--seeds 1001,1002,1003,1004] [--photons 4000000] [--workers 2]
         [--work DIR]
 
 Prints one JSON object on its last line: table / reference - 1 for R over all points,
@@ -56,6 +58,11 @@ RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 #: Upper end of the thin-skin corner of the box (skin_transport_thickness), where the
 #: subcutis takes much of the light and the table is least accurate (README). [-]
 THIN_TAU = 0.6
+
+#: Dermal absorption bins of the summary [1/cm]: the default grid's box ends at 2; in
+#: the ``swir`` box the reference's own noise grows steeply with absorption (fewer
+#: photons reach rho with a short enough path), so its errors are shown per bin.
+MUA_DERMIS_BINS = (0.0, 2.0, 8.0, 14.0, np.inf)
 
 
 def _use_bench_cache() -> None:
@@ -85,12 +92,12 @@ def _points(lut, groups: int, per_group: int, rng: int, thin_groups: int,
 
 def _solve(task: tuple) -> tuple[int, int]:
     """One (group, seed) reference solve, written atomically to its file."""
-    lut_dir, group_pts, photons, seed, path = task
+    lut_dir, grid, group_pts, photons, seed, path = task
     os.environ["NIRGLUCOSE_CACHE"] = lut_dir
     from nirglucose.optics import lut as L
     from nirglucose.optics.reference import lut_checks as LV
 
-    lut = L.get_lut(RHO_CM, T_EPI_CM, N_TISSUE)  # memoised: read once per worker
+    lut = L.get_lut(RHO_CM, T_EPI_CM, N_TISSUE, grid=grid)  # memoised: read once per worker
     r, se, paths = LV.direct_solve(lut, group_pts, n_photons=photons, seed=seed)
     tmp = Path(str(path) + ".tmp.npz")
     np.savez(tmp, r=r, se=se, paths=paths)
@@ -107,6 +114,7 @@ def _reference(runs: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--grid", default="default", help="the table's grid (LUT_GRIDS)")
     ap.add_argument("--groups", type=int, default=8)
     ap.add_argument("--thin-groups", type=int, default=1,
                     help=f"extra groups drawn in the thin-skin corner (tau < {THIN_TAU})")
@@ -136,16 +144,19 @@ def main(argv: list[str] | None = None) -> dict:
     _use_bench_cache()
     # the work directory checked before the table, whose cold build takes hours
     work = work_dir(ap, args.work, L.cache_dir() / "optics-reference")
-    lut = L.load_or_build_lut(RHO_CM, T_EPI_CM, N_TISSUE)
+    if args.grid not in L.LUT_GRIDS:
+        ap.error(f"--grid {args.grid!r}: valid grids are {', '.join(L.LUT_GRIDS)}")
+    lut = L.load_or_build_lut(RHO_CM, T_EPI_CM, N_TISSUE, grid=args.grid)
     n_groups = args.groups + args.thin_groups
     pts, group = _points(lut, args.groups, args.per_group, args.rng, args.thin_groups)
 
     def path(g: int, seed: int) -> Path:
-        return work / (f"ref-rng{args.rng}-g{g}of{args.groups}+{args.thin_groups}"
+        grid = "" if args.grid == "default" else f"{args.grid}-"
+        return work / (f"ref-{grid}rng{args.rng}-g{g}of{args.groups}+{args.thin_groups}"
                        f"x{args.per_group}-p{args.photons}-s{seed}.npz")
 
-    tasks = [(str(L.cache_dir()), {k: v[group == g] for k, v in pts.items()}, args.photons, seed,
-              path(g, seed))
+    tasks = [(str(L.cache_dir()), args.grid, {k: v[group == g] for k, v in pts.items()},
+              args.photons, seed, path(g, seed))
              for seed in seeds for g in range(n_groups) if not path(g, seed).exists()]
     if tasks:
         with ProcessPoolExecutor(max_workers=args.workers) as pool:
@@ -182,7 +193,12 @@ def main(argv: list[str] | None = None) -> dict:
         }
 
     worst = np.argsort(-np.abs(err))[:5]
+    mua_d = pts["mua_dermis_per_cm"]
+    by_mua = {f"{lo:g}-{hi:g}": summary((mua_d >= lo) & (mua_d < hi))
+              for lo, hi in zip(MUA_DERMIS_BINS[:-1], MUA_DERMIS_BINS[1:], strict=True)
+              if np.any((mua_d >= lo) & (mua_d < hi))}
     return {
+        "grid": args.grid,
         "table_key": lut.key,
         "seeds": seeds,
         "photons_per_seed": args.photons,
@@ -192,6 +208,7 @@ def main(argv: list[str] | None = None) -> dict:
         "all": summary(np.ones(err.size, dtype=bool)),
         "thin_skin": summary(thin) if thin.any() else None,
         "rest": summary(~thin),
+        "by_mua_dermis_per_cm": by_mua,
         "worst": [{"error": round(float(err[i]), 5),
                    "reference_rel_se": round(float(rel_se[i]), 5),
                    "skin_transport_thickness": round(float(tau[i]), 3),

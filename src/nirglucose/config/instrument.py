@@ -86,6 +86,15 @@ class OpticsConfig(_Model):
             "per probe geometry, cached) or three-layer diffusion (about 40 s, smooth)."
         ),
     )
+    lut_grid: Literal["auto", "default", "swir"] = Field(
+        "auto",
+        description=(
+            "Box of the rte-lut model's table: 'default' covers LED bands in 700-1320 nm, "
+            "'swir' those in 1160-1700 nm (its own table, about 25 min to build); 'auto' "
+            "takes $NIRGLUCOSE_LUT_GRID where set, else for each LED the grid that covers "
+            "its band."
+        ),
+    )
 
 
 class HardwareConfig(_Model):

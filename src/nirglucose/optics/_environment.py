@@ -13,7 +13,8 @@ from pathlib import Path
 
 from ..exceptions import ConfigError
 
-__all__ = ["mc_threads_from_env", "cache_dir_from_env", "lut_grid_from_env"]
+__all__ = ["mc_threads_from_env", "cache_dir_from_env", "lut_grid_from_env",
+           "lut_grid_named_in_env"]
 
 
 def mc_threads_from_env() -> int | None:
@@ -52,4 +53,9 @@ def cache_dir_from_env() -> Path:
 
 def lut_grid_from_env() -> str:
     """The look-up-table grid named by ``$NIRGLUCOSE_LUT_GRID``, else ``"default"``."""
-    return os.environ.get("NIRGLUCOSE_LUT_GRID") or "default"
+    return lut_grid_named_in_env() or "default"
+
+
+def lut_grid_named_in_env() -> str | None:
+    """The look-up-table grid named by ``$NIRGLUCOSE_LUT_GRID``, else None."""
+    return os.environ.get("NIRGLUCOSE_LUT_GRID") or None

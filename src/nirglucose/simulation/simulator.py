@@ -70,18 +70,29 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
     )
     lut = None
     if cfg.optics.model == "rte-lut":
-        from ..optics import lut as lut_mod
-
-        lut = lut_mod.node_lut(
-            lut_mod.get_lut(
-                sep_cm,
-                cfg.optics.epidermis_thickness_mm / 10.0,
-                cfg.optics.tissue_refractive_index,
-                solver=cfg.optics.lut_solver,
-            ),
-            optics["musp_subcutis"][0] / optics["musp_dermis"][0],
-        )
+        lut = _node_tables(cfg, spectra, optics["musp_subcutis"][0] / optics["musp_dermis"][0])
     return _Tables(spectra, geometry, lut)
+
+
+def _node_tables(cfg: ScenarioConfig, spectra, ratio: np.ndarray):
+    """The ``rte-lut`` model's node table: one for all LEDs where one grid covers their
+    bands, else a tuple with one per LED (``optics.lut_grid = "auto"``: bands on both
+    sides of 1320 nm; :func:`~nirglucose.optics.lut.lut_grids_for_bands`)."""
+    from ..optics import lut as lut_mod
+
+    named: str | None = cfg.optics.lut_grid
+    if named == "auto":
+        named = lut_mod.lut_grid_named_in_env()
+    grids = (named,) * len(ratio) if named else lut_mod.lut_grids_for_bands(spectra.nodes_nm)
+
+    def table(name: str, q: np.ndarray):
+        return lut_mod.node_lut(lut_mod.get_lut(
+            cfg.optics.source_detector_mm / 10.0, cfg.optics.epidermis_thickness_mm / 10.0,
+            cfg.optics.tissue_refractive_index, grid=name, solver=cfg.optics.lut_solver), q)
+
+    if len(set(grids)) == 1:
+        return table(grids[0], ratio)
+    return tuple(table(name, ratio[i:i + 1]) for i, name in enumerate(grids))
 
 
 #: Rows per optics slice: the (rows, n_led, n_points) temporaries then fit in the

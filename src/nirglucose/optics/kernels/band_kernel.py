@@ -259,7 +259,8 @@ def band_detected_fraction_lut(
     (:func:`nirglucose.optics.kernels.lut_kernel.node_reflectance`), then the band weights:
     equal (to rounding) to weighting ``detected_fraction('rte-lut', tissue_optics(...))``
     over each band. Parameters as :func:`band_detected_fraction`, with ``node_lut`` the
-    :class:`~nirglucose.optics.lut.NodeLUT` of the scenario's band nodes and
+    :class:`~nirglucose.optics.lut.NodeLUT` of the scenario's band nodes (or a tuple of
+    one per LED, each for that LED's nodes, where the bands need different grids) and
     ``detector_area_cm2`` the photodiode area [cm^2].
 
     Raises
@@ -268,9 +269,12 @@ def band_detected_fraction_lut(
         If a snapshot's optics fall outside the table (the message names the axis).
     """
     n_led, n_pts = spectra.nodes_nm.shape
-    if tuple(node_lut.node_shape) != (n_led, n_pts):
-        raise ConfigError(f"the node table is for nodes {node_lut.node_shape}, "
-                          f"the LED bands have {(n_led, n_pts)}")
+    tables = node_lut if isinstance(node_lut, tuple) else (node_lut,)
+    want = [(1, n_pts)] * n_led if isinstance(node_lut, tuple) else [(n_led, n_pts)]
+    if [tuple(t.node_shape) for t in tables] != want:
+        raise ConfigError(f"the node tables are for nodes "
+                          f"{[tuple(t.node_shape) for t in tables]}, the LED bands have "
+                          f"{(n_led, n_pts)}")
 
     def vec(a, shape):
         return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=np.float64), shape))
@@ -293,8 +297,14 @@ def band_detected_fraction_lut(
         mua_d, mua_s, mua_e, musp_d, musp_s,
     )
     t_cm = vec(skin_thickness_cm, (n,))
-    out = _table_reflectance(node_lut, (n_led, n_pts, n), t_cm,
-                             mua_d, mua_s, mua_e, musp_d, musp_s)
+    # one table for every LED, or one per LED (node-major inputs: LED i's rows are one
+    # contiguous block)
+    shape = (n_led, n_pts, n) if len(tables) == 1 else (1, n_pts, n)
+    per = k * n // len(tables)
+    out = np.concatenate([
+        _table_reflectance(t, shape, t_cm, *(a[i * per:(i + 1) * per] for a in (
+            mua_d, mua_s, mua_e, musp_d, musp_s)))
+        for i, t in enumerate(tables)])
     weights = np.asarray(spectra.weights) * float(detector_area_cm2)
     return (weights.reshape(k, 1) * out.reshape(k, n)).reshape(n_led, n_pts, n).sum(axis=1).T
 

@@ -98,14 +98,16 @@ References
 from __future__ import annotations
 
 from .build import build_lut
-from .cache import cache_dir, get_lut, load_or_build_lut
+from .cache import cache_dir, get_lut, load_or_build_lut, lut_grid_named_in_env
 from .grid import (
     LUT_AXES,
+    LUT_GRID_WAVELENGTHS_NM,
     LUT_GRIDS,
     LUT_MC_PHOTONS,
     LUT_MC_SETTINGS,
     LUT_SOLVERS,
     SkinLUT,
+    lut_grids_for_bands,
     lut_key,
 )
 from .interpolate import (
@@ -119,10 +121,13 @@ from .interpolate import (
 __all__ = [
     "LUT_AXES",
     "LUT_GRIDS",
+    "LUT_GRID_WAVELENGTHS_NM",
+    "lut_grids_for_bands",
     "SkinLUT",
     "NodeLUT",
     "build_lut",
     "cache_dir",
+    "lut_grid_named_in_env",
     "lut_key",
     "load_or_build_lut",
     "get_lut",

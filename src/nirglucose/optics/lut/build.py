@@ -26,7 +26,6 @@ from .grid import (
     _SCATTERING,
     _SOLVED_AXES,
     LUT_AXES,
-    LUT_MC_SETTINGS,
     SkinLUT,
     _check_solver,
     _forward,
@@ -34,6 +33,7 @@ from .grid import (
     _inverse,
     _mc_photons,
     _resolve_grid,
+    grid_mc_settings,
     lut_key,
 )
 
@@ -57,14 +57,15 @@ def _mua_ref(grid: dict) -> float:
 
 def _mc_run_kwargs(grid: dict, geo: dict, n_photons: int) -> dict:
     """Keyword arguments of :func:`~nirglucose.optics.kernels.mc_white.white_mc_run` for a table."""
+    settings = grid_mc_settings(grid)
     return {
         "n_photons": n_photons,
-        "seed": int(LUT_MC_SETTINGS["seed"]),
+        "seed": int(settings["seed"]),
         "mua_ref": _mua_ref(grid),
-        "g": float(LUT_MC_SETTINGS["anisotropy"]),
+        "g": float(settings["anisotropy"]),
         "n_tissue": geo["n_tissue"],
         "n_ambient": geo["n_ambient"],
-        "path_split": float(LUT_MC_SETTINGS["path_split"]),
+        "path_split": float(settings["path_split"]),
     }
 
 
@@ -230,7 +231,7 @@ def _node_values(solver: str, grid: dict, geo: dict, coords: list, splits: list,
     1996 for the scaled white runs behind :func:`_monte_carlo_nodes`).
     """
     names = list(LUT_AXES)
-    degrees = LUT_MC_SETTINGS["residual_fit_degrees"]
+    degrees = grid_mc_settings(grid)["residual_fit_degrees"]
     if solver == "monte-carlo" and degrees is None:  # raw Monte Carlo nodes, splined
         values = _monte_carlo_nodes(ax, grid, geo, photons)
         solved = {}
@@ -398,7 +399,7 @@ def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int,
     independent node values (``benchmarks/optics_fit_degrees.py``).
     """
     musp = ax["musp_dermis_per_cm"]
-    rho, half = geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"])
+    rho, half = geo["rho_cm"], float(grid_mc_settings(grid)["half_width_cm"])
     if not half < rho:
         raise ConfigError(f"separation_cm = {rho!r} must exceed the detector kernel's "
                           f"half-width {half!r} [cm]")

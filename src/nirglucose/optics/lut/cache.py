@@ -21,13 +21,23 @@ from pathlib import Path
 
 import numpy as np
 
-from .._environment import cache_dir_from_env, lut_grid_from_env, mc_threads_from_env
+from .._environment import (
+    cache_dir_from_env,
+    lut_grid_from_env,
+    lut_grid_named_in_env,
+    mc_threads_from_env,
+)
 from .build import build_lut
 from .grid import SkinLUT, _mc_photons, _resolve_grid, lut_key
 
-__all__ = ["mc_threads_from_env", "cache_dir", "load_or_build_lut", "get_lut"]
+__all__ = ["mc_threads_from_env", "lut_grid_named_in_env", "cache_dir", "load_or_build_lut",
+           "get_lut"]
 
 _log = logging.getLogger(__name__)
+
+#: CPU time of a Monte Carlo build of the named grids, measured on the development
+#: machine (2-core AMD EPYC; ``docs/user_guide/optics.md``).
+_BUILD_CPU = {"default": "2 hours", "swir": "1 hour"}
 
 
 def cache_dir() -> Path:
@@ -118,10 +128,12 @@ def load_or_build_lut(
     if solver == "monte-carlo":  # minutes to hours: say so where it shows
         spec = _resolve_grid(grid)
         runs = spec["musp_ratio"][2] * spec["skin_transport_thickness"][2]
-        _log.warning("building the rte-lut skin table %s by Monte Carlo: %d runs of %d "
-                     "photons (the default grid: about 2 hours of CPU), once per probe "
-                     "geometry, cached in %s; optics.lut_solver=diffusion builds one in "
-                     "about 40 s", key, runs, _mc_photons(grid, None), path.parent)
+        name = grid if isinstance(grid, str) else "custom"
+        cost = f" (about {_BUILD_CPU[name]} of CPU)" if name in _BUILD_CPU else ""
+        _log.warning("building the rte-lut skin table %s (grid %s) by Monte Carlo: %d runs "
+                     "of %d photons%s, once per probe geometry, cached in %s; "
+                     "optics.lut_solver=diffusion builds one in about 40 s", key, name, runs,
+                     _mc_photons(grid, None), cost, path.parent)
     else:
         _log.info("building the skin LUT %s (grid %s, solver %s)", key,
                   grid if isinstance(grid, str) else "custom", solver)

@@ -15,7 +15,7 @@ import json
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ... import portable as pm
 from ...exceptions import ConfigError
@@ -27,8 +27,12 @@ __all__ = [
     "LUT_GRIDS",
     "LUT_MC_PHOTONS",
     "LUT_MC_SETTINGS",
+    "LUT_MC_GRID_SETTINGS",
     "LUT_SOLVERS",
+    "LUT_GRID_WAVELENGTHS_NM",
     "SkinLUT",
+    "grid_mc_settings",
+    "lut_grids_for_bands",
     "lut_key",
 ]
 
@@ -60,10 +64,20 @@ LUT_AXES: dict[str, tuple[str, str]] = {
 #: tau = 1) and the ratio axis are not splined (:data:`_SOLVED_AXES`): the diffusion
 #: model is solved at each of their refined nodes, and the Monte Carlo correction
 #: (:func:`_residual_fit`) evaluated there. The
-#: ``default`` box covers every LED in 700-1300 nm (not bands above about 1340 nm, where
+#: ``default`` box covers every LED band in 700-1320 nm (not bands above about 1340 nm, where
 #: the dermis absorbs more than 2 /cm and fat scatters more than 0.85 x skin),
 #: Fitzpatrick I-VI, the physiology
 #: presets and skin 0.4-4.2 mm; ``tiny`` covers the same box coarsely, for tests.
+#: ``swir`` covers LED bands in 1160-1700 nm (``data/optics/SOURCES.md``, "Above 1300
+#: nm"): the dermis absorbs 0.7-26 /cm there (water: the band tails of a 1350 or
+#: 1550 nm LED reach into the 1450 nm peak), the subcutis 0.3-8 /cm (fat's 1210 nm band,
+#: water), the epidermis at most about 7 /cm for the presets' melanin (melanosome
+#: absorption falls as lambda^-3.5), skin mus' 5.8-14.3 /cm (glucose lowers it by up to
+#: 29 % at 400 mg/dL under the presets' signal gain of 12.5) and the fat/skin mus' ratio
+#: 0.75-1.00 (Jacques 2013's two power laws). :data:`LUT_GRID_WAVELENGTHS_NM` says which
+#: grid covers which LED bands; every preset's skin through 100 nm wide bands at 1350,
+#: 1450, 1550 and 1650 nm falls inside ``swir`` (``tests/optics/test_optics_lut_swir.py``).
+#: ``tiny-swir`` is its coarse twin, for tests.
 LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
     "default": {
         "musp_dermis_per_cm": (7.0, 30.0, 7, 3),
@@ -81,15 +95,86 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
         "mua_epidermis_per_cm": (0.0, 35.0, 2, 1),
         "skin_transport_thickness": (0.25, 13.0, 3, 1),
     },
+    "swir": {
+        "musp_dermis_per_cm": (5.5, 14.5, 5, 2),
+        "musp_ratio": (0.74, 1.03, 3, 3),
+        "mua_dermis_per_cm": (0.5, 26.0, 9, 2),
+        "mua_subcutis_per_cm": (0.25, 8.0, 6, 2),
+        "mua_epidermis_per_cm": (0.0, 10.0, 4, 2),
+        "skin_transport_thickness": (0.25, 6.5, 9, 2),
+    },
+    "tiny-swir": {
+        "musp_dermis_per_cm": (5.5, 14.5, 2, 1),
+        "musp_ratio": (0.74, 1.03, 2, 1),
+        "mua_dermis_per_cm": (0.5, 26.0, 2, 1),
+        "mua_subcutis_per_cm": (0.25, 8.0, 2, 1),
+        "mua_epidermis_per_cm": (0.0, 10.0, 2, 1),
+        "skin_transport_thickness": (0.25, 6.5, 3, 1),
+    },
 }
+
+
+#: LED band nodes each named grid covers [nm], for ``optics.lut_grid = "auto"``
+#: (:func:`lut_grids_for_bands`). ``default`` ends below where nominal dermis reaches the
+#: box's 2 /cm (1343 nm), ``swir`` starts above where skin mus' reaches its 14.5 /cm
+#: (1140 nm); the 20 nm margins leave room for wetter skin, glucose and the LEDs'
+#: thermal shift (every preset, ``tests/optics/test_optics_lut_swir.py``).
+LUT_GRID_WAVELENGTHS_NM: dict[str, tuple[float, float]] = {
+    "default": (700.0, 1320.0),
+    "swir": (1160.0, 1700.0),
+}
+
+
+def lut_grids_for_bands(nodes_nm: ArrayLike) -> tuple[str, ...]:
+    """The named grid of each LED band: the first of :data:`LUT_GRID_WAVELENGTHS_NM` whose
+    wavelengths hold every node of the band.
+
+    Parameters
+    ----------
+    nodes_nm : array_like
+        (n_led, n_pts): the band nodes of each LED. [nm]
+
+    Returns
+    -------
+    tuple of str
+        One grid name per LED.
+
+    Raises
+    ------
+    ConfigError
+        If a band is wider than any one grid covers (one line naming the LED).
+
+    Examples
+    --------
+    >>> lut_grids_for_bands([[830.0, 850.0, 870.0], [1500.0, 1550.0, 1600.0]])
+    ('default', 'swir')
+    """
+    out = []
+    for i, band in enumerate(np.atleast_2d(np.asarray(nodes_nm, dtype=float))):
+        lo, hi = float(band.min()), float(band.max())
+        name = next((g for g, (a, b) in LUT_GRID_WAVELENGTHS_NM.items()
+                     if a <= lo and hi <= b), None)
+        if name is None:
+            spans = ", ".join(f"{g} {a:g}-{b:g} nm" for g, (a, b) in
+                              LUT_GRID_WAVELENGTHS_NM.items())
+            raise ConfigError(
+                f"LED {i + 1}'s band spans {lo:.0f}-{hi:.0f} nm, wider than one rte-lut table "
+                f"covers ({spans}); narrow its fwhm_nm or use optics.model = 'diffusion'")
+        out.append(name)
+    return tuple(out)
 
 
 #: Monte Carlo photons per (musp_ratio, skin_transport_thickness) node, by grid name
 #: (a custom grid takes the default grid's unless :func:`build_lut` is told). The
 #: default's 3.2 million: at 1.6 million the table's own noise exceeds 1 % at about 1 %
 #: of random points of the box (0.13 % at 3.2 million; two tables from disjoint halves
-#: of the photons compared, README). [-]
-LUT_MC_PHOTONS: dict[str, int] = {"default": 3_200_000, "tiny": 8_000}
+#: of the photons compared, README). ``swir``'s 12.8 million: its kernel is half as
+#: wide (:data:`LUT_MC_GRID_SETTINGS`) and fewer photons reach rho the more the dermis
+#: absorbs (a node's standard error of R, 3.2 million photons: 0.6 % at a dermal mua of
+#: 4 /cm, 0.9 % at 8, 1.6 % at 12, 3.4 % at 16, 7.4 % at 20 /cm; halved by 4 x the
+#: photons). [-]
+LUT_MC_PHOTONS: dict[str, int] = {"default": 3_200_000, "tiny": 8_000,
+                                   "swir": 12_800_000, "tiny-swir": 8_000}
 
 
 #: Settings of the white Monte Carlo behind the table (:mod:`nirglucose.optics.kernels.mc_white`;
@@ -111,6 +196,21 @@ LUT_MC_SETTINGS: dict = {
     "path_split": 300.0,
     "anisotropy": mc_white.SKIN_ANISOTROPY,
     "residual_fit_degrees": (4, 2, 5),
+}
+
+
+#: Settings of named grids that differ from :data:`LUT_MC_SETTINGS` (in their cache
+#: key). ``swir``: R(rho) falls about 50 times faster per cm at a dermal mua of 26 /cm
+#: than at 2 /cm, and the fourth-order kernel's O(h^4) bias grows with it: over
+#: rho +- 0.75 mm it reads R 1.6 % low at 8 /cm, 3.6 % at 12 /cm and 8 % at 20 /cm
+#: against rho +- 0.35 mm, which agrees with rho +- 0.25 mm within the noise (one
+#: 3 200 000-photon run, mus' 9 /cm, tau 1.5, ratio 0.9; the noise grows as
+#: h^-1/2). Its residual fit has degrees (3, 2, 4), one less than the default along
+#: mus' (5 solve nodes instead of 7) and along ln tau (9 instead of 12), so the fit
+#: still averages over more nodes than it has terms; not chosen by cross-validation.
+LUT_MC_GRID_SETTINGS: dict[str, dict] = {
+    name: {"half_width_cm": 0.035, "residual_fit_degrees": (3, 2, 4)}
+    for name in ("swir", "tiny-swir")
 }
 
 
@@ -218,6 +318,13 @@ class SkinLUT:
                 for k, v in ((k, self.axis_nodes(k)) for k in LUT_AXES)}
 
 
+def grid_mc_settings(grid: str | dict) -> dict:
+    """The Monte Carlo settings of a grid: :data:`LUT_MC_SETTINGS`, with a named grid's own
+    (:data:`LUT_MC_GRID_SETTINGS`; a spec takes those of the named grid it equals)."""
+    name = grid if isinstance(grid, str) else _grid_name(grid)
+    return {**LUT_MC_SETTINGS, **LUT_MC_GRID_SETTINGS.get(name or "default", {})}
+
+
 def _check_grid(grid: dict) -> None:
     if set(grid) != set(LUT_AXES):
         raise ConfigError(f"a LUT grid needs exactly the axes {list(LUT_AXES)}, got {list(grid)}")
@@ -293,7 +400,7 @@ def lut_key(
         } if solver == "diffusion" else {
             "monte_carlo": "white-mc-1",  # mc_white's algorithm; bump when it changes
             "n_photons": _mc_photons(grid, n_photons),
-            **LUT_MC_SETTINGS,
+            **grid_mc_settings(grid),
             "batch_photons": mc_white._BATCH_PHOTONS,
             "split_survival": mc_white._SPLIT_SURVIVAL,
             "min_skin_over_epidermis": _MIN_SKIN_OVER_EPIDERMIS,

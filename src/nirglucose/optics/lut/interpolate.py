@@ -81,7 +81,8 @@ def _cell_coords(
             hint = " (mus'_dermis x skin thickness)" if name == "skin_transport_thickness" else ""
             raise ConfigError(
                 f"{name}{hint} = {float(bad):.6g} is outside the look-up table; valid range is "
-                f"[{lo:.6g}, {hi:.6g}] [{unit}] (use another grid or forward model)"
+                f"[{lo:.6g}, {hi:.6g}] [{unit}] (optics.lut_grid: 'default' covers LED bands "
+                f"in 700-1340 nm, 'swir' 1350-1700 nm; or use another forward model)"
             )
         j = pos.astype(np.intp)
         np.clip(j, 0, n - 2, out=j)

@@ -23,12 +23,12 @@ from ..kernels import mc_white
 from ..lut.build import _mc_run_kwargs
 from ..lut.grid import (
     LUT_AXES,
-    LUT_MC_SETTINGS,
     SkinLUT,
     _grid_name,
     _inverse,
     _mc_photons,
     _resolve_grid,
+    grid_mc_settings,
 )
 from ..lut.interpolate import interpolate_lut
 
@@ -137,7 +137,7 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
         sel = np.flatnonzero(which.ravel() == k)
         qq, tt = q[j], tau[j]
         refl[sel], se[sel], paths[sel] = mc_white.white_mc_points(
-            geo["rho_cm"], float(LUT_MC_SETTINGS["half_width_cm"]),
+            geo["rho_cm"], float(grid_mc_settings(lut.grid)["half_width_cm"]),
             geo["epidermis_thickness_cm"],
             mua_epidermis_per_cm=p["mua_epidermis_per_cm"][sel],
             mua_dermis_per_cm=p["mua_dermis_per_cm"][sel],
