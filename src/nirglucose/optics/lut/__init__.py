@@ -31,6 +31,18 @@ skin 0.4-4 mm. It stops at a dermal mua of 2 /cm, which nominal skin reaches at 
 power laws reach at 1368 nm: LED bands above about 1340 nm fall outside it and raise a
 ConfigError naming the axis (``data/optics/SOURCES.md``, "Above 1300 nm").
 
+Above it, the ``swir`` grid: LED bands in 1160-1700 nm (:data:`LUT_GRID_WAVELENGTHS_NM`),
+dermal mua 0.5-26 /cm (the 1450 nm water peak included), subcutis 0.25-8 /cm,
+epidermis 0-10 /cm, skin mus' 5.5-14.5 /cm, fat/skin mus' ratio 0.74-1.03. Its own
+table per probe geometry, built the same way with a narrower detector kernel (rho +-
+0.35 mm: R falls about 50 times faster per cm at 26 /cm than at 2 /cm) and 12.8 million
+photons per run (:data:`LUT_MC_GRID_SETTINGS`, :data:`LUT_MC_PHOTONS`). The more the
+dermis absorbs, the fewer photons reach rho with a path short enough to count, so the
+table's own Monte Carlo noise grows with absorption; its errors against independent
+references are given per dermal absorption in the README. ``optics.lut_grid = "auto"``
+(the default) gives each LED the table that covers its band, so a device may have LEDs
+on both sides of 1320 nm.
+
 Where the table comes from: a white Monte Carlo solution of the radiative transport
 equation (:mod:`nirglucose.optics.kernels.mc_white`, MCML physics with Henyey-Greenstein g = 0.9
 and Fresnel escape, compiled with numba): one run per (``musp_ratio``,
@@ -103,10 +115,12 @@ from .grid import (
     LUT_AXES,
     LUT_GRID_WAVELENGTHS_NM,
     LUT_GRIDS,
+    LUT_MC_GRID_SETTINGS,
     LUT_MC_PHOTONS,
     LUT_MC_SETTINGS,
     LUT_SOLVERS,
     SkinLUT,
+    grid_mc_settings,
     lut_grids_for_bands,
     lut_key,
 )
@@ -137,5 +151,7 @@ __all__ = [
     "reflectance_from_tissue_optics",
     "LUT_MC_PHOTONS",
     "LUT_MC_SETTINGS",
+    "LUT_MC_GRID_SETTINGS",
+    "grid_mc_settings",
     "LUT_SOLVERS",
 ]

@@ -29,6 +29,7 @@ from .cache import get_lut, load_or_build_lut
 from .grid import (
     _CHANNELS,
     LUT_AXES,
+    LUT_GRID_WAVELENGTHS_NM,
     SkinLUT,
     _forward,
     _grid_name,
@@ -57,6 +58,11 @@ def _axis_map(nodes_bytes: bytes) -> tuple[float, float, int, float]:
     return float(u[0]), float(d[0]), n_low, float(d[n_low])
 
 
+#: Which named grid covers which LED bands, for the out-of-box message.
+_GRID_BANDS = ", ".join(f"'{g}' covers {a:g}-{b:g} nm" for g, (a, b) in
+                        LUT_GRID_WAVELENGTHS_NM.items())
+
+
 def _cell_coords(
     nodes: list[np.ndarray], names: list[str], inputs: list[np.ndarray],
 ) -> tuple[list[np.ndarray], list[np.ndarray]]:
@@ -81,8 +87,8 @@ def _cell_coords(
             hint = " (mus'_dermis x skin thickness)" if name == "skin_transport_thickness" else ""
             raise ConfigError(
                 f"{name}{hint} = {float(bad):.6g} is outside the look-up table; valid range is "
-                f"[{lo:.6g}, {hi:.6g}] [{unit}] (optics.lut_grid: 'default' covers LED bands "
-                f"in 700-1340 nm, 'swir' 1350-1700 nm; or use another forward model)"
+                f"[{lo:.6g}, {hi:.6g}] [{unit}] (optics.lut_grid: {_GRID_BANDS} LED bands; "
+                f"or use another forward model)"
             )
         j = pos.astype(np.intp)
         np.clip(j, 0, n - 2, out=j)
