@@ -103,15 +103,10 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
         "mua_epidermis_per_cm": (0.0, 10.0, 4, 2),
         "skin_transport_thickness": (0.25, 6.5, 9, 2),
     },
-    "tiny-swir": {
-        "musp_dermis_per_cm": (5.5, 14.5, 2, 1),
-        "musp_ratio": (0.74, 1.03, 2, 1),
-        "mua_dermis_per_cm": (0.5, 26.0, 2, 1),
-        "mua_subcutis_per_cm": (0.25, 8.0, 2, 1),
-        "mua_epidermis_per_cm": (0.0, 10.0, 2, 1),
-        "skin_transport_thickness": (0.25, 6.5, 3, 1),
-    },
 }
+# the swir box, coarsely (as tiny is the default box): two nodes an axis, three in tau
+LUT_GRIDS["tiny-swir"] = {k: (lo, hi, 3 if k == "skin_transport_thickness" else 2, 1)
+                          for k, (lo, hi, _n, _m) in LUT_GRIDS["swir"].items()}
 
 
 #: LED band nodes each named grid covers [nm], for ``optics.lut_grid = "auto"``
