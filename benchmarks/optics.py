@@ -63,20 +63,13 @@ def _cohort(seed: int = 0) -> tuple[dict, np.ndarray, np.ndarray]:
     (rows,)), and the nominal subcutis/dermis scattering ratio of each node.
     """
     import nirglucose as ng
-    from nirglucose.constants import MGDL_PER_MMOLL_GLUCOSE
-    from nirglucose.simulation.simulator import _tables
+    from nirglucose.simulation.simulator import scenario_band_spectra, true_tissue_state
 
     cfg = ng.resolve_config("paper", {})
     frame = ng.simulate("paper", n_subjects=700, per_subject=3, seed=seed).frame
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
-    state = tissue.TissueState(
-        frame["true_blood_fraction_detected"].to_numpy(float),
-        frame["true_saturation"].to_numpy(float),
-        frame["true_water_fraction"].to_numpy(float),
-        frame["true_subcutis_fat_fraction"].to_numpy(float),
-        cfg.glucose.signal_gain * frame["glucose_mgdl"].to_numpy(float) / MGDL_PER_MMOLL_GLUCOSE,
-    )
-    spectra = _tables(cfg).spectra
+    state = true_tissue_state(cfg, frame, frame["glucose_mgdl"].to_numpy(float))
+    spectra = scenario_band_spectra(cfg)
     optics = tissue.tissue_optics(
         spectra, state,
         water_displacement_per_mm=cfg.glucose.water_displacement_per_mm,

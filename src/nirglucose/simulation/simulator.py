@@ -29,6 +29,7 @@ __all__ = [
     "simulate_frame",
     "nominal_tissue",
     "detected_fraction_given_glucose",
+    "true_tissue_state",
     "scenario_band_spectra",
 ]
 
@@ -367,6 +368,20 @@ def simulate_frame(
     return pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
 
 
+def true_tissue_state(cfg: ScenarioConfig, frame: pd.DataFrame,
+                      glucose_mgdl: np.ndarray) -> tissue.TissueState:
+    """The tissue composition of each row (its ``true_*`` columns), with ``glucose_mgdl``
+    in place of the row's glucose, scaled as the simulator scales it
+    (``glucose.signal_gain``), for :func:`nirglucose.optics.tissue.tissue_optics`."""
+    return tissue.TissueState(
+        frame["true_blood_fraction_detected"].to_numpy(float),
+        frame["true_saturation"].to_numpy(float),
+        frame["true_water_fraction"].to_numpy(float),
+        frame["true_subcutis_fat_fraction"].to_numpy(float),
+        cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
+    )
+
+
 def detected_fraction_given_glucose(
     cfg: ScenarioConfig,
     frame: pd.DataFrame,
@@ -398,18 +413,11 @@ def detected_fraction_given_glucose(
     """
     tables = _tables(cfg) if tables is None else tables
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
-    state = tissue.TissueState(
-        frame["true_blood_fraction_detected"].to_numpy(float),
-        frame["true_saturation"].to_numpy(float),
-        frame["true_water_fraction"].to_numpy(float),
-        frame["true_subcutis_fat_fraction"].to_numpy(float),
-        cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
-    )
     shift = frame[[f"true_led_shift_nm_{w}" for w in wl]].to_numpy(float)
     fraction = _band_detected_fraction(
         cfg,
         tables,
-        state,
+        true_tissue_state(cfg, frame, glucose_mgdl),
         frame["true_melanin_fraction"].to_numpy(float),
         frame["true_skin_thickness_probe_mm"].to_numpy(float),
         shift,
