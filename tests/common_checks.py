@@ -92,9 +92,7 @@ def check_parameter_validation(estimator: Any) -> None:
     """
     name = type(estimator).__name__
     params = set(estimator.get_params(deep=False))
-    table = set(estimator._parameter_constraints)
-    assert table == params, f"{name}: constraints {sorted(table ^ params)} differ from params"
-    check_param_validation(name, estimator)
+    check_param_validation(name, estimator)  # it also asserts the table covers params
     for param in sorted(params):
         if estimator._parameter_constraints[param] == "no_validation":
             continue

@@ -90,9 +90,13 @@ class IntervalArray(Interval):
     """
 
     def is_satisfied_by(self, val: Any) -> bool:
-        if isinstance(val, str | bytes) or np.ndim(val) != 1 or len(val) == 0:
+        if isinstance(val, str | bytes):
             return False
-        return all(Interval.is_satisfied_by(self, v) for v in np.asarray(val).tolist())
+        try:  # a ragged or otherwise odd sequence is not a sequence of numbers
+            values = np.asarray(val).tolist() if np.ndim(val) == 1 and len(val) else None
+        except (TypeError, ValueError):
+            return False
+        return values is not None and all(Interval.is_satisfied_by(self, v) for v in values)
 
     def __str__(self) -> str:
         return f"a non-empty sequence of numbers each {super().__str__()[2:]}"

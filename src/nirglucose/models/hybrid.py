@@ -14,7 +14,8 @@ none it can be worse than the training mean, so the hybrid is a stack (Breiman 1
 
     y_mean + a * (f_backbone(x) - y_mean) + s * GP(x)
 
-On the training rows only, the GP is cross-fitted over the same subject-grouped folds,
+On the training rows only, the GP is cross-fitted over the same subject-grouped folds (on
+the backbone's out-of-fold predictions: stacking, not nested),
 giving out-of-fold residual predictions ``r_hat`` next to the backbone's out-of-fold
 glucose; ``s`` in [0, 1] is the least-squares weight of ``r_hat`` in the backbone's
 out-of-fold residual, and ``a`` is 1, or 0 (with ``s`` 0: the training mean) where the
@@ -127,8 +128,8 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
     cv : int
         Subject-grouped folds of the out-of-fold backbone predictions the GP learns
         from, and of the cross-fit that learns the stacking weights; 0 or 1 learns
-        from the backbone's in-sample residuals (the weights then from
-        :data:`SHRINKAGE_FOLDS` folds of the whole fit). [-]
+        from the backbone's in-sample residuals, as do fewer subjects than ``cv`` (the
+        weights then from :data:`SHRINKAGE_FOLDS` folds of the whole fit). [-]
     random_state : int, optional
         Seed of the GP's row subset and restarts.
 
@@ -146,7 +147,8 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
     shrinkage_ : float
         Stacking weight of the GP's residual, in [0, 1]: 0 where its cross-fitted
         predictions explain none of the residual. Both weights are 1 without subject
-        ids or with fewer subjects than folds (the plain hybrid, as before issue 29). [-]
+        ids or with fewer than :data:`SHRINKAGE_FOLDS` subjects (the plain hybrid, as
+        before issue 29). [-]
     """
 
     backbone_name = ""
@@ -159,7 +161,8 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
         "random_state": GP_RANDOM_STATE,
     }
 
-    def __init__(self, backbone_params=None, gp_params=None, cv: int = 3, random_state=None):
+    def __init__(self, backbone_params=None, gp_params=None, cv: int = SHRINKAGE_FOLDS,
+                 random_state=None):
         self.backbone_params = backbone_params
         self.gp_params = gp_params
         self.cv = cv
@@ -192,11 +195,14 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
 
     def _cross_fit_residual(self, X, A, y, groups, folds, oof) -> tuple:
         """``(base, r_hat)``: each row's backbone glucose and the residual GP's
-        prediction of its residual, both from fits on the other folds' rows only.
+        prediction of its residual, the GP fitted on the other folds' rows only.
 
         With ``oof`` (the backbone's out-of-fold predictions over ``folds``) only the GP
-        is refitted per fold; without it (``cv`` < 2) the backbone and the GP on its
-        in-sample residuals are, as :meth:`fit` does on every row.
+        is refitted per fold, on those rows' out-of-fold predictions: ordinary stacking,
+        not nested, so a row's own label has entered the backbones behind the other
+        rows' ``oof``. Without it (``cv`` < 2, or fewer subjects than ``cv``) the
+        backbone and the GP on its in-sample residuals are refitted per fold, as
+        :meth:`fit` does on every row.
         """
         base, r_hat = np.empty(len(y)), np.empty(len(y))
         for tr, te in folds:
@@ -257,6 +263,8 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
         base = np.asarray(self.backbone_.predict(X), dtype=float).ravel()
         U = np.column_stack([self.schema_.stacked(Xa), base])
         stacked = self.y_mean_ + self.backbone_weight_ * (base - self.y_mean_)
+        if self.shrinkage_ == 0.0:  # the GP's weight is 0: no need to evaluate it
+            return stacked
         return stacked + self.shrinkage_ * self.residual_.predict(U)
 
     @property

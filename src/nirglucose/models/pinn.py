@@ -138,6 +138,7 @@ def _with_physics(est: Any, total: torch.Tensor, physics: torch.Tensor) -> torch
 _LAMBDA_PHYS = [Interval(Real, 0, None, closed="left")]
 #: A physics constant that defaults to the scenario's: None, or finite and > 0.
 _POSITIVE_OR_NONE = [None, Interval(Real, 0, None, closed="neither")]
+_FORWARD_MODEL = [None, StrOptions(set(FORWARD_MODELS))]
 
 
 # ============================================================================ Beer-Lambert
@@ -161,7 +162,7 @@ class _BeerLambertPINN(BeerLambertForwardTerm, TorchRegressor):
         "physics_form": [StrOptions(set(PHYSICS_FORMS))],
         "absorptivity_per_cm_per_mm": _POSITIVE_OR_NONE,
         "signal_gain": _POSITIVE_OR_NONE,
-        "forward_model": [None, StrOptions(set(FORWARD_MODELS))],
+        "forward_model": _FORWARD_MODEL,
         "collocation": [Interval(Integral, 0, None, closed="left")],
     }
 
@@ -358,7 +359,8 @@ class OptimizedPINN(_BeerLambertPINN):
     def _check_param_relations(self) -> None:
         if self.d_model % self.n_heads:
             raise ParameterError(
-                f"OptimizedPINN: n_heads={self.n_heads!r} must divide d_model={self.d_model!r}"
+                f"{type(self).__name__}: n_heads={self.n_heads!r} must divide "
+                f"d_model={self.d_model!r}"
             )
 
     def build_module(self) -> OptimizedPINNNet:
@@ -469,7 +471,7 @@ class _RTEPINNBase(StateForwardTerm, TorchRegressor):
         "lambda_phys": _LAMBDA_PHYS,
         "stability_weight": [Interval(Real, 0, None, closed="left")],
         "physics_form": [StrOptions(set(RTE_PHYSICS_FORMS))],
-        "forward_model": [None, StrOptions(set(FORWARD_MODELS))],
+        "forward_model": _FORWARD_MODEL,
     }
 
     def _regularised(self, wavelengths_nm: tuple[float, ...]) -> list[int]:

@@ -99,7 +99,10 @@ class ForwardModel:
         return np.log(frac / cfg.hardware.reference_transmission) + th[:, 7:8]
 
 
+#: :data:`PHYSICAL_BOUNDS` of the :data:`NUISANCES`, in their order (low, high).
+_PHYSICAL_LOW = np.array([PHYSICAL_BOUNDS[k][0] for k in NUISANCES])
+_PHYSICAL_HIGH = np.array([PHYSICAL_BOUNDS[k][1] for k in NUISANCES])
+
+
 def _clip_physical(theta: np.ndarray) -> np.ndarray:
-    lo = np.array([PHYSICAL_BOUNDS[k][0] for k in NUISANCES])
-    hi = np.array([PHYSICAL_BOUNDS[k][1] for k in NUISANCES])
-    return np.clip(theta, lo, hi)
+    return np.clip(theta, _PHYSICAL_LOW, _PHYSICAL_HIGH)
