@@ -195,13 +195,19 @@ def resolve_entries(models: Any, default: Sequence[str]) -> list[ModelEntry]:
 
 
 def check_object_params(objects: Mapping[str, Any], params: Mapping[str, Any]) -> None:
-    """Refuse ``model_params`` that an estimator object does not take, before any task runs.
+    """Refuse ``model_params`` that are no mapping, or that an estimator object does not
+    take, before any task runs.
 
     Raises
     ------
     ConfigError
-        ``set_params`` of a clone refuses ``params[label]`` (the message is its reason).
+        A value of ``params`` is not a mapping, or ``set_params`` of a clone refuses
+        ``params[label]`` (the message is its reason).
     """
+    for label, value in params.items():
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"model_params[{label!r}] must be a mapping of parameter names "
+                              f"to values, got {type(value).__name__}")
     for label, est in objects.items():
         if params.get(label):
             try:
