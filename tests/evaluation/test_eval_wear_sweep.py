@@ -40,7 +40,7 @@ def test_dask_cluster_gives_the_serial_rows(serial, tmp_path):
 def test_a_finished_sweep_is_reused_whatever_the_backend(serial):
     out, ref = serial
     seen = []
-    # every task is cached: nothing runs, whatever jobs: every task is cached, nothing runs
+    # every task is cached: nothing runs, whatever jobs
     res = run_wear_sweep(out, jobs=2, on_task=lambda spec, cached: seen.append(cached),
                          **TINY)
     assert seen == [True, True]
