@@ -85,3 +85,9 @@ def test_latency_decimals_follow_the_magnitude(ms):
     decimals = 3 if ms < 0.1 else 2 if ms < 10 else 1
     assert len(text.split(".")[1]) == decimals
     assert math.isclose(float(text), ms, abs_tol=0.5 * 10.0**-decimals * (1 + 1e-9))
+
+
+@pytest.mark.parametrize("value", [1.0, None, math.nan])
+def test_a_misspelt_style_is_refused_whatever_the_value(value):
+    with pytest.raises(ValueError, match="unknown style 'percnt'"):
+        format_number(value, style="percnt")

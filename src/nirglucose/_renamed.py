@@ -98,4 +98,6 @@ class RenamedModuleFinder(importlib.abc.MetaPathFinder):
 def install() -> None:
     """Put the finder on :data:`sys.meta_path` once (idempotent)."""
     if not any(isinstance(f, RenamedModuleFinder) for f in sys.meta_path):
-        sys.meta_path.append(RenamedModuleFinder())
+        # first: an old package folder left behind (say its __pycache__) would otherwise
+        # be found as an empty namespace package before the finder is asked
+        sys.meta_path.insert(0, RenamedModuleFinder())

@@ -89,6 +89,8 @@ def format_number(
     >>> format_number(0.0234, style="latency"), format_number(0.25, 0, style="percent")
     ('0.023', '25%')
     """
+    if style not in STYLES:  # checked first: a misspelt style shows with missing values too
+        raise ValueError(f"unknown style {style!r}; valid: {', '.join(STYLES)}")
     f = _to_float(value)
     if f is None or not math.isfinite(f):
         blank = value is None or isinstance(value, str) and not value.strip()
@@ -104,10 +106,9 @@ def format_number(
         return f"{f:{plus}.{digits}e}"
     if style == "percent":
         return f"{f:{plus}.{digits}%}"
-    if style == "latency":
-        return f"{f:{plus}.3f}" if abs(f) < 0.1 else f"{f:{plus}.2f}" if abs(f) < 10 else (
-            f"{f:{plus}.1f}")
-    raise ValueError(f"unknown style {style!r}; valid: {', '.join(STYLES)}")
+    # style == "latency"
+    return f"{f:{plus}.3f}" if abs(f) < 0.1 else f"{f:{plus}.2f}" if abs(f) < 10 else (
+        f"{f:{plus}.1f}")
 
 
 def format_ci(value: Any, low: Any, high: Any, digits: int = 1, **options: Any) -> str:

@@ -109,3 +109,15 @@ def test_unknown_names_raise_one_line():
         uva.parameters_2007("gestational")
     with pytest.raises(ConfigError, match="valid"):
         uva.integrate("euler", {}, np.zeros((12, 1)), np.zeros((1, 1)))
+
+
+def test_sensitivity_is_refused_where_it_does_not_apply_or_fit():
+    p, x0 = uva.basal_2007(uva.parameters_2007("normal"))
+    meals = _day(70.0)
+    with pytest.raises(ConfigError, match="type1 model only") as err:
+        uva.integrate("meal_2007", p, x0, meals, sensitivity=np.ones(meals.shape))
+    assert "\n" not in str(err.value)
+    _names, cols = uva.type1_patients()
+    p1 = {k: v[:1] for k, v in cols.items()}
+    with pytest.raises(ConfigError, match=r"got kind 'type1', shape \(1, 2\)"):
+        uva.integrate("type1", p1, uva.basal_type1(p1), meals, sensitivity=np.ones((1, 2)))

@@ -20,7 +20,7 @@ import pandas as pd
 from ..evaluation.findings import RunData, physics_verdicts
 from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
-from ..formatting import format_number
+from ..formatting import as_number, format_number
 from .markup import esc as _esc
 from .markup import model_label as _model_label
 from .tables import extra_table, hypo_note, main_table, significance
@@ -228,7 +228,7 @@ def _metric_cell(met: pd.DataFrame, model: str, col: str, ci: str | None) -> str
         return "<td>–</td>"
     r = met.loc[model]
     txt = _num(r.get(col))
-    if ci and _num(r.get(f"{ci}_ci_low")) != "–":
+    if ci and as_number(r.get(f"{ci}_ci_low")) is not None:
         txt += f" [{_num(r.get(f'{ci}_ci_low'))}, {_num(r.get(f'{ci}_ci_high'))}]"
     return f"<td>{txt}</td>"
 

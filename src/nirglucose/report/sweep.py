@@ -24,7 +24,7 @@ from pydantic import BaseModel
 
 from ..config import ScenarioConfig
 from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
-from ..formatting import format_ci, format_number
+from ..formatting import MISSING, format_ci, format_number
 from ..plots.designs import plot_design_curve
 from ..plots.fleet import figure_fleet
 from ..plots.style import figure_bytes, model_label, save_figure
@@ -324,8 +324,8 @@ def _designs_table(e: pd.DataFrame) -> list[str]:
     for _, d in e.groupby(keys, sort=False):
         r = d.iloc[0]
         by_model = {m: d[d["model"] == m] for m in models}
-        cells = [f"{_num(x['rmse_mgdl'].iloc[0])} [{_num(x['rmse_ci_low'].iloc[0])}, "
-                 f"{_num(x['rmse_ci_high'].iloc[0])}]" if len(x) else "–"
+        cells = [format_ci(x["rmse_mgdl"].iloc[0], x["rmse_ci_low"].iloc[0],
+                           x["rmse_ci_high"].iloc[0], text=_esc) if len(x) else MISSING
                  for x in by_model.values()]
         rows.append([_esc(r["detector"]), _esc(r["n_leds"]), _esc(r["rank"]),
                      _esc(r["wavelengths_nm"]), _esc(r["study_leds_kept"]),

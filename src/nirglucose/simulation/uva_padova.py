@@ -317,6 +317,10 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
         raise ConfigError(f"unknown model kind {kind!r}; valid: {', '.join(MODEL_KINDS)}")
     meals_mg = np.asarray(meals_mg, dtype=float)
     n, n_min = meals_mg.shape
+    if sensitivity is not None and (kind != "type1" or np.shape(sensitivity) != (n, n_min)):
+        raise ConfigError(f"sensitivity applies to the type1 model only, one factor per subject "
+                          f"and minute ({n}, {n_min}); got kind {kind!r}, shape "
+                          f"{np.shape(sensitivity)}")
     if kind == "type1":
         u = p["u2ss"]
         base = p
@@ -338,7 +342,7 @@ def integrate(kind: str, p: dict, x0: np.ndarray, meals_mg: np.ndarray,
     factor = None
     for k in range(n_min):
         out[:, k] = x[gp_row] / vg
-        if sensitivity is not None and kind == "type1" and (
+        if sensitivity is not None and (
                 factor is None or (sensitivity[:, k] != factor).any()):
             factor = sensitivity[:, k].copy()
             p["Vmx"], p["kp3"] = base["Vmx"] * factor, base["kp3"] * factor

@@ -211,7 +211,7 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
         if names[status_codes[i]] == "type1":
             patient[i] = patient_names[k]
             units, missed[i], si_day[i] = _type1_therapy(
-                streams, carbs, {c: v[k] for c, v in pcols.items()}, wear_days, errors)
+                streams, carbs, float(pcols["carb_ratio_g_per_u"][k]), wear_days, errors)
             bolus[i] = meals.meal_grid_mg(
                 minute, units * meals.INSULIN_PMOL_PER_UNIT / pcols["BW"][k], n_min)
     blood = np.empty((n, n_min))
@@ -230,7 +230,8 @@ def glucose_trajectories(cfg: ScenarioConfig, seed: int, subject_ids, status_cod
             "bolus_missed": missed, "sensitivity": si_day}
 
 
-def _type1_therapy(streams, carbs_g, patient: dict, wear_days: int, errors) -> tuple:
+def _type1_therapy(streams, carbs_g, carb_ratio_g_per_u: float, wear_days: int,
+                   errors) -> tuple:
     """One type 1 subject's meal boluses [U], which were missed, and each day's insulin
     sensitivity factor, with the therapy errors named in ``errors`` (:mod:`.therapy`)."""
     counted = (meals.estimated_carbs_g(streams("wear.carb_count"), carbs_g)
@@ -239,7 +240,10 @@ def _type1_therapy(streams, carbs_g, patient: dict, wear_days: int, errors) -> t
               if "missed_bolus" in errors else np.zeros(len(carbs_g), dtype=bool))
     si_day = (therapy.draw_daily_sensitivity(streams("wear.insulin_sensitivity"), wear_days)
               if "sensitivity" in errors else np.ones(wear_days))
-    units = np.where(missed, 0.0, meals.bolus_units(counted, patient["carb_ratio_g_per_u"]))
+    if missed.shape != np.shape(carbs_g):  # one missed-bolus probability per daily meal
+        raise ConfigError(f"{missed.size} missed-bolus draws for {np.size(carbs_g)} meals: "
+                          f"therapy.MEALS_PER_DAY must list every meal of the day")
+    units = np.where(missed, 0.0, meals.bolus_units(counted, carb_ratio_g_per_u))
     return units, missed, si_day
 
 
