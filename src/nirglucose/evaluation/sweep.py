@@ -502,23 +502,6 @@ def _resolve_seeds(seeds: int | Sequence[int]) -> list[int]:
     return out
 
 
-def _check_worker(spec: Mapping[str, Any], res: Mapping[str, Any]) -> None:
-    """Refuse a result from another version; warn about one from other code."""
-    if res.get("version") != spec["version"]:
-        raise DataError(
-            f"a worker runs nirglucose {res.get('version')}, this "
-            f"process {spec['version']}; install the same version "
-            "on every worker"
-        )
-    if res.get("source_sha256") != spec["source_sha256"]:
-        warnings.warn(
-            "a worker runs different nirglucose code than this process "
-            f"(source digest {res.get('source_sha256')} vs "
-            f"{spec['source_sha256']}); results may mix code versions",
-            stacklevel=5,
-        )
-
-
 def _execute(
     cache: tasks.TaskCache,
     pending: list[str],
@@ -546,7 +529,7 @@ def _execute(
             keys=[f"nirglucose-sweep-{k}" for k in pending],
         )
         try:
-            cache.collect(stream, pending, specs, _task_tag, on_done=done, check=_check_worker)
+            cache.collect(stream, pending, specs, _task_tag, on_done=done, check=tasks.check_worker)
         finally:
             stream.close()
 

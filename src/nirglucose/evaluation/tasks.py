@@ -41,6 +41,7 @@ __all__ = [
     "TASK_FORMAT",
     "TaskCache",
     "canonical",
+    "check_worker",
     "checksum",
     "derived_seed",
     "external_code_digest",
@@ -111,6 +112,19 @@ def stamp(spec: Mapping[str, Any]) -> dict[str, Any]:
         "version": __version__,
         "source_sha256": source_digest(),
     }
+
+
+def check_worker(spec: Mapping[str, Any], result: Mapping[str, Any]) -> None:
+    """Refuse a result computed by another nirglucose version (a Dask worker's); warn
+    about one computed by other code under the same version (its source digest)."""
+    if result.get("version") != spec["version"]:
+        raise DataError(f"a worker runs nirglucose {result.get('version')}, this process "
+                        f"{spec['version']}; install the same version on every worker")
+    if result.get("source_sha256") != spec["source_sha256"]:
+        warnings.warn(
+            "a worker runs different nirglucose code than this process (source digest "
+            f"{result.get('source_sha256')} vs {spec['source_sha256']}); results may mix "
+            "code versions", stacklevel=5)
 
 
 def sha256_hex(text: str) -> str:

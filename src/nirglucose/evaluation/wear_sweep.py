@@ -33,7 +33,7 @@ from .._version import __version__
 from ..api import simulate_wear
 from ..config import resolve_config
 from ..dataset import atomic_write
-from ..exceptions import ConfigError, DataError
+from ..exceptions import ConfigError
 from . import tasks
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .wear_benchmark import WEAR_MODELS, run_wear_benchmark
@@ -60,7 +60,8 @@ def run_wear_task(spec: dict) -> dict:
                              schedules=spec["schedules"], n_boot=spec["n_boot"])
     cols = ["model", "variant", "schedule", "rmse_mgdl", "rmse_ci_low", "rmse_ci_high",
             "mard_pct", "fingersticks_per_day", "n_scored", "n_subjects"]
-    return {"rows": res.schedules[cols].to_dict(orient="list"), "version": __version__}
+    return {"rows": res.schedules[cols].to_dict(orient="list"), "version": __version__,
+            "source_sha256": tasks.source_digest()}
 
 
 def run_wear_sweep(
@@ -128,7 +129,7 @@ def run_wear_sweep(
                            scheduler=scheduler,
                            keys=[f"nirglucose-wear-{k}" for k in pending])
     try:
-        cache.collect(stream, pending, specs, _tag, check=_check_worker, on_done=(
+        cache.collect(stream, pending, specs, _tag, check=tasks.check_worker, on_done=(
             None if on_task is None else lambda spec, _res: on_task(dict(spec), False)))
     finally:
         stream.close()
@@ -153,13 +154,6 @@ def _plan(presets, wear_days, seeds, common: dict) -> dict[str, dict]:
                                     "wear_days": int(days), "seed": int(seed), **common})
                 specs[tasks.task_key(spec)] = spec
     return specs
-
-
-def _check_worker(spec, result) -> None:
-    """Refuse a result computed by another nirglucose version (a Dask worker's)."""
-    if result.get("version") != spec["version"]:
-        raise DataError(f"a worker runs nirglucose {result.get('version')}, this process "
-                        f"{spec['version']}; install the same version on every worker")
 
 
 def _tag(spec) -> str:
