@@ -93,3 +93,16 @@ def test_external_code_digest():
         pass
 
     assert isinstance(tasks.external_code_digest(Local), str)
+
+
+def test_a_worker_result_from_another_version_is_refused_from_other_code_warned():
+    from nirglucose.exceptions import DataError
+
+    T = tasks
+    spec = T.stamp({"model": "x"})
+    same = {"version": spec["version"], "source_sha256": spec["source_sha256"]}
+    T.check_worker(spec, same)  # the same code: silent
+    with pytest.raises(DataError, match="install the same version on every worker"):
+        T.check_worker(spec, {**same, "version": "0.0.0"})
+    with pytest.warns(UserWarning, match="different nirglucose code"):
+        T.check_worker(spec, {**same, "source_sha256": "0" * 64})
