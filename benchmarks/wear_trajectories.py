@@ -45,6 +45,8 @@ import os
 
 import numpy as np
 
+from nirglucose.metrics import time_in_ranges
+
 N_PER_STATUS = int(os.environ.get("NIRGLUCOSE_BENCH_TIR_SUBJECTS", 10))
 DAYS = int(os.environ.get("NIRGLUCOSE_BENCH_TIR_DAYS", 14))
 
@@ -113,16 +115,18 @@ def replay(label: str) -> dict:
 
 
 def _range_metrics(g: np.ndarray) -> dict:
-    """Time in ranges, CV and extremes of (subjects, minutes) plasma glucose."""
-    tir = ((g >= 70) & (g <= 180)).mean(axis=1)
+    """Time in ranges (:func:`nirglucose.metrics.time_in_ranges`, per subject, then the
+    mean: every subject has as many minutes), CV and extremes of (subjects, minutes)
+    plasma glucose."""
+    t = time_in_ranges(g.ravel(), np.repeat(np.arange(len(g)), g.shape[1]))
     return {
-        "tir_70_180_pct": round(100 * float(tir.mean()), 1),
-        "tir_subject_range_pct": [round(100 * float(tir.min()), 1),
-                                  round(100 * float(tir.max()), 1)],
+        "tir_70_180_pct": round(float(t["tir_70_180_pct"].mean()), 1),
+        "tir_subject_range_pct": [round(float(t["tir_70_180_pct"].min()), 1),
+                                  round(float(t["tir_70_180_pct"].max()), 1)],
         "within_70_140_pct": round(100 * float(((g >= 70) & (g <= 140)).mean()), 1),
-        "tbr_below_70_pct": round(100 * float((g < 70).mean()), 2),
-        "tbr_below_54_pct": round(100 * float((g < 54).mean()), 2),
-        "tar_above_180_pct": round(100 * float((g > 180).mean()), 1),
+        "tbr_below_70_pct": round(float(t["tbr_lt70_pct"].mean()), 2),
+        "tbr_below_54_pct": round(float(t["tbr_lt54_pct"].mean()), 2),
+        "tar_above_180_pct": round(float(t["tar_gt180_pct"].mean()), 1),
         "cv_pct": round(100 * float((g.std(axis=1) / g.mean(axis=1)).mean()), 1),
         "mean_mgdl": round(float(g.mean()), 1),
         "min_mgdl": round(float(g.min()), 1),
