@@ -4,9 +4,12 @@ reader and the ADC policy read it; :mod:`nirglucose.dataset` re-exports every na
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
+from typing import Any
 
 from .constants import DEFAULT_LED_WAVELENGTHS_NM
+from .exceptions import DataError
 
 __all__ = [
     "PMF_COLUMNS",
@@ -19,6 +22,9 @@ __all__ = [
     "adc_columns",
     "ref_columns",
     "measured_columns",
+    "ADC_COLUMN_RE",
+    "led_wavelengths_in",
+    "has_reference_columns",
 ]
 
 #: The measured physiological vector, in the study's order (the simulator's
@@ -60,6 +66,60 @@ def adc_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) ->
 def ref_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) -> list[str]:
     """``adc_ref_<nm>`` column names."""
     return [f"adc_ref_{_wl_label(w)}" for w in wavelengths_nm]
+
+
+#: An LED's ADC column, ``adc_<nm>`` (``adc_850``, ``adc_1550.5``); group 1 is the
+#: wavelength. ``adc_ref_<nm>`` does not match.
+ADC_COLUMN_RE = re.compile(r"^adc_(\d+(?:\.\d+)?)$")
+
+
+def led_wavelengths_in(columns: Iterable[Any]) -> tuple[float, ...]:
+    """The LEDs named by ``adc_<nm>`` columns, ascending: the one rule by which the
+    schema, the dataset and the estimators read a device's channels. [nm]
+
+    Raises
+    ------
+    DataError
+        If two columns name the same wavelength (``adc_850`` and ``adc_850.0``).
+
+    Examples
+    --------
+    >>> led_wavelengths_in(["adc_940", "adc_ref_940", "adc_850.5", "age_yr"])
+    (850.5, 940.0)
+    """
+    found: dict[float, str] = {}
+    for c in columns:
+        if isinstance(c, str) and (m := ADC_COLUMN_RE.match(c)):
+            w = float(m.group(1))
+            if w in found:
+                raise DataError(f"columns {found[w]!r} and {c!r} name the same LED "
+                                f"({w:g} nm); keep one of them")
+            found[w] = c
+    return tuple(sorted(found))
+
+
+def has_reference_columns(columns: Iterable[Any], wavelengths_nm: Iterable[float]) -> bool:
+    """Whether ``columns`` hold the reference codes ``adc_ref_<nm>`` of every LED (True)
+    or of none (False).
+
+    Raises
+    ------
+    DataError
+        If some LEDs have reference codes and others not (one line naming the missing).
+
+    Examples
+    --------
+    >>> has_reference_columns(["adc_850", "adc_ref_850"], [850.0])
+    True
+    """
+    present = set(columns)
+    refs = ref_columns(wavelengths_nm)
+    have = [c in present for c in refs]
+    if any(have) and not all(have):
+        missing = [c for c, h in zip(refs, have, strict=True) if not h]
+        raise DataError(f"reference codes for some LEDs only: missing {missing}; give "
+                        "adc_ref_<nm> for every LED or for none")
+    return bool(have) and all(have)
 
 
 def measured_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) -> list[str]:

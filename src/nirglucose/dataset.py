@@ -39,6 +39,7 @@ from .columns import (
     PPG_COLUMNS,
     WEAR_COLUMNS,
     adc_columns,
+    led_wavelengths_in,
     measured_columns,
     ref_columns,
 )
@@ -172,9 +173,7 @@ class Dataset:
         """LED wavelengths of the dataset. [nm]"""
         if self.config is not None:
             return tuple(self.config.leds.wavelengths_nm)
-        return tuple(
-            float(c[4:]) for c in self.frame.columns if c.startswith("adc_") and c[4:].isdigit()
-        )
+        return led_wavelengths_in(self.frame.columns)
 
     def _meta(self) -> dict[str, Any]:
         return {

@@ -32,7 +32,6 @@ References
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
@@ -41,6 +40,7 @@ import pandas as pd
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .adc_resolution import resolve_adc_bits
+from .columns import has_reference_columns, led_wavelengths_in
 from .constants import DEFAULT_LED_WAVELENGTHS_NM
 from .dataset import (
     DEFAULT_ADC_BITS,
@@ -62,8 +62,6 @@ __all__ = [
     "check_reference_glucose",
     "meter_flags",
 ]
-
-_ADC_RE = re.compile(r"^adc_(\d+(?:\.\d+)?)$")
 
 
 def _first_rows(mask: np.ndarray, limit: int = 5) -> str:
@@ -152,21 +150,13 @@ class DeviceSchema:
             meta_bits = X.metadata.get("adc_bits")
             if meta_bits is None and X.config is not None:
                 meta_bits = int(X.config.hardware.adc_bits)
-        cols = [c for c in frame.columns if isinstance(c, str)]
-        wl = sorted(float(m.group(1)) for c in cols if (m := _ADC_RE.match(c)))
+        wl = led_wavelengths_in(frame.columns)
         if not wl:
             raise DataError(_no_adc_message(frame.columns))
         bits, _ = resolve_adc_bits(frame, adc_bits, meta_bits)
-        labels = [f"{w:g}" for w in wl]
-        refs = [f"adc_ref_{w}" in frame.columns for w in labels]
-        if any(refs) and not all(refs):
-            missing = [f"adc_ref_{w}" for w, r in zip(labels, refs, strict=True) if not r]
-            raise DataError(
-                f"reference codes for some LEDs only: missing {missing}; give adc_ref_<nm> "
-                "for every LED or for none"
-            )
+        reference = has_reference_columns(frame.columns, wl)
         physio = tuple(c for c in KNOWN_PHYSIOLOGY if c in frame.columns)
-        return cls(tuple(wl), all(refs), int(bits), physio, 0)
+        return cls(wl, reference, int(bits), physio, 0)
 
     @classmethod
     def from_json(cls, doc: Any) -> DeviceSchema:

@@ -211,3 +211,21 @@ def test_sweep_takes_objects(tmp_path):
     assert again.meta["tasks_computed"] == 0
     with pytest.raises(ConfigError, match="fleet study takes registered model names"):
         run_sweep(study="fleet", models=[("ridge", Ridge())], seeds=1)
+
+
+def test_measured_frame_reads_channels_as_the_schema_does(data):
+    """A reference learner sees the schema's channels: every adc_<nm> (850.5 included),
+    ascending whatever the file's order; a partial set of references is refused."""
+    from nirglucose.schema import DeviceSchema
+
+    frame = data.frame.rename(columns={"adc_940": "adc_940.5", "adc_ref_940": "adc_ref_940.5"})
+    shuffled = frame[list(reversed(frame.columns))]
+    own = Dataset(shuffled, seed=0)
+    X = measured_frame(own)
+    schema = DeviceSchema.infer(own, adc_bits=12)
+    assert tuple(X.columns) == schema.raw_columns
+    assert "adc_940.5" in X.columns and "adc_ref_940.5" in X.columns
+    with pytest.raises(ng.DataError, match=r"some LEDs only: missing \['adc_ref_850'\]"):
+        measured_frame(Dataset(frame.drop(columns=["adc_ref_850"]), seed=0))
+    with pytest.raises(ng.DataError, match="name the same LED"):
+        measured_frame(Dataset(frame.assign(**{"adc_850.0": frame["adc_850"]}), seed=0))

@@ -41,9 +41,9 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
+from ..columns import led_wavelengths_in
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
-from ..schema import _ADC_RE
 from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
 from .benchmark_aggregate import scored
 from .benchmark_result import DROP_ONE_COLUMNS, ablation_base
@@ -94,8 +94,7 @@ def drop_one_row(model: str, wavelength_nm: float) -> str:
 def led_wavelengths(dataset: Dataset) -> list[float]:
     """The dataset's LEDs (those with an ``adc_<nm>`` column, as the models read them),
     ascending. [nm]"""
-    return sorted(float(m.group(1)) for c in dataset.frame.columns
-                  if isinstance(c, str) and (m := _ADC_RE.match(c)))
+    return list(led_wavelengths_in(dataset.frame.columns))
 
 
 def resolve_drop_one_models(

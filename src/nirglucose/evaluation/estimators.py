@@ -49,7 +49,13 @@ import numpy as np
 import pandas as pd
 from sklearn.base import clone
 
-from ..columns import KNOWN_PHYSIOLOGY, adc_columns, ref_columns
+from ..columns import (
+    KNOWN_PHYSIOLOGY,
+    adc_columns,
+    has_reference_columns,
+    led_wavelengths_in,
+    ref_columns,
+)
 from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..models.registry import available_models, get_model_class
@@ -349,14 +355,22 @@ def takes_dataset(model: Any) -> bool:
 def measured_frame(data: Dataset) -> pd.DataFrame:
     """The device's measured columns of ``data`` (what any other estimator gets as ``X``).
 
-    ``adc_<nm>`` and, where the device has them, ``adc_ref_<nm>`` for each LED
-    (:attr:`Dataset.wavelengths_nm <nirglucose.dataset.Dataset.wavelengths_nm>`), then
-    the measured physiology it records (:data:`~nirglucose.columns.KNOWN_PHYSIOLOGY`),
-    in that order; never ``true_*``, ids or ``glucose_mgdl``.
+    ``adc_<nm>`` for each LED, ascending, and ``adc_ref_<nm>`` where the device has them,
+    then the measured physiology it records (:data:`~nirglucose.columns.KNOWN_PHYSIOLOGY`),
+    in that order; never ``true_*``, ids or ``glucose_mgdl``. The LEDs and references are
+    read by the schema's rule (:func:`~nirglucose.columns.led_wavelengths_in`,
+    :func:`~nirglucose.columns.has_reference_columns`), so a reference learner sees the
+    channels a package model sees, in the same order whatever the file's column order.
+
+    Raises
+    ------
+    DataError
+        Reference codes for some LEDs only, or two columns naming one LED.
     """
     frame = data.frame
-    wl = data.wavelengths_nm
-    cols = [c for c in (*adc_columns(wl), *ref_columns(wl), *KNOWN_PHYSIOLOGY) if c in frame]
+    wl = led_wavelengths_in(frame.columns)
+    refs = ref_columns(wl) if has_reference_columns(frame.columns, wl) else []
+    cols = [*adc_columns(wl), *refs, *(c for c in KNOWN_PHYSIOLOGY if c in frame)]
     return frame[cols]
 
 
