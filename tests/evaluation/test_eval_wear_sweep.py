@@ -37,6 +37,19 @@ def test_dask_cluster_gives_the_serial_rows(serial, tmp_path):
     assert len(list((tmp_path / ".tasks").glob("wear-paper-1d-s*.json"))) == 2
 
 
+def test_local_processes_give_the_serial_rows(serial, tmp_path):
+    """jobs=2 runs the pending tasks in worker processes (each checked against this
+    process's version and code) and writes the serial run's files."""
+    ref_dir, ref = serial
+    seen = []
+    res = run_wear_sweep(tmp_path, jobs=2, on_task=lambda spec, cached: seen.append(cached),
+                         **TINY)
+    assert seen == [False, False]
+    pd.testing.assert_frame_equal(res, ref)
+    for name in ("wear_sweep.csv", "wear_summary.csv"):
+        assert (tmp_path / name).read_bytes() == (ref_dir / name).read_bytes()
+
+
 def test_a_finished_sweep_is_reused_whatever_the_backend(serial):
     out, ref = serial
     seen = []

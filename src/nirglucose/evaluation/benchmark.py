@@ -121,14 +121,13 @@ from .drop_one import (
 )
 from .estimators import (
     build_estimator,
-    check_object_params,
     describe_entries,
     estimator_identity,
     fit_history,
     fit_model,
     measured_frame,
     predict_model,
-    resolve_entries,
+    resolve_rows,
     takes_dataset,
 )
 from .estimators import seeded_params as seeded_params  # re-exported: sweep, fleet, CLI
@@ -429,23 +428,15 @@ def _oracle_rows(
     return [], note
 
 
-def _rows(models: Any, references: bool) -> tuple[list[str], dict[str, Any]]:
-    """The rows' labels (the references last) and label -> estimator object."""
-    entries = resolve_entries(models, available_models())
-    names = [e.label for e in entries]
-    if references:
-        names += [m for m in REFERENCE_MODELS if m not in names]
-    return names, {e.label: e.estimator for e in entries if e.estimator is not None}
-
-
 def _plan(
     dataset: Dataset,
     models: Sequence[Any] | str | None,
     opts: dict[str, Any],
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
-    names, objects = _rows(models, opts["references"])
-    check_object_params(objects, opts["model_params"] or {})
+    names, objects = resolve_rows(models, available_models(), opts["model_params"])
+    if opts["references"]:  # the references last
+        names += [m for m in REFERENCE_MODELS if m not in names]
     preset = getattr(dataset.config, "preset", None)
     names, base_of, params, pairs = _row_params(
         names, objects, opts["model_params"], preset, opts["ablation"]

@@ -73,6 +73,7 @@ __all__ = [
     "measured_frame",
     "predict_model",
     "resolve_entries",
+    "resolve_rows",
     "seeded_params",
     "takes_dataset",
 ]
@@ -221,6 +222,25 @@ def check_object_params(objects: Mapping[str, Any], params: Mapping[str, Any]) -
             except ValueError as exc:
                 raise ConfigError(f"model_params[{label!r}]: {' '.join(str(exc).split())}"
                                   ) from None
+
+
+def resolve_rows(models: Any, default: Sequence[str], params: Mapping[str, Any] | None
+                 ) -> tuple[list[str], dict[str, Any]]:
+    """The rows' labels, in order, and label -> estimator object, with ``params`` checked
+    against the objects (:func:`resolve_entries`, :func:`check_object_params`): what the
+    benchmark and the sweep both start from.
+
+    Examples
+    --------
+    >>> from sklearn.linear_model import Ridge
+    >>> labels, objects = resolve_rows(["pls", Ridge()], [], {"Ridge": {"alpha": 2.0}})
+    >>> labels, list(objects)
+    (['pls', 'Ridge'], ['Ridge'])
+    """
+    entries = resolve_entries(models, default)
+    objects = {e.label: e.estimator for e in entries if e.estimator is not None}
+    check_object_params(objects, params or {})
+    return [e.label for e in entries], objects
 
 
 def describe_entries(objects: Mapping[str, Any]) -> dict[str, dict[str, str]]:

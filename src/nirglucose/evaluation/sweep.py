@@ -74,12 +74,11 @@ from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
 from .benchmark_result import _dumps, _write_csv, _write_text
 from .estimators import (
     build_estimator,
-    check_object_params,
     describe_entries,
     estimator_identity,
     fit_model,
     predict_model,
-    resolve_entries,
+    resolve_rows,
 )
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .fleet import fleet_metrics, fleet_table
@@ -651,10 +650,7 @@ def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int]
 def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
                   params: Mapping[str, Any] | None) -> tuple[list[str], dict[str, Any]]:
     """The rows' labels (a study's subject first) and label -> estimator object."""
-    entries = resolve_entries(models, STUDY_MODELS.get(study, DEFAULT_MODELS))
-    labels = [e.label for e in entries]
-    objects = {e.label: e.estimator for e in entries if e.estimator is not None}
-    check_object_params(objects, params or {})
+    labels, objects = resolve_rows(models, STUDY_MODELS.get(study, DEFAULT_MODELS), params)
     if objects and any(sc.kind == "fleet" for sc in scenarios):
         raise ConfigError(f"the fleet study takes registered model names, not estimator "
                           f"objects ({', '.join(objects)}); run the objects in a grid study")
