@@ -460,13 +460,14 @@ def _plan(
     makers = {n: objects[n] if n in objects else get_model_class(base_of[n])
               for n in [*names, *aux]}
     ident = {n: {"estimator": estimator_identity(o)} for n, o in objects.items()}
+    code = {n: tasks.external_code_digest(_class_of(m)) for n, m in makers.items()}
     planned = []
     for split in splits:
         for name in [*names, *aux]:
             spec = tasks.stamp(
                 {
                     **common,
-                    "code": tasks.external_code_digest(_class_of(makers[name])),
+                    "code": code[name],
                     **ident.get(name, {}),  # an estimator object: its class and parameters
                     "model": name,
                     "seed_model": base_of[name],
