@@ -445,10 +445,8 @@ def _plan(
     base_of.update({a: a for a in aux})
     protocol = opts["protocol"]
     n_eff, r_eff = effective_layout(protocol, opts["n_splits"], opts["repeats"])
-    groups = dataset.frame["subject_id"].to_numpy()
-    splits = make_splits(
-        groups, protocol, n_splits=opts["n_splits"], repeats=opts["repeats"], seed=opts["seed"]
-    )
+    splits = make_splits(dataset.frame["subject_id"].to_numpy(), protocol,
+                         n_splits=opts["n_splits"], repeats=opts["repeats"], seed=opts["seed"])
     data_hash = dataset.content_hash()
     common = {
         "dataset": data_hash,
@@ -459,16 +457,17 @@ def _plan(
     }
     makers = {n: objects[n] if n in objects else get_model_class(base_of[n])
               for n in [*names, *aux]}
-    ident = {n: {"estimator": estimator_identity(o)} for n, o in objects.items()}
-    code = {n: tasks.external_code_digest(_class_of(m)) for n, m in makers.items()}
+    # a row's code outside the package, and an estimator object's class and parameters
+    ident = {n: {"code": tasks.external_code_digest(_class_of(m)),
+                 **({"estimator": estimator_identity(objects[n])} if n in objects else {})}
+             for n, m in makers.items()}
     planned = []
     for split in splits:
         for name in [*names, *aux]:
             spec = tasks.stamp(
                 {
                     **common,
-                    "code": code[name],
-                    **ident.get(name, {}),  # an estimator object: its class and parameters
+                    **ident[name],
                     "model": name,
                     "seed_model": base_of[name],
                     "params": tasks.canonical(dict(params.get(name, {}))),
