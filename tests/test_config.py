@@ -146,6 +146,17 @@ def test_one_override_changes_the_led_set():
     assert '"power_mw": 3.0' in cfg.to_json()
 
 
+@pytest.mark.parametrize("overrides, says", [
+    ({"leds": {"wavelength_nm": 850}}, "leds must be a list of LED records or part names"),
+    (["hardware.adc_bits"], "overrides must be a dict of dotted keys.*got a list"),
+    ({1: 2}, "overrides must be a dict of dotted keys"),
+])
+def test_malformed_overrides_are_one_config_error(overrides, says):
+    with pytest.raises(ConfigError, match=says) as err:
+        resolve_config("paper", overrides)
+    assert "\n" not in str(err.value)
+
+
 def test_former_per_led_keys_map_onto_the_records():
     old = {
         "leds.wavelengths_nm": [850, 940, 1150],

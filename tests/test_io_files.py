@@ -118,3 +118,28 @@ def test_metrics_bad_inputs_are_said():
         clarke_zones([5.0, 8.0, 12.0], [6.0, 8.0, 11.0], units="mmol/L")
     with pytest.warns(UserWarning, match="at least 600 results"):
         assert iso15197_2013_passes([80, 200], [90, 220])
+
+
+def test_a_header_given_twice_is_refused_not_renamed(tmp_path):
+    """pandas would read a repeated adc_940 as adc_940.1, a 940.1 nm LED: refused."""
+    frame = ng.simulate("paper", n_subjects=6, per_subject=2, seed=0).frame
+    cols = ["subject_id", "glucose_mgdl", "adc_850", "adc_940", "age_yr"]
+    path = tmp_path / "twice.csv"
+    frame[cols + ["adc_940"]].to_csv(path, index=False)
+    with pytest.raises(DataError, match="column 'adc_940' appears 2 times in the header"):
+        ng.load_dataset(path, adc_bits=12)
+    with pytest.raises(DataError, match="column 'adc_940' appears 2 times; keep one"):
+        ng.Dataset(frame[cols + ["adc_940"]])
+    for bad in (None, [1, 2, 3]):
+        with pytest.raises(DataError, match="expected a pandas DataFrame"):
+            ng.Dataset(bad)
+    with pytest.raises(DataError, match="do not fit a dataset of 12 rows"):
+        ng.Dataset(frame).rows([100])
+
+
+def test_reference_glucose_of_zero_or_below_is_refused_as_such(tmp_path):
+    frame = ng.simulate("paper", n_subjects=6, per_subject=2, seed=0).frame
+    path = tmp_path / "neg.csv"
+    frame.assign(glucose_mgdl=-50.0).to_csv(path, index=False)
+    with pytest.raises(DataError, match="values of 0 or below at lines 2, 3, 4"):
+        ng.load_dataset(path)

@@ -131,6 +131,10 @@ def test_bad_input_is_one_clear_error(fitted, tmp_path):
         ng.predict(tmp_path / "none.json", new)
     with pytest.raises(DataError, match="unknown glucose unit"):
         ng.predict(model, new, glucose_unit="g/L")
+    # readings without their fingerstick value would silently calibrate nobody
+    cal = new.frame.iloc[:4].assign(glucose_mgdl=np.nan)
+    with pytest.raises(DataError, match="no reference glucose at rows 1, 2, 3, 4"):
+        ng.predict(model, new, calibration=cal)
 
 
 def test_the_cli_writes_what_predict_returns(calibrated, fitted, tmp_path):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from .config import ScenarioConfig, resolve_config
+from .config.overrides import check_overrides
 from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, check_positive_int
 from .resources import check_simulation_size
@@ -81,12 +82,7 @@ def simulate(
 
 def _resolve(preset, overrides, dotted) -> ScenarioConfig:
     """The scenario of a preset (or config) with dict and keyword overrides."""
-    if overrides is not None and not isinstance(overrides, dict):
-        raise ConfigError(
-            f"overrides must be a dict of dotted keys to values, e.g. "
-            f"{{'hardware.adc_bits': 14}}, got a {type(overrides).__name__}: {overrides!r}"
-        )
-    all_overrides = dict(overrides or {})
+    all_overrides = check_overrides(overrides)
     all_overrides.update({k.replace("__", "."): v for k, v in dotted.items()})
     return resolve_config(preset, all_overrides)
 

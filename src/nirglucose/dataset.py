@@ -47,7 +47,7 @@ from .config import ScenarioConfig
 from .constants import PHYSIOLOGICAL_RANGES
 from .dataset_meta import parse_meta
 from .exceptions import DataError
-from .io_files import check_glucose_unit, read_frame, validate_frame
+from .io_files import check_frame, check_glucose_unit, read_frame, validate_frame
 
 __all__ = [
     "Dataset",
@@ -138,6 +138,8 @@ class Dataset:
         seed: int | None = None,
         metadata: dict[str, Any] | None = None,
     ) -> None:
+        if frame is not None or type(self) is Dataset:  # a lazy dataset reads it later
+            check_frame(frame)
         self.frame = frame
         self.config = config
         self.seed = seed
@@ -159,7 +161,11 @@ class Dataset:
         Dataset
             A new dataset (the declared ``metadata["adc_bits"]`` travels with the rows).
         """
-        frame = self.frame.iloc[idx].reset_index(drop=True)
+        try:
+            frame = self.frame.iloc[idx].reset_index(drop=True)
+        except IndexError as exc:
+            raise DataError(f"rows {idx!r} do not fit a dataset of {len(self)} rows: "
+                            f"{' '.join(str(exc).split())}") from None
         return Dataset(frame, config=self.config, seed=self.seed, metadata=dict(self.metadata))
 
     def __repr__(self) -> str:

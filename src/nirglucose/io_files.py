@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable
+from csv import reader as csv_reader
 from pathlib import Path
 from typing import Any, Literal
 
@@ -46,6 +47,7 @@ __all__ = [
     "MMOLL_SUSPECT_MEDIAN_MGDL",
     "canonical_name",
     "canonical_columns",
+    "check_frame",
     "check_glucose_unit",
     "sniff_csv",
     "read_frame",
@@ -109,6 +111,10 @@ def canonical_columns(columns: Iterable[Any]) -> tuple[dict[Any, str], list[str]
         Two headers that read as the same column.
     """
     columns = list(columns)
+    twice = sorted({str(c) for c in columns if columns.count(c) > 1})
+    if twice:
+        raise DataError(f"column {twice[0]!r} appears {columns.count(twice[0])} times in the "
+                        "header; keep one")
     renames: dict[Any, str] = {}
     for c in columns:
         new = canonical_name(c)
@@ -121,6 +127,31 @@ def canonical_columns(columns: Iterable[Any]) -> tuple[dict[Any, str], list[str]
         raise DataError(f"columns {' and '.join(same)} both read as {dup[0]!r}; keep one")
     notes = [f"read column {c!r} as {n!r}" for c, n in renames.items()]
     return renames, notes
+
+
+def check_frame(frame: Any) -> None:
+    """Refuse what is not a table of measurements: not a pandas DataFrame, or one with a
+    column name given twice (which column would the model read?).
+
+    Raises
+    ------
+    DataError
+        One line saying what was given and what to give.
+
+    Examples
+    --------
+    >>> check_frame(pd.DataFrame([[1, 2]], columns=["adc_850", "adc_850"]))
+    Traceback (most recent call last):
+    ...
+    nirglucose.exceptions.DataError: column 'adc_850' appears 2 times; keep one
+    """
+    if not isinstance(frame, pd.DataFrame):
+        raise DataError(f"expected a pandas DataFrame of measurements, got "
+                        f"{type(frame).__name__}; read a file with nirglucose.load_dataset")
+    if frame.columns.has_duplicates:
+        c = frame.columns[frame.columns.duplicated()][0]
+        raise DataError(f"column {c!r} appears {int((frame.columns == c).sum())} times; "
+                        "keep one")
 
 
 def sniff_csv(text: str) -> tuple[str, str]:
@@ -159,6 +190,9 @@ def read_frame(path: Path) -> tuple[pd.DataFrame, dict[bytes, bytes], list[str]]
         with open(path, encoding="utf-8-sig", errors="replace") as fh:
             head = fh.read(65536)
         sep, decimal = sniff_csv(head)
+        first = next((ln for ln in head.splitlines() if ln.strip()), "")
+        # pandas renames a repeated header (adc_940, adc_940.1): read it as written
+        canonical_columns(next(csv_reader([first], delimiter=sep), []))
         frame = pd.read_csv(path, sep=sep, decimal=decimal, encoding="utf-8-sig")
         frame.attrs["decimal"] = decimal
         raw = {}
@@ -245,6 +279,9 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
     known = vals[np.isfinite(vals)]
     if not len(known):
         return []
+    if (known <= 0).any():
+        raise DataError(f"reference glucose {col!r} has values of 0 or below at "
+                        f"{file_rows(vals <= 0, csv)}; a meter reports only positive values")
     notes = []
     if unit == "mmol/L":
         if np.median(known) > MMOLL_SUSPECT_MEDIAN_MGDL:

@@ -22,7 +22,13 @@ from .dataset import Dataset, load_dataset
 from .evaluation.calibration import apply_offset
 from .evaluation.conformal import calibration_of, interval
 from .exceptions import ConfigError, DataError
-from .io_files import check_codes, check_glucose_unit, glucose_to_unit, validate_frame
+from .io_files import (
+    check_codes,
+    check_glucose_unit,
+    file_rows,
+    glucose_to_unit,
+    validate_frame,
+)
 from .models._validate import check_predictions
 from .models.registry import load_model
 from .schema import meter_flags
@@ -251,13 +257,19 @@ def calibrate_by_person(
     if "glucose_mgdl" not in calibration.frame.columns:
         raise DataError("the calibration readings need the reference glucose of each "
                         "reading (glucose_mgdl or glucose_mmoll)")
+    reference_mgdl = pd.to_numeric(calibration.frame["glucose_mgdl"], errors="coerce"
+                                   ).to_numpy(float)
+    if not np.isfinite(reference_mgdl).all():
+        raise DataError(f"the calibration readings have no reference glucose at "
+                        f"{file_rows(~np.isfinite(reference_mgdl), csv=False)}: every "
+                        "calibration reading needs its fingerstick value")
     _warn_overlap(estimator, calibration, ds)
     cal_pred = check_predictions(estimator.predict(calibration), source)
     return apply_offset(
         predicted_mgdl,
         ds.frame["subject_id"].to_numpy(),
         cal_pred,
-        calibration.frame["glucose_mgdl"].to_numpy(float),
+        reference_mgdl,
         calibration.frame["subject_id"].to_numpy(),
     )
 

@@ -53,6 +53,7 @@ from .dataset import (
 )
 from .exceptions import DataError
 from .fitted import require_fitted
+from .io_files import check_frame
 
 __all__ = [
     "DeviceSchema",
@@ -162,15 +163,20 @@ class DeviceSchema:
     def from_json(cls, doc: Any) -> DeviceSchema:
         """Rebuild from :meth:`to_json` (validated; DataError when malformed)."""
         try:
-            s = cls(
-                tuple(float(w) for w in doc["wavelengths_nm"]),
-                bool(doc["reference"]),
-                int(doc["adc_bits"]),
-                tuple(str(c) for c in doc["physiology"]),
-                int(doc.get("n_plain", 0)),
-            )
-        except (KeyError, TypeError, ValueError):
-            raise DataError("model file has a malformed 'schema' entry") from None
+            wl, ref, bits = doc["wavelengths_nm"], doc["reference"], doc["adc_bits"]
+            physio, n_plain = doc["physiology"], doc.get("n_plain", 0)
+            ok = (isinstance(wl, list) and all(_is_number(w) and 0 < w < 1e5 for w in wl)
+                  and isinstance(ref, bool) and isinstance(physio, list)
+                  and all(isinstance(c, str) for c in physio)
+                  and _is_number(n_plain, integer=True) and n_plain >= 0)
+        except (KeyError, TypeError):
+            ok = False
+        if not ok:
+            raise DataError("model file has a malformed 'schema' entry; refit the model")
+        if not (_is_number(bits, integer=True) and (1 <= bits <= 32 or (bits == 0 and n_plain))):
+            raise DataError(f"model file's schema has adc_bits {bits!r}; expected an integer "
+                            "from 1 to 32; the file is corrupt, refit the model")
+        s = cls(tuple(float(w) for w in wl), ref, int(bits), tuple(physio), int(n_plain))
         lo, hi = doc.get("train_min") or (), doc.get("train_max") or ()
         try:
             lo, hi = tuple(float(v) for v in lo), tuple(float(v) for v in hi)
@@ -301,6 +307,7 @@ class DeviceSchema:
             X = X.frame
         cols = self.raw_columns
         if isinstance(X, pd.DataFrame):
+            check_frame(X)
             if self.is_plain:
                 Xa = X.to_numpy(dtype=float) if X.shape[1] == self.n_plain else None
                 if Xa is None:
@@ -400,6 +407,13 @@ class DeviceSchema:
     def stacked_names(self) -> tuple[str, ...]:
         """Names of :meth:`stacked`'s columns: ``A_<nm>`` per LED, then the physiology."""
         return tuple(f"A_{w}" for w in self.labels) + tuple(self.physiology)
+
+
+def _is_number(v: Any, integer: bool = False) -> bool:
+    """A JSON number (not a bool, not a string), finite; an integer when asked."""
+    if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
+        return False
+    return not integer or float(v).is_integer()
 
 
 def _no_adc_message(columns) -> str:
@@ -570,7 +584,14 @@ def as_raw_input(est: Any, X: Any, schema: DeviceSchema) -> Any:
     else:
         from sklearn.utils import check_array
 
-        Xa = check_array(X, dtype=np.float64, estimator=est, input_name="X")
+        want = (f"X must be a Dataset, a DataFrame or a 2-D array of the model's "
+                f"{len(schema.raw_columns)} columns (its schema_.raw_columns)")
+        if X is None or isinstance(X, str | bytes | dict):
+            raise DataError(f"{want}, got {type(X).__name__}")
+        try:
+            Xa = check_array(X, dtype=np.float64, estimator=est, input_name="X")
+        except ValueError as exc:
+            raise DataError(f"{want}: {str(exc).splitlines()[0].rstrip(':')}") from None
     if Xa.shape[1] != len(schema.raw_columns):
         raise DataError(
             f"X has {Xa.shape[1]} features, but {type(est).__name__} is expecting "

@@ -230,6 +230,22 @@ def test_load_rejects_bad_files(paper, tmp_path):
         EnhancedBeerLambert.load(write({**good, "state": {**good["state"], "coef_": ["a"]}}))
     with pytest.raises(ConfigError, match="unknown model 'zzz'"):
         load_model(write({**good, "model": "zzz"}))
+    # a value of the right shape but the wrong JSON type is refused, not coerced
+    for key, value in (("intercept_", "1"), ("coef_", [True] * 56)):
+        with pytest.raises(DataError, match=f"state {key}' is not numeric"):
+            EnhancedBeerLambert.load(write({**good, "state": {**good["state"], key: value}}))
+    schema = good["state"]["schema_"]
+    for bits in (99, 0, 12.5, "12", True):
+        bad = {**good, "state": {**good["state"], "schema_": {**schema, "adc_bits": bits}}}
+        with pytest.raises(DataError, match="adc_bits .*expected an integer from 1 to 32"):
+            EnhancedBeerLambert.load(write(bad))
+    for entry in ({"reference": "no"}, {"wavelengths_nm": ["850", 940]}):
+        bad = {**good, "state": {**good["state"], "schema_": {**schema, **entry}}}
+        with pytest.raises(DataError, match="malformed 'schema'"):
+            EnhancedBeerLambert.load(write(bad))
+    # stored parameters are held to the constructor's constraints
+    with pytest.raises(DataError, match="'cv' parameter .*the file is corrupt"):
+        EnhancedBeerLambert.load(write({**good, "params": {**good["params"], "cv": -1}}))
 
 
 def test_bad_parameters_and_inputs(paper):
@@ -249,6 +265,18 @@ def test_bad_parameters_and_inputs(paper):
         PLSBaseline().fit(paper.frame.drop(columns=["glucose_mgdl"]))
     with pytest.raises(NotFittedError):
         EnhancedBeerLambert().save("never.json")
+    with pytest.raises(ConfigError, match="unknown parameter 'foo' of model 'ebl'; valid: "):
+        make_model("ebl", foo=1)
+    fitted = EnhancedBeerLambert(alphas=(1.0,)).fit(paper)
+    for X, says in ((None, "got NoneType"), ({"adc_850": [1.0]}, "got dict"),
+                    ([1.0, 2.0], "Expected 2D array")):
+        with pytest.raises(DataError, match=says) as err:
+            fitted.predict(X)
+        assert "\n" not in str(err.value)
+    twice = paper.frame.assign(extra=paper.frame["adc_850"]).rename(
+        columns={"extra": "adc_850"})
+    with pytest.raises(DataError, match="column 'adc_850' appears 2 times; keep one"):
+        fitted.predict(twice)
 
 
 def test_registry_names():

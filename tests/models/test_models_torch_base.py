@@ -533,6 +533,11 @@ def test_wrong_shape_and_garbage_weights_raise(fitted, tmp_path):
     w.write_bytes(b"import os; os.system('echo pwned')")
     with pytest.raises(DataError, match="safetensors"):
         OriginalPINN.load(path)
+    # integer weights would load truncated to 0: a constant prediction, no error
+    fitted.save(path)
+    save_file({k: v.to(torch.int32) for k, v in load_file(w).items()}, w)
+    with pytest.raises(DataError, match="are torch.int32, not floating point"):
+        OriginalPINN.load(path)
 
 
 def test_load_rejects_bad_documents(fitted, tmp_path):
@@ -544,6 +549,7 @@ def test_load_rejects_bad_documents(fitted, tmp_path):
         ({"weights_file": "../m.safetensors"}, "plain file name"),
         ({"format_version": 99}, "format_version"),
         ({"params": {**doc["params"], "evil": 1}}, "unknown parameters"),
+        ({"params": {**doc["params"], "dropout": 5}}, "'dropout' parameter .*corrupt"),
     ]:
         bad = tmp_path / "bad.json"
         bad.write_text(json.dumps({**doc, **change}))
@@ -563,8 +569,10 @@ def test_load_weights_only_torch_file(fitted, small, tmp_path):
     np.testing.assert_array_equal(OriginalPINN.load(path).predict(small), fitted.predict(small))
     # A pickle that is not a plain state_dict is refused by weights_only loading.
     torch.save({"x": object()}, tmp_path / "m.pt", _use_new_zipfile_serialization=True)
-    with pytest.raises(DataError):
+    with pytest.raises(DataError, match="not a weights-only torch file") as err:
         OriginalPINN.load(path)
+    # one line, and no advice to turn the safety off
+    assert "\n" not in str(err.value) and "False" not in str(err.value)
 
 
 def test_save_needs_fitted_and_a_json_suffix(fitted, tmp_path):

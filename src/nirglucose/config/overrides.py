@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Mapping
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -70,9 +71,33 @@ def _plain(value: Any) -> Any:
     return value
 
 
+def check_overrides(overrides: Any) -> dict[str, Any]:
+    """``overrides`` as a dict, refused (one line) unless it maps dotted keys to values.
+
+    Examples
+    --------
+    >>> check_overrides(["hardware.adc_bits"])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nirglucose.exceptions.ConfigError: overrides must be a dict of dotted keys to values, ...
+    """
+    if overrides is None:
+        return {}
+    if not isinstance(overrides, Mapping) or not all(isinstance(k, str) for k in overrides):
+        raise ConfigError(
+            f"overrides must be a dict of dotted keys to values, e.g. "
+            f"{{'hardware.adc_bits': 14}}, got a {type(overrides).__name__}: "
+            f"{str(overrides)[:80]}"
+        )
+    return dict(overrides)
+
+
 def _set_per_led(out: dict[str, Any], dotted: str, value: Any) -> None:
     m = _PER_LED_KEY.fullmatch(dotted)
-    assert m is not None
+    if m is None:  # "leds" given as something other than a list of LEDs
+        raise ConfigError(f"{dotted} must be a list of LED records or part names, e.g. "
+                          f"[{{'wavelength_nm': 850, 'power_mw': 3}}, 'L8957'], got "
+                          f"{type(value).__name__}: {str(value)[:80]}")
     emitters = out["leds"]["emitters"]
     i = int(m.group(1))
     if i >= len(emitters):
@@ -160,14 +185,15 @@ def resolve_config(
     >>> resolve_config("paper", {"hardware.adc_bits": 14}).hardware.adc_bits
     14
     """
+    given = check_overrides(overrides)
     if isinstance(preset, ScenarioConfig):
         base = preset.model_dump(mode="json")
-        all_overrides = dict(overrides or {})
+        all_overrides = given
     else:
         if preset not in PRESETS:
             raise ConfigError(unknown_name("preset", preset, PRESETS))
         base = ScenarioConfig(preset=preset).model_dump(mode="json")
-        all_overrides = {**PRESETS[preset], **(overrides or {})}
+        all_overrides = {**PRESETS[preset], **given}
     data = apply_overrides(base, all_overrides)
     try:
         return ScenarioConfig.model_validate(data)

@@ -27,7 +27,13 @@ import numpy as np
 from .._version import __version__
 from ..dataset import atomic_write
 from ..exceptions import DataError
-from ._validate import MODEL_FORMAT, check_array, check_calibration_doc, read_model_document
+from ._validate import (
+    MODEL_FORMAT,
+    check_array,
+    check_calibration_doc,
+    check_loaded_params,
+    read_model_document,
+)
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "JsonModelMixin"]
 
@@ -132,6 +138,7 @@ class JsonModelMixin:
             model = cls(**cls._params_from_json(params))
         except (TypeError, ValueError) as exc:
             raise DataError(f"{str(path)!r}: invalid parameters: {exc}") from None
+        check_loaded_params(model, path)
         for key, shape in cls._STATE.items():
             if key not in state:
                 raise DataError(f"{str(path)!r} lacks state {key!r}")

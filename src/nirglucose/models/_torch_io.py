@@ -21,6 +21,7 @@ from ..schema import DeviceSchema
 from ._validate import (
     MODEL_FORMAT,
     check_calibration_doc,
+    check_loaded_params,
     check_torch_doc,
     check_weights,
     read_model_document,
@@ -117,6 +118,7 @@ class TorchIOMixin:
         if unknown:
             raise DataError(f"{str(path)!r}: unknown parameters {unknown}; valid: {sorted(valid)}")
         est = cls(**params)
+        check_loaded_params(est, path)
         est._restore_fitted(doc, path)
         est.module_ = est._module_from_weights(_read_weights(path, doc["weights_file"]), path)
         est._prepare_physics_tensors()
@@ -228,8 +230,11 @@ def _read_weights(doc_path: Path, name: Any) -> dict[str, torch.Tensor]:
     if wpath.suffix in (".pt", ".pth"):
         try:
             state = torch.load(wpath, map_location="cpu", weights_only=True)
-        except Exception as exc:  # noqa: BLE001 - any unpickling refusal is a data error
-            raise DataError(f"{str(wpath)!r} is not a weights-only torch file: {exc}") from None
+        except Exception:  # noqa: BLE001 - any unpickling refusal is a data error
+            # torch's own message runs to several lines and suggests weights_only=False
+            raise DataError(f"{str(wpath)!r} is not a weights-only torch file (it holds "
+                            "objects or code, not only tensors); save the weights with "
+                            "safetensors or torch.save(state_dict)") from None
         if not isinstance(state, dict) or not all(
             isinstance(v, torch.Tensor) for v in state.values()
         ):

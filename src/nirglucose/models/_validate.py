@@ -15,13 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import DataError
+from ..exceptions import ConfigError, DataError
 
 __all__ = [
     "MAX_ABS_STATE",
     "MAX_Y_SCALE_MGDL",
     "check_array",
     "check_calibration_doc",
+    "check_loaded_params",
     "check_predictions",
     "check_torch_doc",
     "check_weights",
@@ -71,11 +72,12 @@ def check_array(path: str | Path, name: str, value: Any, *, positive: bool = Fal
         where it must be.
     """
     try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise DataError(f"{_where(path)}: {name!r} is not numeric") from None
-    if arr.dtype == object:  # pragma: no cover - asarray(float) never yields object
-        raise DataError(f"{_where(path)}: {name!r} is not numeric")
+        raw = np.asarray(value)
+    except (TypeError, ValueError):  # a ragged list
+        raise DataError(f"{_where(path)}: {name!r} is not a numeric array") from None
+    if raw.dtype.kind not in "iuf":  # strings, booleans, nulls are not stored numbers
+        raise DataError(f"{_where(path)}: {name!r} is not numeric; the file is corrupt")
+    arr = raw.astype(np.float64)
     if not np.all(np.isfinite(arr)):
         raise DataError(f"{_where(path)}: {name!r} has NaN or infinite values; refit the model")
     if arr.size and float(np.max(np.abs(arr))) > MAX_ABS_STATE:
@@ -131,8 +133,25 @@ def check_torch_doc(doc: dict[str, Any], path: str | Path) -> None:
 def check_weights(state: dict[str, Any], path: str | Path) -> None:
     """Every weight tensor finite and of sane magnitude (see :func:`check_array`)."""
     for key, tensor in state.items():
+        if hasattr(tensor, "is_floating_point") and not tensor.is_floating_point():
+            raise DataError(f"{_where(path)}: weights {key} are {tensor.dtype}, not floating "
+                            "point; the file is corrupt, refit the model")
         arr = tensor.detach().cpu().double().numpy() if hasattr(tensor, "detach") else tensor
         check_array(path, f"weights {key}", arr)
+
+
+def check_loaded_params(model: Any, path: str | Path) -> None:
+    """Refuse a loaded model whose stored parameters break its constraints (one line
+    naming the file), as :func:`~nirglucose.models.registry.make_model` would at fit."""
+    validate = getattr(model, "_validate_params", None)
+    if validate is None:
+        return
+    try:
+        validate()
+    except (ConfigError, ValueError) as exc:
+        reason = " ".join(str(exc).split()).rstrip(".")
+        raise DataError(f"{_where(path)}: {reason}; the file is corrupt, refit the model"
+                        ) from None
 
 
 def check_predictions(pred: Any, path: str | Path) -> np.ndarray:

@@ -51,6 +51,7 @@ from ..fitted import require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
 from ._json_io import _state_value, _to_json
 from ._params import Integral, Interval, ValidatedParamsMixin
+from ._validate import check_loaded_params
 from .reference import GP_RANDOM_STATE
 from .registry import get_model_class, make_model, register
 
@@ -107,6 +108,7 @@ def _nested_model(name: str, doc) -> object:
         msg = f"the hybrid's saved {name!r} component: invalid parameters: {exc}"
         raise DataError(msg) from None
     where = Path(f"<{name} inside a hybrid model file>")
+    check_loaded_params(model, where)
     for key, shape in cls._STATE.items():
         if key not in doc["state"]:
             raise DataError(f"the hybrid's saved {name!r} component lacks state {key!r}")

@@ -150,8 +150,28 @@ def describe_model(model: Any) -> str:
 
 
 def make_model(name: str, **params: Any):
-    """A new, unfitted estimator of the registered ``name``."""
-    return get_model_class(name)(**params)
+    """A new, unfitted estimator of the registered ``name``.
+
+    Raises
+    ------
+    ConfigError
+        An unknown name, or a parameter the model does not take (one line listing those
+        it takes).
+
+    Examples
+    --------
+    >>> make_model("ebl", foo=1)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nirglucose.exceptions.ConfigError: unknown parameter 'foo' of model 'ebl'; valid: ...
+    """
+    cls = get_model_class(name)
+    valid = sorted(cls().get_params(deep=False))
+    unknown = [key for key in params if key not in valid]
+    if unknown:
+        raise ConfigError(f"unknown parameter {unknown[0]!r} of model {name!r}; valid: "
+                          f"{', '.join(valid)}")
+    return cls(**params)
 
 
 def load_model(path: str | Path):
