@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from .config import ScenarioConfig, resolve_config
 from .config.overrides import check_overrides
 from .dataset import Dataset, load_dataset
@@ -72,12 +74,21 @@ def simulate(
                              seed, n_jobs=n_jobs, overrides=overrides, **dotted)
     for name, value in (("n_subjects", n_subjects), ("per_subject", per_subject)):
         check_positive_int(name, value)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    _check_seed_and_jobs(seed, n_jobs)
     check_simulation_size(n_subjects, per_subject)  # refuse up front, not by OOM (issue 20)
     cfg = _resolve(preset, overrides, dotted)
     frame = simulate_frame(cfg, int(n_subjects), int(per_subject), int(seed), n_jobs=n_jobs)
     return Dataset(frame, config=cfg, seed=int(seed))
+
+
+def _check_seed_and_jobs(seed: Any, n_jobs: Any) -> None:
+    """Refuse (one line) a seed that is no non-negative integer, and worker counts other
+    than a positive integer or -1 (every core, joblib's convention)."""
+    if not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0:
+        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    if (not isinstance(n_jobs, int | np.integer) or isinstance(n_jobs, bool)
+            or not (n_jobs >= 1 or n_jobs == -1)):
+        raise ConfigError(f"n_jobs must be a positive integer or -1 (every core), got {n_jobs!r}")
 
 
 def _resolve(preset, overrides, dotted) -> ScenarioConfig:
@@ -146,8 +157,7 @@ def simulate_wear(
 
     check_positive_int("n_subjects", n_subjects)
     n_t = wear.readings_per_subject(wear_days, every_min)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    _check_seed_and_jobs(seed, n_jobs)
     cfg = _resolve(preset, overrides, dotted)
     meta = {"wear": wear.wear_metadata(wear_days, every_min, None)}
     if out is not None:

@@ -207,6 +207,8 @@ def test_load_rejects_bad_files(paper, tmp_path):
         EnhancedBeerLambert.load(tmp_path / "missing.json")
     with pytest.raises(DataError, match="not JSON"):
         EnhancedBeerLambert.load(write("{nope"))
+    with pytest.raises(DataError, match="not JSON, or a number"):
+        EnhancedBeerLambert.load(write('{"format": ' + "9" * 5000 + "}"))
     with pytest.raises(DataError, match="format"):
         EnhancedBeerLambert.load(write({**good, "format": "other"}))
     with pytest.raises(DataError, match="format_version 2"):

@@ -110,6 +110,24 @@ def test_bad_arguments_give_one_line(days, every, match):
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.parametrize("kwargs, match", [
+    ({"n_jobs": 0}, "n_jobs must be a positive integer or -1"),
+    ({"n_jobs": "a"}, "n_jobs must be a positive integer or -1"),
+    ({"seed": -1}, "seed must be a non-negative integer"),
+    ({"seed": 1.0}, "seed must be a non-negative integer"),
+])
+@pytest.mark.parametrize("wear", [False, True])
+def test_bad_seed_and_workers_give_one_line(kwargs, match, wear):
+    extra = {"wear_days": 1, "every_min": 240} if wear else {}
+    with pytest.raises(ConfigError, match=match):
+        ng.simulate("paper", 2, **extra, **kwargs)
+
+
+def test_a_numpy_integer_seed_is_a_seed():
+    assert ng.simulate("paper", 2, 2, seed=np.int64(3)).content_hash() == \
+        ng.simulate("paper", 2, 2, seed=3).content_hash()
+
+
 def test_simulate_with_wear_days_is_simulate_wear():
     a = ng.simulate("paper", 2, seed=5, wear_days=1, every_min=240)
     b = ng.simulate_wear("paper", 2, 1, 240, seed=5)

@@ -186,8 +186,9 @@ def read_model_document(
         raise DataError(f"no such model file {str(path)!r}")
     try:
         doc = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON)") from None
+    except (ValueError, UnicodeDecodeError):  # not JSON, or a number beyond Python's limit
+        raise DataError(f"{str(path)!r} is not a nirglucose model (not JSON, or a number "
+                        "in it is beyond what JSON readers take)") from None
     if not isinstance(doc, dict) or doc.get("format") != MODEL_FORMAT or "model" not in doc:
         raise DataError(
             f"{str(path)!r} is not a nirglucose model file (no 'format': {MODEL_FORMAT!r} "
