@@ -30,7 +30,7 @@ from .io_files import (
     validate_frame,
 )
 from .models._validate import check_predictions
-from .models.registry import load_model
+from .models.registry import model_from
 from .schema import meter_flags
 
 __all__ = [
@@ -176,7 +176,7 @@ def predict(
 def _estimator(model: Any) -> tuple[Any, str]:
     """``(estimator, its name in messages)``: a model file loaded, an estimator as is."""
     if isinstance(model, str | os.PathLike):
-        return load_model(Path(model)), str(model)
+        return model_from(model), str(model)
     if not callable(getattr(model, "predict", None)):
         raise ConfigError(f"model must be a fitted estimator or the path of a model file, "
                           f"got a {type(model).__name__}")

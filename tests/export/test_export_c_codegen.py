@@ -136,6 +136,10 @@ def test_only_fitted_linear_models_export(fitted, tmp_path):
         "nirglucose_model.c",
         "nirglucose_model.h",
     ]
+    # the path of a model file exports what the model itself exports
+    saved = fitted["ebl"].save(tmp_path / "ebl.json")
+    h2, c2 = export_c(str(saved), tmp_path / "fw2")
+    assert (h2.read_text(), c2.read_text()) == (h.read_text(), c.read_text())
 
 
 def _driver(schema) -> str:

@@ -47,6 +47,7 @@ from ..features import (
     SKIN_TEMP_CENTER_C,
     feature_table,
 )
+from ..models.registry import model_from
 from ..schema import DeviceSchema
 from .c_guard import estimate_body, estimate_decl
 
@@ -402,8 +403,8 @@ def export_c(model, out_dir: str | os.PathLike) -> tuple[Path, Path]:
 
     Parameters
     ----------
-    model : EnhancedBeerLambert or PLSBaseline
-        A fitted model (e.g. from :func:`nirglucose.models.load_model`).
+    model : EnhancedBeerLambert, PLSBaseline or path
+        A fitted model, or the path of its model file.
     out_dir : str or path-like
         Output directory; created if its parent exists. Files are written atomically.
 
@@ -421,7 +422,7 @@ def export_c(model, out_dir: str | os.PathLike) -> tuple[Path, Path]:
     >>> h.name, c.name
     ('nirglucose_model.h', 'nirglucose_model.c')
     """
-    texts = generate_c(model)
+    texts = generate_c(model_from(model))
     out = Path(out_dir)
     if not out.parent.exists():
         raise DataError(f"parent directory {str(out.parent)!r} of --out does not exist")

@@ -54,6 +54,7 @@ from ..features.blocks import (
     PRESSURE_CENTER_MBAR,
     SKIN_TEMP_CENTER_C,
 )
+from ..models.registry import model_from
 
 __all__ = ["ONNX_MODELS", "NO_ONNX_PATH", "OPSET", "ML_OPSET", "export_onnx", "onnx_graph_bytes"]
 
@@ -322,8 +323,9 @@ def export_onnx(model: Any, path: str | Path) -> Path:
 
     Parameters
     ----------
-    model : estimator
-        A fitted model with an ONNX path (:data:`ONNX_MODELS`), fitted on a device's data.
+    model : estimator or path
+        A fitted model with an ONNX path (:data:`ONNX_MODELS`), fitted on a device's data,
+        or the path of its model file.
     path : str or Path
         The ``.onnx`` file to write; its directory must exist.
 
@@ -333,6 +335,6 @@ def export_onnx(model: Any, path: str | Path) -> Path:
         ``path``.
     """
     path = Path(path)
-    blob = onnx_graph_bytes(model)
+    blob = onnx_graph_bytes(model_from(model))
     atomic_write(path, lambda tmp: Path(tmp).write_bytes(blob))
     return path

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,7 @@ __all__ = [
     "describe_model",
     "available_models",
     "load_model",
+    "model_from",
     "MODEL_MODULES",
     "MODELS",
     "is_network",
@@ -172,6 +174,14 @@ def make_model(name: str, **params: Any):
         raise ConfigError(f"unknown parameter {unknown[0]!r} of model {name!r}; valid: "
                           f"{', '.join(valid)}")
     return cls(**params)
+
+
+def model_from(model: Any):
+    """A fitted estimator as given, or loaded from the path of a model file
+    (:func:`load_model`): what prediction and export accept as ``model``."""
+    if isinstance(model, str | os.PathLike):
+        return load_model(Path(model))
+    return model
 
 
 def load_model(path: str | Path):
