@@ -169,6 +169,9 @@ def test_validation_split_is_by_subject():
     assert len(np.unique(groups[va])) == 5
     tr, va = m._split(60, None, seed=0)  # no subject ids: random rows
     assert len(va) == 15 and len(set(tr) | set(va)) == 60
+    with pytest.raises(ConfigError, match="val_fraction=0.9 leaves nothing to train on out "
+                                          "of 6 subjects; lower it"):
+        SDNN(val_fraction=0.9)._split(12, np.repeat(np.arange(6), 2), seed=0)
 
 
 def test_no_validation_trains_on_train_loss(small):

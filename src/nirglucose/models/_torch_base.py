@@ -90,7 +90,14 @@ from ._constructor import (
     TRAINING_PARAMS,
     keyword_init,
 )
-from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
+from ._params import (
+    Integral,
+    Interval,
+    ParameterError,
+    Real,
+    StrOptions,
+    ValidatedParamsMixin,
+)
 from ._torch_io import FORMAT_VERSION, WHITENING_KEY, TorchIOMixin
 from ._torch_predict import NUMPY_ROWS, PREDICT_CHUNK, TorchPredictMixin
 from ._training import (
@@ -581,12 +588,15 @@ class TorchRegressor(
         all_rows = np.arange(n)
         if self.val_fraction == 0 or n < 4:
             return all_rows, None
-        if groups is not None and len(np.unique(groups)) >= 2:
-            splitter = GroupShuffleSplit(n_splits=1, test_size=self.val_fraction, random_state=seed)
-            tr, va = next(splitter.split(all_rows, groups=groups))
-        else:
-            splitter = ShuffleSplit(n_splits=1, test_size=self.val_fraction, random_state=seed)
-            tr, va = next(splitter.split(all_rows))
+        grouped = groups is not None and len(np.unique(groups)) >= 2
+        splitter = (GroupShuffleSplit if grouped else ShuffleSplit)(
+            n_splits=1, test_size=self.val_fraction, random_state=seed)
+        try:
+            tr, va = next(splitter.split(all_rows, groups=groups if grouped else None))
+        except ValueError:  # scikit-learn: the split leaves an empty training set
+            units = f"{len(np.unique(groups))} subjects" if grouped else f"{n} rows"
+            raise ParameterError(f"val_fraction={self.val_fraction:g} leaves nothing to train "
+                                 f"on out of {units}; lower it") from None
         if len(tr) < 2 or len(va) == 0:
             return all_rows, None
         return tr, va
