@@ -279,9 +279,10 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
     known = vals[np.isfinite(vals)]
     if not len(known):
         return []
+    lo, hi = GLUCOSE_REPORTING_RANGE_MGDL
     if (known <= 0).any():
         raise DataError(f"reference glucose {col!r} has values of 0 or below at "
-                        f"{file_rows(vals <= 0, csv)}; a meter reports only positive values")
+                        f"{file_rows(vals <= 0, csv)}; a meter reports {lo:g}-{hi:g} [mg/dL]")
     notes = []
     if unit == "mmol/L":
         if np.median(known) > MMOLL_SUSPECT_MEDIAN_MGDL:
@@ -300,7 +301,6 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
             f"{MMOLL_SUSPECT_MEDIAN_MGDL:g}); declare the unit mmol/L "
             "(--glucose-unit mmol/L; Python glucose_unit='mmol/L') or name it 'glucose_mmoll'"
         )
-    lo, hi = GLUCOSE_REPORTING_RANGE_MGDL
     bad = (vals < lo) | (vals > hi)
     if bad.any():
         raise DataError(
