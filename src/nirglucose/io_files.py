@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from pydantic import TypeAdapter, ValidationError
 
-from .columns import GLUCOSE_REPORTING_RANGE_MGDL, KNOWN_PHYSIOLOGY
+from .columns import GLUCOSE_REPORTING_RANGE_MGDL, KNOWN_PHYSIOLOGY, WEAR_COLUMNS
 from .constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
 from .exceptions import DataError
 
@@ -48,6 +48,8 @@ __all__ = [
     "canonical_name",
     "canonical_columns",
     "check_frame",
+    "check_result_table",
+    "ID_COLUMNS",
     "check_glucose_unit",
     "sniff_csv",
     "read_frame",
@@ -77,7 +79,9 @@ _ALIASES = {
     "glucose_mmol": "glucose_mmoll",
 }
 _ADC_NAME = re.compile(r"^adc_(ref_)?\d+(\.\d+)?$")
-_KNOWN = {*KNOWN_PHYSIOLOGY, *GLUCOSE_COLUMNS, "subject_id", "measurement_id"}
+#: Identity columns: read as written, kept whole, never empty.
+ID_COLUMNS = ("subject_id", "measurement_id")
+_KNOWN = {*KNOWN_PHYSIOLOGY, *GLUCOSE_COLUMNS, *ID_COLUMNS}
 _UNIT = TypeAdapter(Literal["mg/dL", "mmol/L"])
 
 
@@ -154,6 +158,50 @@ def check_frame(frame: Any) -> None:
                         "keep one")
 
 
+#: Column name endings that say a results table's column holds numbers (its unit).
+_NUMBER_SUFFIXES = ("_mgdl", "_pct", "_low", "_high", "_s", "_ms", "_mse", "_nm")
+
+
+def check_result_table(frame: pd.DataFrame, name: str, required: Iterable[str] = (),
+                       text: Iterable[str] = ("model", "label")) -> None:
+    """Refuse a results table (``metrics.csv``, ``sweep.csv``) that lacks ``required``
+    columns or has text in a column of numbers (a hand edit, a corrupted file).
+
+    A column is one of numbers when its name carries a unit or a count (``_mgdl``,
+    ``_pct``, ``_ci_low``, ``n_``...: the units-in-names convention) or any of its cells
+    is a number; the ``text`` columns are not checked.
+
+    Raises
+    ------
+    DataError
+        One line naming the file, the column and the first bad cell.
+
+    Examples
+    --------
+    >>> check_result_table(pd.DataFrame({"model": ["a"], "note": ["x"]}), "m.csv")
+    >>> check_result_table(pd.DataFrame({"model": ["a"], "rmse_mgdl": ["x"]}), "m.csv")
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nirglucose.exceptions.DataError: m.csv: column 'rmse_mgdl' has text 'x' in row 1 ...
+    """
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise DataError(f"{name} lacks column(s) {missing}; it has {list(frame.columns)[:12]}")
+    skip = set(text)
+    for col in frame.columns:
+        raw = frame[col]
+        if col in skip or pd.api.types.is_numeric_dtype(raw) or raw.dtype == bool:
+            continue
+        num = pd.to_numeric(raw, errors="coerce")
+        bad = (num.isna() & raw.notna()).to_numpy()
+        named = str(col).endswith(_NUMBER_SUFFIXES) or str(col).startswith("n_")
+        if (named or num.notna().any()) and bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise DataError(f"{name}: column {col!r} has text {raw.iloc[i]!r} in row {i + 1} "
+                            "where numbers are; rerun what wrote it")
+
+
 def sniff_csv(text: str) -> tuple[str, str]:
     """``(delimiter, decimal)`` of a CSV file's first lines.
 
@@ -192,8 +240,11 @@ def read_frame(path: Path) -> tuple[pd.DataFrame, dict[bytes, bytes], list[str]]
         sep, decimal = sniff_csv(head)
         first = next((ln for ln in head.splitlines() if ln.strip()), "")
         # pandas renames a repeated header (adc_940, adc_940.1): read it as written
-        canonical_columns(next(csv_reader([first], delimiter=sep), []))
-        frame = pd.read_csv(path, sep=sep, decimal=decimal, encoding="utf-8-sig")
+        header = next(csv_reader([first], delimiter=sep), [])
+        canonical_columns(header)
+        # ids as written ("007" stays "007"; plain integers become ints in validate_frame)
+        ids = {c: str for c in header if canonical_name(c) in ID_COLUMNS}
+        frame = pd.read_csv(path, sep=sep, decimal=decimal, encoding="utf-8-sig", dtype=ids)
         frame.attrs["decimal"] = decimal
         raw = {}
         if (sep, decimal) != (",", "."):
@@ -205,6 +256,22 @@ def read_frame(path: Path) -> tuple[pd.DataFrame, dict[bytes, bytes], list[str]]
 
 
 # ------------------------------------------------------------------------ validation
+def _ids(frame: pd.DataFrame, csv: bool) -> None:
+    """Refuse empty ids; in place, text ids that are all plain integers ("12", not
+    "012") become integers, as pandas would have read them, so one file gives the same
+    ids (and folds) as CSV and as Parquet."""
+    for col in [c for c in ID_COLUMNS if c in frame.columns]:
+        raw = frame[col]
+        text = None if pd.api.types.is_numeric_dtype(raw) else raw.astype(str).str.strip()
+        empty = raw.isna().to_numpy() | (text.eq("").to_numpy() if text is not None
+                                          else False)
+        if empty.any():
+            raise DataError(f"column {col!r} is empty at {file_rows(empty, csv)}: every "
+                            "reading needs its id (models validate by subject)")
+        if text is not None and text.str.fullmatch(r"-?(0|[1-9]\d{0,17})").all():
+            frame[col] = text.astype(np.int64)
+
+
 def file_rows(mask: np.ndarray, csv: bool, limit: int = 5) -> str:
     """The flagged rows as the file numbers them (CSV: its lines, header = line 1)."""
     idx = np.flatnonzero(mask)
@@ -345,12 +412,17 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
         One line naming the column, the file's rows and the fix.
     """
     unit = check_glucose_unit(glucose_unit)
+    _ids(frame, csv)
     for col in [c for c in frame.columns if isinstance(c, str) and _ADC_NAME.match(c)]:
         vals = _numeric(frame, col, csv)
         if (vals <= 0).any():
             raise DataError(f"column {col!r} has ADC codes of 0 or below at "
                             f"{file_rows(vals <= 0, csv)}: a dead or disconnected channel")
         if not pd.api.types.is_numeric_dtype(frame[col]):  # numeric ones keep dtype and hash
+            frame[col] = vals
+    for col in [c for c in WEAR_COLUMNS if c in frame.columns]:  # a worn device's times
+        vals = _numeric(frame, col, csv)
+        if not pd.api.types.is_numeric_dtype(frame[col]):
             frame[col] = vals
     for col in [c for c in KNOWN_PHYSIOLOGY if c in frame.columns]:
         vals = _numeric(frame, col, csv)

@@ -257,6 +257,11 @@ def calibrate_by_person(
     if "glucose_mgdl" not in calibration.frame.columns:
         raise DataError("the calibration readings need the reference glucose of each "
                         "reading (glucose_mgdl or glucose_mmoll)")
+    numeric = {pd.api.types.is_numeric_dtype(f["subject_id"])
+               for f in (calibration.frame, ds.frame)}
+    if len(numeric) > 1:
+        raise DataError("the calibration readings and the data spell subject_id differently "
+                        "(numbers in one, text in the other); use the same ids in both")
     reference_mgdl = pd.to_numeric(calibration.frame["glucose_mgdl"], errors="coerce"
                                    ).to_numpy(float)
     if not np.isfinite(reference_mgdl).all():

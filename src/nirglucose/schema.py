@@ -184,6 +184,9 @@ class DeviceSchema:
             raise DataError(
                 "model file has a malformed 'schema' training range; refit the model"
             ) from None
+        if not np.isfinite([*lo, *hi]).all():
+            raise DataError("model file's schema training range has NaN or infinite values; "
+                            "the file is corrupt, refit the model")
         if len(lo) != len(hi) or (lo and len(lo) != len(s.raw_columns)):
             raise DataError(
                 "model file's schema training range does not match its columns; refit the model"
@@ -446,6 +449,10 @@ def check_fit_size(n_rows: int, groups: Any = None) -> None:
             f"too few rows to fit: {n_rows} sample(s); every model needs at least {MIN_FIT_ROWS}"
         )
     if groups is not None:
+        missing = pd.isna(np.asarray(groups, dtype=object))
+        if missing.any():
+            raise DataError(f"subject ids (groups) are empty at {_first_rows(missing)}: "
+                            "every reading needs its subject's id (validation is by subject)")
         n_sub = len(np.unique(np.asarray(groups)))
         if n_sub < MIN_FIT_SUBJECTS:
             raise DataError(

@@ -65,6 +65,8 @@ def fit_model(
 
     _check_seed(seed)
     _check_fit_args(out, intervals, calibration_share)
+    if cv_folds == 1 or cv_folds < 0:
+        raise UserError(f"--cv-folds {cv_folds}: give 0 (no cross-validation) or 2 or more")
     cls = get_model_class(model)  # unknown names raise with the valid ones
     # nothing is tuned for a team's device: networks early-stop on held-out subjects
     estimator = cls(**seeded_params(cls, untuned_params(model), seed))
@@ -177,6 +179,10 @@ def predict_glucose(
         raise UserError(f"--out {str(out)!r}: predictions are written as .csv")
     check_glucose_unit(glucose_unit)
     _check_out_file(out)
+    for option, given in (("--data", data), ("--calibration", calibration)):
+        if given is not None and out.resolve() == given.resolve():
+            raise UserError(f"--out {str(out)!r} is the {option} file: writing the predictions "
+                            "there would replace your measurements; choose another --out")
     with _warnings_as_lines():
         result = predict(model, data, calibration, glucose_unit=glucose_unit)
     table = result.frame

@@ -66,6 +66,7 @@ from ..api import simulate
 from ..config import resolve_config
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
+from ..io_files import check_result_table
 from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks
@@ -481,6 +482,8 @@ def load_sweep(sweep_dir: str | Path) -> SweepResult:
         raise DataError(
             f"{str(d)!r} is not a sweep directory (sweep.csv and sweep_meta.json): {exc}"
         ) from None
+    check_result_table(frame, f"sweep.csv in {str(d)!r}", ("scenario", "model", "seed"),
+                       text=("study", "scenario", "model", *meta.get("label_columns", [])))
     labels = meta.get("label_columns", [])
     summary = summarize_sweep(frame, labels)
     effects = None

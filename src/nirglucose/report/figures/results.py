@@ -20,6 +20,7 @@ import pandas as pd
 from ...config import ScenarioConfig
 from ...dataset import load_dataset
 from ...exceptions import DataError
+from ...io_files import check_result_table
 from .inputs import model_order
 
 __all__ = ["REQUIRED_METRIC_COLUMNS", "REQUIRED_PREDICTION_COLUMNS", "Results",
@@ -222,7 +223,7 @@ def _load_metrics(d: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     if metrics is None:
         raise DataError(f"results directory {str(d)!r} is incomplete: no metrics.csv or "
                         f"metrics.json (rerun `nirglucose benchmark --out {d}`)")
-    _require_columns(metrics, REQUIRED_METRIC_COLUMNS, "metrics.csv")
+    check_result_table(metrics, f"metrics.csv in {str(d)!r}", REQUIRED_METRIC_COLUMNS)
     if metrics.empty:
         raise DataError(f"metrics.csv in {str(d)!r} has no rows")
     return metrics.assign(model=metrics["model"].astype(str)), meta
