@@ -112,3 +112,23 @@ def test_ctrl_c_in_process_exits_130(cli, workdir, monkeypatch):
     code, _, err = cli("benchmark", "--out", "res", "--subjects", 4, "--models", "ebl")
     assert code == 130
     assert err.strip().startswith("error: interrupted") and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(("sig", "status", "word"), [(signal.SIGTERM, 143, "terminated"),
+                                                     (signal.SIGINT, 130, "interrupted")])
+def test_a_signal_while_the_script_starts_is_one_line(tmp_path, sig, status, word):
+    """The console script handles the signal before the package's imports (about 1.5 s)
+    start; later, the command's own handler does: one line and 130 / 143 either way."""
+    script = Path(sys.executable).parent / "nirglucose"
+    if not script.is_file():
+        pytest.skip("the console script is not installed beside this Python")
+    proc = subprocess.Popen([str(script), "simulate", "--subjects", "400", "--out",
+                             str(tmp_path / "d.csv")], env=subprocess_env(), cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.3)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == status, err
+    lines = [ln for ln in err.splitlines() if ln.strip() and not PROGRESS.match(ln)]
+    assert len(lines) == 1 and lines[0].startswith(f"error: {word}"), err
+    assert not (tmp_path / "d.csv").exists()
