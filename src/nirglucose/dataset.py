@@ -402,6 +402,8 @@ def load_dataset(
         raise
     except (OSError, ValueError, pa.ArrowException) as exc:
         raise DataError(f"cannot read {str(path)!r}: {exc}") from None
+    if not len(frame):
+        raise DataError(f"{str(path)!r} holds no measurements (a header, no rows)")
     meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
     notes += validate_frame(frame, csv=path.suffix == ".csv", glucose_unit=glucose_unit)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}

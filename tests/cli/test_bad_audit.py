@@ -98,3 +98,37 @@ def test_report_refuses_text_in_a_metric_and_a_garbage_sweep(cli, workdir):
     (workdir / "s" / "sweep_meta.json").write_text("{}")
     code, _, err = cli("report", "b", "--out", "r.html", "--sweep", "s")
     assert_one_line_error(code, err, contains=["sweep.csv in", "lacks column(s)"])
+
+
+def test_simulation_options_with_data_are_refused(cli, workdir, device):
+    code, _, err = cli("benchmark", "--out", "b", "--data", "d.csv", "--subjects", 5,
+                       "--preset", "wearable", "--models", "pls")
+    assert_one_line_error(code, err, contains=["--preset, --subjects describe a simulation"])
+    assert not (workdir / "b").exists()
+
+
+def test_a_header_only_file_says_so(cli, workdir, device):
+    (workdir / "h.csv").write_text((workdir / "d.csv").read_text().splitlines()[0] + "\n")
+    code, _, err = cli("benchmark", "--out", "b", "--data", "h.csv", "--models", "pls")
+    assert_one_line_error(code, err, contains=["holds no measurements"])
+
+
+@pytest.mark.parametrize("args, says", [
+    (("export-onnx", "--model", "m.json", "--out", "m.txt"), "written as .onnx"),
+    (("simulate", "--out", "z.csv", "--subjects", 2, "--set", "leds.band_points=true"),
+     "leds.band_points: takes a number, not true"),
+])
+def test_wrong_suffixes_and_booleans_for_numbers(cli, workdir, device, args, says):
+    code, _, err = cli(*args)
+    assert_one_line_error(code, err, contains=[says])
+
+
+def test_report_output_must_be_html_and_figures_a_directory(cli, workdir, device):
+    code, _, err = cli("benchmark", "--out", "b", "--data", "d.csv", "--models", "pls",
+                       "--folds", 2, "--repeats", 1, "--resamples", 100, "--no-references",
+                       "--no-ablation", "--jobs", 1)
+    assert code == 0, err
+    code, _, err = cli("report", "b", "--out", "r.txt")
+    assert_one_line_error(code, err, contains=["written as .html"])
+    code, _, err = cli("report", "b", "--figures", "d.csv")
+    assert_one_line_error(code, err, contains=["--figures 'd.csv' is a file"])

@@ -54,6 +54,7 @@ _DropOneOption = Annotated[
 @app.command()
 @_tidy_out
 def benchmark(
+    ctx: typer.Context,
     out: OutDirOption,
     preset: Annotated[
         str,
@@ -101,6 +102,7 @@ def benchmark(
     of the --data file and of the printed table."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
+    _refuse_simulation_options(ctx, data)
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
@@ -115,6 +117,16 @@ def benchmark(
             say_notes(ds)  # after the checks: an error stays one line
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
                        references, ablation, calibration, glucose_unit, drop_one)
+
+
+def _refuse_simulation_options(ctx: typer.Context, data: Path | None) -> None:
+    """With --data nothing is simulated: --preset, --subjects and --per-subject given on
+    the command line would be silently ignored, so they are refused."""
+    given = [f"--{name.replace('_', '-')}" for name in ("preset", "subjects", "per_subject")
+             if getattr(ctx.get_parameter_source(name), "name", None) == "COMMANDLINE"]
+    if data is not None and given:
+        raise UserError(f"{', '.join(given)} describe a simulation; with --data nothing is "
+                        "simulated: leave them out")
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,

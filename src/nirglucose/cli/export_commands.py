@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ._app import app
-from ._common import _check_out_file, _say
+from ._common import UserError, _check_out_file, _say
 
 
 @app.command("export-onnx")
@@ -23,6 +23,8 @@ def export_onnx_file(
     from ..export.onnx_export import export_onnx
     from ..models import load_model
 
+    if out.suffix != ".onnx":
+        raise UserError(f"--out {str(out)!r}: the model is written as .onnx")
     _check_out_file(out)
     path = export_onnx(load_model(model), out)
     _say(f"wrote {path} (input 'raw', outputs 'glucose_mgdl' [mg/dL] and 'status')", err=False)

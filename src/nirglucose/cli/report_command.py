@@ -29,6 +29,11 @@ def report(
     from ..report import build_report
     from ..report.wear import build_wear_report, is_wear_results
 
+    if out is not None and out.suffix not in (".html", ".htm"):
+        raise UserError(f"--out {str(out)!r}: the report is written as .html")
+    if figures is not None and figures.exists() and not figures.is_dir():
+        raise UserError(f"--figures {str(figures)!r} is a file; give a directory for the "
+                        "PNG and SVG figures")
     if results.is_dir() and is_wear_results(results):  # a worn run (wear-benchmark)
         if out is not None:
             _check_out_file(out)

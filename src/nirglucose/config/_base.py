@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
 #: Magnitude no setting may exceed, whatever its own bounds: the largest default is
 #: 1e5 (ambient lux, TIA gain in ohm); beyond 1e9 a value can only overflow the
@@ -17,6 +17,17 @@ class _Model(BaseModel):
     model_config = ConfigDict(
         extra="forbid", frozen=True, validate_default=True, allow_inf_nan=False
     )
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_a_number(cls, v: Any, info: ValidationInfo) -> Any:
+        # pydantic reads True as 1 in a number field: `--set leds.band_points=true`
+        # would silently become 1 point
+        if isinstance(v, bool) and info.field_name is not None:
+            ann = cls.model_fields[info.field_name].annotation
+            if ann is not bool and bool not in get_args(ann):
+                raise ValueError(f"takes a number, not {str(v).lower()}")
+        return v
 
     @field_validator("*")
     @classmethod

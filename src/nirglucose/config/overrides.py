@@ -208,7 +208,8 @@ def resolve_config(
             if msg is not None:
                 raise ConfigError(msg) from None
         unit = unit_of(loc)
+        msg = err["msg"].removeprefix("Value error, ")  # pydantic's prefix for a validator's
         raise ConfigError(
-            f"invalid value for {loc}: {err['msg']}{f' [{unit}]' if unit else ''} "
+            f"invalid value for {loc}: {msg}{f' [{unit}]' if unit else ''} "
             f"(got {err.get('input')!r})"
         ) from None

@@ -420,10 +420,10 @@ def estimated_lag(
         if idx.shape[0] >= 3:
             dts = np.diff(tt)
             if not np.allclose(dts, dts[0], rtol=1e-6, atol=1e-9):
+                who = uniq[s_sorted[a:a + 1]].tolist()[0]  # a Python value, not np.int64(3)
                 raise DataError(
-                    f"subject {uniq[s_sorted[a]]!r}: readings are not uniformly spaced in "
-                    "time (intervals from {:g} to {:g} min); resample first".format(
-                        dts.min(), dts.max()))
+                    f"subject {who!r}: readings are not uniformly spaced in time (intervals "
+                    f"from {dts.min():g} to {dts.max():g} min); resample first")
             dt = float(dts[0])
             k, c = _best_shift(ref[idx], pred[idx], int(np.floor(max_lag_min / dt + 1e-9)), 3)
             if np.isfinite(c):

@@ -119,8 +119,9 @@ class CausalKalmanSmoother:
         for a, b in zip(starts, ends, strict=True):
             idx = order[a:b]
             if np.any(np.diff(t_sorted[a:b]) <= 0):
-                raise DataError(f"subject {s_sorted[a]!r} has two readings at one time; "
-                                "times must be distinct within a subject")
+                who = s_sorted[a:a + 1].tolist()[0]  # a Python value, not np.int64(3)
+                raise DataError(f"subject {who!r} has two readings at one time; times must be "
+                                "distinct within a subject")
             out[idx] = self._filter(z[idx], t[idx])
         return out
 
