@@ -237,13 +237,19 @@ def test_rerun_reuses_tasks_and_recomputes_deleted_or_corrupt_ones(result, data)
 
 def test_interrupted_run_resumes_without_recomputing_finished_tasks(data, tmp_path):
     out = tmp_path / "run"
+    # a previous, finished run in the same directory (another seed, say)
+    run_benchmark(data, ["test-ridge"], n_splits=3, repeats=1, seed=7, out=out, **FAST)
+    (out / "report.html").write_text("<html>the previous run</html>")
     RidgeModel.fits, RidgeModel.fail_on_fit = 0, 4
     try:
         with pytest.raises(RuntimeError, match="simulated crash"):
             run_benchmark(data, ["test-ridge"], n_splits=3, repeats=2, out=out, **FAST)
     finally:
         RidgeModel.fail_on_fit = None
-    assert len(list((out / ".tasks").glob("*.json"))) == 3
+    # nothing left that looks like this run's results: only the task files (and the
+    # data, which may be what this run reads)
+    assert sorted(p.name for p in out.iterdir()) in ([".tasks"], [".tasks", "dataset.parquet"])
+    assert len(list((out / ".tasks").glob("*.json"))) == 3 + 3
     RidgeModel.fits = 0
     res = run_benchmark(data, ["test-ridge"], n_splits=3, repeats=2, out=out, **FAST)
     assert RidgeModel.fits == 3

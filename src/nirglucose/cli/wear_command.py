@@ -74,7 +74,8 @@ def wear_benchmark(
 ) -> None:
     """Benchmark a device worn for days: every model on the series, a causal smoother,
     calibration schedules and the CGM standards (wear_*.csv)."""
-    from ..evaluation.wear_benchmark import WEAR_MODELS, run_wear_benchmark
+    from ..evaluation.tasks import clear_outputs
+    from ..evaluation.wear_benchmark import WEAR_FILES, WEAR_MODELS, run_wear_benchmark
 
     _check_counts(("--subjects", subjects), ("--wear-days", wear_days),
                   ("--every-min", every_min), ("--folds", folds),
@@ -88,6 +89,7 @@ def wear_benchmark(
     _check_out_dir(out)
     runs, overrides = _benchmark_runs(preset, data, set_, out)  # the benchmark's own rule
     for p, run_out in runs:
+        clear_outputs(run_out, (*WEAR_FILES, "report.html"))  # a stopped run: no stale files
         ds = _worn_data(p, data, subjects, wear_days, every_min, seed, overrides)
         with _warnings_as_lines():
             res = run_wear_benchmark(ds, names, preset=p, n_splits=folds, seed=seed,

@@ -104,6 +104,7 @@ from .benchmark_result import (
     PINN_MODELS,
     PREDICTION_COLUMNS,
     REFERENCE_MODELS,
+    STALE_FILES,
     BenchmarkResult,
     ablation_base,
     lambda_row,
@@ -754,6 +755,7 @@ def run_benchmark(
                             oracle_reference=oracle_reference, ablation=ablation)
     plan = _plan(dataset, models, opts)
     cache = tasks.TaskCache(out, valid=_valid_result)
+    tasks.clear_outputs(out, STALE_FILES)
     specs = plan.specs()
     pending = cache.lookup(
         specs, _task_tag, None if on_task is None else lambda spec: on_task(spec, True)

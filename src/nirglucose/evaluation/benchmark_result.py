@@ -31,6 +31,7 @@ __all__ = [
     "COMPARISON_COLUMNS",
     "DROP_ONE_COLUMNS",
     "OUTPUT_FILES",
+    "STALE_FILES",
     "ORACLE",
     "REFERENCE_MODELS",
     "PINN_MODELS",
@@ -193,6 +194,12 @@ OUTPUT_FILES = (
     "dataset.parquet",
     "meta.json",
 )
+
+#: What a new run into an existing directory removes before it computes: the previous
+#: run's results (:data:`OUTPUT_FILES`) and the report drawn from them, which would
+#: otherwise look like this run's were it stopped half-way. Not ``dataset.parquet``:
+#: it may be the very file this run reads (``--data OUT/dataset.parquet``).
+STALE_FILES = (*(f for f in OUTPUT_FILES if f != "dataset.parquet"), "report.html")
 
 
 # --------------------------------------------------------------------------- result

@@ -761,6 +761,7 @@ def run_sweep(
     keys = [tasks.task_key(s) for s in specs]
     spec_of = dict(zip(keys, specs, strict=True))
     cache = tasks.TaskCache(out, valid=_valid_result)
+    tasks.clear_outputs(out, SWEEP_FILES)
     pending = cache.lookup(
         spec_of, _task_tag, None if on_task is None else lambda spec: on_task(spec, True)
     )

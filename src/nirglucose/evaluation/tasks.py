@@ -41,6 +41,7 @@ __all__ = [
     "TASK_FORMAT",
     "TaskCache",
     "canonical",
+    "clear_outputs",
     "check_worker",
     "checksum",
     "derived_seed",
@@ -164,6 +165,16 @@ def prepare_out(out: str | Path) -> Path:
             raise DataError(f"output directory {str(out.parent)!r} does not exist; create it first")
         out.mkdir()
     return out
+
+
+def clear_outputs(out: str | Path | None, names: Iterable[str]) -> None:
+    """Remove a previous run's final files ``names`` from ``out`` before this run
+    computes, so a run stopped half-way leaves nothing that looks complete (its finished
+    task files stay in ``out/.tasks``: the rerun resumes from them)."""
+    if out is None or not Path(out).is_dir():
+        return
+    for name in names:
+        (Path(out) / name).unlink(missing_ok=True)
 
 
 def _safe(text: str) -> str:

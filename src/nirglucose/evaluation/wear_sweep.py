@@ -123,6 +123,7 @@ def run_wear_sweep(
         "n_subjects": int(n_subjects), "every_min": int(every_min), "folds": int(folds),
         "models": list(models), "schedules": list(schedules), "n_boot": int(n_boot)})
     cache = tasks.TaskCache(out, valid=lambda spec, res: "rows" in res)
+    tasks.clear_outputs(out, ("wear_sweep.csv", "wear_summary.csv"))
     pending = cache.lookup(specs, _tag, on_cached=(
         None if on_task is None else lambda spec: on_task(dict(spec), True)))
     stream = run_unordered(run_wear_task, [specs[k] for k in pending], jobs=jobs,
