@@ -146,6 +146,12 @@ def test_one_override_changes_the_led_set():
     assert '"power_mw": 3.0' in cfg.to_json()
 
 
+def test_led_records_must_be_json_and_part_names_may_go_unquoted():
+    with pytest.raises(ConfigError, match="is not valid JSON .*no nan"):
+        parse_override('leds.emitters=[{"wavelength_nm": nan}]')
+    assert parse_override("leds=[L8957, G17190-005K]") == ("leds", ["L8957", "G17190-005K"])
+
+
 @pytest.mark.parametrize("overrides, says", [
     ({"leds": {"wavelength_nm": 850}}, "leds must be a list of LED records or part names"),
     (["hardware.adc_bits"], "overrides must be a dict of dotted keys.*got a list"),

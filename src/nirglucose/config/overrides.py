@@ -15,6 +15,9 @@ from .leds import LED, LEGACY_LED_KEYS, _merge_legacy_leds
 from .presets import PRESETS
 from .scenario import DETECTOR_KEYS, ScenarioConfig
 
+#: A bracketed list of bare names, ``[L8957, G17190-005K]`` (part names typed unquoted).
+_BARE_NAMES = re.compile(r"\[\s*[A-Za-z][\w.\-]*(\s*,\s*[A-Za-z][\w.\-]*)*\s*\]")
+
 
 def parse_override(text: str) -> tuple[str, Any]:
     """Parse ``"key=value"`` from the command line; the value is read as JSON if it can be.
@@ -25,6 +28,8 @@ def parse_override(text: str) -> tuple[str, Any]:
     ('hardware.adc_bits', 14)
     >>> parse_override("environment.temperature_c=[5, 35]")
     ('environment.temperature_c', [5, 35])
+    >>> parse_override("leds=[L8957, L1909]")
+    ('leds', ['L8957', 'L1909'])
     """
     if "=" not in text:
         raise ConfigError(f"override {text!r} must look like key=value, e.g. hardware.adc_bits=14")
@@ -34,7 +39,13 @@ def parse_override(text: str) -> tuple[str, Any]:
         raise ConfigError(f"override {text!r} has an empty key")
     try:
         value = json.loads(raw)
-    except json.JSONDecodeError:
+    except json.JSONDecodeError as exc:
+        if _BARE_NAMES.fullmatch(raw):  # [L8957, L1909]: part names without quotes
+            return key, [n.strip() for n in raw[1:-1].split(",")]
+        if "{" in raw:  # records: only JSON reads them
+            raise ConfigError(
+                f"override {key}: {raw!r} is not valid JSON ({exc.msg} at character "
+                f"{exc.pos + 1}); quote names, write numbers plainly (no nan)") from None
         lowered = raw.lower()
         value = {"true": True, "false": False}.get(lowered, raw)
     return key, value
