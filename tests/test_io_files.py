@@ -120,6 +120,18 @@ def test_metrics_bad_inputs_are_said():
         assert iso15197_2013_passes([80, 200], [90, 220])
 
 
+def test_an_leds_wavelength_is_read_however_it_is_spelled(tmp_path):
+    frame = ng.simulate("paper", n_subjects=6, per_subject=2, seed=0).frame
+    path = tmp_path / "spelled.csv"
+    frame.rename(columns={"adc_850": "ADC_0850", "adc_ref_850": "adc_ref_850.0"}).to_csv(
+        path, index=False)
+    ds = ng.load_dataset(path)
+    assert {"adc_850", "adc_ref_850"} <= set(ds.frame.columns)
+    assert "read column 'ADC_0850' as 'adc_850'" in ds.metadata["read_notes"]
+    with pytest.raises(DataError, match="the same LED|both read as 'adc_850'"):
+        canonical_columns(["adc_850", "adc_850.0"])
+
+
 def test_a_header_given_twice_is_refused_not_renamed(tmp_path):
     """pandas would read a repeated adc_940 as adc_940.1, a 940.1 nm LED: refused."""
     frame = ng.simulate("paper", n_subjects=6, per_subject=2, seed=0).frame

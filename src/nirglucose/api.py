@@ -9,7 +9,7 @@ import numpy as np
 from .config import ScenarioConfig, resolve_config
 from .config.overrides import check_overrides
 from .dataset import Dataset, load_dataset
-from .exceptions import ConfigError, check_positive_int
+from .exceptions import ConfigError, check_positive_int, check_seed
 from .resources import check_simulation_size
 
 __all__ = ["simulate", "simulate_wear"]
@@ -84,8 +84,7 @@ def simulate(
 def _check_seed_and_jobs(seed: Any, n_jobs: Any) -> None:
     """Refuse (one line) a seed that is no non-negative integer, and worker counts other
     than a positive integer or -1 (every core, joblib's convention)."""
-    if not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0:
-        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    check_seed(seed)
     if (not isinstance(n_jobs, int | np.integer) or isinstance(n_jobs, bool)
             or not (n_jobs >= 1 or n_jobs == -1)):
         raise ConfigError(f"n_jobs must be a positive integer or -1 (every core), got {n_jobs!r}")

@@ -13,6 +13,7 @@ from .exceptions import DataError
 
 __all__ = [
     "PMF_COLUMNS",
+    "ID_COLUMNS",
     "PPG_COLUMNS",
     "KNOWN_PHYSIOLOGY",
     "DEFAULT_ADC_BITS",
@@ -43,6 +44,10 @@ PMF_COLUMNS = (
     "humidity_pct",
     "pressure_mbar",
 )
+#: Identity columns, in the order outputs give them: read as written, kept whole, never
+#: empty (:func:`nirglucose.io_files.validate_frame`).
+ID_COLUMNS = ("measurement_id", "subject_id")
+
 #: Columns of the PPG perfusion and saturation estimates (``device.ppg_perfusion_spo2``),
 #: present only when that capability is on.
 PPG_COLUMNS = ("blood_volume_pct", "spo2_pct")
@@ -80,7 +85,9 @@ def led_wavelengths_in(columns: Iterable[Any]) -> tuple[float, ...]:
     Raises
     ------
     DataError
-        If two columns name the same wavelength (``adc_850`` and ``adc_850.0``).
+        If a column spells its wavelength otherwise than :func:`adc_columns` does
+        (``adc_850.0``, ``adc_0850``: a file's are renamed when it is read), or two
+        columns name the same wavelength.
 
     Examples
     --------
@@ -91,6 +98,10 @@ def led_wavelengths_in(columns: Iterable[Any]) -> tuple[float, ...]:
     for c in columns:
         if isinstance(c, str) and (m := ADC_COLUMN_RE.match(c)):
             w = float(m.group(1))
+            if c != f"adc_{_wl_label(w)}":  # read from a file, it would have been renamed
+                raise DataError(f"column {c!r} names the {w:g} nm LED; spell it "
+                                f"'adc_{_wl_label(w)}' (and its reference "
+                                f"'adc_ref_{_wl_label(w)}')")
             if w in found:
                 raise DataError(f"columns {found[w]!r} and {c!r} name the same LED "
                                 f"({w:g} nm); keep one of them")

@@ -18,6 +18,7 @@ __all__ = [
     "NotFittedError",
     "unknown_name",
     "check_positive_int",
+    "check_seed",
 ]
 
 
@@ -49,6 +50,24 @@ def unknown_name(kind: str, name: object, valid: Iterable[str]) -> str:
     close = difflib.get_close_matches(str(name), valid, n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ";"
     return f"unknown {kind} {name!r}{hint} valid: {', '.join(valid)}"
+
+
+def check_seed(value: object) -> int:
+    """``value`` as an ``int`` when it is a non-negative integer (not a bool): a seed.
+
+    Raises
+    ------
+    ConfigError
+        Anything else.
+
+    Examples
+    --------
+    >>> check_seed(0)
+    0
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
+        raise ConfigError(f"seed must be a non-negative integer, got {value!r}")
+    return int(value)
 
 
 def check_positive_int(name: str, value: object) -> int:

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from pydantic import TypeAdapter, ValidationError
 
-from .columns import GLUCOSE_REPORTING_RANGE_MGDL, KNOWN_PHYSIOLOGY, WEAR_COLUMNS
+from .columns import GLUCOSE_REPORTING_RANGE_MGDL, ID_COLUMNS, KNOWN_PHYSIOLOGY, WEAR_COLUMNS
 from .constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
 from .exceptions import DataError
 
@@ -49,7 +49,6 @@ __all__ = [
     "canonical_columns",
     "check_frame",
     "check_result_table",
-    "ID_COLUMNS",
     "check_glucose_unit",
     "sniff_csv",
     "read_frame",
@@ -79,8 +78,6 @@ _ALIASES = {
     "glucose_mmol": "glucose_mmoll",
 }
 _ADC_NAME = re.compile(r"^adc_(ref_)?\d+(\.\d+)?$")
-#: Identity columns: read as written, kept whole, never empty.
-ID_COLUMNS = ("subject_id", "measurement_id")
 _KNOWN = {*KNOWN_PHYSIOLOGY, *GLUCOSE_COLUMNS, *ID_COLUMNS}
 _UNIT = TypeAdapter(Literal["mg/dL", "mmol/L"])
 
@@ -98,8 +95,19 @@ def check_glucose_unit(unit: Any) -> str | None:
 
 
 def canonical_name(name: Any) -> str:
-    """A header as the schema spells it: stripped, case-folded, spaces and '-' as '_'."""
+    """A header as the schema spells it: stripped, case-folded, spaces and '-' as '_',
+    an LED's wavelength as :func:`~nirglucose.columns.adc_columns` writes it
+    (``adc_0850``, ``adc_850.0`` -> ``adc_850``).
+
+    Examples
+    --------
+    >>> canonical_name(" ADC_Ref_0940.0 ")
+    'adc_ref_940'
+    """
     text = re.sub(r"[\s\-]+", "_", str(name).strip().casefold())
+    m = _ADC_NAME.match(text)
+    if m:
+        text = f"adc_{m.group(1) or ''}{float(text.rsplit('_', 1)[1]):g}"
     return _ALIASES.get(text, text)
 
 
@@ -115,10 +123,7 @@ def canonical_columns(columns: Iterable[Any]) -> tuple[dict[Any, str], list[str]
         Two headers that read as the same column.
     """
     columns = list(columns)
-    twice = sorted({str(c) for c in columns if columns.count(c) > 1})
-    if twice:
-        raise DataError(f"column {twice[0]!r} appears {columns.count(twice[0])} times in the "
-                        "header; keep one")
+    _refuse_repeated(columns, " in the header")
     renames: dict[Any, str] = {}
     for c in columns:
         new = canonical_name(c)
@@ -131,6 +136,14 @@ def canonical_columns(columns: Iterable[Any]) -> tuple[dict[Any, str], list[str]
         raise DataError(f"columns {' and '.join(same)} both read as {dup[0]!r}; keep one")
     notes = [f"read column {c!r} as {n!r}" for c, n in renames.items()]
     return renames, notes
+
+
+def _refuse_repeated(columns: Iterable[Any], where: str = "") -> None:
+    """DataError naming the first column name given more than once."""
+    names = pd.Index(list(columns))
+    if names.has_duplicates:
+        c = names[names.duplicated()][0]
+        raise DataError(f"column {c!r} appears {int((names == c).sum())} times{where}; keep one")
 
 
 def check_frame(frame: Any) -> None:
@@ -152,10 +165,7 @@ def check_frame(frame: Any) -> None:
     if not isinstance(frame, pd.DataFrame):
         raise DataError(f"expected a pandas DataFrame of measurements, got "
                         f"{type(frame).__name__}; read a file with nirglucose.load_dataset")
-    if frame.columns.has_duplicates:
-        c = frame.columns[frame.columns.duplicated()][0]
-        raise DataError(f"column {c!r} appears {int((frame.columns == c).sum())} times; "
-                        "keep one")
+    _refuse_repeated(frame.columns)
 
 
 #: Column name endings that say a results table's column holds numbers (its unit).
@@ -241,7 +251,7 @@ def read_frame(path: Path) -> tuple[pd.DataFrame, dict[bytes, bytes], list[str]]
         first = next((ln for ln in head.splitlines() if ln.strip()), "")
         # pandas renames a repeated header (adc_940, adc_940.1): read it as written
         header = next(csv_reader([first], delimiter=sep), [])
-        canonical_columns(header)
+        _refuse_repeated(header, " in the header")
         # ids as written ("007" stays "007"; plain integers become ints in validate_frame)
         ids = {c: str for c in header if canonical_name(c) in ID_COLUMNS}
         frame = pd.read_csv(path, sep=sep, decimal=decimal, encoding="utf-8-sig", dtype=ids)
@@ -268,6 +278,7 @@ def _ids(frame: pd.DataFrame, csv: bool) -> None:
         if empty.any():
             raise DataError(f"column {col!r} is empty at {file_rows(empty, csv)}: every "
                             "reading needs its id (models validate by subject)")
+        # an int64 holds every integer of up to 18 digits
         if text is not None and text.str.fullmatch(r"-?(0|[1-9]\d{0,17})").all():
             frame[col] = text.astype(np.int64)
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .columns import ID_COLUMNS
 from .dataset import Dataset, load_dataset
 from .evaluation.calibration import apply_offset
 from .evaluation.conformal import calibration_of, interval
@@ -161,9 +162,9 @@ def predict(
     pred = check_predictions(estimator.predict(ds), source)
     calibrated = None
     if calibration is not None:
-        cal, _ = _readings(calibration, unit)
+        cal, cal_csv = _readings(calibration, unit)
         name = str(calibration) if isinstance(calibration, str | os.PathLike) else "calibration"
-        pred, calibrated = calibrate_by_person(estimator, ds, pred, cal, name)
+        pred, calibrated = calibrate_by_person(estimator, ds, pred, cal, name, csv=cal_csv)
     table, has_intervals = prediction_table(estimator, ds, pred, calibrated)
     return PredictionResult(
         frame=in_unit_columns(table, unit),
@@ -224,6 +225,8 @@ def calibrate_by_person(
     predicted_mgdl: np.ndarray,
     calibration: Dataset,
     source: str | Path = "calibration",
+    *,
+    csv: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Each person's mean error on their calibration readings added to their predictions.
 
@@ -239,6 +242,8 @@ def calibrate_by_person(
         A person's readings with the fingerstick ``glucose_mgdl`` and ``subject_id``.
     source : str or path
         Name of the calibration readings in error messages.
+    csv : bool
+        Whether they were read from a CSV file (messages then give its line numbers).
 
     Returns
     -------
@@ -266,7 +271,7 @@ def calibrate_by_person(
                                    ).to_numpy(float)
     if not np.isfinite(reference_mgdl).all():
         raise DataError(f"the calibration readings have no reference glucose at "
-                        f"{file_rows(~np.isfinite(reference_mgdl), csv=False)}: every "
+                        f"{file_rows(~np.isfinite(reference_mgdl), csv=csv)}: every "
                         "calibration reading needs its fingerstick value")
     _warn_overlap(estimator, calibration, ds)
     cal_pred = check_predictions(estimator.predict(calibration), source)
@@ -306,7 +311,7 @@ def prediction_table(
 ) -> tuple[pd.DataFrame, bool]:
     """The rows of the predictions file and whether the model carried an interval
     calibration (columns: see :class:`PredictionResult`; glucose in mg/dL)."""
-    ids = [c for c in ("measurement_id", "subject_id") if c in ds.frame.columns]
+    ids = [c for c in ID_COLUMNS if c in ds.frame.columns]
     table = ds.frame[ids].reset_index(drop=True).copy()
     table["predicted_glucose_mgdl"] = pd.Series(predicted_mgdl, dtype=float).to_numpy()
     lower, upper, has_intervals = _interval_bounds(estimator, predicted_mgdl, calibrated)

@@ -127,3 +127,28 @@ def test_report_output_must_be_html_and_figures_a_directory(cli, workdir, device
     assert_one_line_error(code, err, contains=["written as .html"])
     code, _, err = cli("report", "b", "--figures", "d.csv")
     assert_one_line_error(code, err, contains=["--figures 'd.csv' is a file"])
+
+
+def test_a_bad_data_file_deletes_no_previous_results(cli, workdir, device):
+    (workdir / "w").mkdir()
+    (workdir / "w" / "wear_schedules.csv").write_text("a previous run's table\n")
+    code, _, err = cli("wear-benchmark", "--out", "w", "--data", "d.csv")  # no time_min
+    assert_one_line_error(code, err, contains=["has no time_min column"])
+    assert (workdir / "w" / "wear_schedules.csv").exists()
+    code, _, err = cli("wear-benchmark", "--out", "w", "--data", "d.csv", "--wear-days", 2)
+    assert_one_line_error(code, err, contains=["--wear-days describe a simulation"])
+
+
+def test_several_presets_clear_every_preset_and_the_comparison_first(tmp_path):
+    from nirglucose.cli._common import clear_previous_runs
+
+    runs = [("paper", tmp_path / "paper"), ("wearable", tmp_path / "wearable")]
+    for _, d in runs:
+        d.mkdir()
+        (d / "metrics.csv").write_text("old")
+        (d / "notes.txt").write_text("the user's")
+    (tmp_path / "report.html").write_text("old")
+    clear_previous_runs(runs[:1], tmp_path, ("metrics.csv",))  # one run clears its own later
+    assert (tmp_path / "report.html").exists()
+    clear_previous_runs(runs, tmp_path, ("metrics.csv",))
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["notes.txt"] * 2

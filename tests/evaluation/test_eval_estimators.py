@@ -227,5 +227,5 @@ def test_measured_frame_reads_channels_as_the_schema_does(data):
     assert "adc_940.5" in X.columns and "adc_ref_940.5" in X.columns
     with pytest.raises(ng.DataError, match=r"some LEDs only: missing \['adc_ref_850'\]"):
         measured_frame(Dataset(frame.drop(columns=["adc_ref_850"]), seed=0))
-    with pytest.raises(ng.DataError, match="name the same LED"):
+    with pytest.raises(ng.DataError, match="'adc_850.0' names the 850 nm LED; spell it 'adc_850'"):
         measured_frame(Dataset(frame.assign(**{"adc_850.0": frame["adc_850"]}), seed=0))

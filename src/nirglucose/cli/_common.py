@@ -19,6 +19,7 @@ from ..config import PRESETS
 from ..evaluation.calibration import MAX_CALIBRATION_READINGS
 from ..evaluation.stats import DEFAULT_N_BOOT
 from ..evaluation.studies import STUDIES
+from ..evaluation.tasks import clear_outputs
 from ..exceptions import NirGlucoseError
 from ._app import console, out_console
 
@@ -215,3 +216,27 @@ def _tidy_out(command):
             raise
 
     return wrapper
+
+
+def refuse_simulation_options(ctx: typer.Context, data: Path | None,
+                              names: tuple[str, ...]) -> None:
+    """With --data nothing is simulated: the options ``names`` (parameter names) given on
+    the command line would be silently ignored, so they are refused in one line."""
+    given = [f"--{n.replace('_', '-')}" for n in names
+             if getattr(ctx.get_parameter_source(n), "name", None) == "COMMANDLINE"]
+    if data is not None and given:
+        raise UserError(f"{', '.join(given)} describe a simulation; with --data nothing is "
+                        "simulated: leave them out")
+
+
+def clear_previous_runs(runs: list[tuple[str | None, Path]], out: Path,
+                        names: tuple[str, ...]) -> None:
+    """Before several presets' runs: remove every preset directory's previous results
+    ``names`` and the report that compared them (``out/report.html``), so a run stopped
+    during one preset leaves no other preset's old results looking like its own. (One
+    run clears its own directory once its input is read: a bad --data file deletes
+    nothing.)"""
+    if len(runs) > 1:
+        clear_outputs(out, ("report.html",))
+        for _, run_out in runs:
+            clear_outputs(run_out, names)

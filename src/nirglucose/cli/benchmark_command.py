@@ -36,6 +36,8 @@ from ._common import (
     _say,
     _tidy_out,
     _warnings_as_lines,
+    clear_previous_runs,
+    refuse_simulation_options,
 )
 from .fit_report import say_notes
 
@@ -102,7 +104,7 @@ def benchmark(
     of the --data file and of the printed table."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
-    _refuse_simulation_options(ctx, data)
+    refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
@@ -117,16 +119,6 @@ def benchmark(
             say_notes(ds)  # after the checks: an error stays one line
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
                        references, ablation, calibration, glucose_unit, drop_one)
-
-
-def _refuse_simulation_options(ctx: typer.Context, data: Path | None) -> None:
-    """With --data nothing is simulated: --preset, --subjects and --per-subject given on
-    the command line would be silently ignored, so they are refused."""
-    given = [f"--{name.replace('_', '-')}" for name in ("preset", "subjects", "per_subject")
-             if getattr(ctx.get_parameter_source(name), "name", None) == "COMMANDLINE"]
-    if data is not None and given:
-        raise UserError(f"{', '.join(given)} describe a simulation; with --data nothing is "
-                        "simulated: leave them out")
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
@@ -149,11 +141,14 @@ def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subje
     return names
 
 
-def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out: Path):
+def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out: Path,
+                    stale: tuple[str, ...] | None = None):
     """``([(preset or None for --data, output directory), ...], overrides)``.
 
     Every preset is resolved first, so an unknown one fails before anything runs;
-    several presets write ``OUT/<preset>/`` each.
+    several presets write ``OUT/<preset>/`` each, and their previous results ``stale``
+    (default: the benchmark's, ``STALE_FILES``) are removed first
+    (:func:`~._common.clear_previous_runs`).
     """
     presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
     if not presets:
@@ -171,7 +166,11 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
         resolve_config(p, overrides)  # an unknown preset fails before anything runs
     if len(presets) > 1:
         out.mkdir(exist_ok=True)
-    return [(p, out / p if len(presets) > 1 else out) for p in presets], overrides
+    runs = [(p, out / p if len(presets) > 1 else out) for p in presets]
+    if stale is None:
+        from ..evaluation.benchmark_result import STALE_FILES as stale
+    clear_previous_runs(runs, out, stale)
+    return runs, overrides
 
 
 def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bits=None,

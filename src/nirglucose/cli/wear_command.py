@@ -24,6 +24,7 @@ from ._common import (
     _say,
     _tidy_out,
     _warnings_as_lines,
+    refuse_simulation_options,
 )
 from .benchmark_command import _benchmark_runs
 
@@ -42,6 +43,7 @@ def _schedule_names(schedules: str) -> list[str]:
 @app.command("wear-benchmark")
 @_tidy_out
 def wear_benchmark(
+    ctx: typer.Context,
     out: OutDirOption,
     preset: Annotated[
         str,
@@ -81,16 +83,18 @@ def wear_benchmark(
                   ("--every-min", every_min), ("--folds", folds),
                   ("--train-readings", train_readings), ("--resamples", resamples))
     _check_seed(seed)
+    refuse_simulation_options(ctx, data, ("preset", "subjects", "wear_days", "every_min"))
     if resamples < 100:
         raise UserError(f"--resamples {resamples} is too few for a lower confidence bound; "
                         "give at least 100")
     names = _model_names(models) or list(WEAR_MODELS)
     sched = _schedule_names(schedules)
     _check_out_dir(out)
-    runs, overrides = _benchmark_runs(preset, data, set_, out)  # the benchmark's own rule
+    stale = (*WEAR_FILES, "report.html")
+    runs, overrides = _benchmark_runs(preset, data, set_, out, stale)  # the benchmark's rule
     for p, run_out in runs:
-        clear_outputs(run_out, (*WEAR_FILES, "report.html"))  # a stopped run: no stale files
         ds = _worn_data(p, data, subjects, wear_days, every_min, seed, overrides)
+        clear_outputs(run_out, stale)  # its input read: a stopped run leaves no stale files
         with _warnings_as_lines():
             res = run_wear_benchmark(ds, names, preset=p, n_splits=folds, seed=seed,
                                      schedules=sched, train_readings_per_subject=train_readings,

@@ -25,7 +25,7 @@ class _Model(BaseModel):
         # would silently become 1 point
         if isinstance(v, bool) and info.field_name is not None:
             ann = cls.model_fields[info.field_name].annotation
-            if ann is not bool and bool not in get_args(ann):
+            if {int, float} & {ann, *get_args(ann)} and bool not in {ann, *get_args(ann)}:
                 raise ValueError(f"takes a number, not {str(v).lower()}")
         return v
 

@@ -105,10 +105,7 @@ def check_overrides(overrides: Any) -> dict[str, Any]:
 
 def _set_per_led(out: dict[str, Any], dotted: str, value: Any) -> None:
     m = _PER_LED_KEY.fullmatch(dotted)
-    if m is None:  # "leds" given as something other than a list of LEDs
-        raise ConfigError(f"{dotted} must be a list of LED records or part names, e.g. "
-                          f"[{{'wavelength_nm': 850, 'power_mw': 3}}, 'L8957'], got "
-                          f"{type(value).__name__}: {str(value)[:80]}")
+    assert m is not None  # apply_overrides queues only leds.emitters.<i>.<field> here
     emitters = out["leds"]["emitters"]
     i = int(m.group(1))
     if i >= len(emitters):
@@ -144,7 +141,12 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
     legacy: dict[str, Any] = {}
     per_led: dict[str, Any] = {}
     for dotted, value in overrides.items():
-        if dotted == "leds" and isinstance(value, list | tuple):
+        if dotted == "leds":  # the whole LED set
+            if not isinstance(value, list | tuple):
+                raise ConfigError(
+                    f"leds must be a list of LED records or part names, e.g. "
+                    f"[{{'wavelength_nm': 850, 'power_mw': 3}}, 'L8957'], got "
+                    f"{type(value).__name__}: {str(value)[:80]}")
             dotted = "leds.emitters"
         if dotted in LEGACY_LED_KEYS:
             legacy[dotted] = value

@@ -45,7 +45,7 @@ from ..config import resolve_config
 from ..config.detector import band_responsivity_a_per_w, responsivity_curve
 from ..config.parts import led_part
 from ..dataset import Dataset
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, check_seed
 
 __all__ = [
     "DEFAULT_BIN_PART",
@@ -221,8 +221,7 @@ def draw_units(
     """
     if isinstance(n_units, bool) or not isinstance(n_units, int | np.integer) or n_units < 1:
         raise ConfigError(f"n_units must be a positive integer, got {n_units!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    check_seed(seed)
     scale = _check_scale(tolerance_scale)
     tol = tolerances or FleetTolerances()
     base = dict(overrides or {})

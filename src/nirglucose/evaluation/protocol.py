@@ -9,12 +9,11 @@ or, as before, the protocol's name with the options as keywords.
 
 from __future__ import annotations
 
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ..exceptions import ConfigError, check_positive_int
+from ..exceptions import ConfigError, check_positive_int, check_seed
 from .calibration import check_k
 from .splits import check_protocol
 from .stats import DEFAULT_N_BOOT
@@ -70,10 +69,7 @@ class Protocol:
         check_protocol(self.splitter)
         for name in ("n_splits", "repeats", "resamples"):
             object.__setattr__(self, name, check_positive_int(name, getattr(self, name)))
-        seed = self.seed
-        if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
-            raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
-        object.__setattr__(self, "seed", int(seed))
+        object.__setattr__(self, "seed", check_seed(self.seed))
         object.__setattr__(self, "calibration", check_k(self.calibration))
 
 
