@@ -164,7 +164,7 @@ class Dataset:
         try:
             frame = self.frame.iloc[idx].reset_index(drop=True)
         except IndexError as exc:
-            raise DataError(f"rows {idx!r} do not fit a dataset of {len(self)} rows: "
+            raise DataError(f"rows {str(idx)[:60]} do not fit a dataset of {len(self)} rows: "
                             f"{' '.join(str(exc).split())}") from None
         return Dataset(frame, config=self.config, seed=self.seed, metadata=dict(self.metadata))
 

@@ -8,6 +8,7 @@ working (the xarray / scikit-learn habit).
 from __future__ import annotations
 
 import difflib
+import math
 import numbers
 from collections.abc import Iterable
 
@@ -19,6 +20,7 @@ __all__ = [
     "unknown_name",
     "check_positive_int",
     "check_seed",
+    "is_finite_number",
 ]
 
 
@@ -50,6 +52,21 @@ def unknown_name(kind: str, name: object, valid: Iterable[str]) -> str:
     close = difflib.get_close_matches(str(name), valid, n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ";"
     return f"unknown {kind} {name!r}{hint} valid: {', '.join(valid)}"
+
+
+def is_finite_number(value: object, integer: bool = False) -> bool:
+    """Whether ``value`` is a finite number as JSON or Python gives one (not a bool, not a
+    string); with ``integer``, a whole one.
+
+    Examples
+    --------
+    >>> is_finite_number(2.0, integer=True), is_finite_number(True), is_finite_number("1")
+    (True, False, False)
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return False
+    v = float(value)
+    return math.isfinite(v) and (not integer or v.is_integer())
 
 
 def check_seed(value: object) -> int:

@@ -173,7 +173,7 @@ _NUMBER_SUFFIXES = ("_mgdl", "_pct", "_low", "_high", "_s", "_ms", "_mse", "_nm"
 
 
 def check_result_table(frame: pd.DataFrame, name: str, required: Iterable[str] = (),
-                       text: Iterable[str] = ("model", "label")) -> None:
+                       text: Iterable[str] = ("model", "label", *ID_COLUMNS)) -> None:
     """Refuse a results table (``metrics.csv``, ``sweep.csv``) that lacks ``required``
     columns or has text in a column of numbers (a hand edit, a corrupted file).
 

@@ -51,7 +51,7 @@ from .dataset import (
     PHYSIOLOGICAL_RANGES,
     Dataset,
 )
-from .exceptions import DataError
+from .exceptions import DataError, is_finite_number
 from .fitted import require_fitted
 from .io_files import check_frame
 
@@ -165,15 +165,16 @@ class DeviceSchema:
         try:
             wl, ref, bits = doc["wavelengths_nm"], doc["reference"], doc["adc_bits"]
             physio, n_plain = doc["physiology"], doc.get("n_plain", 0)
-            ok = (isinstance(wl, list) and all(_is_number(w) and 0 < w < 1e5 for w in wl)
+            ok = (isinstance(wl, list) and all(is_finite_number(w) and w > 0 for w in wl)
                   and isinstance(ref, bool) and isinstance(physio, list)
                   and all(isinstance(c, str) for c in physio)
-                  and _is_number(n_plain, integer=True) and n_plain >= 0)
+                  and is_finite_number(n_plain, integer=True) and n_plain >= 0)
         except (KeyError, TypeError):
             ok = False
         if not ok:
             raise DataError("model file has a malformed 'schema' entry; refit the model")
-        if not (_is_number(bits, integer=True) and (1 <= bits <= 32 or (bits == 0 and n_plain))):
+        plain_ok = bits == 0 and n_plain  # a plain array's schema has no ADC
+        if not (is_finite_number(bits, integer=True) and (1 <= bits <= 32 or plain_ok)):
             raise DataError(f"model file's schema has adc_bits {bits!r}; expected an integer "
                             "from 1 to 32; the file is corrupt, refit the model")
         s = cls(tuple(float(w) for w in wl), ref, int(bits), tuple(physio), int(n_plain))
@@ -410,13 +411,6 @@ class DeviceSchema:
     def stacked_names(self) -> tuple[str, ...]:
         """Names of :meth:`stacked`'s columns: ``A_<nm>`` per LED, then the physiology."""
         return tuple(f"A_{w}" for w in self.labels) + tuple(self.physiology)
-
-
-def _is_number(v: Any, integer: bool = False) -> bool:
-    """A JSON number (not a bool, not a string), finite; an integer when asked."""
-    if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
-        return False
-    return not integer or float(v).is_integer()
 
 
 def _no_adc_message(columns) -> str:

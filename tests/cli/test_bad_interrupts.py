@@ -125,7 +125,15 @@ def test_a_signal_while_the_script_starts_is_one_line(tmp_path, sig, status, wor
     proc = subprocess.Popen([str(script), "simulate", "--subjects", "400", "--out",
                              str(tmp_path / "d.csv")], env=subprocess_env(), cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(0.3)
+    # numpy being mapped means the package's imports are under way (the window aimed at)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 10 and proc.poll() is None:
+        try:
+            if "numpy" in Path(f"/proc/{proc.pid}/maps").read_text(errors="replace"):
+                break
+        except OSError:
+            pass
+        time.sleep(0.01)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == status, err

@@ -233,7 +233,7 @@ def test_load_rejects_bad_files(paper, tmp_path):
     with pytest.raises(ConfigError, match="unknown model 'zzz'"):
         load_model(write({**good, "model": "zzz"}))
     # a value of the right shape but the wrong JSON type is refused, not coerced
-    for key, value in (("intercept_", "1"), ("coef_", [True] * 56)):
+    for key, value in (("intercept_", "1"), ("coef_", [True] * len(good["state"]["coef_"]))):
         with pytest.raises(DataError, match=f"state {key}' is not numeric"):
             EnhancedBeerLambert.load(write({**good, "state": {**good["state"], key: value}}))
     schema = good["state"]["schema_"]

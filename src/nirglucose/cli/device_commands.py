@@ -64,9 +64,7 @@ def fit_model(
     from ..models.tuning import untuned_params
 
     _check_seed(seed)
-    _check_fit_args(out, intervals, calibration_share)
-    if cv_folds == 1 or cv_folds < 0:
-        raise UserError(f"--cv-folds {cv_folds}: give 0 (no cross-validation) or 2 or more")
+    _check_fit_args(out, intervals, calibration_share, cv_folds)
     cls = get_model_class(model)  # unknown names raise with the valid ones
     # nothing is tuned for a team's device: networks early-stop on held-out subjects
     estimator = cls(**seeded_params(cls, untuned_params(model), seed))
@@ -86,7 +84,10 @@ def fit_model(
         report_cv(estimator, ds, schema, cv_folds, glucose_unit)
 
 
-def _check_fit_args(out: Path, intervals: str, calibration_share: float) -> None:
+def _check_fit_args(out: Path, intervals: str, calibration_share: float, cv_folds: int
+                    ) -> None:
+    if cv_folds == 1 or cv_folds < 0:
+        raise UserError(f"--cv-folds {cv_folds}: give 0 (no cross-validation) or 2 or more")
     if out.suffix != ".json":
         raise UserError(f"--out {str(out)!r}: the model file must end in .json")
     if intervals not in ("auto", "split", "none"):
@@ -212,7 +213,6 @@ def export_c_source(
 ) -> None:
     """Write C99 source + header of a linear model for a microcontroller."""
     from ..export import export_c
-    from ..models import load_model
 
-    header, source = export_c(load_model(model), out)
+    header, source = export_c(model, out)  # a model file's path: loaded there
     _say(f"wrote {header} and {source}", err=False)

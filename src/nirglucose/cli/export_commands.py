@@ -21,10 +21,9 @@ def export_onnx_file(
     Models with an ONNX path: ebl, the torch networks, gp, pls, mean and ebl+gp.
     """
     from ..export.onnx_export import export_onnx
-    from ..models import load_model
 
     if out.suffix != ".onnx":
         raise UserError(f"--out {str(out)!r}: the model is written as .onnx")
     _check_out_file(out)
-    path = export_onnx(load_model(model), out)
+    path = export_onnx(model, out)  # a model file's path: loaded there
     _say(f"wrote {path} (input 'raw', outputs 'glucose_mgdl' [mg/dL] and 'status')", err=False)

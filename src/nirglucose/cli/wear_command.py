@@ -143,7 +143,7 @@ def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects:
                folds: int, resamples: int, set_, jobs: int | None = 1,
                scheduler: str | None = None) -> None:
     """``sweep --study wear``: :func:`nirglucose.evaluation.wear_sweep.run_wear_sweep`."""
-    from ..evaluation.wear_sweep import WEAR_DAYS, WEAR_PRESETS, run_wear_sweep
+    from ..evaluation.wear_sweep import WEAR_DAYS, WEAR_PRESETS, WEAR_SWEEP_FILES, run_wear_sweep
 
     _check_counts(("--subjects", subjects), ("--folds", folds), ("--seeds", seeds),
                   ("--resamples", resamples))
@@ -180,7 +180,7 @@ def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects:
     best = summary[summary["variant"] == "raw"].pivot_table(
         index=["preset", "wear_days", "model"], columns="schedule", values="rmse_mgdl")
     out_console.print(escape(best.round(1).to_string()))
-    _say(f"wrote {out}/ (wear_sweep.csv, wear_summary.csv)", err=False)
+    _say(f"wrote {out}/ ({', '.join(WEAR_SWEEP_FILES)})", err=False)
 
 
 def _default_models() -> list[str]:

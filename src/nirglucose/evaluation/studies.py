@@ -71,7 +71,6 @@ from __future__ import annotations
 
 import itertools
 import json
-import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -86,7 +85,7 @@ from ..config import (
     resolve_config,
 )
 from ..design.fleet import MAX_TOLERANCE_SCALE
-from ..exceptions import ConfigError, unknown_name
+from ..exceptions import ConfigError, is_finite_number, unknown_name
 from .fleet import FLEET_DEFAULTS, FLEET_TOLERANCE_SCALES, FLEET_VARIANTS
 from .scenario import Scenario
 from .wavelength_study import WAVELENGTHS_MODELS, WAVELENGTHS_PRESET, wavelength_scenarios
@@ -233,17 +232,13 @@ def _default_value(preset: str, key: str, base: Mapping[str, Any]) -> Any:
     return node
 
 
-def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-
-
 def _check_values(preset: str, key: str, values: Sequence[Any], base: Mapping[str, Any]) -> None:
     """Check every value of a varied key against the key's type and range."""
     if not is_valid_key(key):
         resolve_config(preset, {**base, key: values[0]})  # raises with a hint
     default = _default_value(preset, key, base)
     for v in values:
-        if _is_number(default) and not _is_number(v):
+        if is_finite_number(default) and not is_finite_number(v):
             raise ConfigError(
                 f"--vary {key}: {v!r} is not a number; {key} takes numbers (default {default!r})"
             )
@@ -358,7 +353,7 @@ def _fleet_scenarios(scales: Sequence[Any] | None) -> list[Scenario]:
     """Every tolerance scale x fleet variant (:mod:`~nirglucose.evaluation.fleet`)."""
 
     scales = list(FLEET_TOLERANCE_SCALES if scales is None else scales)
-    bad = [v for v in scales if not _is_number(v) or not 0 <= v <= MAX_TOLERANCE_SCALE]
+    bad = [v for v in scales if not is_finite_number(v) or not 0 <= v <= MAX_TOLERANCE_SCALE]
     if not scales or bad:
         raise ConfigError(
             f"fleet study: {FLEET_KEY} values must be numbers in 0-{MAX_TOLERANCE_SCALE:g} "

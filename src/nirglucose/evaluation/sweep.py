@@ -482,9 +482,11 @@ def load_sweep(sweep_dir: str | Path) -> SweepResult:
         raise DataError(
             f"{str(d)!r} is not a sweep directory (sweep.csv and sweep_meta.json): {exc}"
         ) from None
-    check_result_table(frame, f"sweep.csv in {str(d)!r}", ("scenario", "model", "seed"),
-                       text=("study", "scenario", "model", *meta.get("label_columns", [])))
+    if not isinstance(meta, dict):
+        raise DataError(f"sweep_meta.json in {str(d)!r} must hold a JSON object; rerun the sweep")
     labels = meta.get("label_columns", [])
+    check_result_table(frame, f"sweep.csv in {str(d)!r}", ("scenario", "model", "seed"),
+                       text=("study", "scenario", "model", *labels))
     summary = summarize_sweep(frame, labels)
     effects = None
     if (d / "effects.csv").exists():

@@ -39,7 +39,10 @@ from .executors import check_scheduler, resolve_backend, run_unordered
 from .wear_benchmark import WEAR_MODELS, run_wear_benchmark
 from .wear_calibration import SCHEDULES
 
-__all__ = ["WEAR_DAYS", "WEAR_PRESETS", "run_wear_sweep", "run_wear_task"]
+__all__ = ["WEAR_DAYS", "WEAR_PRESETS", "WEAR_SWEEP_FILES", "run_wear_sweep", "run_wear_task"]
+
+#: Output files: every row, then the summary over seeds.
+WEAR_SWEEP_FILES = ("wear_sweep.csv", "wear_summary.csv")
 
 #: Default grid of the study: days of wear and presets.
 WEAR_DAYS: tuple[int, ...] = (1, 3, 7)
@@ -123,7 +126,7 @@ def run_wear_sweep(
         "n_subjects": int(n_subjects), "every_min": int(every_min), "folds": int(folds),
         "models": list(models), "schedules": list(schedules), "n_boot": int(n_boot)})
     cache = tasks.TaskCache(out, valid=lambda spec, res: "rows" in res)
-    tasks.clear_outputs(out, ("wear_sweep.csv", "wear_summary.csv"))
+    tasks.clear_outputs(out, WEAR_SWEEP_FILES)
     pending = cache.lookup(specs, _tag, on_cached=(
         None if on_task is None else lambda spec: on_task(dict(spec), True)))
     stream = run_unordered(run_wear_task, [specs[k] for k in pending], jobs=jobs,
@@ -140,8 +143,8 @@ def run_wear_sweep(
     sweep = pd.concat(frames, ignore_index=True)
     summary = _summary(sweep)
     out = Path(out)
-    atomic_write(out / "wear_sweep.csv", lambda tmp: sweep.to_csv(tmp, index=False))
-    atomic_write(out / "wear_summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
+    for name, table in zip(WEAR_SWEEP_FILES, (sweep, summary), strict=True):
+        atomic_write(out / name, lambda tmp, t=table: t.to_csv(tmp, index=False))
     return summary
 
 

@@ -33,6 +33,7 @@ from ._validate import (
     check_calibration_doc,
     check_loaded_params,
     read_model_document,
+    unknown_params,
 )
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "JsonModelMixin"]
@@ -128,12 +129,9 @@ class JsonModelMixin:
         path = Path(path)
         doc = _read_document(path, cls.registry_name)
         params, state = doc["params"], doc["state"]
-        valid = set(cls().get_params(deep=False))
-        unknown = sorted(set(params) - valid)
+        unknown, valid = unknown_params(cls, params)
         if unknown:
-            raise DataError(
-                f"{str(path)!r} has unknown parameters {unknown}; valid: {sorted(valid)}"
-            )
+            raise DataError(f"{str(path)!r} has unknown parameters {unknown}; valid: {valid}")
         try:
             model = cls(**cls._params_from_json(params))
         except (TypeError, ValueError) as exc:

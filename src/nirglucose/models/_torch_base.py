@@ -588,13 +588,14 @@ class TorchRegressor(
         all_rows = np.arange(n)
         if self.val_fraction == 0 or n < 4:
             return all_rows, None
-        grouped = groups is not None and len(np.unique(groups)) >= 2
+        n_groups = 0 if groups is None else len(np.unique(groups))
+        grouped = n_groups >= 2
         splitter = (GroupShuffleSplit if grouped else ShuffleSplit)(
             n_splits=1, test_size=self.val_fraction, random_state=seed)
         try:
             tr, va = next(splitter.split(all_rows, groups=groups if grouped else None))
         except ValueError:  # scikit-learn: the split leaves an empty training set
-            units = f"{len(np.unique(groups))} subjects" if grouped else f"{n} rows"
+            units = f"{n_groups} subjects" if grouped else f"{n} rows"
             raise ParameterError(f"val_fraction={self.val_fraction:g} leaves nothing to train "
                                  f"on out of {units}; lower it") from None
         if len(tr) < 2 or len(va) == 0:

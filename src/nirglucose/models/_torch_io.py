@@ -25,6 +25,7 @@ from ._validate import (
     check_torch_doc,
     check_weights,
     read_model_document,
+    unknown_params,
 )
 
 __all__ = ["FORMAT_VERSION", "TorchIOMixin", "WHITENING_KEY"]
@@ -113,10 +114,9 @@ class TorchIOMixin:
         path = Path(path)
         doc = _read_document(cls, path)
         params = doc["params"]
-        valid = cls().get_params(deep=False)
-        unknown = sorted(set(params) - set(valid))
+        unknown, valid = unknown_params(cls, params)
         if unknown:
-            raise DataError(f"{str(path)!r}: unknown parameters {unknown}; valid: {sorted(valid)}")
+            raise DataError(f"{str(path)!r}: unknown parameters {unknown}; valid: {valid}")
         est = cls(**params)
         check_loaded_params(est, path)
         est._restore_fitted(doc, path)

@@ -23,6 +23,7 @@ __all__ = [
     "check_array",
     "check_calibration_doc",
     "check_loaded_params",
+    "unknown_params",
     "check_predictions",
     "check_torch_doc",
     "check_weights",
@@ -138,6 +139,13 @@ def check_weights(state: dict[str, Any], path: str | Path) -> None:
                             "point; the file is corrupt, refit the model")
         arr = tensor.detach().cpu().double().numpy() if hasattr(tensor, "detach") else tensor
         check_array(path, f"weights {key}", arr)
+
+
+def unknown_params(cls: type, params: Any) -> tuple[list[str], list[str]]:
+    """``(unknown, valid)``: the keys of ``params`` that estimator class ``cls`` does not
+    take, and those it takes (sorted; scikit-learn's ``_get_param_names``)."""
+    valid = sorted(cls._get_param_names())  # type: ignore[attr-defined]
+    return sorted(set(params) - set(valid)), valid
 
 
 def check_loaded_params(model: Any, path: str | Path) -> None:

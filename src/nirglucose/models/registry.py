@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ConfigError, unknown_name
-from ._validate import read_model_document
+from ._validate import read_model_document, unknown_params
 
 __all__ = [
     "register",
@@ -168,8 +168,7 @@ def make_model(name: str, **params: Any):
     nirglucose.exceptions.ConfigError: unknown parameter 'foo' of model 'ebl'; valid: ...
     """
     cls = get_model_class(name)
-    valid = sorted(cls().get_params(deep=False))
-    unknown = [key for key in params if key not in valid]
+    unknown, valid = unknown_params(cls, params)
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} of model {name!r}; valid: "
                           f"{', '.join(valid)}")

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import logging
-from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
@@ -163,12 +162,6 @@ def _read_csv(path: Path) -> pd.DataFrame:
             f"{path.name} in {str(path.parent)!r} is not a readable CSV: {exc}") from exc
 
 
-def _require_columns(frame: pd.DataFrame, required: Iterable[str], what: str) -> None:
-    missing = [c for c in required if c not in frame.columns]
-    if missing:
-        raise DataError(f"{what} lacks column(s) {missing}; it has {list(frame.columns)}")
-
-
 def load_results(results_dir: str | Path) -> Results:
     """Load a benchmark results directory.
 
@@ -239,7 +232,8 @@ def _load_predictions(d: Path) -> pd.DataFrame:
         predictions = pd.read_parquet(pred_path)
     except (OSError, ValueError) as exc:
         raise DataError(f"predictions.parquet in {str(d)!r} is unreadable: {exc}") from exc
-    _require_columns(predictions, REQUIRED_PREDICTION_COLUMNS, "predictions.parquet")
+    check_result_table(predictions, f"predictions.parquet in {str(d)!r}",
+                       REQUIRED_PREDICTION_COLUMNS)
     return predictions.assign(model=predictions["model"].astype(str))
 
 
@@ -287,8 +281,8 @@ def _load_drop_one_and_dataset(res: Results, d: Path) -> None:
     """``drop_one.csv`` and ``dataset.parquet`` into ``res`` (a note for each missing)."""
     if (d / "drop_one.csv").is_file():
         table = _read_csv(d / "drop_one.csv")
-        _require_columns(table, ("model", "dropped_wavelength_nm", "delta_rmse_mgdl", "ci_low",
-                                 "ci_high"), "drop_one.csv")
+        check_result_table(table, "drop_one.csv", ("model", "dropped_wavelength_nm",
+                                                   "delta_rmse_mgdl", "ci_low", "ci_high"))
         res.drop_one = table if len(table) else None
     else:
         res.notes.append("No drop_one.csv: the wavelength-utilisation figure is left out.")
