@@ -152,3 +152,15 @@ def test_several_presets_clear_every_preset_and_the_comparison_first(tmp_path):
     assert (tmp_path / "report.html").exists()
     clear_previous_runs(runs, tmp_path, ("metrics.csv",))
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["notes.txt"] * 2
+
+
+def test_the_oracle_on_a_device_file_says_what_it_needs(cli, workdir, device):
+    code, _, err = cli("fit", "--model", "oracle", "--data", "d.csv", "--out", "o.json")
+    assert_one_line_error(code, err, contains=["carries no scenario", "`nirglucose simulate`"])
+    assert "nirglucose.simulate or" not in err  # no Python advice for a command-line user
+
+
+def test_folds_beyond_the_subjects_name_the_option(cli, workdir, device):
+    code, _, err = cli("benchmark", "--out", "b", "--data", "d.csv", "--folds", 50,
+                       "--models", "pls", "--adc-bits", 12)
+    assert_one_line_error(code, err, contains=["--folds 50 exceeds the 8 subjects"])

@@ -109,7 +109,8 @@ def test_ctrl_c_in_process_exits_130(cli, workdir, monkeypatch):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(bench_mod, "run_benchmark", interrupt)
-    code, _, err = cli("benchmark", "--out", "res", "--subjects", 4, "--models", "ebl")
+    code, _, err = cli("benchmark", "--out", "res", "--subjects", 4, "--folds", 2, "--models",
+                       "ebl")
     assert code == 130
     assert err.strip().startswith("error: interrupted") and len(err.strip().splitlines()) == 1
 

@@ -114,7 +114,7 @@ def benchmark(
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
-        _check_calibration_readings(ds, calibration)
+        _check_run_data(ds, calibration, protocol, folds)
         if p is None:
             say_notes(ds)  # after the checks: an error stays one line
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
@@ -190,9 +190,13 @@ def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bi
     return _simulate(preset, subjects, per_subject, seed, overrides=overrides)
 
 
-def _check_calibration_readings(ds, k: int) -> None:
-    """Refuse --calibration K when no subject has a reading left to score, before any
-    task runs."""
+def _check_run_data(ds, k: int, protocol: str, folds: int) -> None:
+    """Before any task runs, refuse --folds beyond the subjects (grouped CV), and
+    --calibration K when no subject has a reading left to score."""
+    n_sub = ds.frame["subject_id"].nunique()
+    if protocol == "grouped-cv" and folds > n_sub:
+        raise UserError(f"--folds {folds} exceeds the {n_sub} subjects (each fold tests at "
+                        f"least one); give --folds {n_sub} or fewer")
     if not k:
         return
     counts = ds.frame.groupby("subject_id").size()

@@ -106,7 +106,13 @@ def _load_device_data(model: str, data: Path, adc_bits: int | None, unit: str | 
     if model == "oracle":
         from ..dataset import load_dataset
 
-        return load_dataset(data, glucose_unit=unit, adc_bits=adc_bits), None
+        ds = load_dataset(data, glucose_unit=unit, adc_bits=adc_bits)
+        if ds.config is None:
+            raise UserError(f"{str(data)!r} carries no scenario: the oracle reads the "
+                            "simulator's true tissue state, which only a Parquet file "
+                            "written by `nirglucose simulate` keeps; a device's own "
+                            "file has none (fit another model)")
+        return ds, None
     ds, schema = load_device_file(data, unit, adc_bits, need_glucose=True)
     n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else 0
     if "subject_id" not in ds.frame:
