@@ -136,6 +136,8 @@ def test_only_fitted_linear_models_export(fitted, tmp_path):
         "nirglucose_model.c",
         "nirglucose_model.h",
     ]
+    with pytest.raises(DataError, match="out_dir must be a directory path, got int"):
+        export_c(fitted["ebl"], 5)
     # the path of a model file exports what the model itself exports
     saved = fitted["ebl"].save(tmp_path / "ebl.json")
     h2, c2 = export_c(str(saved), tmp_path / "fw2")

@@ -126,7 +126,8 @@ def grouped_kfold(
     n_sub = len(subjects)
     if isinstance(n_splits, bool) or int(n_splits) != n_splits or not 2 <= n_splits <= n_sub:
         raise ConfigError(
-            f"n_splits must be an integer from 2 to the {n_sub} subjects, got {n_splits!r}"
+            f"n_splits (--folds on the command line) must be an integer from 2 to the "
+            f"{n_sub} subjects, got {n_splits!r}"
         )
     if isinstance(repeats, bool) or int(repeats) != repeats or repeats < 1:
         raise ConfigError(f"repeats must be a positive integer, got {repeats!r}")

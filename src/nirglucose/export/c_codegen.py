@@ -422,6 +422,8 @@ def export_c(model, out_dir: str | os.PathLike) -> tuple[Path, Path]:
     >>> h.name, c.name
     ('nirglucose_model.h', 'nirglucose_model.c')
     """
+    if not isinstance(out_dir, str | os.PathLike):
+        raise DataError(f"out_dir must be a directory path, got {type(out_dir).__name__}")
     texts = generate_c(model_from(model))
     out = Path(out_dir)
     if not out.parent.exists():

@@ -39,6 +39,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -334,6 +335,8 @@ def export_onnx(model: Any, path: str | Path) -> Path:
     Path
         ``path``.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise DataError(f"path must be the .onnx file's path, got {type(path).__name__}")
     path = Path(path)
     blob = onnx_graph_bytes(model_from(model))
     atomic_write(path, lambda tmp: Path(tmp).write_bytes(blob))
