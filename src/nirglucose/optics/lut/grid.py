@@ -87,14 +87,6 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
         "mua_epidermis_per_cm": (0.0, 35.0, 6, 2),
         "skin_transport_thickness": (0.25, 13.0, 12, 2),
     },
-    "tiny": {
-        "musp_dermis_per_cm": (7.0, 30.0, 2, 1),
-        "musp_ratio": (0.48, 0.85, 2, 1),
-        "mua_dermis_per_cm": (0.05, 2.0, 2, 1),
-        "mua_subcutis_per_cm": (0.01, 2.0, 2, 1),
-        "mua_epidermis_per_cm": (0.0, 35.0, 2, 1),
-        "skin_transport_thickness": (0.25, 13.0, 3, 1),
-    },
     "swir": {
         "musp_dermis_per_cm": (5.5, 14.5, 5, 2),
         "musp_ratio": (0.74, 1.03, 3, 3),
@@ -104,9 +96,18 @@ LUT_GRIDS: dict[str, dict[str, tuple[float, float, int, int]]] = {
         "skin_transport_thickness": (0.25, 6.5, 9, 2),
     },
 }
-# the swir box, coarsely (as tiny is the default box): two nodes an axis, three in tau
-LUT_GRIDS["tiny-swir"] = {k: (lo, hi, 3 if k == "skin_transport_thickness" else 2, 1)
-                          for k, (lo, hi, _n, _m) in LUT_GRIDS["swir"].items()}
+
+
+def _coarse(box: dict[str, tuple[float, float, int, int]]
+            ) -> dict[str, tuple[float, float, int, int]]:
+    """A box solved coarsely, for tests: two nodes an axis, three in tau (a node on tau =
+    1 between its ends), no refinement."""
+    return {k: (lo, hi, 3 if k == "skin_transport_thickness" else 2, 1)
+            for k, (lo, hi, _n, _m) in box.items()}
+
+
+LUT_GRIDS["tiny"] = _coarse(LUT_GRIDS["default"])
+LUT_GRIDS["tiny-swir"] = _coarse(LUT_GRIDS["swir"])
 
 
 #: LED band nodes each named grid covers [nm], for ``optics.lut_grid = "auto"``
