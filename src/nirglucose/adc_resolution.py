@@ -24,14 +24,13 @@ Examples
 
 from __future__ import annotations
 
-import re
 import warnings
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from .columns import DEFAULT_ADC_BITS
+from .columns import CODE_COLUMN_RE, DEFAULT_ADC_BITS
 from .exceptions import DataError
 
 __all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits"]
@@ -39,8 +38,6 @@ __all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits"]
 #: Codes at or below this fit a 10-bit ADC and every larger one: the resolution is
 #: ambiguous and must be declared. [ADC code]
 AMBIGUOUS_BELOW_CODE = 2**10 - 1
-
-_CODE_COL = re.compile(r"^adc_(ref_)?\d+(\.\d+)?$")
 
 
 def check_adc_bits(bits: Any) -> int:
@@ -51,7 +48,7 @@ def check_adc_bits(bits: Any) -> int:
 
 
 def _max_code(frame: pd.DataFrame) -> float:
-    cols = [c for c in frame.columns if isinstance(c, str) and _CODE_COL.match(c)]
+    cols = [c for c in frame.columns if isinstance(c, str) and CODE_COLUMN_RE.match(c)]
     if not cols or not len(frame):
         return float("nan")
     vals = frame[cols].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)

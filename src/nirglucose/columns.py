@@ -24,6 +24,7 @@ __all__ = [
     "ref_columns",
     "measured_columns",
     "ADC_COLUMN_RE",
+    "CODE_COLUMN_RE",
     "led_wavelengths_in",
     "has_reference_columns",
 ]
@@ -76,6 +77,9 @@ def ref_columns(wavelengths_nm: Iterable[float] = DEFAULT_LED_WAVELENGTHS_NM) ->
 #: An LED's ADC column, ``adc_<nm>`` (``adc_850``, ``adc_1550.5``); group 1 is the
 #: wavelength. ``adc_ref_<nm>`` does not match.
 ADC_COLUMN_RE = re.compile(r"^adc_(\d+(?:\.\d+)?)$")
+#: Any column of ADC codes, an LED's or its reference's: group 1 is ``ref_`` or None,
+#: group 2 the wavelength.
+CODE_COLUMN_RE = re.compile(r"^adc_(ref_)?(\d+(?:\.\d+)?)$")
 
 
 def led_wavelengths_in(columns: Iterable[Any]) -> tuple[float, ...]:

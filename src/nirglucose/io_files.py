@@ -37,7 +37,13 @@ import numpy as np
 import pandas as pd
 from pydantic import TypeAdapter, ValidationError
 
-from .columns import GLUCOSE_REPORTING_RANGE_MGDL, ID_COLUMNS, KNOWN_PHYSIOLOGY, WEAR_COLUMNS
+from .columns import (
+    CODE_COLUMN_RE,
+    GLUCOSE_REPORTING_RANGE_MGDL,
+    ID_COLUMNS,
+    KNOWN_PHYSIOLOGY,
+    WEAR_COLUMNS,
+)
 from .constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
 from .exceptions import DataError
 
@@ -77,7 +83,6 @@ _ALIASES = {
     "glucose_mmol/l": "glucose_mmoll",
     "glucose_mmol": "glucose_mmoll",
 }
-_ADC_NAME = re.compile(r"^adc_(ref_)?\d+(\.\d+)?$")
 _KNOWN = {*KNOWN_PHYSIOLOGY, *GLUCOSE_COLUMNS, *ID_COLUMNS}
 _UNIT = TypeAdapter(Literal["mg/dL", "mmol/L"])
 
@@ -105,9 +110,9 @@ def canonical_name(name: Any) -> str:
     'adc_ref_940'
     """
     text = re.sub(r"[\s\-]+", "_", str(name).strip().casefold())
-    m = _ADC_NAME.match(text)
+    m = CODE_COLUMN_RE.match(text)
     if m:
-        text = f"adc_{m.group(1) or ''}{float(text.rsplit('_', 1)[1]):g}"
+        text = f"adc_{m.group(1) or ''}{float(m.group(2)):g}"
     return _ALIASES.get(text, text)
 
 
@@ -127,7 +132,7 @@ def canonical_columns(columns: Iterable[Any]) -> tuple[dict[Any, str], list[str]
     renames: dict[Any, str] = {}
     for c in columns:
         new = canonical_name(c)
-        if new != c and (new in _KNOWN or _ADC_NAME.match(new)):
+        if new != c and (new in _KNOWN or CODE_COLUMN_RE.match(new)):
             renames[c] = new
     final = [renames.get(c, c) for c in columns]
     dup = sorted({n for n in final if final.count(n) > 1}, key=str)
@@ -201,7 +206,7 @@ def check_result_table(frame: pd.DataFrame, name: str, required: Iterable[str] =
     skip = set(text)
     for col in frame.columns:
         raw = frame[col]
-        if col in skip or pd.api.types.is_numeric_dtype(raw) or raw.dtype == bool:
+        if col in skip or pd.api.types.is_numeric_dtype(raw):
             continue
         num = pd.to_numeric(raw, errors="coerce")
         bad = (num.isna() & raw.notna()).to_numpy()
@@ -329,6 +334,15 @@ def _numeric(frame: pd.DataFrame, col: str, csv: bool, allow_empty: bool = False
     return vals
 
 
+def _numbers(frame: pd.DataFrame, col: str, csv: bool) -> np.ndarray:
+    """:func:`_numeric` of a column that must be complete, stored back as floats when it
+    was read as text (a numeric column keeps its dtype, and the dataset its hash)."""
+    vals = _numeric(frame, col, csv)
+    if not pd.api.types.is_numeric_dtype(frame[col]):
+        frame[col] = vals
+    return vals
+
+
 def _flag_mask(raw: pd.Series) -> np.ndarray:
     return raw.astype(str).str.strip().str.upper().isin(_METER_FLAGS).to_numpy()
 
@@ -396,7 +410,7 @@ def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool) -> None:
     """Refuse ADC and reference codes above the full scale 2^bits - 1, with the file's
     rows (codes of 0 or below are refused by :func:`validate_frame`)."""
     full = 2**bits - 1
-    for col in [c for c in frame.columns if isinstance(c, str) and _ADC_NAME.match(c)]:
+    for col in [c for c in frame.columns if isinstance(c, str) and CODE_COLUMN_RE.match(c)]:
         vals = np.asarray(frame[col], dtype=float)
         bad = vals > full
         if bad.any():
@@ -424,24 +438,18 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
     """
     unit = check_glucose_unit(glucose_unit)
     _ids(frame, csv)
-    for col in [c for c in frame.columns if isinstance(c, str) and _ADC_NAME.match(c)]:
-        vals = _numeric(frame, col, csv)
+    for col in [c for c in frame.columns if isinstance(c, str) and CODE_COLUMN_RE.match(c)]:
+        vals = _numbers(frame, col, csv)
         if (vals <= 0).any():
             raise DataError(f"column {col!r} has ADC codes of 0 or below at "
                             f"{file_rows(vals <= 0, csv)}: a dead or disconnected channel")
-        if not pd.api.types.is_numeric_dtype(frame[col]):  # numeric ones keep dtype and hash
-            frame[col] = vals
     for col in [c for c in WEAR_COLUMNS if c in frame.columns]:  # a worn device's times
-        vals = _numeric(frame, col, csv)
-        if not pd.api.types.is_numeric_dtype(frame[col]):
-            frame[col] = vals
+        _numbers(frame, col, csv)
     for col in [c for c in KNOWN_PHYSIOLOGY if c in frame.columns]:
-        vals = _numeric(frame, col, csv)
+        vals = _numbers(frame, col, csv)
         lo, hi, _ = PHYSIOLOGICAL_RANGES[col]
         bad = (vals < lo) | (vals > hi)
         if bad.any():
             raise DataError(f"column {col!r} has values outside the physiological range "
                             f"{lo:g}-{hi:g} at {file_rows(bad, csv)} (docs/user_data.md)")
-        if not pd.api.types.is_numeric_dtype(frame[col]):
-            frame[col] = vals
     return _glucose(frame, unit, csv)
