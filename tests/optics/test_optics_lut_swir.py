@@ -34,6 +34,9 @@ def test_swir_grid_has_its_own_kernel_and_keeps_the_default_key(monkeypatch):
     swir = LG.grid_mc_settings("swir")
     assert swir["half_width_cm"] == 0.035 < L.LUT_MC_SETTINGS["half_width_cm"]
     assert LG.grid_mc_settings(L.LUT_GRIDS["swir"]) == swir  # a spec equal to the named grid
+    # ... takes its photons too: the same table, the same cache key
+    assert L.lut_key(RHO, T_EPI, grid=dict(L.LUT_GRIDS["swir"])) == L.lut_key(RHO, T_EPI,
+                                                                               grid="swir")
     assert LG.grid_mc_settings("default") == L.LUT_MC_SETTINGS
     default_key, swir_key = L.lut_key(RHO, T_EPI), L.lut_key(RHO, T_EPI, grid="swir")
     monkeypatch.setattr(LG, "LUT_MC_GRID_SETTINGS", {})
@@ -51,7 +54,7 @@ def test_swir_reference_absorption_is_the_box_minimum():
         lo / spec["musp_dermis_per_cm"][1], rel=1e-12)
 
 
-def test_interpolation_against_direct_solves_in_a_block_of_the_swir_grid():
+def test_interpolation_against_direct_solves_in_a_block_of_the_swir_grid(monkeypatch):
     # a 2 x 2 block of (ratio, thickness) runs, few photons, the box's less absorbing
     # part (a few thousand photons reach rho above a dermal mua of 10 /cm only with
     # millions launched): the table against direct solves (same random numbers, same
@@ -63,7 +66,13 @@ def test_interpolation_against_direct_solves_in_a_block_of_the_swir_grid():
     spec["musp_ratio"] = (lo, 0.5 * (lo + hi), 2, 1)
     lo, hi, _, m = spec["skin_transport_thickness"]
     spec["skin_transport_thickness"] = (1.0, hi, 2, m)
+    # the block is no named grid: give it the swir grid's Monte Carlo settings
+    monkeypatch.setitem(LG.LUT_MC_SETTINGS, "half_width_cm",
+                        LG.grid_mc_settings("swir")["half_width_cm"])
+    monkeypatch.setitem(LG.LUT_MC_SETTINGS, "residual_fit_degrees",
+                        LG.grid_mc_settings("swir")["residual_fit_degrees"])
     lut = L.build_lut(RHO, T_EPI, grid=spec, n_photons=20_000)
+    assert LG.grid_mc_settings(lut.grid)["half_width_cm"] == 0.035
     pts = LV.random_lut_points(lut, 40, rng=4, groups=2)
     err = LV.lut_errors(lut, pts, n_photons=20_000)
     r, se = np.abs(err["reflectance"]), err["reflectance_se"]

@@ -121,6 +121,7 @@ from .grid import (
     LUT_SOLVERS,
     SkinLUT,
     grid_mc_settings,
+    grid_name,
     lut_grids_for_bands,
     lut_key,
 )
@@ -153,5 +154,6 @@ __all__ = [
     "LUT_MC_SETTINGS",
     "LUT_MC_GRID_SETTINGS",
     "grid_mc_settings",
+    "grid_name",
     "LUT_SOLVERS",
 ]

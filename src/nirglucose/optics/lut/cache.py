@@ -28,7 +28,7 @@ from .._environment import (
     mc_threads_from_env,
 )
 from .build import build_lut
-from .grid import SkinLUT, _mc_photons, _resolve_grid, lut_key
+from .grid import SkinLUT, _mc_photons, _resolve_grid, grid_name, lut_key
 
 __all__ = ["mc_threads_from_env", "lut_grid_named_in_env", "cache_dir", "load_or_build_lut",
            "get_lut"]
@@ -128,7 +128,7 @@ def load_or_build_lut(
     if solver == "monte-carlo":  # minutes to hours: say so where it shows
         spec = _resolve_grid(grid)
         runs = spec["musp_ratio"][2] * spec["skin_transport_thickness"][2]
-        name = grid if isinstance(grid, str) else "custom"
+        name = grid_name(grid) or "custom"
         cost = f" (about {_BUILD_CPU[name]} of CPU)" if name in _BUILD_CPU else ""
         _log.warning("building the rte-lut skin table %s (grid %s) by Monte Carlo: %d runs "
                      "of %d photons%s, once per probe geometry, cached in %s; "

@@ -32,6 +32,7 @@ __all__ = [
     "LUT_GRID_WAVELENGTHS_NM",
     "SkinLUT",
     "grid_mc_settings",
+    "grid_name",
     "lut_grids_for_bands",
     "lut_key",
 ]
@@ -317,8 +318,7 @@ class SkinLUT:
 def grid_mc_settings(grid: str | dict) -> dict:
     """The Monte Carlo settings of a grid: :data:`LUT_MC_SETTINGS`, with a named grid's own
     (:data:`LUT_MC_GRID_SETTINGS`; a spec takes those of the named grid it equals)."""
-    name = grid if isinstance(grid, str) else _grid_name(grid)
-    return {**LUT_MC_SETTINGS, **LUT_MC_GRID_SETTINGS.get(name or "default", {})}
+    return {**LUT_MC_SETTINGS, **LUT_MC_GRID_SETTINGS.get(grid_name(grid) or "default", {})}
 
 
 def _check_grid(grid: dict) -> None:
@@ -348,8 +348,9 @@ def _resolve_grid(grid: str | dict) -> dict:
     return grid
 
 
-def _grid_name(grid: str | dict) -> str | None:
-    """The first name in :data:`LUT_GRIDS` of a grid with the same axes, or None."""
+def grid_name(grid: str | dict) -> str | None:
+    """The first name in :data:`LUT_GRIDS` of a grid with the same axes, or None: the one
+    rule by which a spec takes a named grid's settings, photons and build cost."""
     axes = _resolve_grid(grid)
     return next((k for k, v in LUT_GRIDS.items() if _resolve_grid(v) == axes), None)
 
@@ -414,8 +415,8 @@ def _check_solver(solver: str) -> None:
 
 
 def _mc_photons(grid: str | dict, n_photons: int | None) -> int:
-    """Photons per Monte Carlo run: given, else the grid's, else the default grid's."""
+    """Photons per Monte Carlo run: given, else the grid's (a spec takes those of the named
+    grid it equals, as in :func:`grid_mc_settings`), else the default grid's."""
     if n_photons is None:
-        name = grid if isinstance(grid, str) else "default"
-        n_photons = LUT_MC_PHOTONS.get(name, LUT_MC_PHOTONS["default"])
+        n_photons = LUT_MC_PHOTONS.get(grid_name(grid) or "default", LUT_MC_PHOTONS["default"])
     return check_n_photons(n_photons)

@@ -32,8 +32,8 @@ from .grid import (
     LUT_GRID_WAVELENGTHS_NM,
     SkinLUT,
     _forward,
-    _grid_name,
     _inverse,
+    grid_name,
 )
 
 __all__ = [
@@ -290,7 +290,7 @@ def node_lut(lut: SkinLUT, musp_ratio: ArrayLike) -> NodeLUT:
 def _node_lut_from_recipe(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid, ratio,
                           solver="monte-carlo"):
     grid = {k: tuple(v) for k, v in grid.items()}
-    named = _grid_name(grid)
+    named = grid_name(grid)
     lut = (get_lut(rho_cm, epidermis_thickness_cm, n_tissue, n_ambient, grid=named,
                    solver=solver)
            if named else load_or_build_lut(rho_cm, epidermis_thickness_cm, n_tissue,

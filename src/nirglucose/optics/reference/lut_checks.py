@@ -24,7 +24,6 @@ from ..lut.build import _mc_run_kwargs
 from ..lut.grid import (
     LUT_AXES,
     SkinLUT,
-    _grid_name,
     _inverse,
     _mc_photons,
     _resolve_grid,
@@ -121,7 +120,7 @@ def direct_solve(lut: SkinLUT, points: dict, *, n_photons: int | None = None,
             geo["rho_cm"], epidermis_thickness_cm=geo["epidermis_thickness_cm"],
             n_tissue=geo["n_tissue"], n_ambient=geo["n_ambient"], **p)
         return refl, np.zeros_like(refl), paths
-    photons = _mc_photons(_grid_name(grid) or grid, n_photons)
+    photons = _mc_photons(grid, n_photons)
     p = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in points.items()}
     musp = p["musp_dermis_per_cm"]
     q = p["musp_subcutis_per_cm"] / musp
