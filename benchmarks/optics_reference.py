@@ -65,7 +65,13 @@ THIN_TAU = 0.6
 MUA_DERMIS_BINS = (0.0, 2.0, 8.0, 14.0, np.inf)
 
 
-def _use_bench_cache() -> None:
+def mua_dermis_bin_names() -> list[str]:
+    """Names of :data:`MUA_DERMIS_BINS` ('0-2', ..., '14-inf'), the summary's keys."""
+    return [f"{lo:g}-{hi:g}" for lo, hi in
+            zip(MUA_DERMIS_BINS[:-1], MUA_DERMIS_BINS[1:], strict=True)]
+
+
+def use_bench_cache() -> None:
     """Point the nirglucose cache at NIRGLUCOSE_BENCH_LUT_CACHE when it is set."""
     cache = os.environ.get("NIRGLUCOSE_BENCH_LUT_CACHE")
     if cache:
@@ -134,18 +140,19 @@ def main(argv: list[str] | None = None) -> dict:
         seeds = [int(s) for s in args.seeds.split(",")]
     except ValueError:
         ap.error(f"--seeds {args.seeds!r}: give integers separated by commas, e.g. 1001,1002")
-    if int(L.LUT_MC_SETTINGS["seed"]) in seeds or len(set(seeds)) < 2:
-        ap.error(f"give at least two seeds, none the table's ({L.LUT_MC_SETTINGS['seed']})")
+    if args.grid not in L.LUT_GRIDS:
+        ap.error(f"--grid {args.grid!r}: valid grids are {', '.join(L.LUT_GRIDS)}")
+    table_seed = int(L.grid_mc_settings(args.grid)["seed"])
+    if table_seed in seeds or len(set(seeds)) < 2:
+        ap.error(f"give at least two seeds, none the table's ({table_seed})")
     for name in ("groups", "per_group", "photons", "workers"):
         if getattr(args, name) < 1:
             ap.error(f"--{name.replace('_', '-')} must be at least 1")
     if args.thin_groups < 0:
         ap.error("--thin-groups must be at least 0")
-    _use_bench_cache()
+    use_bench_cache()
     # the work directory checked before the table, whose cold build takes hours
     work = work_dir(ap, args.work, L.cache_dir() / "optics-reference")
-    if args.grid not in L.LUT_GRIDS:
-        ap.error(f"--grid {args.grid!r}: valid grids are {', '.join(L.LUT_GRIDS)}")
     lut = L.load_or_build_lut(RHO_CM, T_EPI_CM, N_TISSUE, grid=args.grid)
     n_groups = args.groups + args.thin_groups
     pts, group = _points(lut, args.groups, args.per_group, args.rng, args.thin_groups)
@@ -194,8 +201,9 @@ def main(argv: list[str] | None = None) -> dict:
 
     worst = np.argsort(-np.abs(err))[:5]
     mua_d = pts["mua_dermis_per_cm"]
-    by_mua = {f"{lo:g}-{hi:g}": summary((mua_d >= lo) & (mua_d < hi))
-              for lo, hi in zip(MUA_DERMIS_BINS[:-1], MUA_DERMIS_BINS[1:], strict=True)
+    by_mua = {name: summary((mua_d >= lo) & (mua_d < hi))
+              for name, lo, hi in zip(mua_dermis_bin_names(), MUA_DERMIS_BINS[:-1],
+                                      MUA_DERMIS_BINS[1:], strict=True)
               if np.any((mua_d >= lo) & (mua_d < hi))}
     return {
         "grid": args.grid,

@@ -24,21 +24,38 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import time
 import warnings
 
 import numpy as np
+from optics_reference import MUA_DERMIS_BINS as BINS
+from optics_reference import N_TISSUE, RHO_CM, T_EPI_CM, use_bench_cache
+from optics_reference import mua_dermis_bin_names as _bin_names
 
-RHO_CM, T_EPI_CM, N_TISSUE, SKIN_CM = 0.3, 0.008, 1.4, 0.15
-BINS = (0.0, 2.0, 8.0, 14.0, np.inf)
+SKIN_CM = 0.15  # nominal skin thickness of the bands [cm]
 LEDS_NM = (1300.0, 1350.0, 1450.0, 1550.0, 1600.0, 1650.0)
 FWHMS_NM = (50.0, 100.0)
 MELANIN = {"I": 0.015, "VI": 0.15}
 
 
-def _bin_names() -> list[str]:
-    return [f"{lo:g}-{hi:g}" for lo, hi in zip(BINS[:-1], BINS[1:], strict=True)]
+def _bin_errors(ap: argparse.ArgumentParser, text: str | None) -> dict[str, float] | None:
+    """``--bin-errors`` read: a JSON object of known bins to finite numbers, else one line."""
+    if not text:
+        return None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        ap.error(f"--bin-errors is not JSON: {exc.msg}")
+    names = _bin_names()
+    if not isinstance(doc, dict) or set(doc) - set(names):
+        ap.error(f"--bin-errors must be a JSON object of bins among {', '.join(names)}")
+    try:
+        out = {k: float(v) for k, v in doc.items()}
+    except (TypeError, ValueError):
+        ap.error("--bin-errors: every value must be a number (an RMS relative error)")
+    if not all(np.isfinite(v) and v >= 0 for v in out.values()):
+        ap.error("--bin-errors: every value must be a finite number >= 0")
+    return out
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -46,10 +63,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--bin-errors", default=None,
                     help="JSON object: dermal-mua bin (e.g. '8-14') -> RMS relative error")
     args = ap.parse_args(argv)
-    bin_errors = json.loads(args.bin_errors) if args.bin_errors else None
-    cache = os.environ.get("NIRGLUCOSE_BENCH_LUT_CACHE")
-    if cache:
-        os.environ["NIRGLUCOSE_CACHE"] = cache
+    bin_errors = _bin_errors(ap, args.bin_errors)
+    use_bench_cache()
     from nirglucose.optics import lut as L
     from nirglucose.optics.layers import skin_layer_optics, three_layer_reflectance
     from nirglucose.optics.tissue import band_spectra
@@ -83,7 +98,7 @@ def main(argv: list[str] | None = None) -> dict:
                        "table_over_diffusion": round(float(light.sum()
                                                            / (weights * r_dif).sum()), 4)}
                 if bin_errors is not None:
-                    row["error_bound"] = round(sum(share[k] * float(bin_errors.get(k, 0.0))
+                    row["error_bound"] = round(sum(share[k] * bin_errors.get(k, 0.0)
                                                    for k in share), 5)
                 out["bands"][f"{centre:g}nm/{fwhm:g}nm/{skin}"] = row
     out["seconds"] = round(time.perf_counter() - start, 2)
