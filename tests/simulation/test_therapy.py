@@ -134,3 +134,13 @@ def test_the_errors_widen_the_glucose_excursions():
     ideal = wear.glucose_trajectories(cfg, 0, np.arange(6), codes, 3,
                                       therapy_errors=())["blood_mgdl"]
     assert out(full) > out(ideal) and full.std() > ideal.std()
+
+
+def test_one_missed_bolus_probability_per_daily_meal():
+    """Each type 1 subject's missed boluses are drawn per meal of the day: the therapy's
+    meal list and the meal scenario's must be the same length."""
+    from nirglucose.simulation import meal_scenario
+
+    assert len(therapy.MEALS_PER_DAY) == len(meal_scenario.DAILY_MEALS)
+    missed = therapy.draw_missed_boluses(SubjectStreams(0, 0)("wear.missed_bolus"), 2)
+    assert missed.shape == (2 * len(meal_scenario.DAILY_MEALS),)

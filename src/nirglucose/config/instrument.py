@@ -90,7 +90,7 @@ class OpticsConfig(_Model):
         "auto",
         description=(
             "Box of the rte-lut model's table: 'default' covers LED bands in 700-1320 nm, "
-            "'swir' those in 1160-1700 nm (its own table, about 25 min to build); 'auto' "
+            "'swir' those in 1160-1700 nm (its own table, about 1.5 CPU-hours to build); 'auto' "
             "takes $NIRGLUCOSE_LUT_GRID where set, else for each LED the grid that covers "
             "its band."
         ),

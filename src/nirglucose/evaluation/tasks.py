@@ -115,9 +115,13 @@ def stamp(spec: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
-def check_worker(spec: Mapping[str, Any], result: Mapping[str, Any]) -> None:
+def check_worker(spec: Mapping[str, Any], result: Mapping[str, Any], *,
+                 stacklevel: int = 5) -> None:
     """Refuse a result computed by another nirglucose version (a Dask worker's); warn
-    about one computed by other code under the same version (its source digest)."""
+    about one computed by other code under the same version (its source digest).
+
+    ``stacklevel`` points the warning at the caller of the run: 5 from the sweep
+    (check, collect, its executor, run_sweep), 4 from the wear sweep (no executor)."""
     if result.get("version") != spec["version"]:
         raise DataError(f"a worker runs nirglucose {result.get('version')}, this process "
                         f"{spec['version']}; install the same version on every worker")
@@ -125,7 +129,7 @@ def check_worker(spec: Mapping[str, Any], result: Mapping[str, Any]) -> None:
         warnings.warn(
             "a worker runs different nirglucose code than this process (source digest "
             f"{result.get('source_sha256')} vs {spec['source_sha256']}); results may mix "
-            "code versions", stacklevel=5)
+            "code versions", stacklevel=stacklevel)
 
 
 def sha256_hex(text: str) -> str:

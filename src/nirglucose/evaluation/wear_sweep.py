@@ -22,6 +22,7 @@ interval where there are two seeds or more, else the task's subject-bootstrap on
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -133,7 +134,9 @@ def run_wear_sweep(
                            scheduler=scheduler,
                            keys=[f"nirglucose-wear-{k}" for k in pending])
     try:
-        cache.collect(stream, pending, specs, _tag, check=tasks.check_worker, on_done=(
+        # no executor between collect and this function: the warning's caller is one up
+        check = partial(tasks.check_worker, stacklevel=4)
+        cache.collect(stream, pending, specs, _tag, check=check, on_done=(
             None if on_task is None else lambda spec, _res: on_task(dict(spec), False)))
     finally:
         stream.close()

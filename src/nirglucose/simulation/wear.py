@@ -240,9 +240,6 @@ def _type1_therapy(streams, carbs_g, carb_ratio_g_per_u: float, wear_days: int,
               if "missed_bolus" in errors else np.zeros(len(carbs_g), dtype=bool))
     si_day = (therapy.draw_daily_sensitivity(streams("wear.insulin_sensitivity"), wear_days)
               if "sensitivity" in errors else np.ones(wear_days))
-    if missed.shape != np.shape(carbs_g):  # one missed-bolus probability per daily meal
-        raise ConfigError(f"{missed.size} missed-bolus draws for {np.size(carbs_g)} meals: "
-                          f"therapy.MEALS_PER_DAY must list every meal of the day")
     units = np.where(missed, 0.0, meals.bolus_units(counted, carb_ratio_g_per_u))
     return units, missed, si_day
 
