@@ -105,6 +105,7 @@ from ._training import (
     SMOOTHING_EPOCHS,
     EarlyStopping,
     batches,
+    gradient_norms,
     make_scheduler,
     smoothed_argmin,
     start_at_mean,
@@ -114,6 +115,7 @@ from ._training import (
 from ._whitening import scale_of as _scale_of
 from ._whitening import zca_whitening
 from .networks import count_parameters
+from .physics_effect import GRADIENT_KEYS, is_probe_epoch
 
 __all__ = [
     "TorchRegressor",
@@ -260,7 +262,12 @@ class TorchRegressor(
         One dict per epoch: ``epoch``, ``lr``, ``train_loss``, ``val_loss`` and each
         loss term as ``train_<term>`` / ``val_<term>`` (e.g. ``train_mse``,
         ``train_physics``), plus ``val_rmse_mgdl``. Losses are in standardised target
-        units; ``val_*`` are None without a validation set.
+        units; ``val_*`` are None without a validation set. A network with a physics
+        term adds the gradient probes of
+        :data:`~nirglucose.models.physics_effect.GRADIENT_KEYS` (norms of the data and
+        physics terms' gradients on a few epochs, None on the others), which
+        :func:`~nirglucose.models.physics_effect.physics_verdict` reads (the refit's
+        rows hold None: it repeats these epochs on every row).
     best_epoch_ : int
         With a validation set: the epoch with the lowest validation MSE (whose weights
         were kept) or, after a refit, how many epochs the refit ran; 0 when no epoch
@@ -356,6 +363,10 @@ class TorchRegressor(
         self._optimizer.zero_grad(set_to_none=True)
         out = self.module_(batch["nir"], batch["pmf"])
         total, terms = self.get_loss(out, batch["y"], batch)
+        if self.__dict__.pop("_probe_next_step", False) and "physics" in terms:
+            self._gradient_probe = gradient_norms(
+                self.module_.parameters(), terms["mse"], terms["physics"],
+                getattr(self, "lambda_phys", 0.0), self._glucose(out))
         total.backward()
         self._optimizer.step()
         return {"loss": total.detach(), **{k: v.detach() for k, v in terms.items()}}
@@ -512,8 +523,8 @@ class TorchRegressor(
         finally:
             if flushing:
                 torch.set_flush_denormal(False)  # torch's default
-            self.__dict__.pop("_optimizer", None)
-            self.__dict__.pop("_whitening", None)
+            for key in ("_optimizer", "_whitening", "_probe_next_step", "_gradient_probe"):
+                self.__dict__.pop(key, None)
         self.refit_epochs_ = len(self.refit_history_)
         self._build_fast_path()
         return self
@@ -653,7 +664,9 @@ class TorchRegressor(
             if lr_plan is not None:
                 for group in self._optimizer.param_groups:
                     group["lr"] = lr_plan[epoch - 1]
-            record, monitor = self._epoch(train, val, epoch, gen)
+            # the refit repeats the selection run's epochs: only that run is probed
+            probe = lr_plan is None and is_probe_epoch(epoch, max_epochs)
+            record, monitor = self._epoch(train, val, epoch, gen, probe)
             history.append(record)
             logger.debug("%s epoch %d: %s", type(self).__name__, epoch, record)
             if not math.isfinite(monitor):
@@ -670,11 +683,15 @@ class TorchRegressor(
         return history, stopper.best_epoch
 
     def _epoch(
-        self, train: dict, val: dict | None, epoch: int, gen: torch.Generator
+        self, train: dict, val: dict | None, epoch: int, gen: torch.Generator,
+        probe: bool = False,
     ) -> tuple[dict[str, Any], float]:
         """One epoch of training steps; ``(history record, monitored loss)``.
 
         The monitored loss is the validation MSE, or the training loss without ``val``.
+        With ``probe`` (and a physics term) the record holds the gradient norms of
+        :data:`~nirglucose.models.physics_effect.GRADIENT_KEYS` on the epoch's first
+        batch (None otherwise).
         """
         self.module_.train()
         n_train = len(train["y"])
@@ -683,12 +700,17 @@ class TorchRegressor(
         record: dict[str, Any] = {"epoch": epoch, "lr": self._optimizer.param_groups[0]["lr"]}
         order = None if full_batch else torch.randperm(n_train, generator=gen)
         sums: dict[str, torch.Tensor] = {}
+        # the epoch's first step measures the physics term's gradient (physics_effect)
+        self._probe_next_step = probe
         for size, batch in batches(train, batch_size, order):
             for k, v in self.train_step(batch).items():
                 sums[k] = sums.get(k, 0.0) + v * size
+        self.__dict__.pop("_probe_next_step", None)
         train_terms = {k: float(v) / n_train for k, v in sums.items()}
         record["train_loss"] = train_terms.pop("loss")
         record.update({f"train_{k}": v for k, v in train_terms.items()})
+        if "physics" in train_terms:
+            record.update(self.__dict__.pop("_gradient_probe", dict.fromkeys(GRADIENT_KEYS)))
         if val is None:
             record["val_loss"] = None
             record.update({f"val_{k}": None for k in train_terms})

@@ -4,19 +4,23 @@
 here decide the learning rate of each epoch (:func:`make_scheduler`), when to stop and
 which weights to keep (:class:`EarlyStopping`), how many epochs the refit on every row
 runs (:func:`smoothed_argmin`), how rows are batched (:func:`batches`), and where an
-untrained network starts (:func:`start_at_mean`).
+untrained network starts (:func:`start_at_mean`), and how large a physics term's
+gradient is against the data term's (:func:`gradient_norms`; read by
+:mod:`~nirglucose.models.physics_effect`).
 """
 
 from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
 import numpy as np
 import torch
 from torch import nn
+
+from .physics_effect import GRADIENT_KEYS
 
 __all__ = [
     "LR_SCHEDULES",
@@ -25,6 +29,7 @@ __all__ = [
     "SMOOTHING_EPOCHS",
     "EarlyStopping",
     "batches",
+    "gradient_norms",
     "make_scheduler",
     "smoothed_argmin",
     "start_at_mean",
@@ -112,6 +117,97 @@ def start_at_mean(module: nn.Module) -> nn.Module:
                 layer.weight.zero_()
                 layer.bias.zero_()
     return module
+
+
+def _norm(grads: Iterable[torch.Tensor | None]) -> float:
+    """Euclidean norm of a gradient over all parameters (None: a parameter it misses)."""
+    sq = [torch.sum(g.detach().double() ** 2) for g in grads if g is not None]
+    return math.sqrt(float(torch.stack(sq).sum())) if sq else 0.0
+
+
+def _ratio(num: float | None, den: float) -> float | None:
+    return None if num is None or den == 0 else num / den
+
+
+def gradient_norms(
+    parameters: Iterable[torch.Tensor],
+    data_loss: torch.Tensor,
+    physics_loss: torch.Tensor | None,
+    lambda_phys: float,
+    glucose: torch.Tensor,
+) -> dict[str, float | None]:
+    r"""How hard the physics term pulls against the data term: gradient norms and ratios.
+
+    Called before the step's ``backward`` (the graph is retained for it, so the step and
+    hence the trained weights are bit-identical with or without the probe; it draws no
+    random numbers). Two extra backward passes through the network, three where the
+    term reads the glucose prediction (and one through the loss only).
+
+    Parameters
+    ----------
+    parameters : iterable of torch.Tensor
+        The network's parameters (those without ``requires_grad`` are skipped).
+    data_loss : torch.Tensor
+        The data term (MSE on standardised glucose), a scalar in the graph.
+    physics_loss : torch.Tensor or None
+        The physics term before its weight; None, or a tensor outside the graph (a
+        term switched off), gives None for its norms and ratios.
+    lambda_phys : float
+        The weight the loss multiplies it by (0: left out of the loss). [-]
+    glucose : torch.Tensor
+        The network's glucose output for the batch (standardised), in the graph.
+
+    Returns
+    -------
+    dict
+        The keys of :data:`~nirglucose.models.physics_effect.GRADIENT_KEYS`, with
+        :math:`M` the data term, :math:`P` the physics term, :math:`\theta` the
+        parameters and :math:`z` the glucose predictions:
+        ``grad_norm_data`` :math:`\|\nabla_\theta M\|`, ``grad_norm_physics``
+        :math:`\lambda\|\nabla_\theta P\|`, ``grad_norm_physics_unit``
+        :math:`\|\nabla_\theta P\|`, ``grad_ratio`` (the second over the first),
+        ``pull_sd`` :math:`\lambda\frac n2\,\mathrm{RMS}_i(\partial P/\partial z_i)`,
+        how far the term displaces each prediction against the data term's curvature
+        :math:`\partial^2 M/\partial z_i^2 = 2/n` (in training-glucose SDs: :math:`z`
+        is standardised; 0 for a term that does not read :math:`z`), and
+        ``indirect_ratio`` :math:`\lambda\|\nabla_\theta P - J^T\partial P/\partial
+        z\| / \|\nabla_\theta M\|` (the part of the physics gradient that does not
+        pass through the glucose prediction, :math:`J = \partial z/\partial\theta`).
+
+    Examples
+    --------
+    A "network" z = w (two predictions), data term mean((z - 1)^2), physics term
+    sum(z) / 10 at weight 1: the physics term reads z only, so it has no indirect part.
+
+    >>> w = torch.tensor([3.0, 5.0], requires_grad=True)
+    >>> out = gradient_norms([w], ((w - 1) ** 2).mean(), w.sum() / 10, 1.0, w)
+    >>> round(out["grad_ratio"], 4), round(out["pull_sd"], 4), out["indirect_ratio"]
+    (0.0316, 0.1, 0.0)
+    """
+    params = [p for p in parameters if p.requires_grad]
+    data = _norm(torch.autograd.grad(data_loss, params, retain_graph=True, allow_unused=True))
+    out = dict.fromkeys(GRADIENT_KEYS)
+    out["grad_norm_data"] = data
+    if physics_loss is None or not physics_loss.requires_grad:
+        return out
+    lam = float(lambda_phys)
+    grads = torch.autograd.grad(physics_loss, params, retain_graph=True, allow_unused=True)
+    unit = _norm(grads)
+    (dp,) = torch.autograd.grad(physics_loss, glucose, retain_graph=True, allow_unused=True)
+    if dp is None:  # the term does not read the glucose prediction: all of it is indirect
+        pull, indirect = 0.0, unit
+    else:
+        # the data term's curvature in each prediction is 2/n: the term displaces each by
+        # n/2 times its gradient, RMS sqrt(n)/2 times the gradient's norm
+        pull = math.sqrt(glucose.numel()) / 2.0 * _norm([dp])
+        # one backward of P - <dP/dz, z>: the gradient less its share through z
+        indirect = _norm(torch.autograd.grad(
+            (physics_loss, glucose), params, grad_outputs=(torch.ones(()), -dp),
+            retain_graph=True, allow_unused=True))
+    out.update(grad_norm_physics=lam * unit, grad_norm_physics_unit=unit,
+               grad_ratio=_ratio(lam * unit, data), pull_sd=lam * pull,
+               indirect_ratio=_ratio(lam * indirect, data))
+    return out
 
 
 def make_scheduler(
