@@ -25,6 +25,13 @@ def test_models_lists_one_line_each(cli):
     lines = out.strip().splitlines()
     assert [ln.split()[0] for ln in lines] == available_models()
     assert all(len(ln.split()) > 2 for ln in lines)  # a description follows each name
+    # plain text (issue 42): no reST roles or literals, no private class names
+    assert not re.search(r":[a-z]+:`|``|_ResidualHybrid", out)
+    # one column for the names, the longest included
+    assert len({len(ln) - len(ln[len(ln.split()[0]):].lstrip()) for ln in lines}) == 1
+    # the -fm variants name their base and the defaults they change
+    fm = next(ln for ln in lines if ln.startswith("original-pinn-fm "))
+    assert "original-pinn with physics_form='forward', lambda_phys=0.1" in fm
 
 
 def test_keys_have_units_and_descriptions(cli):

@@ -3,6 +3,9 @@ under the package's forward model (models/pinn.py, physics_losses.py, inversion.
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -15,6 +18,8 @@ from nirglucose.models import (
     RTEPINN,
     OriginalPINN,
     SelectiveRTEPINN,
+    available_models,
+    get_model_class,
     load_model,
     make_model,
     tuned_params,
@@ -22,7 +27,12 @@ from nirglucose.models import (
 from nirglucose.models._inversion_solver import NUISANCES
 from nirglucose.models.inversion import PhysicsInversion
 from nirglucose.models.physics_losses import forward_likelihood_loss
-from nirglucose.models.pinn import OptimizedPINNForward, OriginalPINNForward
+from nirglucose.models.pinn import (
+    FORWARD_MODEL_KNOWLEDGE,
+    OptimizedPINNForward,
+    OriginalPINNForward,
+)
+from nirglucose.models.registry import describe_model, get_variant, register_variant
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")  # tests/models/conftest.py
 
@@ -241,3 +251,83 @@ def _one_reading(model, ds):
     sch = model.schema_
     return ([row[f"adc_{w}"] for w in sch.labels], [row[f"adc_ref_{w}"] for w in sch.labels],
             [row[c] for c in sch.physiology])
+
+
+# ----------------------------------------------------------------- registered variants
+
+
+FM_TWINS = {"original-pinn-fm": ("original-pinn", 0.1),
+            "optimized-pinn-fm": ("optimized-pinn", 0.1),
+            "rte-pinn-fm": ("rte-pinn", 1.0),
+            "selective-rte-pinn-fm": ("selective-rte-pinn", 1.0)}
+DATA = Path(__file__).parent / "data"
+
+
+@pytest.mark.parametrize("name", list(FM_TWINS))
+def test_fm_models_are_registered_variants_of_their_twins(name):
+    """Issue 42: one class per network; each -fm name is its twin with two defaults."""
+    twin_name, lam = FM_TWINS[name]
+    cls, twin = get_model_class(name), get_model_class(twin_name)
+    assert cls.__bases__ == (twin,) and cls.registry_name == name
+    assert cls.variant_of == twin_name and get_variant(twin_name) is None
+    v = get_variant(name)
+    assert v.base == twin_name and dict(v.defaults) == {"physics_form": "forward",
+                                                         "lambda_phys": lam}
+    assert v.privileged == cls.privileged == FORWARD_MODEL_KNOWLEDGE
+    # nothing of its own but the defaults (and the privileged note); scikit-learn adds
+    # its metadata-request methods to every estimator class
+    own = {k for k in vars(cls) if not k.endswith("_request")}
+    assert own <= {"__doc__", "__module__", "__qualname__", "__init__", "own_params",
+                   "training_defaults", "variant_of", "privileged", "registry_name"}
+    fm_params = make_model(name).get_params()
+    twin_params = make_model(twin_name).get_params()
+    assert {k for k in fm_params if fm_params[k] != twin_params[k]} == {"physics_form",
+                                                                      "lambda_phys"}
+    assert describe_model(name).startswith(f"{twin_name} with physics_form='forward', ")
+
+
+def test_variant_fits_as_its_twin_with_those_parameters(paper):
+    a = OriginalPINNForward(**FAST).fit(paper)
+    b = OriginalPINN(physics_form="forward", lambda_phys=0.1, **FAST).fit(paper)
+    np.testing.assert_array_equal(a.predict(paper), b.predict(paper))
+    assert a.physics_ == b.physics_ and a.history_ == b.history_
+
+
+def test_a_file_saved_by_the_class_of_its_own_still_loads():
+    """A model file written by the pre-variant code (commit 8eb8f05, when
+    OriginalPINNForward was a class of its own) loads as the variant and predicts the
+    same numbers, to the last bit."""
+    check = json.loads((DATA / "original-pinn-fm_8eb8f05_check.json").read_text())
+    model = load_model(DATA / "original-pinn-fm_8eb8f05.json")
+    assert type(model) is OriginalPINNForward and model.physics_form == "forward"
+    rows = pd.DataFrame(check["rows"])
+    np.testing.assert_array_equal(model.predict(rows), np.array(check["predicted_mgdl"]))
+
+
+@pytest.mark.parametrize(
+    ("base", "defaults", "name", "match"),
+    [
+        ("original-pinn", {"nope": 1}, "x-variant", "'nope' is not a parameter"),
+        ("original-pinn", {"lambda_phys": 1.0}, "original-pinn-fm", "registered already"),
+        ("ebl", {"alphas": (1.0,)}, "x-variant", "own_params"),
+    ],
+)
+def test_register_variant_refuses_bad_declarations(base, defaults, name, match):
+    with pytest.raises(TypeError, match=match):
+        register_variant(name, get_model_class(base), defaults=defaults, summary="x",
+                         class_name="X")
+    assert "x-variant" not in available_models()
+
+
+def test_unregistered_base_is_refused():
+    class Loose(OriginalPINN):
+        pass
+
+    Loose.registry_name = "nowhere"
+    with pytest.raises(TypeError, match="not a registered class"):
+        register_variant("x-loose", Loose, defaults={}, summary="x", class_name="X")
+
+
+def test_hybrid_summaries_name_no_private_class():
+    for name in ("ebl+gp", "physics-inversion+gp"):
+        assert "_ResidualHybrid" not in describe_model(name)

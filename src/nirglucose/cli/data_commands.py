@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Annotated
 
@@ -140,6 +141,16 @@ def keys() -> None:
         _say(f"{key} = {node}{unit}{rng}{desc}", err=False)
 
 
+def _plain(text: str) -> str:
+    """A docstring line as plain text: reST roles and literals without their markup
+    (``:class:`~a.B``` -> ``B``, double back-quotes dropped)."""
+    def role(m: re.Match) -> str:
+        target = m.group(1)
+        return target.rsplit(".", 1)[-1] if target.startswith("~") else target
+
+    return re.sub(r"``(.+?)``", r"\1", re.sub(r":[a-z:]+:`([^`]+)`", role, text))
+
+
 @app.command("models")
 def list_models(
     model: Annotated[
@@ -154,8 +165,10 @@ def list_models(
     if model is not None:
         _say(describe_model(load_model(model)), err=False)
         return
-    for name in available_models():
-        _say(f"{name:<20} {describe_model(name)}".rstrip(), err=False)
+    names = available_models()
+    width = max(map(len, names)) + 2
+    for name in names:
+        _say(f"{name:<{width}}{_plain(describe_model(name))}".rstrip(), err=False)
 
 
 @app.command("parts")

@@ -1,28 +1,63 @@
-"""The study's four physics-informed networks, each an override of ``get_loss``.
+r"""The study's four physics-informed networks, each an override of ``get_loss``.
 
-=====================  ====================  ==========================================
-estimator              registry name         physics term added to the MSE
-=====================  ====================  ==========================================
-:class:`OriginalPINN`  ``original-pinn``     Beer-Lambert residual ``A - eps c l``
-:class:`OptimizedPINN` ``optimized-pinn``    the same, on an attention network
-:class:`RTEPINN`       ``rte-pinn``          diffusion-theory reflectance + mus' prior
-:class:`SelectiveRTEPINN` ``selective-rte-pinn`` the same at 1050 and 1150 nm only
-:class:`OriginalPINNForward` ``original-pinn-fm`` forward-model likelihood (``'forward'``)
-:class:`OptimizedPINNForward` ``optimized-pinn-fm`` the same, on the attention network
-:class:`RTEPINNForward` ``rte-pinn-fm``       glucose likelihood + a state head (``'forward'``)
-:class:`SelectiveRTEPINNForward` ``selective-rte-pinn-fm`` the same, selective network
-=====================  ====================  ==========================================
+=========================  ========================  ==========================================
+estimator                  registry name             physics term added to the MSE
+=========================  ========================  ==========================================
+:class:`OriginalPINN`      ``original-pinn``         Beer-Lambert residual ``A - eps c l``
+:class:`OptimizedPINN`     ``optimized-pinn``        the same, on an attention network
+:class:`RTEPINN`           ``rte-pinn``              diffusion-theory reflectance + mus' prior
+:class:`SelectiveRTEPINN`  ``selective-rte-pinn``    the same at 1050 and 1150 nm only
+=========================  ========================  ==========================================
 
 The Beer-Lambert PINNs choose their term by ``physics_form``
 (:data:`PHYSICS_FORMS`): ``'study'`` (the default, alias ``'absolute'``) is the study's
 residual, kept so the reproduction stays; ``'forward'`` ties the predicted glucose to
 the measured absorbances through the package's own forward model
 (:meth:`~nirglucose.models.inversion.PhysicsInversion.glucose_likelihood`,
-:func:`~nirglucose.models.physics_losses.forward_likelihood_loss`); the ``-fm``
-estimators are the study networks with that form by default.
+:func:`~nirglucose.models.physics_losses.forward_likelihood_loss`); the RTE PINNs
+likewise (:data:`RTE_PHYSICS_FORMS`). The ``-fm`` names are registered variants of the
+four (:func:`~nirglucose.models.registry.register_variant`): each network with
+``physics_form='forward'`` and its own ``lambda_phys`` by default, privileged
+(:data:`FORWARD_MODEL_KNOWLEDGE`): ``original-pinn-fm`` (:class:`OriginalPINNForward`),
+``optimized-pinn-fm``, ``rte-pinn-fm`` and ``selective-rte-pinn-fm``.
 
 All share :class:`~nirglucose.models._torch_base.TorchRegressor`'s one training loop;
-each adds its residual in ``get_loss`` by calling the parent (the skorch habit).
+each adds its residual in ``get_loss`` by calling the parent (the skorch habit). The
+loop measures how hard each term pulls against the data term
+(:mod:`~nirglucose.models.physics_effect`).
+
+Notes
+-----
+**Why the study's Beer-Lambert term does not move the fit.** The residual
+:math:`r_{i\lambda} = A_{i\lambda} - \varepsilon_\lambda \hat c_i l` hardly depends on
+:math:`\hat c`: on ``paper`` (signal gain 11) :math:`\varepsilon` is
+:math:`1.1\times10^{-8}`, :math:`1.7\times10^{-6}`, :math:`1.9\times10^{-7}` and
+:math:`2.7\times10^{-5}` per cm per mg/dL at 850, 940, 1050 and 1150 nm, so at 140 mg/dL
+:math:`\varepsilon\hat c l` is at most 0.004 against mean absorbances of 0.09, 0.14, 0.08
+and 0.28: whatever the network predicts, the term stays at 0.120 (it changes by
+:math:`3\times10^{-4}` of its value over 200 epochs). It is not without a gradient:
+:math:`\partial P/\partial \hat c_i = -\frac2n\sum_\lambda\varepsilon_\lambda
+r_{i\lambda}` pushes every prediction up, towards the :math:`\hat c \approx A/\varepsilon`
+(about 10,000 mg/dL) that would zero it, and the push adds up over the rows while the
+data term's gradients partly cancel, so its gradient w.r.t. the parameters is 0.03-0.4
+of the data term's (0.006-0.5 on ``wearable``; the larger where the network has
+memorised its training rows). But the data term pulls back: the two balance where each prediction has
+moved by :math:`\lambda\,\sigma_y^2\sum_\lambda\varepsilon_\lambda r_{i\lambda}`
+(:math:`\sigma_y` the training glucose's SD, 58 mg/dL), which at
+:math:`\lambda_\mathrm{phys} = 1` is 0.026 mg/dL on ``paper`` and 0.029 mg/dL on
+``wearable`` (:math:`4\text{-}5\times10^{-4}` SD; ``benchmarks/pinn_physics_gradient.py``,
+40 x 3, seed 0; the record in ``benchmarks/records/pinn_physics_gradient.json``). The
+estimate holds: at :math:`\lambda = 1000` it predicts 26 mg/dL and the Original PINN's
+held-out predictions rise by 27-33 mg/dL (``random_state`` 0-2). So the study's term is
+constant during training and cannot change the fit at the study's weights
+(:math:`\lambda \le 1`): its ablation cannot show an effect. What an ablation of it does
+show is the training's sensitivity to any change of the loss: :math:`\lambda = 10^{-3}`
+instead of 0 moves the Original PINN's held-out predictions by 2.3 mg/dL RMS, as much as
+:math:`\lambda = 1` (2.6 mg/dL). The forward-model term of the ``-fm`` variants pulls
+each prediction by tens to hundreds of SD on ``paper`` and about 0.6 SD on ``wearable``
+at :math:`\lambda = 1`, and the RTE PINNs' study term acts through their optics heads
+(its gradient outside the glucose prediction is 3-11 times the data term's): both move
+the fit.
 
 Examples
 --------
@@ -73,7 +108,7 @@ from .physics_losses import (
     glucose_absorptivity_per_cm_per_mgdl,
     scattering_prior_loss,
 )
-from .registry import register
+from .registry import register, register_variant
 
 __all__ = [
     "OriginalPINN",
@@ -86,6 +121,7 @@ __all__ = [
     "SelectiveRTEPINNForward",
     "PHYSICS_FORMS",
     "RTE_PHYSICS_FORMS",
+    "FORWARD_MODEL_KNOWLEDGE",
     "nominal_optics",
 ]
 
@@ -304,10 +340,11 @@ class OriginalPINN(_BeerLambertPINN):
     :math:`\varepsilon\hat c` is of order 0.005 even at the paper preset's gain, so
     the residual stays large whatever the network predicts, and its gradient with
     respect to :math:`\hat c`, :math:`2\lambda\sum_\lambda\varepsilon(\varepsilon\hat c - A)`
-    per mg/dL, is tiny next to the MSE's. With :math:`\lambda_\mathrm{phys} = 10^{-2}`
-    predictions change by less than 0.1 mg/dL (0.05 mg/dL at most on the paper preset,
-    seed 0, against :math:`\lambda_\mathrm{phys} = 0`): the term is, as in the study,
-    a weak regulariser. The 'relative' form
+    per mg/dL, pushes every prediction up by the same tiny amount: against the MSE it
+    displaces them by 0.03 mg/dL at :math:`\lambda_\mathrm{phys} = 1` (module notes,
+    ``benchmarks/pinn_physics_gradient.py``). The term is constant during training
+    and does not move the fit at the study's weights; the history's gradient probes
+    say so (:func:`~nirglucose.models.physics_effect.physics_verdict`). The 'relative' form
     is the physically sensible variant; it is not the default because it is not the
     study's model. The absorbance is decadic (DESIGN.md) where the study writes
     ``log``; the choice only rescales :math:`\varepsilon` consistently.
@@ -387,32 +424,24 @@ _FORWARD_NOTES = """
     """
 
 
-@register("original-pinn-fm")
-class OriginalPINNForward(OriginalPINN):
-    __doc__ = (
-        """The Original PINN with the forward-model likelihood as its physics term.
+#: What the ``-fm`` variants know beyond the measured data (their ``privileged``): the
+#: forward term is a :class:`~nirglucose.models.inversion.PhysicsInversion` of the
+#: training Dataset's scenario, i.e. the simulator's own forward model.
+FORWARD_MODEL_KNOWLEDGE = "the generating scenario and the simulator's forward model"
 
-    :class:`OriginalPINN` with ``physics_form='forward'`` by default (its parameters,
-    network and prediction are the same).
-    """
-        + _FORWARD_NOTES
-    )
+#: The ``-fm`` variants' changed defaults: the Beer-Lambert networks', the RTE ones'.
+_FM_DEFAULTS = {"physics_form": "forward", "lambda_phys": 0.1}
+_RTE_FM_DEFAULTS = {"physics_form": "forward", "lambda_phys": 1.0}
 
-    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 0.1}
-
-
-@register("optimized-pinn-fm")
-class OptimizedPINNForward(OptimizedPINN):
-    __doc__ = (
-        """The Optimized PINN with the forward-model likelihood as its physics term.
-
-    :class:`OptimizedPINN` with ``physics_form='forward'`` by default (its parameters,
-    network and prediction are the same).
-    """
-        + _FORWARD_NOTES
-    )
-
-    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 0.1}
+OriginalPINNForward = register_variant(
+    "original-pinn-fm", OriginalPINN, defaults=_FM_DEFAULTS, class_name="OriginalPINNForward",
+    summary="the forward-model likelihood as its physics term.",
+    privileged=FORWARD_MODEL_KNOWLEDGE, notes=_FORWARD_NOTES)
+OptimizedPINNForward = register_variant(
+    "optimized-pinn-fm", OptimizedPINN, defaults=_FM_DEFAULTS,
+    class_name="OptimizedPINNForward",
+    summary="the forward-model likelihood as its physics term.",
+    privileged=FORWARD_MODEL_KNOWLEDGE, notes=_FORWARD_NOTES)
 
 
 # ============================================================================ RTE
@@ -719,27 +748,12 @@ _RTE_FORWARD_NOTES = """
     """
 
 
-@register("rte-pinn-fm")
-class RTEPINNForward(RTEPINN):
-    __doc__ = (
-        """The RTE-inspired PINN with the forward model as its physics (and a state head).
-
-    :class:`RTEPINN` with ``physics_form='forward'`` by default.
-    """
-        + _RTE_FORWARD_NOTES
-    )
-
-    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 1.0}
-
-
-@register("selective-rte-pinn-fm")
-class SelectiveRTEPINNForward(SelectiveRTEPINN):
-    __doc__ = (
-        """The Selective RTE PINN with the forward model as its physics (and a state head).
-
-    :class:`SelectiveRTEPINN` with ``physics_form='forward'`` by default.
-    """
-        + _RTE_FORWARD_NOTES
-    )
-
-    own_params: ClassVar[dict[str, Any]] = {"physics_form": "forward", "lambda_phys": 1.0}
+RTEPINNForward = register_variant(
+    "rte-pinn-fm", RTEPINN, defaults=_RTE_FM_DEFAULTS, class_name="RTEPINNForward",
+    summary="the forward model as its physics term, and a state head.",
+    privileged=FORWARD_MODEL_KNOWLEDGE, notes=_RTE_FORWARD_NOTES)
+SelectiveRTEPINNForward = register_variant(
+    "selective-rte-pinn-fm", SelectiveRTEPINN, defaults=_RTE_FM_DEFAULTS,
+    class_name="SelectiveRTEPINNForward",
+    summary="the forward model as its physics term, and a state head.",
+    privileged=FORWARD_MODEL_KNOWLEDGE, notes=_RTE_FORWARD_NOTES)

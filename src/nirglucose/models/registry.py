@@ -10,6 +10,8 @@ from __future__ import annotations
 import importlib
 import inspect
 import os
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +32,10 @@ __all__ = [
     "MODELS",
     "is_network",
     "is_pinn",
+    # variants (issue 42), the block at the end of this module
+    "Variant",
+    "register_variant",
+    "get_variant",
 ]
 
 #: Registered name -> the module that defines it. Adding a model is a module with a
@@ -192,3 +198,138 @@ def load_model(path: str | Path):
     doc = read_model_document(Path(path))
     cls: Any = get_model_class(doc["model"])  # every registered class has a load()
     return cls.load(path)
+
+
+# ============================================================================ variants
+# Issue 42: a registered name for an existing class with other defaults (the ``-fm``
+# PINNs are their study twins with ``physics_form='forward'``). Everything of the
+# mechanism is in this block; the rest of the registry sees a variant as a registered
+# class (a generated subclass that only sets defaults), so ``get_model_class(name)``,
+# ``make_model``, ``load_model``, the benchmark's ``get_model_class(name)(**params)``,
+# saved files and the class's name and ``registry_name`` stay as they were.
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A registered name for an existing estimator class with other defaults.
+
+    Attributes
+    ----------
+    name : str
+        The variant's registered name (``original-pinn-fm``).
+    base : str
+        The registered name of the class it varies (``original-pinn``).
+    defaults : Mapping[str, Any]
+        The constructor defaults it changes; every other parameter is the base's.
+    privileged : Any
+        What the variant knows beyond the measured data (set as the generated class's
+        ``privileged``), or None to keep the base's.
+    """
+
+    name: str
+    base: str
+    defaults: Mapping[str, Any]
+    privileged: Any = None
+
+
+_VARIANTS: dict[str, Variant] = {}
+
+
+def _variant_doc(variant: Variant, base: type, summary: str, notes: str) -> str:
+    values = ", ".join(f"{k}={v!r}" for k, v in variant.defaults.items())
+    literal = ", ".join(f"``{k}={v!r}``" for k, v in variant.defaults.items())
+    return (f"{variant.base} with {values}: {summary}\n\n"
+            f"    The registered variant ``{variant.name}`` of :class:`{base.__name__}`\n"
+            f"    (:func:`~nirglucose.models.registry.register_variant`): that class with the\n"
+            f"    defaults {literal}; its parameters, network and prediction\n"
+            f"    are the base's.\n" + notes)
+
+
+def register_variant(
+    name: str,
+    base: type,
+    *,
+    defaults: Mapping[str, Any],
+    summary: str,
+    class_name: str,
+    privileged: Any = None,
+    notes: str = "",
+) -> type:
+    """Register ``name`` as the registered class ``base`` with other constructor defaults.
+
+    Parameters
+    ----------
+    name : str
+        The variant's registered name.
+    base : type
+        A registered class whose constructor is built from its ``own_params`` (the
+        networks, :class:`~nirglucose.models._torch_base.TorchRegressor`).
+    defaults : mapping
+        Constructor defaults the variant changes (each a parameter of ``base``).
+    summary : str
+        What the variant is, in a few words; its docstring's first line (what
+        ``nirglucose models`` prints) is the base's name, the changed defaults and this.
+    class_name : str
+        The name the generated class carries (and its module exports).
+    privileged : optional
+        What the variant knows beyond the measured data (the generated class's
+        ``privileged``); None keeps the base's.
+    notes : str
+        Further docstring sections (numpydoc, indented by four spaces).
+
+    Returns
+    -------
+    type
+        The generated class: a subclass of ``base`` that sets only the defaults (and
+        ``privileged``), registered under ``name``. ``variant_of`` on it names the base.
+
+    Raises
+    ------
+    TypeError
+        If ``base`` is not registered or builds no constructor from ``own_params``, a
+        default is not one of its parameters, or ``name`` is taken.
+    """
+    base_name = getattr(base, "registry_name", "")
+    if _REGISTRY.get(base_name) is not base:
+        raise TypeError(f"variant {name!r}: {base.__name__} is not a registered class")
+    if not getattr(base.__init__, "generated", False):
+        raise TypeError(f"variant {name!r}: {base.__name__} does not build its constructor "
+                        "from own_params (a network class)")
+    known = inspect.signature(base).parameters
+    unknown = sorted(set(defaults) - set(known))
+    if unknown:
+        raise TypeError(f"variant {name!r}: {unknown[0]!r} is not a parameter of "
+                        f"{base.__name__}; parameters: {', '.join(known)}")
+    if name in _REGISTRY:
+        raise TypeError(f"variant {name!r}: the name is registered already")
+    own = {k for c in base.__mro__ for k in c.__dict__.get("own_params", {})}
+    variant = Variant(name, base_name, dict(defaults), privileged)
+    namespace: dict[str, Any] = {
+        "__module__": base.__module__,
+        "__qualname__": class_name,
+        "__doc__": _variant_doc(variant, base, summary, notes),
+        "own_params": {k: v for k, v in defaults.items() if k in own},
+        "training_defaults": {k: v for k, v in defaults.items() if k not in own},
+        "variant_of": base_name,
+    }
+    if privileged is not None:
+        namespace["privileged"] = privileged
+    cls = register(name)(type(class_name, (base,), namespace))
+    _VARIANTS[name] = variant
+    return cls
+
+
+def get_variant(name: str) -> Variant | None:
+    """The :class:`Variant` registered under ``name``, or None for a class of its own;
+    an unknown name raises ConfigError (:func:`get_model_class`).
+
+    Examples
+    --------
+    >>> get_variant("original-pinn-fm").base
+    'original-pinn'
+    >>> get_variant("ebl") is None
+    True
+    """
+    get_model_class(name)
+    return _VARIANTS.get(name)
+
