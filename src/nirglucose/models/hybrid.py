@@ -303,7 +303,7 @@ class _ResidualHybrid(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Bas
 
 @register("ebl+gp")
 class EBLGP(_ResidualHybrid):
-    """Enhanced Beer-Lambert ridge, then a GP on its out-of-fold residual (stacked).
+    """Enhanced Beer-Lambert ridge, then a GP on its residual, stacked.
 
     Parameters, the stack and its weights: :class:`_ResidualHybrid` and the module notes.
 
@@ -320,7 +320,7 @@ class EBLGP(_ResidualHybrid):
 
 @register("physics-inversion+gp")
 class PhysicsInversionGP(_ResidualHybrid):
-    """The forward-model inversion, then a GP on its out-of-fold residual (stacked).
+    """The forward-model inversion, then a GP on its residual, stacked.
 
     Parameters, the stack and its weights: :class:`_ResidualHybrid` and the module notes.
 

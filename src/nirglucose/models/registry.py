@@ -257,6 +257,9 @@ def register_variant(
 ) -> type:
     """Register ``name`` as the registered class ``base`` with other constructor defaults.
 
+    Called where ``base`` is defined, after it; like any registered name, ``name`` needs
+    its line in :data:`MODELS` (the module that registers it).
+
     Parameters
     ----------
     name : str
