@@ -41,8 +41,9 @@ r_{i\lambda}` pushes every prediction up, towards the :math:`\hat c \approx A/\v
 (about 10,000 mg/dL) that would zero it, and the push adds up over the rows while the
 data term's gradients partly cancel, so its gradient w.r.t. the parameters is 0.03-0.4
 of the data term's (0.006-0.5 on ``wearable``; the larger where the network has
-memorised its training rows). But the data term pulls back: the two balance where each prediction has
-moved by :math:`\lambda\,\sigma_y^2\sum_\lambda\varepsilon_\lambda r_{i\lambda}`
+memorised its training rows). But the data term pulls back: the two balance where
+each prediction has moved by
+:math:`\lambda\,\sigma_y^2\sum_\lambda\varepsilon_\lambda r_{i\lambda}`
 (:math:`\sigma_y` the training glucose's SD, 58 mg/dL), which at
 :math:`\lambda_\mathrm{phys} = 1` is 0.026 mg/dL on ``paper`` and 0.029 mg/dL on
 ``wearable`` (:math:`4\text{-}5\times10^{-4}` SD; ``benchmarks/pinn_physics_gradient.py``,
