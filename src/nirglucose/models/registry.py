@@ -295,7 +295,8 @@ def register_variant(
     base_name = getattr(base, "registry_name", "")
     if _REGISTRY.get(base_name) is not base:
         raise TypeError(f"variant {name!r}: {base.__name__} is not a registered class")
-    if not getattr(base.__init__, "generated", False):
+    # every network class gets its own generated __init__ (TorchRegressor.__init_subclass__)
+    if not getattr(vars(base).get("__init__"), "generated", False):
         raise TypeError(f"variant {name!r}: {base.__name__} does not build its constructor "
                         "from own_params (a network class)")
     known = inspect.signature(base).parameters
