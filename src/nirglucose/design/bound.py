@@ -20,7 +20,13 @@ Two conditionings, :data:`CONDITIONS`:
     NUISANCES` (blood volume under the probe, saturation, water, fat, melanin, skin
     thickness under the probe, one common LED peak shift, the optical coupling); each
     LED's own junction-temperature shift beyond the common one is taken as known, which
-    can only lower the bound.
+    can only lower the bound. Where ``noise.water_temperature`` is on (water absorbs at
+    the skin temperature, Röttgers et al. 2014), the skin temperature is one more
+    nuisance (:data:`~nirglucose.simulation.forward_model.TEMPERATURE_NUISANCE`) with the
+    same prior: its simulated spread given the measured columns, which include the
+    skin thermometer's reading ``skin_temp_c``, so its prior width is the thermometer's
+    error (``measurement.skin_temp_c``, 0.2 degC; none with ``device.physiology =
+    exact``) -- a known covariate with its error as prior width.
 ``"oracle"`` -- the information of the :class:`~nirglucose.models.oracle.Oracle`: it
     knows each reading's true nuisance state (the ``true_*`` columns, per-LED shifts
     included) but not the noise, and it shrinks to a Gaussian glucose prior, so per
@@ -85,8 +91,10 @@ CONDITIONS = ("device", "oracle")
 #: so a design's bound is a deterministic function of its config). [-]
 PILOT_SUBJECTS, PILOT_PER_SUBJECT, PILOT_SEED = 200, 3, 0
 #: Forward-difference steps: glucose as the oracle's Jacobian [mg/dL], then each
-#: nuisance of NUISANCES in its unit (about 1e-3 of its population spread).
-_STEPS = np.array([0.5, 1e-3, 1e-4, 1e-4, 1e-4, 1e-5, 1e-3, 1e-3, 1e-4])
+#: nuisance of NUISANCES in its unit (about 1e-3 of its population spread), then the
+#: skin temperature [degC] where ``noise.water_temperature`` is on (the model is linear
+#: in it, so any step is exact).
+_STEPS = np.array([0.5, 1e-3, 1e-4, 1e-4, 1e-4, 1e-5, 1e-3, 1e-3, 1e-4, 1e-3])
 
 
 @dataclass(frozen=True)
@@ -135,10 +143,10 @@ class DesignBound:
 @dataclass(frozen=True)
 class _Pilot:
     glucose_mgdl: np.ndarray  # (n,)
-    theta: np.ndarray  # (n, 8) NUISANCES
+    theta: np.ndarray  # (n, 8) NUISANCES, (n, 9) with the skin temperature last
     board_c: np.ndarray  # (n,)
     ambient_step_var_c2: float  # E[(T_ambient - T_ambient at the subject's reference)^2]
-    nuisance_cov: np.ndarray  # (8, 8) given the measured physiology
+    nuisance_cov: np.ndarray  # (k, k), theta's columns, given the measured physiology
 
 
 @dataclass(frozen=True)
@@ -244,9 +252,10 @@ def _population_key(cfg: ScenarioConfig) -> str:
     data["leds"] = {"emitters": [e.model_dump(mode="json") for e in DEFAULT_LEDS],
                     "band_points": data["leds"]["band_points"]}
     data["detector"] = None
-    defaults = ScenarioConfig.model_construct()
+    sections = ScenarioConfig.model_fields
     for section, key, _ in DETECTOR_KEYS:
-        data[section][key] = getattr(getattr(defaults, section), key)
+        # the field's default, read off the section's class (no instance: fast)
+        data[section][key] = sections[section].annotation.model_fields[key].default
     return json.dumps(data, sort_keys=True)
 
 
@@ -266,6 +275,8 @@ def _pilot(population_json: str) -> _Pilot:
         shift.mean(axis=1),
         np.log(f["true_coupling"].to_numpy(float)),
     ])
+    if cfg.noise_factor("water_temperature") != 0.0:  # the water's (skin) temperature
+        theta = np.column_stack([theta, f["true_skin_temp_c"].to_numpy(float)])
     amb = f["true_ambient_temperature_c"].to_numpy(float)
     first = f.groupby("subject_id")["true_ambient_temperature_c"].transform("first").to_numpy()
     measured = [c for c in PHYSIOLOGICAL_RANGES if c in f.columns]
