@@ -56,6 +56,24 @@ def _coefficients(b, s, w, f, c, x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, 
             max(1.0 - bs - water_sub - f, 0.0), np.exp(k_scat_per_mm * c))
 
 
+@njit(cache=True, nogil=True)
+def _coefficient_rows(blood, sat, water, fat_sub, glucose_mm, water_dt_c, x_disp_per_mm,
+                      k_scat_per_mm, blood_sub_ratio, water_sub):  # pragma: no cover - compiled
+    """Per snapshot, (14, n): the mixture coefficients (dermis rows 0-4, subcutis 5-10,
+    see :func:`_coefficients`), water's temperature term (row 11 dermis: water's
+    coefficient x dT; row 12 subcutis) and the glucose scattering factor (row 13)."""
+    n = blood.shape[0]
+    c = np.empty((14, n))
+    for i in range(n):
+        (c[0, i], c[1, i], c[2, i], c[3, i], c[4, i], c[5, i], c[6, i], c[7, i], c[8, i],
+         c[9, i], c[10, i], c[13, i]) = _coefficients(
+            blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i], x_disp_per_mm,
+            k_scat_per_mm, blood_sub_ratio, water_sub)
+        c[11, i] = c[2, i] * water_dt_c[i]
+        c[12, i] = c[7, i] * water_dt_c[i]
+    return c
+
+
 @njit(cache=True, inline="always")
 def _node_spectra(tab, der, led, p):
     """One band node's tabulated spectra and wavelength derivatives, in :data:`_ORDER`
@@ -76,21 +94,13 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin
     share_k = -2.0 * np.sqrt(2.0 / rho_cm)
     x2_k = 3.0 * rho_cm * rho_cm
     epi_k = 4.0 * epi_cm
-    # Per snapshot: mixture coefficients (dermis c0-c4, subcutis c5-c10, water's
-    # temperature term c11 dermis, c12 subcutis), the glucose scattering factor and the
-    # share exponent's thickness factor.
-    c0, c1, c2, c3, c4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c5, c6, c7, c8, c9 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c10, glc_scatter, t_k = np.empty(n), np.empty(n), np.empty(n)
-    c11, c12 = np.empty(n), np.empty(n)
-    for i in range(n):
-        (c0[i], c1[i], c2[i], c3[i], c4[i], c5[i], c6[i], c7[i], c8[i], c9[i], c10[i],
-         glc_scatter[i]) = _coefficients(blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i],
-                                         x_disp_per_mm, k_scat_per_mm, blood_sub_ratio,
-                                         water_sub)
-        c11[i] = c2[i] * water_dt_c[i]
-        c12[i] = c7[i] * water_dt_c[i]
-        t_k[i] = share_k * skin_cm[i]
+    # Per snapshot: coefficients (:func:`_coefficient_rows`) and the share exponent's
+    # thickness factor.
+    c = _coefficient_rows(blood, sat, water, fat_sub, glucose_mm, water_dt_c, x_disp_per_mm,
+                          k_scat_per_mm, blood_sub_ratio, water_sub)
+    c0, c1, c2, c3, c4, c5, c6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6]
+    c7, c8, c9, c10, c11, c12, glc_scatter = c[7], c[8], c[9], c[10], c[11], c[12], c[13]
+    t_k = share_k * skin_cm
     out_t[:] = 0.0
     mua_d, mua_s, musp_d = np.empty(n), np.empty(n), np.empty(n)
     musp_s, epi, arg = np.empty(n), np.empty(n), np.empty(n)
@@ -142,16 +152,10 @@ def _layers_kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, 
     :func:`nirglucose.optics.layers.layers_from_tissue_optics`, in one pass."""
     n_led, n = shift_t.shape
     n_pts = tab.shape[2]
-    c0, c1, c2, c3, c4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c5, c6, c7, c8, c9 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c10, glc_scatter, c11, c12 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    for i in range(n):
-        (c0[i], c1[i], c2[i], c3[i], c4[i], c5[i], c6[i], c7[i], c8[i], c9[i], c10[i],
-         glc_scatter[i]) = _coefficients(blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i],
-                                         x_disp_per_mm, k_scat_per_mm, blood_sub_ratio,
-                                         water_sub)
-        c11[i] = c2[i] * water_dt_c[i]
-        c12[i] = c7[i] * water_dt_c[i]
+    c = _coefficient_rows(blood, sat, water, fat_sub, glucose_mm, water_dt_c, x_disp_per_mm,
+                          k_scat_per_mm, blood_sub_ratio, water_sub)
+    c0, c1, c2, c3, c4, c5, c6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6]
+    c7, c8, c9, c10, c11, c12, glc_scatter = c[7], c[8], c[9], c[10], c[11], c[12], c[13]
     for led in range(n_led):
         sh_l = shift_t[led]
         for p in range(n_pts):
