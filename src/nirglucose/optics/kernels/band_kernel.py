@@ -101,6 +101,7 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin
     c0, c1, c2, c3, c4, c5, c6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6]
     c7, c8, c9, c10, c11, c12, glc_scatter = c[7], c[8], c[9], c[10], c[11], c[12], c[13]
     t_k = share_k * skin_cm
+    has_dt = np.any(water_dt_c != 0.0)
     out_t[:] = 0.0
     mua_d, mua_s, musp_d = np.empty(n), np.empty(n), np.empty(n)
     musp_s, epi, arg = np.empty(n), np.empty(n), np.empty(n)
@@ -120,12 +121,15 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin
                 deoxy = t_deo + sh * d_deo
                 wat = t_wat + sh * d_wat
                 glc = t_glc + sh * d_glc
-                wdt = t_wdt + sh * d_wdt
-                md = (c0[i] * oxy + c1[i] * deoxy + c2[i] * wat + c3[i] * glc + c4[i] * base
-                      + c11[i] * wdt)
+                md = c0[i] * oxy + c1[i] * deoxy + c2[i] * wat + c3[i] * glc + c4[i] * base
+                ms = (c5[i] * oxy + c6[i] * deoxy + c7[i] * wat + c8[i] * glc
+                      + c9[i] * (t_fat + sh * d_fat) + c10[i] * base)
+                if has_dt:  # loop-invariant: the compiler makes two loops of this one
+                    wdt = t_wdt + sh * d_wdt
+                    md += c11[i] * wdt
+                    ms += c12[i] * wdt
                 mua_d[i] = md
-                mua_s[i] = (c5[i] * oxy + c6[i] * deoxy + c7[i] * wat + c8[i] * glc
-                            + c9[i] * (t_fat + sh * d_fat) + c10[i] * base + c12[i] * wdt)
+                mua_s[i] = ms
                 msd = (t_msd + sh * d_msd) * glc_scatter[i]
                 musp_d[i] = msd
                 musp_s[i] = (t_mss + sh * d_mss) * glc_scatter[i]
