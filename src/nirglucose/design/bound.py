@@ -202,10 +202,9 @@ class DesignTerms:
         sat = self.saturated[:, idx]
         # a saturated channel: no information (its Jacobian row removed)
         J = np.where(sat[:, :, None], 0.0, J)
-        k = len(idx)
-        S = var[:, :, None] * np.eye(k)[None] + self.common_var
-        SinvJ = np.linalg.solve(S, J)
-        F = np.einsum("nki,nkj->nij", J, SinvJ)
+        if condition == "oracle":
+            J = J[:, :, :1]  # the oracle knows the nuisances: glucose's information only
+        F = _fisher(J, var, self.common_var)
         lam = 1.0 / self.glucose_var if prior else 0.0
         if condition == "oracle":
             with np.errstate(divide="ignore"):
@@ -229,6 +228,23 @@ class DesignTerms:
             saturated_fraction=float(sat.mean()),
             n_states=int(J.shape[0]),
         )
+
+
+def _fisher(J: np.ndarray, var: np.ndarray, common_var: float) -> np.ndarray:
+    """Per-state Fisher information J^T S^-1 J, (n, p, p), for S = diag(var) + c 1 1^T.
+
+    By the Sherman-Morrison identity (G. H. Golub, C. F. Van Loan, "Matrix
+    Computations", 4th ed. (2013), 2.1.4): J^T D^-1 J - c u u^T / (1 + c sum 1/var),
+    u = J^T D^-1 1 -- the inverse of S without a solve per state.
+    """
+    w = 1.0 / var  # (n, k)
+    wj = w[:, :, None] * J
+    F = np.einsum("nki,nkj->nij", J, wj)
+    if common_var > 0:
+        u = wj.sum(axis=1)  # (n, p)
+        scale = common_var / (1.0 + common_var * w.sum(axis=1))
+        F -= scale[:, None, None] * u[:, :, None] * u[:, None, :]
+    return F
 
 
 def _resolve(config, leds, detector, overrides) -> ScenarioConfig:
