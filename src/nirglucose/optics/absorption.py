@@ -164,7 +164,7 @@ def water_dmua_dt_per_cm_per_c(wavelength_nm: ArrayLike) -> np.ndarray:
     Röttgers et al. [9]_ measured it spectrophotometrically over 400-2700 nm; the table is
     the WOPP v3 column (2 nm steps), linear in temperature. Warmer water's O-H bands move
     to shorter wavelengths: the coefficient is positive on their short-wavelength flanks
-    (about 1340-1443 nm, 1104-1190 nm, 908-994 nm) and negative on the long ones
+    (about 1306-1442 nm, 1104-1190 nm, 908-994 nm) and negative on the long ones
     (about -0.11 /(cm degC) at 1490 nm, -0.064 at 1550 nm, -0.029 at 1650 nm: -0.46,
     -0.57 and -0.49 % per degC of the same file's mua at 20 degC). An independent
     measurement at 2014 and 2090 nm (-0.259 and -0.104 /(cm K), 20-100 degC) agrees
