@@ -69,7 +69,7 @@ from typing import Any
 import numpy as np
 
 from ..config import DEFAULT_LEDS, ScenarioConfig, resolve_config
-from ..config.scenario import DETECTOR_KEYS
+from ..config.scenario import DETECTOR_KEYS, detector_key_default
 from ..constants import (
     BOLTZMANN_J_PER_K,
     ELEMENTARY_CHARGE_C,
@@ -268,10 +268,8 @@ def _population_key(cfg: ScenarioConfig) -> str:
     data["leds"] = {"emitters": [e.model_dump(mode="json") for e in DEFAULT_LEDS],
                     "band_points": data["leds"]["band_points"]}
     data["detector"] = None
-    sections = ScenarioConfig.model_fields
     for section, key, _ in DETECTOR_KEYS:
-        # the field's default, read off the section's class (no instance: fast)
-        data[section][key] = sections[section].annotation.model_fields[key].default
+        data[section][key] = detector_key_default(section, key)
     return json.dumps(data, sort_keys=True)
 
 
