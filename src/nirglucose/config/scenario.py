@@ -110,7 +110,8 @@ DETECTOR_KEYS = (
 def detector_key_default(section: str, key: str) -> Any:
     """The default of a key a detector sets (:data:`DETECTOR_KEYS`), read off its
     section's class: no default scenario is built (that deep-copies every default)."""
-    return ScenarioConfig.model_fields[section].annotation.model_fields[key].default
+    sections: dict[str, type[_Model]] = {"hardware": HardwareConfig, "optics": OpticsConfig}
+    return sections[section].model_fields[key].default
 
 
 def _section_dict(value: Any) -> dict:
