@@ -9,7 +9,8 @@ numbers beside them are cited in the page. Sections of the JSON object:
     ForwardModel's documented state), glucose 100 -> 200 mg/dL at published magnitude
     (``physical``, gain 1): the dermis' absorption change (glucose's own absorption,
     water displacement, net) [1/cm], the relative mus' change [-], and the detected
-    light's change, d ln I and dA = -d ln I / ln 10 [mAU], by the default
+    light's change, d ln I and dA = -d ln I / ln 10 [mAU] (and d ln I without glucose's
+    scattering effect, ``glucose.scattering_rel_per_mm`` 0), by the default
     ``beer-lambert`` forward model (above 1400 nm it shortens the path about 2 x,
     SOURCES.md, so these light changes are low there).
 ``temperature_equivalence``
@@ -105,6 +106,8 @@ def glucose_and_temperature() -> tuple[list, list]:
         cfg = _band_config(nm)
         d = _dermis_per_mgdl(cfg)
         dlnI = _light(cfg, 200.0) - _light(cfg, 100.0)
+        no_scat = _band_config(nm, {"glucose.scattering_rel_per_mm": 0.0})
+        dlnI_abs = _light(no_scat, 200.0) - _light(no_scat, 100.0)
         rows.append({
             "band_nm": nm, "fwhm_nm": cfg.leds.fwhm_nm[0],
             "dmua_glucose_own_per_cm": 100 * d["own_per_mgdl"],
@@ -112,6 +115,7 @@ def glucose_and_temperature() -> tuple[list, list]:
             "dmua_net_per_cm": 100 * (d["own_per_mgdl"] + d["displacement_per_mgdl"]),
             "dmusp_rel": 100 * d["musp_rel_per_mgdl"],
             "dlnI": dlnI, "dA_mAU": -1000 * dlnI / np.log(10.0),
+            "dlnI_absorption_only": dlnI_abs,
         })
         on = _band_config(nm, ON)
         t0 = on.physiology.skin_temp_c_neutral
