@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from nirglucose.config import (
+    DEFAULT_OFF_NOISE_SOURCES,
     DEVICE_CAPABILITIES,
     NOISE_SOURCES,
     PAPER_SIGNAL_GAIN,
@@ -32,10 +33,14 @@ def test_presets_resolve(preset):
 def test_every_noise_source_has_switch_and_scale():
     cfg = resolve_config("paper")
     for src in NOISE_SOURCES:
-        assert cfg.noise_factor(src) == 1.0
+        # confounders added after calibration are off by default (issue 40)
+        assert cfg.noise_factor(src) == (0.0 if src in DEFAULT_OFF_NOISE_SOURCES else 1.0)
+        on = resolve_config("paper", {f"noise.{src}.enabled": True})
+        assert on.noise_factor(src) == 1.0
         off = resolve_config("paper", {f"noise.{src}.enabled": False})
         assert off.noise_factor(src) == 0.0
-        scaled = resolve_config("paper", {f"noise.{src}.scale": 2.0, "noise_scale": 3.0})
+        scaled = resolve_config("paper", {f"noise.{src}.enabled": True,
+                                          f"noise.{src}.scale": 2.0, "noise_scale": 3.0})
         assert scaled.noise_factor(src) == 6.0
 
 

@@ -68,6 +68,10 @@ def dot_last(x, w) -> np.ndarray:
     if w.shape[-1] != k:
         raise ValueError(f"dot_last: last axes differ ({k} and {w.shape[-1]})")
     shape = np.broadcast_shapes(x.shape[:-1], w.shape[:-1])
+    if shape == () and k:
+        # one long vector (a band integral over a fine grid): the running sum in C,
+        # the same operations in the same order as the loop below
+        return np.asarray(np.add.accumulate(x * w)[-1])
     out = np.zeros(shape)
     if k:
         np.multiply(x[..., 0], w[..., 0], out=out)

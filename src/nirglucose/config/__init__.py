@@ -33,7 +33,7 @@ from .instrument import (
 )
 from .keys import valid_keys
 from .leds import DEFAULT_LEDS, LED, LEGACY_LED_KEYS, LEDConfig
-from .noise import NOISE_SOURCES, NoiseConfig, NoiseSource
+from .noise import DEFAULT_OFF_NOISE_SOURCES, NOISE_SOURCES, NoiseConfig, NoiseSource
 from .overrides import apply_overrides, is_valid_key, parse_override, resolve_config
 from .presets import (
     DEVICE_CAPABILITIES,
@@ -67,6 +67,7 @@ __all__ = [
     "NoiseSource",
     "NoiseConfig",
     "NOISE_SOURCES",
+    "DEFAULT_OFF_NOISE_SOURCES",
     "PRESETS",
     "PRESET_DESCRIPTIONS",
     "PRESET_CAPABILITIES",

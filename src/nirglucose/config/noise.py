@@ -1,4 +1,9 @@
-"""The noise sources, each with an on/off switch and a scale (``noise.<name>``)."""
+"""The noise sources, each with an on/off switch and a scale (``noise.<name>``).
+
+Most are on by default. :data:`DEFAULT_OFF_NOISE_SOURCES` are off unless a scenario
+switches them on: confounders at published magnitude added after the presets were
+calibrated, kept off so that every preset's data stay byte-identical (issue 40).
+"""
 
 from __future__ import annotations
 
@@ -22,7 +27,13 @@ NOISE_SOURCES = (
     "contact_pressure",
     "pulsation",
     "pmf_measurement",
+    "water_temperature",
 )
+
+#: Sources off by default (``noise.<name>.enabled = false``): ``water_temperature``, water's
+#: absorption following the skin temperature (Röttgers et al., Opt. Express 22, 25093
+#: (2014); :func:`nirglucose.optics.absorption.water_mua_at_temperature_per_cm`).
+DEFAULT_OFF_NOISE_SOURCES = ("water_temperature",)
 
 
 class NoiseSource(_Model):
@@ -49,3 +60,5 @@ class NoiseConfig(_Model):
     contact_pressure: NoiseSource = NoiseSource()
     pulsation: NoiseSource = NoiseSource()
     pmf_measurement: NoiseSource = NoiseSource()
+    # scale multiplies water's d(mua)/dT; off by default (DEFAULT_OFF_NOISE_SOURCES)
+    water_temperature: NoiseSource = NoiseSource(enabled=False)

@@ -13,7 +13,7 @@ from ..exceptions import ConfigError, unknown_name
 from .keys import out_of_range_message, suggest_keys, unit_of, valid_keys
 from .leds import LED, LEGACY_LED_KEYS, _merge_legacy_leds
 from .presets import PRESETS
-from .scenario import DETECTOR_KEYS, ScenarioConfig
+from .scenario import DETECTOR_KEYS, ScenarioConfig, detector_key_default
 
 #: A bracketed list of bare names, ``[L8957, G17190-005K]`` (part names typed unquoted).
 _BARE_NAMES = re.compile(r"\[\s*[A-Za-z][\w.\-]*(\s*,\s*[A-Za-z][\w.\-]*)*\s*\]")
@@ -119,9 +119,8 @@ def _clear_detector_values(out: dict[str, Any]) -> None:
     """Before a new detector: the values a detector decides back to their defaults and
     the LED set's responsivities cleared, so the new detector sets them (values given in
     the same overrides still win: they are applied after)."""
-    defaults = ScenarioConfig.model_construct()
     for section, key, _ in DETECTOR_KEYS:
-        out.setdefault(section, {})[key] = getattr(getattr(defaults, section), key)
+        out.setdefault(section, {})[key] = detector_key_default(section, key)
     for e in out.get("leds", {}).get("emitters", []):
         if isinstance(e, dict):
             e["responsivity_a_per_w"] = None

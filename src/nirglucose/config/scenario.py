@@ -107,6 +107,13 @@ DETECTOR_KEYS = (
 )
 
 
+def detector_key_default(section: str, key: str) -> Any:
+    """The default of a key a detector sets (:data:`DETECTOR_KEYS`), read off its
+    section's class: no default scenario is built (that deep-copies every default)."""
+    sections: dict[str, type[_Model]] = {"hardware": HardwareConfig, "optics": OpticsConfig}
+    return sections[section].model_fields[key].default
+
+
 def _section_dict(value: Any) -> dict:
     if value is None:
         return {}

@@ -425,6 +425,15 @@ class GlucoseConfig(_Model):
         "order-of-magnitude estimate (SOURCES.md: <= 1e-4 of water's mua per mM). At most 1e-3, "
         "ten times the estimate. [1/(cm mM)]",
     )
+    first_overtone_relative_peak: float = Field(
+        10.0,
+        ge=0,
+        le=100,
+        description="Peak of glucose's 1st C-H overtone band (1670 nm) relative to its 2nd "
+        "(absorptivity_per_cm_per_mm at 1150 nm): an assumption, a factor of 10 per overtone "
+        "order; no published absorptivity of the band was found (data/optics/SOURCES.md). At "
+        "most 100. [-]",
+    )
     scattering_rel_per_mm: float = Field(
         -1.25e-3,
         ge=-1e-2,

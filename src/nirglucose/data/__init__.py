@@ -24,6 +24,7 @@ OPTICS_TABLES = {
     "lipid_provisional": ("lipid_mua_provisional_unattributed_digitized.csv", "1/cm"),
     "melanosome_jacques": ("melanosome_mua_jacques_powerlaw.csv", "1/cm"),
     "skin_musp_jacques2013": ("skin_musp_jacques2013.csv", "1/cm"),
+    "water_dmua_dt_rottgers2014": ("water_dmua_dt_rottgers2014.csv", "1/(cm degC)"),
 }
 
 
@@ -40,7 +41,8 @@ def load_spectrum(name: str) -> tuple[np.ndarray, np.ndarray]:
     -------
     wavelength_nm, value : numpy.ndarray
         Read-only arrays, sorted by wavelength. Units of ``value`` are in
-        :data:`OPTICS_TABLES`.
+        :data:`OPTICS_TABLES`. Lines of the file that start with ``#`` (a table's
+        source, written into the file) are skipped.
 
     Examples
     --------
@@ -53,7 +55,9 @@ def load_spectrum(name: str) -> tuple[np.ndarray, np.ndarray]:
         raise KeyError(f"unknown optical table {name!r}; valid: {valid}")
     filename = OPTICS_TABLES[name][0]
     text = resources.files(__package__).joinpath("optics", filename).read_text()
-    rows = list(csv.reader(text.splitlines()))[1:]
+    # lines starting with '#' carry a table's source; the first other line is the header
+    lines = [line for line in text.splitlines() if not line.startswith("#")]
+    rows = list(csv.reader(lines))[1:]
     data = np.array([[float(a), float(b)] for a, b in rows if a.strip()])
     wavelength_nm, value = data[:, 0].copy(), data[:, 1].copy()
     wavelength_nm.setflags(write=False)

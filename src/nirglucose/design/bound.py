@@ -20,7 +20,13 @@ Two conditionings, :data:`CONDITIONS`:
     NUISANCES` (blood volume under the probe, saturation, water, fat, melanin, skin
     thickness under the probe, one common LED peak shift, the optical coupling); each
     LED's own junction-temperature shift beyond the common one is taken as known, which
-    can only lower the bound.
+    can only lower the bound. Where ``noise.water_temperature`` is on (water absorbs at
+    the skin temperature, Röttgers et al. 2014), the skin temperature is one more
+    nuisance (:data:`~nirglucose.simulation.forward_model.TEMPERATURE_NUISANCE`) with the
+    same prior: its simulated spread given the measured columns, which include the
+    skin thermometer's reading ``skin_temp_c``, so its prior width is the thermometer's
+    error (``measurement.skin_temp_c``, 0.2 degC; none with ``device.physiology =
+    exact``) -- a known covariate with its error as prior width.
 ``"oracle"`` -- the information of the :class:`~nirglucose.models.oracle.Oracle`: it
     knows each reading's true nuisance state (the ``true_*`` columns, per-LED shifts
     included) but not the noise, and it shrinks to a Gaussian glucose prior, so per
@@ -63,7 +69,7 @@ from typing import Any
 import numpy as np
 
 from ..config import DEFAULT_LEDS, ScenarioConfig, resolve_config
-from ..config.scenario import DETECTOR_KEYS
+from ..config.scenario import DETECTOR_KEYS, detector_key_default
 from ..constants import (
     BOLTZMANN_J_PER_K,
     ELEMENTARY_CHARGE_C,
@@ -85,8 +91,10 @@ CONDITIONS = ("device", "oracle")
 #: so a design's bound is a deterministic function of its config). [-]
 PILOT_SUBJECTS, PILOT_PER_SUBJECT, PILOT_SEED = 200, 3, 0
 #: Forward-difference steps: glucose as the oracle's Jacobian [mg/dL], then each
-#: nuisance of NUISANCES in its unit (about 1e-3 of its population spread).
-_STEPS = np.array([0.5, 1e-3, 1e-4, 1e-4, 1e-4, 1e-5, 1e-3, 1e-3, 1e-4])
+#: nuisance of NUISANCES in its unit (about 1e-3 of its population spread), then the
+#: skin temperature [degC] where ``noise.water_temperature`` is on (the model is linear
+#: in it, so any step is exact).
+_STEPS = np.array([0.5, 1e-3, 1e-4, 1e-4, 1e-4, 1e-5, 1e-3, 1e-3, 1e-4, 1e-3])
 
 
 @dataclass(frozen=True)
@@ -135,10 +143,10 @@ class DesignBound:
 @dataclass(frozen=True)
 class _Pilot:
     glucose_mgdl: np.ndarray  # (n,)
-    theta: np.ndarray  # (n, 8) NUISANCES
+    theta: np.ndarray  # (n, 8) NUISANCES, (n, 9) with the skin temperature last
     board_c: np.ndarray  # (n,)
     ambient_step_var_c2: float  # E[(T_ambient - T_ambient at the subject's reference)^2]
-    nuisance_cov: np.ndarray  # (8, 8) given the measured physiology
+    nuisance_cov: np.ndarray  # (k, k), theta's columns, given the measured physiology
 
 
 @dataclass(frozen=True)
@@ -194,10 +202,9 @@ class DesignTerms:
         sat = self.saturated[:, idx]
         # a saturated channel: no information (its Jacobian row removed)
         J = np.where(sat[:, :, None], 0.0, J)
-        k = len(idx)
-        S = var[:, :, None] * np.eye(k)[None] + self.common_var
-        SinvJ = np.linalg.solve(S, J)
-        F = np.einsum("nki,nkj->nij", J, SinvJ)
+        if condition == "oracle":
+            J = J[:, :, :1]  # the oracle knows the nuisances: glucose's information only
+        F = _fisher(J, var, self.common_var)
         lam = 1.0 / self.glucose_var if prior else 0.0
         if condition == "oracle":
             with np.errstate(divide="ignore"):
@@ -223,6 +230,23 @@ class DesignTerms:
         )
 
 
+def _fisher(J: np.ndarray, var: np.ndarray, common_var: float) -> np.ndarray:
+    """Per-state Fisher information J^T S^-1 J, (n, p, p), for S = diag(var) + c 1 1^T.
+
+    By the Sherman-Morrison identity (G. H. Golub, C. F. Van Loan, "Matrix
+    Computations", 4th ed. (2013), 2.1.4): J^T D^-1 J - c u u^T / (1 + c sum 1/var),
+    u = J^T D^-1 1 -- the inverse of S without a solve per state.
+    """
+    w = 1.0 / var  # (n, k)
+    wj = w[:, :, None] * J
+    F = np.einsum("nki,nkj->nij", J, wj)
+    if common_var > 0:
+        u = wj.sum(axis=1)  # (n, p)
+        scale = common_var / (1.0 + common_var * w.sum(axis=1))
+        F -= scale[:, None, None] * u[:, :, None] * u[:, None, :]
+    return F
+
+
 def _resolve(config, leds, detector, overrides) -> ScenarioConfig:
     extra = dict(overrides or {})
     if leds is not None:
@@ -244,9 +268,8 @@ def _population_key(cfg: ScenarioConfig) -> str:
     data["leds"] = {"emitters": [e.model_dump(mode="json") for e in DEFAULT_LEDS],
                     "band_points": data["leds"]["band_points"]}
     data["detector"] = None
-    defaults = ScenarioConfig.model_construct()
     for section, key, _ in DETECTOR_KEYS:
-        data[section][key] = getattr(getattr(defaults, section), key)
+        data[section][key] = detector_key_default(section, key)
     return json.dumps(data, sort_keys=True)
 
 
@@ -266,6 +289,8 @@ def _pilot(population_json: str) -> _Pilot:
         shift.mean(axis=1),
         np.log(f["true_coupling"].to_numpy(float)),
     ])
+    if cfg.noise_factor("water_temperature") != 0.0:  # the water's (skin) temperature
+        theta = np.column_stack([theta, f["true_skin_temp_c"].to_numpy(float)])
     amb = f["true_ambient_temperature_c"].to_numpy(float)
     first = f.groupby("subject_id")["true_ambient_temperature_c"].transform("first").to_numpy()
     measured = [c for c in PHYSIOLOGICAL_RANGES if c in f.columns]

@@ -26,6 +26,12 @@ References
 .. [8] R. Nachabe et al., "Estimation of biological chromophores using diffuse optical
    spectroscopy: benefit of extending the UV-VIS wavelength range to include 1000 to
    1600 nm", Biomed. Opt. Express 1, 1432-1442 (2010), doi:10.1364/BOE.1.001432
+.. [9] R. Röttgers, D. McKee, C. Utschig, "Temperature and salinity correction
+   coefficients for light absorption by water in the visible to infrared spectral
+   region", Opt. Express 22, 25093-25108 (2014), doi:10.1364/OE.22.025093; tabulated in
+   the WOPP v3 pure-water file (R. Röttgers, HZG, 2016; SOURCES.md)
+.. [10] G. M. Hale, M. R. Querry, "Optical constants of water in the 200-nm to 200-um
+   wavelength region", Appl. Opt. 12, 555-563 (1973), doi:10.1364/AO.12.000555
 """
 
 from __future__ import annotations
@@ -41,14 +47,18 @@ from ..exceptions import ConfigError
 
 __all__ = [
     "WATER_SOURCES",
+    "WATER_TABLE_TEMPERATURE_C",
     "WAVELENGTH_RANGE_NM",
     "water_mua_per_cm",
+    "water_dmua_dt_per_cm_per_c",
+    "water_mua_at_temperature_per_cm",
     "blood_mua_per_cm",
     "lipid_mua_per_cm",
     "melanosome_mua_per_cm",
     "skin_baseline_mua_per_cm",
     "glucose_mua_per_cm_per_mm",
     "GLUCOSE_BANDS_NM",
+    "GLUCOSE_FIRST_OVERTONE_RELATIVE_PEAK",
     "LIPID_TABLE_END_NM",
 ]
 
@@ -58,6 +68,18 @@ WATER_SOURCES = {
     "segelstein1981": "water_segelstein1981",
     "hale_querry1973": "water_hale_querry1973",
     "palmer_williams1974": "water_palmer_williams1974",
+}
+
+#: Temperature of the water in each table of :data:`WATER_SOURCES` (the reference of
+#: :func:`water_mua_at_temperature_per_cm`). [degC] Kou et al.: 22 degC (their abstract,
+#: [1]_); Hale & Querry: 25 degC (their abstract, [10]_); Palmer & Williams: 27 degC (as
+#: Kou et al. give it, their Fig. 1); Segelstein's compilation states none found here:
+#: 25 degC is an assumption (SOURCES.md).
+WATER_TABLE_TEMPERATURE_C = {
+    "kou1993": 22.0,
+    "segelstein1981": 25.0,
+    "hale_querry1973": 25.0,
+    "palmer_williams1974": 27.0,
 }
 
 #: Wavelength range the chromophore functions accept (every table covers it, except
@@ -122,6 +144,82 @@ def water_mua_per_cm(wavelength_nm: ArrayLike, source: str = "kou1993") -> np.nd
     if source not in WATER_SOURCES:
         raise ConfigError(f"unknown water source {source!r}; valid: {', '.join(WATER_SOURCES)}")
     return _interp(WATER_SOURCES[source], _check_wavelength(wavelength_nm))
+
+
+def water_dmua_dt_per_cm_per_c(wavelength_nm: ArrayLike) -> np.ndarray:
+    """Temperature coefficient of pure water's absorption coefficient, d(mua)/dT.
+
+    Parameters
+    ----------
+    wavelength_nm : array_like
+        Wavelength, 700-1700. [nm]
+
+    Returns
+    -------
+    numpy.ndarray
+        d(mua)/dT of liquid water. [1/(cm degC)]
+
+    Notes
+    -----
+    Röttgers et al. [9]_ measured it spectrophotometrically over 400-2700 nm; the table is
+    the WOPP v3 column (2 nm steps), linear in temperature. Warmer water's O-H bands move
+    to shorter wavelengths: the coefficient is positive on their short-wavelength flanks
+    (about 1306-1442 nm, 1104-1190 nm, 908-994 nm) and negative on the long ones
+    (about -0.11 /(cm degC) at 1490 nm, -0.064 at 1550 nm, -0.029 at 1650 nm: -0.46,
+    -0.57 and -0.49 % per degC of the same file's mua at 20 degC). An independent
+    measurement at 2014 and 2090 nm (-0.259 and -0.104 /(cm K), 20-100 degC) agrees
+    within 7 % (SOURCES.md).
+
+    Examples
+    --------
+    >>> round(float(water_dmua_dt_per_cm_per_c(1450.0)), 4)
+    -0.0366
+    >>> round(float(water_dmua_dt_per_cm_per_c(1412.0)), 3)
+    0.14
+    """
+    return _interp("water_dmua_dt_rottgers2014", _check_wavelength(wavelength_nm))
+
+
+def water_mua_at_temperature_per_cm(
+    wavelength_nm: ArrayLike, temperature_c: ArrayLike, source: str = "kou1993"
+) -> np.ndarray:
+    """Absorption coefficient of pure water at a temperature.
+
+    mua(lambda, T) = mua_table(lambda) + d(mua)/dT (lambda) (T - T_table), with T_table
+    the temperature of the chosen table (:data:`WATER_TABLE_TEMPERATURE_C`) and
+    d(mua)/dT from Röttgers et al. [9]_ (:func:`water_dmua_dt_per_cm_per_c`).
+
+    Parameters
+    ----------
+    wavelength_nm : array_like
+        Wavelength, 700-1700. [nm]
+    temperature_c : array_like
+        Water temperature, 0-60 (the linear model's range, about the measurements'). [degC]
+    source : str
+        Water table (:data:`WATER_SOURCES`).
+
+    Returns
+    -------
+    numpy.ndarray
+        mua of water at ``temperature_c``. [1/cm]
+
+    Examples
+    --------
+    >>> a22 = water_mua_at_temperature_per_cm(1550.0, 22.0)
+    >>> bool(a22 == water_mua_per_cm(1550.0))
+    True
+    >>> round(float(water_mua_at_temperature_per_cm(1550.0, 33.0) / a22 - 1), 3)
+    -0.059
+    """
+    t = np.asarray(temperature_c, dtype=float)
+    bad = ~((t >= 0.0) & (t <= 60.0))
+    if np.any(bad):
+        first = float(t.flat[int(np.flatnonzero(bad.ravel())[0])])
+        raise ConfigError(f"water temperature {first} degC is outside 0-60 degC, the "
+                          "linear model's range")
+    mua = water_mua_per_cm(wavelength_nm, source)
+    return mua + water_dmua_dt_per_cm_per_c(wavelength_nm) * (
+        t - WATER_TABLE_TEMPERATURE_C[source])
 
 
 def blood_mua_per_cm(wavelength_nm: ArrayLike, saturation: ArrayLike) -> np.ndarray:
@@ -267,6 +365,11 @@ def skin_baseline_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
     return 0.244 + 85.3 * pm.exp(-(wl - 154.0) / 66.2)  # [4]
 
 
+#: Default peak of glucose's 1st C-H overtone band relative to the 2nd-overtone peak: an
+#: assumption (a factor of 10 per overtone order), no published absorptivity having been
+#: found (SOURCES.md); ``glucose.first_overtone_relative_peak`` moves it. [-]
+GLUCOSE_FIRST_OVERTONE_RELATIVE_PEAK = 10.0
+
 #: Glucose C-H overtone bands: (centre nm, 1/e half-width nm, peak relative to the
 #: 2nd-overtone peak, C-H overtone order). Below 1300 nm (unchanged since the first
 #: model): the 2nd C-H overtone about 1100-1200 nm and a weaker 3rd overtone about
@@ -278,11 +381,17 @@ def skin_baseline_mua_per_cm(wavelength_nm: ArrayLike) -> np.ndarray:
 #: FWHM of one of them); shapes and magnitudes are assumptions: no public table of
 #: glucose absorptivity was found. The relative peaks assume a factor of 10 per overtone
 #: order (3rd : 2nd : 1st = 0.1 : 1 : 10), the factor the first model chose for 3rd : 2nd.
-GLUCOSE_BANDS_NM = ((1150.0, 45.0, 1.0, 2), (920.0, 30.0, 0.1, 3), (1670.0, 45.0, 10.0, 1))
+GLUCOSE_BANDS_NM = (
+    (1150.0, 45.0, 1.0, 2),
+    (920.0, 30.0, 0.1, 3),
+    (1670.0, 45.0, GLUCOSE_FIRST_OVERTONE_RELATIVE_PEAK, 1),
+)
 
 
 def glucose_mua_per_cm_per_mm(
-    wavelength_nm: ArrayLike, peak_per_cm_per_mm: float = 1.0e-4
+    wavelength_nm: ArrayLike,
+    peak_per_cm_per_mm: float = 1.0e-4,
+    first_overtone_relative_peak: float = GLUCOSE_FIRST_OVERTONE_RELATIVE_PEAK,
 ) -> np.ndarray:
     """Glucose's own absorption per mM, as Gaussian C-H overtone bands.
 
@@ -292,6 +401,9 @@ def glucose_mua_per_cm_per_mm(
         Wavelength, 700-1700. [nm]
     peak_per_cm_per_mm : float
         Absorption at the 2nd C-H overtone peak (1150 nm) per mM. [1/(cm mM)]
+    first_overtone_relative_peak : float
+        Peak of the 1st C-H overtone band (1670 nm) relative to the 2nd-overtone peak
+        (:data:`GLUCOSE_FIRST_OVERTONE_RELATIVE_PEAK`, an assumption). [-]
 
     Returns
     -------
@@ -304,18 +416,27 @@ def glucose_mua_per_cm_per_mm(
     absorption per mM is of order 1e-4 of water's mua or smaller); the magnitude is a
     config parameter (``glucose.absorptivity_per_cm_per_mm``). The band positions are
     published (:data:`GLUCOSE_BANDS_NM`, [6]_, [7]_); the 1st-overtone band at 1670 nm,
-    10 x the 2nd-overtone peak, is an assumption (a factor of 10 per overtone order),
-    not a measured absorptivity. Glucose's O-H overtones (about 1480-1540 nm, [6]_)
-    are not modelled as bands: in water they act mainly through water displacement,
-    which the tissue model carries separately.
+    by default 10 x the 2nd-overtone peak, is an assumption (a factor of 10 per overtone
+    order), not a measured absorptivity: none was found (SOURCES.md), so its height is a
+    parameter (``first_overtone_relative_peak``, config
+    ``glucose.first_overtone_relative_peak``) a study can move. Glucose's O-H overtones
+    (about 1480-1540 nm, [6]_) are not modelled as bands: in water they act mainly
+    through water displacement, which the tissue model carries separately.
 
     Examples
     --------
     >>> round(float(glucose_mua_per_cm_per_mm(1670.0, 1e-4)), 6)
     0.001
+    >>> round(float(glucose_mua_per_cm_per_mm(1670.0, 1e-4, 3.0)), 6)
+    0.0003
     """
     wl = _check_wavelength(wavelength_nm)
+    if not first_overtone_relative_peak >= 0:
+        raise ConfigError("first_overtone_relative_peak must be >= 0, got "
+                          f"{first_overtone_relative_peak}")
     out = np.zeros_like(wl)
-    for centre, width, rel, _order in GLUCOSE_BANDS_NM:
+    for centre, width, rel, order in GLUCOSE_BANDS_NM:
+        if order == 1:
+            rel = float(first_overtone_relative_peak)
         out = out + rel * pm.exp(-(((wl - centre) / width) ** 2))
     return peak_per_cm_per_mm * out

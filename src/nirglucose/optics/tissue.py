@@ -10,7 +10,10 @@ Tissue composition (Jacques 2013, Eq. 12; volume fractions from SOURCES.md):
 mua = B [S mua_oxy + (1 - S) mua_deoxy] + W mua_water + F mua_fat
       + (1 - B - W - F) mua_baseline,
 with glucose displacing water (-x_disp C of W), absorbing (W C eps_glc) and lowering
-mus' (factor exp(k C)).
+mus' (factor exp(k C)). Where the tissue state carries a water temperature, water's
+absorption is taken at it: mua_water + s d(mua)/dT (T - T_table) (Röttgers et al. 2014,
+:func:`~nirglucose.optics.absorption.water_mua_at_temperature_per_cm`), with s the
+scale of the ``water_temperature`` switch folded into the ``water_dt`` table.
 
 References
 ----------
@@ -21,6 +24,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -43,6 +47,7 @@ _CHROMOPHORES = (
     "glucose",
     "musp_skin",
     "musp_fat",
+    "water_dt",
 )
 
 
@@ -67,6 +72,9 @@ def band_spectra(
     n_points: int = 5,
     water_source: str = "kou1993",
     glucose_peak_per_cm_per_mm: float = 1.0e-4,
+    *,
+    glucose_first_overtone_relative_peak: float = absorption.GLUCOSE_FIRST_OVERTONE_RELATIVE_PEAK,
+    water_temperature_scale: float = 0.0,
 ) -> BandSpectra:
     """Tabulate every chromophore over the LED bands.
 
@@ -80,46 +88,69 @@ def band_spectra(
         Water table (see :data:`absorption.WATER_SOURCES`).
     glucose_peak_per_cm_per_mm : float
         Glucose absorption at its 1150 nm band peak. [1/(cm mM)]
+    glucose_first_overtone_relative_peak : float
+        Glucose's 1670 nm band peak relative to the 1150 nm one. [-]
+    water_temperature_scale : float
+        Factor on water's temperature coefficient: the ``water_temperature`` switch
+        (0: the table ``water_dt`` is zero). [-]
 
     Returns
     -------
     BandSpectra
+        Its ``water_dt`` table is ``water_temperature_scale`` x d(mua)/dT of water
+        [1/(cm degC)] (:func:`absorption.water_dmua_dt_per_cm_per_c`).
     """
     centre = np.asarray(centre_nm, dtype=float)[:, None]
     sigma = np.asarray(fwhm_nm, dtype=float)[:, None] / (2.0 * np.sqrt(2.0 * pm.log(2.0)))
-    x, w = np.polynomial.hermite.hermgauss(n_points)
+    x, w = _hermgauss(int(n_points))
     nodes = centre + np.sqrt(2.0) * sigma * x[None, :]
     weights = np.broadcast_to(w / np.sqrt(np.pi), nodes.shape).copy()
     lo, hi = absorption.WAVELENGTH_RANGE_NM
     nodes = np.clip(nodes, lo + 1.0, hi - 1.0)  # tails of the band beyond the tables
-
-    def table(wl):
-        return {
-            "water": absorption.water_mua_per_cm(wl, water_source),
-            "blood_oxy": absorption.blood_mua_per_cm(wl, 1.0),
-            "blood_deoxy": absorption.blood_mua_per_cm(wl, 0.0),
-            "fat": absorption.lipid_mua_per_cm(wl),
-            "melanosome": absorption.melanosome_mua_per_cm(wl),
-            "baseline": absorption.skin_baseline_mua_per_cm(wl),
-            "glucose": absorption.glucose_mua_per_cm_per_mm(wl, glucose_peak_per_cm_per_mm),
-            "musp_skin": scattering.power_law_musp_per_cm(wl, *scattering.SKIN_MUSP),
-            "musp_fat": scattering.power_law_musp_per_cm(wl, *scattering.FAT_MUSP),
-        }
-
-    here, plus, minus = table(nodes), table(nodes + 1.0), table(nodes - 1.0)
-    deriv = {k: 0.5 * (plus[k] - minus[k]) for k in _CHROMOPHORES}
+    # the nodes and their +/- 1 nm neighbours (the derivatives) in one call per chromophore
+    wl = np.stack([nodes, nodes + 1.0, nodes - 1.0])
+    tab = {
+        "water": absorption.water_mua_per_cm(wl, water_source),
+        "blood_oxy": absorption.blood_mua_per_cm(wl, 1.0),
+        "blood_deoxy": absorption.blood_mua_per_cm(wl, 0.0),
+        "fat": absorption.lipid_mua_per_cm(wl),
+        "melanosome": absorption.melanosome_mua_per_cm(wl),
+        "baseline": absorption.skin_baseline_mua_per_cm(wl),
+        "glucose": absorption.glucose_mua_per_cm_per_mm(
+            wl, glucose_peak_per_cm_per_mm, glucose_first_overtone_relative_peak),
+        "musp_skin": scattering.power_law_musp_per_cm(wl, *scattering.SKIN_MUSP),
+        "musp_fat": scattering.power_law_musp_per_cm(wl, *scattering.FAT_MUSP),
+        "water_dt": float(water_temperature_scale) * absorption.water_dmua_dt_per_cm_per_c(wl),
+    }
+    here = {k: v[0] for k, v in tab.items()}
+    deriv = {k: 0.5 * (v[1] - v[2]) for k, v in tab.items()}
     return BandSpectra(np.asarray(centre_nm, float), nodes, weights, here, deriv)
+
+
+@lru_cache(maxsize=8)
+def _hermgauss(n_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Hermite nodes and weights (read-only; computed once per ``n_points``)."""
+    x, w = np.polynomial.hermite.hermgauss(n_points)
+    x.setflags(write=False)
+    w.setflags(write=False)
+    return x, w
 
 
 @dataclass(frozen=True)
 class TissueState:
-    """Per-sample tissue composition, each an array of shape (n,)."""
+    """Per-sample tissue composition, each an array of shape (n,).
+
+    ``water_temperature_delta_c`` is the tissue water's temperature minus its table's
+    (T - T_table, :data:`absorption.WATER_TABLE_TEMPERATURE_C`) [degC]; None (the
+    default) takes water's absorption at the table's temperature.
+    """
 
     blood_fraction: np.ndarray
     saturation: np.ndarray
     water_fraction: np.ndarray
     subcutis_fat_fraction: np.ndarray
     glucose_mm: np.ndarray
+    water_temperature_delta_c: np.ndarray | None = None
 
 
 def tissue_optics(
@@ -177,6 +208,12 @@ def tissue_optics(
     tables = _mixture_tables(spectra)
     mua_dermis = _mix(coef_dermis, *tables["dermis"], shift)
     mua_sub = _mix(coef_sub, *tables["subcutis"], shift)
+    if state.water_temperature_delta_c is not None:
+        # water at its temperature: + (water's coefficient) x delta T x d(mua)/dT
+        dt = np.broadcast_to(np.asarray(state.water_temperature_delta_c, dtype=float), (n,))
+        water_dt = _mix(None, *tables["water_dt"], shift, n)
+        mua_dermis += (w * disp * dt)[:, None] * water_dt
+        mua_sub += (w_sub * disp * dt)[:, None] * water_dt
     glc_scatter = scattering.glucose_scattering_factor(c, scattering_rel_per_mm)[:, None]
     musp_dermis = _mix(None, *tables["musp_skin"], shift, n)
     musp_dermis *= glc_scatter
@@ -219,7 +256,7 @@ def _mixture_tables(spectra: BandSpectra) -> dict:
         return np.ascontiguousarray(t), np.ascontiguousarray(d)
 
     out = {k: rows(v) for k, v in _MIXTURES.items()}
-    for k in ("musp_skin", "musp_fat", "melanosome"):
+    for k in ("musp_skin", "musp_fat", "melanosome", "water_dt"):
         out[k] = (np.ravel(tab[k]).copy(), np.ravel(der[k]).copy())
     object.__setattr__(spectra, "_mixture_tables", out)  # frozen dataclass: a cache slot
     return out

@@ -10,6 +10,9 @@ models package to evaluate it, so it lives beside the simulator whose tables it 
 
 The optics and their citations are the simulator's: tissue mixing
 (:mod:`nirglucose.optics.tissue`), the forward models (:mod:`nirglucose.optics.forward`).
+Where the scenario's ``noise.water_temperature`` switch is on, water absorbs at the skin
+temperature (:func:`~nirglucose.simulation.simulator.water_temperature_delta_c`), which
+is then one more unknown: :attr:`ForwardModel.nuisances` ends with ``skin_temp_c``.
 
 Examples
 --------
@@ -29,9 +32,9 @@ from ..config import ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import tissue
 from ..optics.forward import FORWARD_MODELS
-from .simulator import _band_detected_fraction, _tables
+from .simulator import _band_detected_fraction, _tables, water_temperature_delta_c
 
-__all__ = ["NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel"]
+__all__ = ["NUISANCES", "PHYSICAL_BOUNDS", "TEMPERATURE_NUISANCE", "ForwardModel"]
 
 #: The unknowns besides glucose, in column order: ln of the detected dermal blood
 #: fraction, saturation, dermal water fraction, subcutis fat fraction, epidermal
@@ -61,6 +64,11 @@ PHYSICAL_BOUNDS = {
     "led_shift_nm": (-30.0, 30.0),
     "log_coupling": (-2.0, 2.0),
 }
+#: The unknown the ``water_temperature`` switch adds after :data:`NUISANCES`: the skin
+#: (tissue water) temperature [degC], evaluated within the skin-thermometer display range
+#: of ``constants.PHYSIOLOGICAL_RANGES`` (15-45 degC).
+TEMPERATURE_NUISANCE = "skin_temp_c"
+_TEMPERATURE_BOUNDS = (15.0, 45.0)
 
 class ForwardModel:
     """ln(fraction / T_ref) per LED for given glucose and nuisance state.
@@ -80,18 +88,35 @@ class ForwardModel:
         optics = cfg.optics.model_copy(update={"model": model})
         self.cfg = cfg.model_copy(update={"optics": optics})
         self.tables = _tables(self.cfg)
+        #: The unknowns besides glucose that :meth:`log_ratio` reads: :data:`NUISANCES`,
+        #: then :data:`TEMPERATURE_NUISANCE` where ``noise.water_temperature`` is on.
+        self.nuisances = NUISANCES + (
+            (TEMPERATURE_NUISANCE,) if cfg.noise_factor("water_temperature") != 0.0 else ())
 
     def log_ratio(self, glucose_mgdl: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """(n, n_led) noise-free ln(adc / adc_ref) at glucose [mg/dL] and ``theta``
-        ((n, len(NUISANCES)), columns as :data:`NUISANCES`)."""
+        """(n, n_led) noise-free ln(adc / adc_ref) at glucose [mg/dL] and ``theta``.
+
+        ``theta`` is (n, len(NUISANCES)), columns as :data:`NUISANCES`, or (n,
+        len(:attr:`nuisances`)) with the skin temperature [degC] last; without that
+        column the water is at the thermoneutral skin temperature
+        (``physiology.skin_temp_c_neutral``).
+        """
         cfg = self.cfg
-        th = _clip_physical(theta)
+        theta = np.asarray(theta, dtype=float)
+        k = len(NUISANCES)
+        if theta.shape[-1] not in (k, len(self.nuisances)):
+            raise ValueError(f"theta has {theta.shape[-1]} columns; expected {k} "
+                             f"(NUISANCES) or {len(self.nuisances)} ({', '.join(self.nuisances)})")
+        th = _clip_physical(theta[:, :k])
+        temp_c = (np.clip(theta[:, k], *_TEMPERATURE_BOUNDS) if theta.shape[-1] > k
+                  else np.full(len(th), cfg.physiology.skin_temp_c_neutral))
         state = tissue.TissueState(
             np.exp(th[:, 0]),
             th[:, 1],
             th[:, 2],
             th[:, 3],
             cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
+            water_temperature_delta_c(cfg, temp_c),
         )
         n_led = len(cfg.leds.wavelengths_nm)
         shift = np.repeat(th[:, 6:7], n_led, axis=1)

@@ -9,7 +9,7 @@ workers.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -17,7 +17,7 @@ import pandas as pd
 from .. import portable as pm
 from ..config import ReferenceTissue, ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
-from ..optics import forward, tissue
+from ..optics import absorption, forward, tissue
 from . import _random, contact, environment, hardware, measurement, physiology
 from ._random import RandomStreams
 from .glucose import sample_glucose
@@ -31,6 +31,7 @@ __all__ = [
     "detected_fraction_given_glucose",
     "true_tissue_state",
     "scenario_band_spectra",
+    "water_temperature_delta_c",
 ]
 
 @dataclass(frozen=True)
@@ -48,15 +49,49 @@ def scenario_band_spectra(cfg: ScenarioConfig) -> tissue.BandSpectra:
         cfg.leds.band_points,
         cfg.optics.water_source,
         cfg.glucose.absorptivity_per_cm_per_mm,
+        glucose_first_overtone_relative_peak=cfg.glucose.first_overtone_relative_peak,
+        water_temperature_scale=cfg.noise_factor("water_temperature"),
     )
+
+
+def water_temperature_delta_c(cfg: ScenarioConfig, skin_temp_c) -> np.ndarray | None:
+    """The tissue water's temperature minus its table's, per reading, or None when off.
+
+    The ``water_temperature`` switch takes the tissue water at the skin temperature
+    (``true_skin_temp_c``, an assumption: the dermis the light samples is taken to be at
+    the skin's temperature) and water's absorption at that temperature,
+    mua + s d(mua)/dT (T_skin - T_table) (Röttgers et al., Opt. Express 22, 25093 (2014);
+    :func:`nirglucose.optics.absorption.water_mua_at_temperature_per_cm`), s the switch's
+    factor (in the spectra's ``water_dt`` table) and T_table the water table's
+    temperature (:data:`~nirglucose.optics.absorption.WATER_TABLE_TEMPERATURE_C`).
+
+    Parameters
+    ----------
+    cfg : ScenarioConfig
+        Scenario (its ``noise.water_temperature`` switch and ``optics.water_source``).
+    skin_temp_c : array_like
+        Skin temperature per reading. [degC]
+
+    Returns
+    -------
+    numpy.ndarray or None
+        T_skin - T_table per reading [degC]; None when the switch is off (factor 0).
+    """
+    if cfg.noise_factor("water_temperature") == 0.0:
+        return None
+    t_table = absorption.WATER_TABLE_TEMPERATURE_C[cfg.optics.water_source]
+    return np.asarray(skin_temp_c, dtype=float) - t_table
 
 
 def _tables(cfg: ScenarioConfig) -> _Tables:
     spectra = scenario_band_spectra(cfg)
     ref = cfg.optics.reference_tissue
+    # the reference skin at the thermoneutral skin temperature (physiology.skin_temp_c_neutral)
+    nominal = replace(nominal_tissue(1, ref), water_temperature_delta_c=water_temperature_delta_c(
+        cfg, np.full(1, cfg.physiology.skin_temp_c_neutral)))
     optics = tissue.tissue_optics(
         spectra,
-        nominal_tissue(1, ref),
+        nominal,
         water_displacement_per_mm=0.0,
         scattering_rel_per_mm=0.0,
     )
@@ -153,7 +188,7 @@ def _band_rte_lut(cfg, tables, state, melanin, thickness_mm, shift) -> np.ndarra
 
 
 _STATE_FIELDS = ("blood_fraction", "saturation", "water_fraction", "subcutis_fat_fraction",
-                 "glucose_mm")
+                 "glucose_mm", "water_temperature_delta_c")
 
 
 def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.ndarray:
@@ -166,7 +201,9 @@ def _band_forward_model(cfg, tables, state, melanin, thickness_mm, shift) -> np.
     w = tables.spectra.weights
     for lo in range(0, n, _OPTICS_SLICE_ROWS):
         sl = slice(lo, min(lo + _OPTICS_SLICE_ROWS, n))
-        part = tissue.TissueState(*(np.asarray(getattr(state, f))[sl] for f in _STATE_FIELDS))
+        part = tissue.TissueState(*(None if getattr(state, f) is None
+                                    else np.asarray(getattr(state, f))[sl]
+                                    for f in _STATE_FIELDS))
         optics = tissue.tissue_optics(
             tables.spectra,
             part,
@@ -271,8 +308,9 @@ def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: di
 
     The LED peaks shift with junction temperature (``led_c``); the tissue under the
     probe (its detected blood, the subject's saturation, water and fat, the glucose
-    scaled by ``glucose.signal_gain``) is seen through each shifted band, and the
-    probe's coupling scales the result, (n, n_led).
+    scaled by ``glucose.signal_gain``, the water at the skin temperature where
+    ``noise.water_temperature`` is on: :func:`water_temperature_delta_c`) is seen
+    through each shifted band, and the probe's coupling scales the result, (n, n_led).
     """
     shift_nm = cfg.noise_factor("led_wavelength_shift") * hardware.led_peak_shift_nm(
         temps["led_c"], cfg.hardware.led_wavelength_shift_nm_per_c
@@ -283,6 +321,7 @@ def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: di
         phys["true_water_fraction"],
         phys["true_subcutis_fat_fraction"],
         cfg.glucose.signal_gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
+        water_temperature_delta_c(cfg, phys["true_skin_temp_c"]),
     )
     fraction = (
         _band_detected_fraction(
@@ -372,13 +411,18 @@ def true_tissue_state(cfg: ScenarioConfig, frame: pd.DataFrame,
                       glucose_mgdl: np.ndarray) -> tissue.TissueState:
     """The tissue composition of each row (its ``true_*`` columns), with ``glucose_mgdl``
     in place of the row's glucose, scaled as the simulator scales it
-    (``glucose.signal_gain``), for :func:`nirglucose.optics.tissue.tissue_optics`."""
+    (``glucose.signal_gain``), and the water at the row's ``true_skin_temp_c`` where
+    ``noise.water_temperature`` is on, for :func:`nirglucose.optics.tissue.tissue_optics`."""
+    dt = None
+    if cfg.noise_factor("water_temperature") != 0.0:
+        dt = water_temperature_delta_c(cfg, frame["true_skin_temp_c"].to_numpy(float))
     return tissue.TissueState(
         frame["true_blood_fraction_detected"].to_numpy(float),
         frame["true_saturation"].to_numpy(float),
         frame["true_water_fraction"].to_numpy(float),
         frame["true_subcutis_fat_fraction"].to_numpy(float),
         cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
+        dt,
     )
 
 

@@ -14,8 +14,10 @@ Per snapshot i, LED l and band node p, with the node's peak shift s = shift[i, l
 each tabulated spectrum X taken as X + s dX/dlambda (first-order Taylor, as
 :func:`~nirglucose.optics.tissue.tissue_optics` does; the flat baseline is not shifted):
 
-* dermis mua = B S oxy + B (1 - S) deoxy + W D water + W C glucose + (1 - B - W) base,
-  subcutis mua likewise with B/2, water 0.2, fat F and the rest baseline (Jacques 2013);
+* dermis mua = B S oxy + B (1 - S) deoxy + W D water + W C glucose + (1 - B - W) base
+  + W D dT water_dt, subcutis mua likewise with B/2, water 0.2, fat F and the rest
+  baseline (Jacques 2013); dT the water's temperature offset from its table's and
+  water_dt the (scaled) d(mua)/dT of water (Röttgers 2014), zero when the switch is off;
 * mus' = table x exp(k C) (Maier 1994);
 * dermal share of the path 1 - exp(-t 2 sqrt(2 / rho) mu_eff^(1/2)) (Weiss 1989),
   mua and mus' mixed by it;
@@ -37,7 +39,7 @@ __all__ = ["band_detected_fraction", "band_detected_fraction_lut"]
 
 #: Chromophore order of the stacked tables passed to the kernel.
 _ORDER = ("blood_oxy", "blood_deoxy", "water", "glucose", "fat", "baseline",
-          "musp_skin", "musp_fat", "melanosome")
+          "musp_skin", "musp_fat", "melanosome", "water_dt")
 
 
 @njit(cache=True, inline="always")
@@ -54,6 +56,24 @@ def _coefficients(b, s, w, f, c, x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, 
             max(1.0 - bs - water_sub - f, 0.0), np.exp(k_scat_per_mm * c))
 
 
+@njit(cache=True, nogil=True)
+def _coefficient_rows(blood, sat, water, fat_sub, glucose_mm, water_dt_c, x_disp_per_mm,
+                      k_scat_per_mm, blood_sub_ratio, water_sub):  # pragma: no cover - compiled
+    """Per snapshot, (14, n): the mixture coefficients (dermis rows 0-4, subcutis 5-10,
+    see :func:`_coefficients`), water's temperature term (row 11 dermis: water's
+    coefficient x dT; row 12 subcutis) and the glucose scattering factor (row 13)."""
+    n = blood.shape[0]
+    c = np.empty((14, n))
+    for i in range(n):
+        (c[0, i], c[1, i], c[2, i], c[3, i], c[4, i], c[5, i], c[6, i], c[7, i], c[8, i],
+         c[9, i], c[10, i], c[13, i]) = _coefficients(
+            blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i], x_disp_per_mm,
+            k_scat_per_mm, blood_sub_ratio, water_sub)
+        c[11, i] = c[2, i] * water_dt_c[i]
+        c[12, i] = c[7, i] * water_dt_c[i]
+    return c
+
+
 @njit(cache=True, inline="always")
 def _node_spectra(tab, der, led, p):
     """One band node's tabulated spectra and wavelength derivatives, in :data:`_ORDER`
@@ -61,11 +81,12 @@ def _node_spectra(tab, der, led, p):
     return (tab[0, led, p], der[0, led, p], tab[1, led, p], der[1, led, p],
             tab[2, led, p], der[2, led, p], tab[3, led, p], der[3, led, p],
             tab[4, led, p], der[4, led, p], tab[5, led, p], tab[6, led, p], der[6, led, p],
-            tab[7, led, p], der[7, led, p], tab[8, led, p], der[8, led, p])
+            tab[7, led, p], der[7, led, p], tab[8, led, p], der[8, led, p],
+            tab[9, led, p], der[9, led, p])
 
 
 @njit(cache=True, nogil=True)
-def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
+def _kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin, skin_cm,
             tab, der, weight_geometry, x_disp_per_mm, k_scat_per_mm, rho_cm, epi_cm,
             blood_sub_ratio, water_sub, out_t):  # pragma: no cover - compiled
     n_led, n = out_t.shape
@@ -73,17 +94,14 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
     share_k = -2.0 * np.sqrt(2.0 / rho_cm)
     x2_k = 3.0 * rho_cm * rho_cm
     epi_k = 4.0 * epi_cm
-    # Per snapshot: mixture coefficients (dermis c0-c4, subcutis c5-c10), the glucose
-    # scattering factor and the share exponent's thickness factor.
-    c0, c1, c2, c3, c4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c5, c6, c7, c8, c9 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c10, glc_scatter, t_k = np.empty(n), np.empty(n), np.empty(n)
-    for i in range(n):
-        (c0[i], c1[i], c2[i], c3[i], c4[i], c5[i], c6[i], c7[i], c8[i], c9[i], c10[i],
-         glc_scatter[i]) = _coefficients(blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i],
-                                         x_disp_per_mm, k_scat_per_mm, blood_sub_ratio,
-                                         water_sub)
-        t_k[i] = share_k * skin_cm[i]
+    # Per snapshot: coefficients (:func:`_coefficient_rows`) and the share exponent's
+    # thickness factor.
+    c = _coefficient_rows(blood, sat, water, fat_sub, glucose_mm, water_dt_c, x_disp_per_mm,
+                          k_scat_per_mm, blood_sub_ratio, water_sub)
+    c0, c1, c2, c3, c4, c5, c6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6]
+    c7, c8, c9, c10, c11, c12, glc_scatter = c[7], c[8], c[9], c[10], c[11], c[12], c[13]
+    t_k = share_k * skin_cm
+    has_dt = np.any(water_dt_c != 0.0)
     out_t[:] = 0.0
     mua_d, mua_s, musp_d = np.empty(n), np.empty(n), np.empty(n)
     musp_s, epi, arg = np.empty(n), np.empty(n), np.empty(n)
@@ -94,7 +112,8 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
         out_l = out_t[led]
         for p in range(n_pts):
             (t_oxy, d_oxy, t_deo, d_deo, t_wat, d_wat, t_glc, d_glc, t_fat, d_fat, base,
-             t_msd, d_msd, t_mss, d_mss, t_mel, d_mel) = _node_spectra(tab, der, led, p)
+             t_msd, d_msd, t_mss, d_mss, t_mel, d_mel, t_wdt, d_wdt) = _node_spectra(
+                tab, der, led, p)
             wg = weight_geometry[led, p]
             for i in range(n):
                 sh = sh_l[i]
@@ -103,9 +122,14 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
                 wat = t_wat + sh * d_wat
                 glc = t_glc + sh * d_glc
                 md = c0[i] * oxy + c1[i] * deoxy + c2[i] * wat + c3[i] * glc + c4[i] * base
+                ms = (c5[i] * oxy + c6[i] * deoxy + c7[i] * wat + c8[i] * glc
+                      + c9[i] * (t_fat + sh * d_fat) + c10[i] * base)
+                if has_dt:  # loop-invariant: the compiler makes two loops of this one
+                    wdt = t_wdt + sh * d_wdt
+                    md += c11[i] * wdt
+                    ms += c12[i] * wdt
                 mua_d[i] = md
-                mua_s[i] = (c5[i] * oxy + c6[i] * deoxy + c7[i] * wat + c8[i] * glc
-                            + c9[i] * (t_fat + sh * d_fat) + c10[i] * base)
+                mua_s[i] = ms
                 msd = (t_msd + sh * d_msd) * glc_scatter[i]
                 musp_d[i] = msd
                 musp_s[i] = (t_mss + sh * d_mss) * glc_scatter[i]
@@ -124,27 +148,24 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, skin_cm,
 
 
 @njit(cache=True, nogil=True)
-def _layers_kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, tab, der,
-                   x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, water_sub,
+def _layers_kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin, tab,
+                   der, x_disp_per_mm, k_scat_per_mm, blood_sub_ratio, water_sub,
                    mua_d, mua_s, mua_e, musp_d, musp_s):  # pragma: no cover - compiled
     """The three layers' optics at every (node, snapshot), node-major (n_led * n_pts, n):
     :func:`nirglucose.optics.tissue.tissue_optics` then
     :func:`nirglucose.optics.layers.layers_from_tissue_optics`, in one pass."""
     n_led, n = shift_t.shape
     n_pts = tab.shape[2]
-    c0, c1, c2, c3, c4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c5, c6, c7, c8, c9 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c10, glc_scatter = np.empty(n), np.empty(n)
-    for i in range(n):
-        (c0[i], c1[i], c2[i], c3[i], c4[i], c5[i], c6[i], c7[i], c8[i], c9[i], c10[i],
-         glc_scatter[i]) = _coefficients(blood[i], sat[i], water[i], fat_sub[i], glucose_mm[i],
-                                         x_disp_per_mm, k_scat_per_mm, blood_sub_ratio,
-                                         water_sub)
+    c = _coefficient_rows(blood, sat, water, fat_sub, glucose_mm, water_dt_c, x_disp_per_mm,
+                          k_scat_per_mm, blood_sub_ratio, water_sub)
+    c0, c1, c2, c3, c4, c5, c6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6]
+    c7, c8, c9, c10, c11, c12, glc_scatter = c[7], c[8], c[9], c[10], c[11], c[12], c[13]
     for led in range(n_led):
         sh_l = shift_t[led]
         for p in range(n_pts):
             (t_oxy, d_oxy, t_deo, d_deo, t_wat, d_wat, t_glc, d_glc, t_fat, d_fat, base,
-             t_msd, d_msd, t_mss, d_mss, t_mel, d_mel) = _node_spectra(tab, der, led, p)
+             t_msd, d_msd, t_mss, d_mss, t_mel, d_mel, t_wdt, d_wdt) = _node_spectra(
+                tab, der, led, p)
             first = (led * n_pts + p) * n
             for i in range(n):  # a loop free of calls: vectorised
                 sh = sh_l[i]
@@ -152,10 +173,12 @@ def _layers_kernel(blood, sat, water, fat_sub, glucose_mm, shift_t, melanin, tab
                 deoxy = t_deo + sh * d_deo
                 wat = t_wat + sh * d_wat
                 glc = t_glc + sh * d_glc
+                wdt = t_wdt + sh * d_wdt
                 g = first + i
-                mua_d[g] = c0[i] * oxy + c1[i] * deoxy + c2[i] * wat + c3[i] * glc + c4[i] * base
+                mua_d[g] = (c0[i] * oxy + c1[i] * deoxy + c2[i] * wat + c3[i] * glc
+                            + c4[i] * base + c11[i] * wdt)
                 mua_s[g] = (c5[i] * oxy + c6[i] * deoxy + c7[i] * wat + c8[i] * glc
-                            + c9[i] * (t_fat + sh * d_fat) + c10[i] * base)
+                            + c9[i] * (t_fat + sh * d_fat) + c10[i] * base + c12[i] * wdt)
                 musp_d[g] = (t_msd + sh * d_msd) * glc_scatter[i]
                 musp_s[g] = (t_mss + sh * d_mss) * glc_scatter[i]
                 mua_e[g] = base + melanin[i] * ((t_mel + sh * d_mel) - base)
@@ -171,6 +194,15 @@ def _stacked(spectra: BandSpectra) -> tuple[np.ndarray, np.ndarray]:
         cached = (tab, der)
         object.__setattr__(spectra, "_kernel_tables", cached)  # frozen dataclass: cache slot
     return cached
+
+
+def _water_dt(state, n: int) -> np.ndarray:
+    """The water's temperature offset per snapshot, (n,) [degC]; zeros where the state
+    has none (its term then adds exactly 0 to each absorption)."""
+    dt = getattr(state, "water_temperature_delta_c", None)
+    if dt is None:
+        return np.zeros(n)
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(dt, dtype=np.float64), (n,)))
 
 
 def band_detected_fraction(
@@ -231,7 +263,8 @@ def band_detected_fraction(
     _kernel(
         vec(state.blood_fraction, (n,)), vec(state.saturation, (n,)),
         vec(state.water_fraction, (n,)), vec(state.subcutis_fat_fraction, (n,)), glucose,
-        vec(np.broadcast_to(shift, (n, n_led)).T), vec(melanin_fraction, (n,)),
+        _water_dt(state, n), vec(np.broadcast_to(shift, (n, n_led)).T),
+        vec(melanin_fraction, (n,)),
         vec(skin_thickness_cm, (n,)),
         tab, der, vec(np.asarray(spectra.weights) * np.asarray(geometry_factor)),
         float(water_displacement_per_mm), float(scattering_rel_per_mm), float(separation_cm),
@@ -290,7 +323,8 @@ def band_detected_fraction_lut(
     _layers_kernel(
         vec(state.blood_fraction, (n,)), vec(state.saturation, (n,)),
         vec(state.water_fraction, (n,)), vec(state.subcutis_fat_fraction, (n,)), glucose,
-        vec(np.broadcast_to(shift, (n, n_led)).T, (n_led, n)), vec(melanin_fraction, (n,)),
+        _water_dt(state, n), vec(np.broadcast_to(shift, (n, n_led)).T, (n_led, n)),
+        vec(melanin_fraction, (n,)),
         tab, der,
         float(water_displacement_per_mm), float(scattering_rel_per_mm),
         float(SUBCUTIS["blood_ratio_to_dermis"]), float(SUBCUTIS["water_fraction"]),
