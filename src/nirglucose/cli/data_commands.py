@@ -50,6 +50,16 @@ def simulate(
         typer.Option(help="Minutes between the readings of a --wear-days run (default 5); "
                      "must divide a day (1440 min)."),
     ] = None,
+    twin: Annotated[
+        Path | None,
+        typer.Option(help="A device's twin (twin.json of `nirglucose twin`, or its folder): "
+                     "its scenario replaces --preset; --set applies on top."),
+    ] = None,
+    twin_mode: Annotated[
+        str,
+        typer.Option(help="map: the twin's most probable parameters; posterior: one "
+                     "posterior draw, chosen by --seed."),
+    ] = "map",
 ) -> None:
     """Generate a dataset and print a summary of it."""
     from ..config import resolve_config
@@ -58,7 +68,15 @@ def simulate(
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject))
     jobs = _jobs(jobs)
     _check_seed(seed)
-    cfg = resolve_config(preset, _parse_sets(set_))
+    base = preset
+    if twin is not None:
+        from ..api import twin_scenario
+        from .twin_command import check_twin_mode
+
+        if preset != "paper":
+            raise UserError("--twin replaces --preset: give one of them")
+        base = twin_scenario(twin, check_twin_mode(twin_mode), seed)
+    cfg = resolve_config(base, _parse_sets(set_))
     if wear_days is not None or every_min is not None:
         _simulate_wear(cfg, out, subjects, per_subject, seed, jobs, wear_days, every_min)
         return
