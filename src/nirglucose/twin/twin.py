@@ -11,6 +11,7 @@ posterior draws. Reading it validates every entry: a hand-edited or malformed fi
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import time
@@ -109,9 +110,9 @@ class Twin:
         return {
             "format": FORMAT[0], "format_version": FORMAT[1], "version": __version__,
             "base_preset": BASE_PRESET, "device": self.device.to_json(),
-            "parameters": self.parameters,
+            "parameters": copy.deepcopy(self.parameters),
             "map": dict(zip(self.fitted_keys, self.map_values.tolist(), strict=True)),
-            "draws": self.draws.tolist(), **self.info,
+            "draws": self.draws.tolist(), **copy.deepcopy(self.info),
         }
 
     def save(self, folder: str | Path) -> Path:
