@@ -53,6 +53,7 @@ __all__ += [  # also importable, as before the split into a package
     "report",
     "simulate",
     "sweep",
+    "twin",
     "wear_benchmark",
     "_PRESET_NAMES",
     "_STUDY_NAMES",

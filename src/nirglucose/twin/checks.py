@@ -21,7 +21,14 @@ from .parameters import Parameter
 from .simulate import device_seeds, scenario, simulate_summaries
 from .summaries import summary_names
 
-__all__ = ["CODE_QUANTILES", "PPC_RANGE", "posterior_predictive", "code_quantiles"]
+__all__ = ["CODE_QUANTILES", "PPC_RANGE", "FILE_MODELS", "posterior_predictive",
+           "code_quantiles", "file_errors", "twin_bound"]
+
+#: Deployable estimators whose subject-grouped CV error on the file a twin reports
+#: beside its device bound (with no skill, the training mean).
+FILE_MODELS = ("ebl", "pls")
+#: Folds of that CV (at most the file's people). [-]
+_FILE_FOLDS = 5
 
 #: Quantiles of the code distributions compared per channel. [-]
 CODE_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
@@ -89,3 +96,41 @@ def posterior_predictive(device: TwinDevice, params: list[Parameter], draws: np.
     codes = {w: {"file": file_q[w], "twin": twin_q[w]} for w in device.labels}
     return {"summaries": out, "codes": codes, "n_devices": int(len(x)),
             "quantiles": list(CODE_QUANTILES)}
+
+
+def file_errors(ds, *, folds: int = _FILE_FOLDS) -> dict[str, float]:
+    """Subject-grouped ``folds``-fold CV RMSE on the file of each of :data:`FILE_MODELS`
+    and of no skill (the training fold's mean glucose). [mg/dL]
+
+    Out-of-fold predictions only: no row is scored by a model that saw its person.
+    """
+    from sklearn.base import clone
+    from sklearn.model_selection import GroupKFold
+
+    from ..models import make_model
+
+    frame = ds.frame
+    y = frame["glucose_mgdl"].to_numpy(float)
+    groups = frame["subject_id"].to_numpy()
+    k = min(folds, len(np.unique(groups)))
+    bits = ds.metadata.get("adc_bits")
+    out: dict[str, float] = {}
+    for name in (*FILE_MODELS, "mean"):
+        model = make_model(name) if name == "mean" else make_model(name, adc_bits=bits)
+        pred = np.empty(len(y))
+        for tr, te in GroupKFold(n_splits=k).split(y, y, groups):
+            fitted = clone(model).fit(ds.rows(tr))
+            pred[te] = np.asarray(fitted.predict(ds.rows(te)), dtype=float)
+        out[name] = float(np.sqrt(np.mean((pred - y) ** 2)))
+    return out
+
+
+def twin_bound(cfg) -> dict[str, float]:
+    """The twin's device bound (:func:`nirglucose.design.design_bound`, what the device's
+    readings can tell of glucose, and the oracle's) for the twin's scenario. [mg/dL]"""
+    from ..design import design_bound
+
+    dev, orc = (design_bound(cfg, condition=c, n_states=128) for c in ("device", "oracle"))
+    return {"device_mgdl": float(dev.rmse_mgdl), "oracle_mgdl": float(orc.rmse_mgdl),
+            "glucose_sd_mgdl": float(dev.glucose_sd_mgdl),
+            "saturated_fraction": float(dev.saturated_fraction)}

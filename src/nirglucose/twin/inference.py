@@ -35,7 +35,7 @@ from ..optics.lut.cache import cache_dir
 from .device import TwinDevice
 from .parameters import Parameter
 from .simulate import device_seeds, simulate_summaries
-from .summaries import summary_names
+from .summaries import SUMMARY_VERSION, summary_names
 
 __all__ = ["InferenceSettings", "PosteriorEstimator", "train_posterior", "load_or_train",
            "REACH_QUANTILES"]
@@ -192,7 +192,8 @@ class PosteriorEstimator:
 def _expected(params: list[Parameter], names: list[str], settings: InferenceSettings):
     return {"keys": [p.key for p in params],
             "bounds": [list(p.fit_bounds) for p in params], "summaries": names,
-            "settings": asdict(settings), "version": __version__}
+            "settings": asdict(settings), "version": __version__,
+            "summary_version": SUMMARY_VERSION}
 
 
 def train_posterior(device: TwinDevice, params: list[Parameter],
@@ -246,7 +247,8 @@ def load_or_train(device: TwinDevice, params: list[Parameter], settings: Inferen
     (PosteriorEstimator, bool)
         The estimator, and whether it came from the cache.
     """
-    folder = cache_dir() / "twin" / device.cache_key(asdict(settings))
+    folder = cache_dir() / "twin" / device.cache_key(
+        {**asdict(settings), "summary_version": SUMMARY_VERSION})
     expected = _expected(params, summary_names(device), settings)
     if cache:
         found = PosteriorEstimator.load(folder, expected)

@@ -9,10 +9,13 @@ sets only the level):
 * ``within``: log10 of the pooled within-person SD after the within-person glucose
   slope, relative to the mean code;
 * ``slope``: the pooled within-person slope of the code on glucose, relative to the mean
-  code, per 100 mg/dL (the glucose signal);
+  code, per 100 mg/dL (the glucose signal), as asinh(slope / 0.002): linear near 0,
+  logarithmic for the large slopes of large gains (so a few do not dominate the
+  estimator's scaling);
 * ``hetero``: the correlation, over people, of log mean code and log within-person SD
   (an additive white noise gives a negative one, a multiplicative noise none);
-* ``kurtosis``: of the pooled within-person residuals (Gaussian 3);
+* ``kurtosis``: log10 of the kurtosis of the pooled within-person residuals (Gaussian
+  log10 3);
 
 for each pair of channels the within-person correlation of their residuals
 (``corr``: a shared placement noise against each channel's own) and the correlation of
@@ -32,7 +35,14 @@ import pandas as pd
 
 from .device import TwinDevice, subject_codes
 
-__all__ = ["summary_names", "summaries", "channel_pairs"]
+__all__ = ["SUMMARY_VERSION", "summary_names", "summaries", "channel_pairs"]
+
+#: Version of the summaries' definitions, part of a cached estimator's identity: change
+#: it with any change of what a summary computes.
+SUMMARY_VERSION = 2
+#: Relative slope per 100 mg/dL below which asinh is near linear: about the slope of
+#: glucose at its published magnitude (a few codes in a thousand per 100 mg/dL). [-]
+_SLOPE_SCALE = 0.002
 
 #: Floor added to a within-person SD of a physiological column before its log, in
 #: the column's unit: a tenth of the smallest step its instruments report.
@@ -97,8 +107,10 @@ def summaries(frame: pd.DataFrame, device: TwinDevice) -> np.ndarray:
     ...                   "glucose_mgdl": [90., 120., 150., 100., 130., 160.],
     ...                   "adc_940": [500, 510, 520, 600, 612, 618]})
     >>> s = dict(zip(summary_names(dev), summaries(f, dev)))
-    >>> round(s["slope_940"], 4)  # per 100 mg/dL, relative to the mean code
-    0.0596
+    >>> # by hand: sum(dev code x dev glucose) / sum(dev glucose^2) = 1140 / 3600 codes per
+    >>> # mg/dL, x 100 / mean code 560 = 0.0565 of the mean per 100 mg/dL
+    >>> round(float(np.sinh(s["slope_940"]) * 0.002), 4)
+    0.0565
     """
     sid, k = subject_codes(frame)
     n_per = np.bincount(sid, minlength=k).astype(float)
@@ -143,9 +155,9 @@ def _channel(y, sid, k, n_per, g_dev, full_scale):
         np.log10(max(level, 0.5) / full_scale),
         np.log10(float(np.std(mean_s, ddof=1)) / level + _REL_FLOOR),
         np.log10(within / level + _REL_FLOOR),
-        100.0 * slope / level,
+        float(np.arcsinh(100.0 * slope / level / _SLOPE_SCALE)),
         hetero,
-        float(np.mean(z ** 4)) if within > 0 else 3.0,
+        float(np.log10(np.mean(z ** 4))) if within > 0 else float(np.log10(3.0)),
     ]
     return values, resid, np.maximum(mean_s, 0.5)
 

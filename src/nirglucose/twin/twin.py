@@ -27,7 +27,7 @@ from .._version import __version__
 from ..config import ScenarioConfig, resolve_config
 from ..dataset import Dataset, atomic_write, load_dataset
 from ..exceptions import ConfigError, DataError
-from .checks import posterior_predictive
+from .checks import file_errors, posterior_predictive, twin_bound
 from .device import BASE_PRESET, TwinDevice, base_overrides, device_of
 from .inference import REACH_QUANTILES, InferenceSettings, load_or_train
 from .parameters import IDENTIFIED_WIDTH_RATIO, Parameter, fitted_parameters, held_parameters
@@ -293,7 +293,11 @@ def fit_twin(data: Any, *, adc_bits: int | None = None, glucose_unit: str | None
                    "total_s": round(time.perf_counter() - t0, 1)},
     }
     keep = np.linspace(0, len(values) - 1, min(_STORED_DRAWS, len(values))).astype(int)
-    return Twin(device, entries, values[keep], map_values, info)
+    twin = Twin(device, entries, values[keep], map_values, info)
+    twin.info["bound"] = twin_bound(twin.scenario("map"))
+    twin.info["file_errors_mgdl"] = file_errors(ds)
+    twin.info["timing"]["total_s"] = round(time.perf_counter() - t0, 1)
+    return twin
 
 
 def _warnings(device: TwinDevice, entries: list[dict], reach: list[str], n_train: int):
