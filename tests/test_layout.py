@@ -61,6 +61,8 @@ SLOW_MODULES: dict[str, str] = {
     # measured with ``python -X importtime`` after ``import nirglucose`` (issue 33)
     "simulation.simulator": "loads scipy.special (normal quantiles of its random streams), "
     "about 0.2 s, which `import nirglucose` defers until the first ng.simulate call",
+    "twin.twin": "loads the simulator (through the twin's parameters), which `import "
+    "nirglucose` defers until a twin is read",
     "simulation.wear": "loads scipy.signal (the interstitial lag filter), about 0.8 s, "
     "which `import nirglucose` defers until the first ng.simulate_wear call",
 }

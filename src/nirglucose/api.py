@@ -95,7 +95,7 @@ def twin_scenario(twin: Any, mode: str = "map", seed: int = 0) -> ScenarioConfig
     its ``twin.json`` or folder) in ``mode`` ``"map"`` or ``"posterior"`` (a draw chosen
     by ``seed``): the hook by which the simulator and the studies take ``--twin``."""
     # deferred: the twin package loads the simulator and sbi's estimator code on use
-    from .twin import Twin, load_twin
+    from .twin.twin import Twin, load_twin
 
     return (twin if isinstance(twin, Twin) else load_twin(twin)).scenario(mode, int(seed))
 

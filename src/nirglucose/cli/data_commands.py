@@ -24,6 +24,7 @@ from ._common import (
     _jobs,
     _parse_sets,
     _say,
+    twin_base,
 )
 
 
@@ -68,15 +69,7 @@ def simulate(
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject))
     jobs = _jobs(jobs)
     _check_seed(seed)
-    base = preset
-    if twin is not None:
-        from ..api import twin_scenario
-        from .twin_command import check_twin_mode
-
-        if preset != "paper":
-            raise UserError("--twin replaces --preset: give one of them")
-        base = twin_scenario(twin, check_twin_mode(twin_mode), seed)
-    cfg = resolve_config(base, _parse_sets(set_))
+    cfg = resolve_config(twin_base(preset, twin, twin_mode, seed), _parse_sets(set_))
     if wear_days is not None or every_min is not None:
         _simulate_wear(cfg, out, subjects, per_subject, seed, jobs, wear_days, every_min)
         return

@@ -15,11 +15,11 @@ from ._common import (
     GlucoseUnitOption,
     JobsOption,
     UserError,
-    _check_out_dir,
-    _check_seed,
-    _jobs,
-    _say,
-    _warnings_as_lines,
+    check_out_dir,
+    check_seed,
+    jobs_or_cores,
+    say,
+    warnings_as_lines,
 )
 
 
@@ -41,23 +41,23 @@ def twin(
     """Fit the simulator to a device's file: the posterior over its scenario parameters."""
     from ..twin import InferenceSettings, fit_twin
 
-    _check_seed(seed)
-    _check_out_dir(out)
+    check_seed(seed)
+    check_out_dir(out)
     if not data.exists():
         raise UserError(f"--data {str(data)!r} does not exist")
     try:
         settings = InferenceSettings(n_simulations=simulations, seed=seed)
     except ValueError as exc:
         raise UserError(str(exc).replace("n_simulations", "--simulations")) from None
-    with _warnings_as_lines():
+    with warnings_as_lines():
         result = fit_twin(data, adc_bits=adc_bits, glucose_unit=glucose_unit,
-                          settings=settings, n_jobs=_jobs(jobs), cache=cache)
+                          settings=settings, n_jobs=jobs_or_cores(jobs), cache=cache)
     _print_twin(result)
     path = result.save(out)
     t = result.info["timing"]
     how = "a cached estimator" if t["cached_estimator"] else (
         f"{t['n_train']} simulated devices, trained anew")
-    _say(f"wrote {path} ({t['total_s']} s; {how})", err=False)
+    say(f"wrote {path} ({t['total_s']} s; {how})", err=False)
 
 
 def _print_twin(result) -> None:
@@ -71,12 +71,3 @@ def _print_twin(result) -> None:
                       "yes" if p["identified"] else "no" + (" (held)" if not p["fitted"] else ""),
                       f"{p['preset']:.4g}")
     out_console.print(table)
-
-
-def check_twin_mode(mode: str) -> str:
-    """``--twin-mode`` checked (map or posterior)."""
-    from ..twin import TWIN_MODES
-
-    if mode not in TWIN_MODES:
-        raise UserError(f"--twin-mode {mode!r}: choose {' or '.join(TWIN_MODES)}")
-    return mode

@@ -63,12 +63,12 @@ class LED(_Model):
     read_noise_lsb: float = Field(
         0.0,
         ge=0,
-        le=1000,
+        le=1e6,
         description="Temporal (white) noise of this channel's conversion beyond the modelled "
         "shot, Johnson, INL and quantisation noise, Gaussian per reading, scaled by "
         "noise_scale: the temporal dark noise sigma_d in digital numbers of the EMVA 1288 "
         "sensor characterisation (EMVA Standard 1288, release 4.0, 2021). 0: none. At most "
-        "1000 LSB (an assumption). [LSB]",
+        "1e6 LSB, a 24-bit ADC's 6 % of full scale (an assumption). [LSB]",
     )
     flicker_rel: float | None = Field(
         None,

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..design import design_bound
+from ..models import make_model
 from ..simulation.simulator import simulate_frame
 from .device import TwinDevice
 from .parameters import Parameter
@@ -107,8 +109,6 @@ def file_errors(ds, *, folds: int = _FILE_FOLDS) -> dict[str, float]:
     from sklearn.base import clone
     from sklearn.model_selection import GroupKFold
 
-    from ..models import make_model
-
     frame = ds.frame
     y = frame["glucose_mgdl"].to_numpy(float)
     groups = frame["subject_id"].to_numpy()
@@ -128,8 +128,6 @@ def file_errors(ds, *, folds: int = _FILE_FOLDS) -> dict[str, float]:
 def twin_bound(cfg) -> dict[str, float]:
     """The twin's device bound (:func:`nirglucose.design.design_bound`, what the device's
     readings can tell of glucose, and the oracle's) for the twin's scenario. [mg/dL]"""
-    from ..design import design_bound
-
     dev, orc = (design_bound(cfg, condition=c, n_states=128) for c in ("device", "oracle"))
     return {"device_mgdl": float(dev.rmse_mgdl), "oracle_mgdl": float(orc.rmse_mgdl),
             "glucose_sd_mgdl": float(dev.glucose_sd_mgdl),
