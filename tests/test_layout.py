@@ -52,6 +52,7 @@ HEAVY_LIBRARIES: dict[str, str] = {
     "onnx": "an optional extra (export-onnx)",
     "onnxruntime": "an optional extra (export-onnx)",
     "iadpython": "the adding-doubling reference solver only",
+    "sbi": "the device twin's posterior estimator only (nirglucose.twin); about 5 s to import",
 }
 
 #: The package's own modules slow to import for a reason of their own: name -> why.

@@ -11,7 +11,7 @@ import nirglucose as ng
 from nirglucose.twin import Twin, load_twin
 from nirglucose.twin.device import TwinDevice
 from nirglucose.twin.parameters import fitted_parameters, held_parameters
-from nirglucose.twin.twin import _entry
+from nirglucose.twin.twin import parameter_entry
 
 DEVICE = TwinDevice((940.0,), 10, False, False, ("age_yr", "skin_temp_c"), False, 25, 8)
 
@@ -23,8 +23,8 @@ def twin() -> Twin:
     rng = np.random.default_rng(0)
     z = np.column_stack([rng.uniform(*p.fit_bounds, size=200) for p in params])
     values = np.column_stack([p.from_fit(z[:, i]) for i, p in enumerate(params)])
-    entries = [_entry(p, z[:, i]) for i, p in enumerate(params)]
-    entries += [_entry(p, None) for p in held_parameters(DEVICE)]
+    entries = [parameter_entry(p, z[:, i]) for i, p in enumerate(params)]
+    entries += [parameter_entry(p, None) for p in held_parameters(DEVICE)]
     return Twin(DEVICE, entries, values, values[0], {"warnings": []})
 
 
