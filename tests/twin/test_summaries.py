@@ -84,3 +84,11 @@ def test_device_of_refuses_too_few_people(frame):
     few = frame[frame["subject_id"] < 3]
     with pytest.raises(ng.DataError, match="at least 5 people"):
         device_of(ng.Dataset(few.copy()), adc_bits=16)
+
+
+def test_cli_default_simulations_is_the_library_default():
+    """The CLI's --simulations default keys the same cached estimator as ng.fit_twin."""
+    from nirglucose.cli.twin_command import DEFAULT_SIMULATIONS
+    from nirglucose.twin import InferenceSettings
+
+    assert DEFAULT_SIMULATIONS == InferenceSettings().n_simulations

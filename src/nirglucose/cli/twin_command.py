@@ -22,6 +22,11 @@ from ._common import (
     warnings_as_lines,
 )
 
+#: --simulations' default: the library's ``InferenceSettings().n_simulations``, so the CLI
+#: and ``ng.fit_twin`` share one cached estimator (a test keeps them equal; importing the
+#: twin package here would slow ``nirglucose --help``).
+DEFAULT_SIMULATIONS = 6000
+
 
 @app.command("twin")
 def twin(
@@ -32,7 +37,8 @@ def twin(
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,
     simulations: Annotated[int, typer.Option(help="Simulated devices to train the posterior "
-                                             "estimator on (once per device: cached).")] = 8000,
+                                             "estimator on (once per device: cached).")
+                           ] = DEFAULT_SIMULATIONS,
     seed: Annotated[int, typer.Option(help="Seed of the simulations, training and draws.")] = 0,
     jobs: JobsOption = None,
     cache: Annotated[bool, typer.Option(help="Reuse (and keep) the device's trained "
