@@ -69,7 +69,8 @@ def twin(
 def _print_twin(result) -> None:
     """The posterior of each parameter as a table on stdout."""
     table = Table(title="twin: 90 % posterior intervals (scenario keys)")
-    for col in ("key", "median", "90 % interval", "identified", "base"):
+    table.add_column("key", overflow="fold")
+    for col in ("median", "90 % interval", "identified", "base"):
         table.add_column(col)
     for p in result.parameters:
         table.add_row(escape(p["key"]), f"{p['median']:.4g}",

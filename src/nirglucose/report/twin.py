@@ -14,11 +14,11 @@ import base64
 import html
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ..dataset import atomic_write
 from ..exceptions import DataError
-from ..formatting import format_number
 from ..plots.style import figure_bytes
 from ..plots.twin import plot_posterior_intervals, plot_ppc
 from ..twin import Twin, load_twin
@@ -44,7 +44,12 @@ def _img(ax, alt: str) -> str:
 
 
 def _table(frame: pd.DataFrame) -> str:
-    return frame.to_html(index=False, float_format=format_number, border=0, escape=True)
+    return frame.to_html(index=False, float_format=_g, border=0, escape=True)
+
+
+def _g(value) -> str:
+    """Three significant digits: a twin's values span 1e-5 (a noise) to 1e3 (a code)."""
+    return f"{value:.3g}"
 
 
 def _parameter_table(twin: Twin) -> pd.DataFrame:
@@ -52,13 +57,13 @@ def _parameter_table(twin: Twin) -> pd.DataFrame:
     for e in twin.parameters:
         state = "yes" if e["identified"] else (
             "no: posterior ~ prior" if e["fitted"] else f"held at prior: {e['reason']}")
-        rows.append({"scenario key": e["key"], "what": e["label"], "median": e["median"],
-                     "90 % interval": f"{format_number(e['lower'])} - "
-                                      f"{format_number(e['upper'])}",
-                     "identified": state, "base value": e["preset"],
-                     "published": "" if e["published"] is None else e["published"],
-                     "prior": f"{format_number(e['prior']['low'])} - "
-                              f"{format_number(e['prior']['high'])} ({e['prior']['scale']})",
+        rows.append({"scenario key": e["key"], "what": e["label"], "median": _g(e["median"]),
+                     "90 % interval": f"{_g(e['lower'])} - "
+                                      f"{_g(e['upper'])}",
+                     "identified": state, "base value": _g(e["preset"]),
+                     "published": "" if e["published"] is None else _g(e["published"]),
+                     "prior": f"{_g(e['prior']['low'])} - "
+                              f"{_g(e['prior']['high'])} ({e['prior']['scale']})",
                      "unit": e["unit"]})
     return pd.DataFrame(rows)
 
@@ -66,25 +71,57 @@ def _parameter_table(twin: Twin) -> pd.DataFrame:
 def _gain_lines(twin: Twin) -> list[str]:
     """One sentence per channel: the glucose signal against the published magnitude."""
     out = []
-    presets = ", ".join(f"{k} x{format_number(v)}" for k, v in PRESET_GAINS.items())
+    presets = ", ".join(f"{k} x{_g(v)}" for k, v in PRESET_GAINS.items())
     for e in twin.parameters:
         if e["kind"] != "glucose signal":
             continue
-        size = (f"{format_number(e['median'])} x the published magnitude (90 %: "
-                f"{format_number(e['lower'])} - {format_number(e['upper'])})")
+        size = (f"{_g(e['median'])} x the published magnitude (90 %: "
+                f"{_g(e['lower'])} - {_g(e['upper'])})")
         if not e["identified"]:
             size = "not identified by this file (its posterior fills the prior)"
-        out.append(f"Glucose signal at {format_number(e['channel_nm'])} nm: {size}; "
+        out.append(f"Glucose signal at {_g(e['channel_nm'])} nm: {size}; "
                    f"the presets assume {presets}.")
     return out
 
 
+#: Summary prefix -> (what it is, its value in natural units from the summary's scale).
+_SUMMARY_MEANING = {
+    "level": ("mean code [ADC code]", lambda v, fs: 10.0 ** v * fs),
+    "between": ("SD of people's mean codes [% of the mean]", lambda v, fs: 100 * 10.0 ** v),
+    "within": ("within-person SD after glucose [% of the mean]",
+               lambda v, fs: 100 * 10.0 ** v),
+    "slope": ("code-glucose slope [% of the mean per 100 mg/dL]",
+              lambda v, fs: 100 * 0.002 * np.sinh(v)),
+    "hetero": ("corr(log mean, log within-SD) over people [-]", lambda v, fs: v),
+    "kurtosis": ("kurtosis of within-person residuals [-]", lambda v, fs: 10.0 ** v),
+    "corr": ("within-person residual correlation [-]", lambda v, fs: v),
+    "bcorr": ("correlation of people's mean codes [-]", lambda v, fs: v),
+    "ref": ("mean reference code [ADC code]", lambda v, fs: 10.0 ** v * fs),
+    "ratio": ("within-person SD of log(code / reference) [-]", lambda v, fs: 10.0 ** v),
+}
+
+
+def _meaning(name: str, value: float, full_scale: int) -> tuple[str, str]:
+    prefix = name.split("_")[0]
+    if name.startswith("within_") and not name.split("_")[1][0].isdigit():
+        if name == "within_fitzpatrick_type":
+            return "share of readings off a person's usual type [-]", _g(value)
+        return "within-person SD of the column [its unit]", _g(10.0 ** value)
+    what, natural = _SUMMARY_MEANING.get(prefix, ("", lambda v, fs: v))
+    return what, _g(natural(value, full_scale))
+
+
 def _ppc_tables(twin: Twin) -> str:
     ppc = twin.info.get("ppc") or {}
-    rows = [{"summary": k, "file": v["file"], "twin 5 %": v["twin_low"],
-             "twin median": v["twin_median"], "twin 95 %": v["twin_high"],
-             "share of twin devices below the file": v["p_below"]}
-            for k, v in ppc.get("summaries", {}).items()]
+    fs = twin.device.full_scale
+    rows = []
+    for k, v in ppc.get("summaries", {}).items():
+        what, file_natural = _meaning(k, v["file"], fs)
+        twin_natural = _meaning(k, v["twin_median"], fs)[1]
+        rows.append({"summary": k, "what": what, "file": file_natural,
+                     "twin median": twin_natural, "file (scale)": v["file"],
+                     "twin 5 %": v["twin_low"], "twin 95 %": v["twin_high"],
+                     "share of twin devices below the file": v["p_below"]})
     q = [f"{100 * x:g} %" for x in ppc.get("quantiles", [])]
     codes = [{"channel": f"adc_{w}", "of": who, **dict(zip(q, vals[who], strict=True))}
              for w, vals in ppc.get("codes", {}).items() for who in ("file", "twin")]
