@@ -84,6 +84,7 @@ def fit_twin(data: Any, *, adc_bits: int | None = None, glucose_unit: str | None
         raise DataError(f"the file's summaries {', '.join(bad)} cannot be computed (a channel "
                         "that never changes within a person?)")
     z = est.sample(x, n_draws, settings.seed)
+    leakage = est.leakage
     best = z[int(np.argmax(est.log_prob(z, x)))]
     entries = [parameter_entry(p, z[:, i]) for i, p in enumerate(params)]
     entries += [parameter_entry(p, None) for p in held]
@@ -91,7 +92,7 @@ def fit_twin(data: Any, *, adc_bits: int | None = None, glucose_unit: str | None
     map_values = np.array([p.from_fit(best[i]) for i, p in enumerate(params)], dtype=float)
     ppc = posterior_predictive(device, params, z, x, frame, n_devices=ppc_devices,
                                seed=settings.seed, n_jobs=n_jobs)
-    notes = _warnings(device, entries, est.out_of_reach(x), est.meta["n_train"])
+    notes = _warnings(device, entries, est.out_of_reach(x), est.meta["n_train"], leakage)
     for line in notes:
         warnings.warn(line, UserWarning, stacklevel=2)
     info = {
@@ -112,7 +113,12 @@ def fit_twin(data: Any, *, adc_bits: int | None = None, glucose_unit: str | None
     return twin
 
 
-def _warnings(device: TwinDevice, entries: list[dict], reach: list[str], n_train: int):
+#: Share of the estimator's draws outside the priors above which a fit says so.
+_LEAKAGE_WARN = 0.5
+
+
+def _warnings(device: TwinDevice, entries: list[dict], reach: list[str], n_train: int,
+              leakage: float):
     """The fit's one-line warnings (see :func:`fit_twin`)."""
     out = []
     loose = [e["key"] for e in entries if e["fitted"] and not e["identified"]]
@@ -123,7 +129,12 @@ def _warnings(device: TwinDevice, entries: list[dict], reach: list[str], n_train
         lo, hi = (100 * q for q in REACH_QUANTILES)
         out.append(f"the twin is not a twin: the file's {', '.join(reach)} lie outside what "
                    f"the simulator reaches ({lo:g}-{hi:g} % of {n_train} prior simulations); "
-                   "its posterior is the nearest the simulator gets")
+                   "its posterior is the nearest the simulator gets"
+                   + (f" ({100 * leakage:.0f} % of the estimator's draws fell outside the "
+                      "priors and were clipped to them)" if leakage > _LEAKAGE_WARN else ""))
+    elif leakage > _LEAKAGE_WARN:
+        out.append(f"{100 * leakage:.0f} % of the posterior estimator's draws fell outside "
+                   "the priors (clipped to them): the file is far from the simulations")
     if device.n_subjects < 10:
         out.append(f"{device.n_subjects} people: below the small-data policy's 10, the "
                    "between-person spread is loosely known")

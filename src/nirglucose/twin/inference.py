@@ -43,6 +43,8 @@ __all__ = ["InferenceSettings", "PosteriorEstimator", "train_posterior", "load_o
 
 _log = logging.getLogger(__name__)
 
+#: Rounds of rejection sampling (each 2n flow draws) before outside draws are clipped.
+_REJECTION_ROUNDS = 5
 #: A file's summary outside this central range of the prior-predictive simulations is
 #: out of the simulator's reach (named in a warning).
 REACH_QUANTILES = (0.005, 0.995)
@@ -145,6 +147,8 @@ class PosteriorEstimator:
 
         self.net = net
         self.meta = meta
+        #: Share of the last :meth:`sample` call's flow draws outside the priors. [-]
+        self.leakage = 0.0
         self.bounds = np.asarray(meta["bounds"], dtype=float)
         self._posterior = DirectPosterior(posterior_estimator=net, prior=_prior(self.bounds))
 
@@ -152,15 +156,36 @@ class PosteriorEstimator:
         """``n`` posterior draws (fitting scale) given one summary vector ``x``, widened
         about each parameter's median by its factor (``meta["widening"]``) and kept
         inside the prior's bounds."""
-        with _one_thread(seed) as torch:
-            xt = torch.tensor(np.asarray(x, dtype=np.float32)[None, :])
-            draws = self._posterior.sample((n,), x=xt, show_progress_bars=False)
-        z = draws.numpy().astype(float)
+        z = self._inside_prior(x, n, seed)
         factor = np.asarray(self.meta.get("widening") or np.ones(z.shape[1]))
         if not widen or np.all(factor == 1.0):
             return z
         med = np.median(z, axis=0)
         return np.clip(med + factor * (z - med), self.bounds[:, 0], self.bounds[:, 1])
+
+    def _inside_prior(self, x: np.ndarray, n: int, seed: int) -> np.ndarray:
+        """``n`` flow draws inside the prior's box: rejection, a bounded number of rounds
+        (for a file far from every simulation the flow may put most of its mass outside,
+        where sbi's own rejection loop would not end); whatever is still missing is the
+        outside draws clipped to the box. ``self.leakage``: the share drawn outside."""
+        lo, hi = self.bounds[:, 0], self.bounds[:, 1]
+        inside, clipped, drawn = [], [], 0
+        with _one_thread(seed) as torch, warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # sbi's note on outside draws: self.leakage
+            xt = torch.tensor(np.asarray(x, dtype=np.float32)[None, :])
+            for _ in range(_REJECTION_ROUNDS):
+                z = self._posterior.sample((2 * n,), x=xt, show_progress_bars=False,
+                                           reject_outside_prior=False).detach().numpy()
+                z = z.astype(float)
+                ok = np.all((z >= lo) & (z <= hi), axis=1)
+                drawn += len(z)
+                inside.append(z[ok])
+                clipped.append(np.clip(z[~ok], lo, hi))
+                if sum(len(k) for k in inside) >= n:
+                    break
+        z_in = np.concatenate(inside)
+        self.leakage = 1.0 - len(z_in) / drawn
+        return np.concatenate([z_in, *clipped])[:n]
 
     def log_prob(self, z: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Posterior log density (unnormalised) of fitting-scale draws ``z`` given ``x``."""
