@@ -115,6 +115,29 @@ def _one_thread(seed: int):
         torch.set_num_threads(threads)
 
 
+class _NoTracker:
+    """sbi's ``Tracker`` protocol, recording nothing: its default writes TensorBoard logs
+    into ``./sbi-logs`` of whatever directory the user runs in (the training summary the
+    twin keeps is sbi's ``summary`` dict)."""
+
+    log_dir = None
+
+    def log_metric(self, name, value, step=None) -> None:
+        """Nothing."""
+
+    def log_metrics(self, metrics, step=None) -> None:
+        """Nothing."""
+
+    def log_params(self, params) -> None:
+        """Nothing."""
+
+    def add_figure(self, name, figure, step=None) -> None:
+        """Nothing."""
+
+    def flush(self) -> None:
+        """Nothing."""
+
+
 def _builder(settings: InferenceSettings):
     from sbi.neural_nets import posterior_nn
 
@@ -275,7 +298,7 @@ def train_posterior(device: TwinDevice, params: list[Parameter],
     with _one_thread(settings.seed) as torch, warnings.catch_warnings(record=True) as notes:
         warnings.simplefilter("always")
         inference = NPE(prior=_prior(bounds), density_estimator=_builder(settings),
-                        show_progress_bars=False)
+                        show_progress_bars=False, tracker=_NoTracker())
         inference.append_simulations(torch.tensor(z, dtype=torch.float32),
                                      torch.tensor(x, dtype=torch.float32))
         net = inference.train(max_num_epochs=settings.max_epochs,
