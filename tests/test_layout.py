@@ -52,6 +52,7 @@ HEAVY_LIBRARIES: dict[str, str] = {
     "onnx": "an optional extra (export-onnx)",
     "onnxruntime": "an optional extra (export-onnx)",
     "iadpython": "the adding-doubling reference solver only",
+    "sbi": "the device twin's posterior estimator only (nirglucose.twin); about 5 s to import",
 }
 
 #: The package's own modules slow to import for a reason of their own: name -> why.
@@ -61,6 +62,8 @@ SLOW_MODULES: dict[str, str] = {
     # measured with ``python -X importtime`` after ``import nirglucose`` (issue 33)
     "simulation.simulator": "loads scipy.special (normal quantiles of its random streams), "
     "about 0.2 s, which `import nirglucose` defers until the first ng.simulate call",
+    "twin.twin": "loads the simulator (through the twin's parameters), which `import "
+    "nirglucose` defers until a twin is read",
     "simulation.wear": "loads scipy.signal (the interstitial lag filter), about 0.8 s, "
     "which `import nirglucose` defers until the first ng.simulate_wear call",
 }

@@ -22,6 +22,7 @@ _renamed.install()  # ``nirglucose.simulate.*`` imports: the renamed modules, wi
 
 if TYPE_CHECKING:  # the lazy attributes below, as the type checker sees them
     from .prediction import PredictionResult, predict
+    from .twin import Twin, fit_twin, load_twin
 
 __all__ = [
     "__version__",
@@ -29,6 +30,9 @@ __all__ = [
     "simulate_wear",
     "predict",
     "PredictionResult",
+    "fit_twin",
+    "load_twin",
+    "Twin",
     "load_dataset",
     "Dataset",
     "ScenarioConfig",
@@ -44,13 +48,15 @@ __all__ = [
 #: first access so that ``import nirglucose`` stays light (torch, numba and matplotlib
 #: load only when a model, kernel or figure asks for them).
 SUBPACKAGES = ("config", "design", "evaluation", "export", "features", "metrics", "models",
-               "optics", "plots", "portable", "report")
+               "optics", "plots", "portable", "report", "twin")
 
 
 #: Functions and classes reachable as attributes, name -> module, imported on first
 #: access: ``ng.predict`` needs the evaluation package's interval code, which loading a
 #: model file must not import.
-LAZY_ATTRIBUTES = {"predict": "nirglucose.prediction", "PredictionResult": "nirglucose.prediction"}
+LAZY_ATTRIBUTES = {"predict": "nirglucose.prediction", "PredictionResult": "nirglucose.prediction",
+                   "fit_twin": "nirglucose.twin", "load_twin": "nirglucose.twin",
+                   "Twin": "nirglucose.twin"}
 
 
 def __getattr__(name: str):

@@ -31,6 +31,7 @@ from .sweep_command import sweep
 from .device_commands import export_c_source, fit_model, predict_glucose
 from .export_commands import export_onnx_file
 from .report_command import report
+from .twin_command import twin
 
 # isort: on
 
@@ -52,6 +53,7 @@ __all__ += [  # also importable, as before the split into a package
     "report",
     "simulate",
     "sweep",
+    "twin",
     "wear_benchmark",
     "_PRESET_NAMES",
     "_STUDY_NAMES",

@@ -240,3 +240,34 @@ def clear_previous_runs(runs: list[tuple[str | None, Path]], out: Path,
         clear_outputs(out, ("report.html",))
         for _, run_out in runs:
             clear_outputs(run_out, names)
+
+
+# --- the twin (nirglucose twin, simulate --twin) -------------------------------------------
+def check_twin_mode(mode: str) -> str:
+    """``--twin-mode`` checked (map or posterior)."""
+    from ..twin import TWIN_MODES
+
+    if mode not in TWIN_MODES:
+        raise UserError(f"--twin-mode {mode!r}: choose {' or '.join(TWIN_MODES)}")
+    return mode
+
+
+def twin_base(preset: str, twin: Path | None, twin_mode: str, seed: int):
+    """The scenario a ``--twin`` command starts from: the twin's (``--twin-mode``), else
+    ``preset``. ``--twin`` replaces ``--preset`` (given both, one line)."""
+    if twin is None:
+        return preset
+    from ..api import twin_scenario
+
+    if preset != "paper":
+        raise UserError("--twin replaces --preset: give one of them")
+    return twin_scenario(twin, check_twin_mode(twin_mode), seed)
+
+
+# public names of the helpers a newer command shares (the private ones above predate the
+# ratchet on private imports, tests/test_layout.py)
+say = _say
+warnings_as_lines = _warnings_as_lines
+check_out_dir = _check_out_dir
+check_seed = _check_seed
+jobs_or_cores = _jobs

@@ -34,6 +34,15 @@ def report(
     if figures is not None and figures.exists() and not figures.is_dir():
         raise UserError(f"--figures {str(figures)!r} is a file; give a directory for the "
                         "PNG and SVG figures")
+    from ..report.twin import build_twin_report, is_twin_dir
+
+    if results.is_dir() and is_twin_dir(results) and not sweep:  # a device's twin
+        if out is not None:
+            _check_out_file(out)
+        path = build_twin_report(results, out if out is not None else results / "report.html",
+                                 figures_dir=figures)
+        _say(f"wrote {path}", err=False)
+        return
     if results.is_dir() and is_wear_results(results):  # a worn run (wear-benchmark)
         if out is not None:
             _check_out_file(out)

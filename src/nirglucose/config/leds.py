@@ -52,6 +52,32 @@ class LED(_Model):
         description="Catalogue part this record came from (data/parts/leds.csv), None for "
         "a record given by value. [-]",
     )
+    glucose_gain: float | None = Field(
+        None,
+        gt=0,
+        le=100,
+        description="Multiplies glucose's three optical effects in this LED's band in place "
+        "of glucose.signal_gain (1: the published magnitudes); a device's twin fits one per "
+        "channel (nirglucose.twin). None: glucose.signal_gain. At most 100, as signal_gain. [-]",
+    )
+    read_noise_lsb: float = Field(
+        0.0,
+        ge=0,
+        le=1e6,
+        description="Temporal (white) noise of this channel's conversion beyond the modelled "
+        "shot, Johnson, INL and quantisation noise, Gaussian per reading, scaled by "
+        "noise_scale: the temporal dark noise sigma_d in digital numbers of the EMVA 1288 "
+        "sensor characterisation (EMVA Standard 1288, release 4.0, 2021). 0: none. At most "
+        "1e6 LSB, a 24-bit ADC's 6 % of full scale (an assumption). [LSB]",
+    )
+    flicker_rel: float | None = Field(
+        None,
+        ge=0,
+        le=0.1,
+        description="This LED's relative reading-to-reading power SD in place of "
+        "hardware.led_flicker_rel (e.g. a channel with its own driver or optical path). "
+        "None: hardware.led_flicker_rel. At most 10 %, as led_flicker_rel. [-]",
+    )
 
 
 #: The study's four LEDs: FWHM typical of IR LEDs, power per channel for mid-scale
@@ -130,6 +156,16 @@ class LEDConfig(_Model):
     responsivity_a_per_w = property(
         lambda self: tuple(e.responsivity_a_per_w for e in self.emitters)
     )
+
+    def glucose_gains(self, signal_gain: float) -> tuple[float, ...]:
+        """Each LED's glucose gain: its own ``glucose_gain`` or ``signal_gain``. [-]"""
+        return tuple(signal_gain if e.glucose_gain is None else e.glucose_gain
+                     for e in self.emitters)
+
+    def flicker_rels(self, led_flicker_rel: float) -> tuple[float, ...]:
+        """Each LED's relative flicker SD: its own ``flicker_rel`` or the scenario's. [-]"""
+        return tuple(led_flicker_rel if e.flicker_rel is None else e.flicker_rel
+                     for e in self.emitters)
 
 
 def expand_led_part(record: Any) -> Any:

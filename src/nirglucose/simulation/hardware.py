@@ -308,7 +308,8 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         cfg, resp * detected_power_w, dark_now, i_dark_residual, temps, streams
     )
     offset = _offset_lsb(cfg, temps["board_c"])
-    adc = adc_convert(voltage, hw.adc_vref_v, hw.adc_bits, inl, offset)
+    adc = adc_convert(voltage, hw.adc_vref_v, hw.adc_bits, inl,
+                      offset + _read_noise_lsb(cfg, voltage.shape, streams))
 
     adc_ref = _reference_codes(cfg, resp * p_cal, temps, inl, streams)[subject_index]
     if cfg.device.monitor_photodiode:
@@ -398,6 +399,16 @@ def _monitor_codes(cfg, i_led_signal_a, dark, offset, inl: float, temps: dict, s
     return adc_convert(v_mon, hw.adc_vref_v, hw.adc_bits, inl, offset)
 
 
+def _read_noise_lsb(cfg, shape: tuple[int, ...], streams):
+    """Each channel's extra temporal noise (``leds.emitters.<i>.read_noise_lsb``, EMVA 1288
+    temporal dark noise), drawn per reading and scaled by ``noise_scale``; 0.0 (no draw,
+    no stream) where every LED leaves it at 0. [LSB]"""
+    sd = np.asarray([e.read_noise_lsb for e in cfg.leds.emitters])
+    if not np.any(sd > 0):
+        return 0.0
+    return cfg.noise_scale * sd[None, :] * streams("read_noise").normal(size=shape)
+
+
 def _led_powers(cfg, p0, temps: dict, n_sub: int, streams):
     """LED power of each reading and of each subject's start-up reference. [W]"""
     hw = cfg.hardware
@@ -406,10 +417,11 @@ def _led_powers(cfg, p0, temps: dict, n_sub: int, streams):
     thermal = hw.led_thermal_coeff_per_c * cfg.noise_factor("led_thermal_drift")
     ageing = hw.led_ageing_per_1000h * cfg.noise_factor("led_ageing")
     n = len(temps["age_h"])
-    flicker = hw.led_flicker_rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
-    flicker_cal = (
-        hw.led_flicker_rel * f_flicker * streams("led_flicker.cal").normal(size=(n_sub, n_led))
-    )
+    rel = hw.led_flicker_rel
+    if any(e.flicker_rel is not None for e in cfg.leds.emitters):  # presets: scalar, same bits
+        rel = np.asarray(cfg.leds.flicker_rels(hw.led_flicker_rel))[None, :]
+    flicker = rel * f_flicker * streams("led_flicker").normal(size=(n, n_led))
+    flicker_cal = rel * f_flicker * streams("led_flicker.cal").normal(size=(n_sub, n_led))
     powers = (
         led_power_w(
             p0,

@@ -315,16 +315,20 @@ def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: di
     shift_nm = cfg.noise_factor("led_wavelength_shift") * hardware.led_peak_shift_nm(
         temps["led_c"], cfg.hardware.led_wavelength_shift_nm_per_c
     )
-    state = tissue.TissueState(
-        probe["true_blood_fraction_detected"],
-        phys["true_saturation"],
-        phys["true_water_fraction"],
-        phys["true_subcutis_fat_fraction"],
-        cfg.glucose.signal_gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
-        water_temperature_delta_c(cfg, phys["true_skin_temp_c"]),
-    )
+    water_dt = water_temperature_delta_c(cfg, phys["true_skin_temp_c"])
+
+    def state(gain: float) -> tissue.TissueState:
+        return tissue.TissueState(
+            probe["true_blood_fraction_detected"],
+            phys["true_saturation"],
+            phys["true_water_fraction"],
+            phys["true_subcutis_fat_fraction"],
+            gain * glucose["glucose_mgdl"] / MGDL_PER_MMOLL_GLUCOSE,
+            water_dt,
+        )
+
     fraction = (
-        _band_detected_fraction(
+        _fraction_per_gain(
             cfg,
             tables,
             state,
@@ -335,6 +339,26 @@ def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: di
         * probe["true_coupling"][:, None]
     )
     return shift_nm, fraction
+
+
+def _fraction_per_gain(cfg, tables, state, melanin, thickness_mm, shift_nm) -> np.ndarray:
+    """Detected fraction per LED with each LED's glucose gain, (n, n_led). [-]
+
+    ``state(gain)`` is the tissue with glucose scaled by ``gain``. One optics pass at
+    ``glucose.signal_gain`` where no LED sets its own ``glucose_gain`` (the presets:
+    unchanged bytes), else one pass per distinct gain, each LED's column taken from the
+    pass at its gain.
+    """
+    signal_gain = cfg.glucose.signal_gain
+    if all(e.glucose_gain is None for e in cfg.leds.emitters):
+        return _band_detected_fraction(cfg, tables, state(signal_gain), melanin, thickness_mm,
+                                       shift_nm)
+    gains = np.asarray(cfg.leds.glucose_gains(signal_gain))
+    out = None
+    for gain in sorted(set(gains.tolist())):
+        part = _band_detected_fraction(cfg, tables, state(gain), melanin, thickness_mm, shift_nm)
+        out = part if out is None else np.where(gains[None, :] == gain, part, out)
+    return out
 
 
 def _hidden(glucose: dict, temps: dict) -> dict:
@@ -408,11 +432,13 @@ def simulate_frame(
 
 
 def true_tissue_state(cfg: ScenarioConfig, frame: pd.DataFrame,
-                      glucose_mgdl: np.ndarray) -> tissue.TissueState:
+                      glucose_mgdl: np.ndarray, gain: float | None = None) -> tissue.TissueState:
     """The tissue composition of each row (its ``true_*`` columns), with ``glucose_mgdl``
     in place of the row's glucose, scaled as the simulator scales it
-    (``glucose.signal_gain``), and the water at the row's ``true_skin_temp_c`` where
-    ``noise.water_temperature`` is on, for :func:`nirglucose.optics.tissue.tissue_optics`."""
+    (``gain``, by default ``glucose.signal_gain``), and the water at the row's
+    ``true_skin_temp_c`` where ``noise.water_temperature`` is on, for
+    :func:`nirglucose.optics.tissue.tissue_optics`."""
+    gain = cfg.glucose.signal_gain if gain is None else gain
     dt = None
     if cfg.noise_factor("water_temperature") != 0.0:
         dt = water_temperature_delta_c(cfg, frame["true_skin_temp_c"].to_numpy(float))
@@ -421,7 +447,7 @@ def true_tissue_state(cfg: ScenarioConfig, frame: pd.DataFrame,
         frame["true_saturation"].to_numpy(float),
         frame["true_water_fraction"].to_numpy(float),
         frame["true_subcutis_fat_fraction"].to_numpy(float),
-        cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
+        gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
         dt,
     )
 
@@ -458,10 +484,10 @@ def detected_fraction_given_glucose(
     tables = _tables(cfg) if tables is None else tables
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     shift = frame[[f"true_led_shift_nm_{w}" for w in wl]].to_numpy(float)
-    fraction = _band_detected_fraction(
+    fraction = _fraction_per_gain(
         cfg,
         tables,
-        true_tissue_state(cfg, frame, glucose_mgdl),
+        lambda gain: true_tissue_state(cfg, frame, glucose_mgdl, gain),
         frame["true_melanin_fraction"].to_numpy(float),
         frame["true_skin_thickness_probe_mm"].to_numpy(float),
         shift,
