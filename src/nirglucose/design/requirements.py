@@ -60,7 +60,7 @@ import pandas as pd
 from ..api import simulate
 from ..config import DEFAULT_LEDS, resolve_config
 from ..config.detector import responsivity_curve
-from ..config.parts import detector_part
+from ..config.parts import LED_PARTS, detector_part
 from ..exceptions import ConfigError, check_positive_int
 from .averaging import glucose_lag_rmse_mgdl, readings_in
 from .bound import PILOT_PER_SUBJECT, PILOT_SEED, PILOT_SUBJECTS, DesignTerms, design_terms
@@ -120,7 +120,7 @@ class Candidates:
         LED records at their drive-rule power (``wavelength_nm``, ``fwhm_nm``,
         ``power_mw``, and ``responsivity_a_per_w`` for the study's photodiode).
     sources : list of str
-        ``"study"``, a SWIR part name or ``"generic"`` per record.
+        ``"study"``, a part name (catalogue or SWIR) or ``"generic"`` per record.
     caps_mw : numpy.ndarray
         Power cap of the power lever per record: the exposure limit, and a catalogue
         part's datasheet power. [mW]
@@ -141,12 +141,19 @@ class Candidates:
 
 
 def _pool(wavelengths_nm: Sequence[float]) -> tuple[list[dict[str, float]], list[str], list]:
-    """Study LEDs, SWIR parts, generic grid; a centre already taken keeps its first record."""
+    """Study LEDs, catalogue parts, SWIR parts, generic grid; a centre already taken keeps
+    its first record."""
     recs, srcs, caps = [], [], []
     for e in DEFAULT_LEDS:
         recs.append({"wavelength_nm": e.wavelength_nm, "fwhm_nm": e.fwhm_nm, "power_mw": 1.0})
         srcs.append("study")
         caps.append(MAX_POWER_MW)
+    for part in LED_PARTS.values():
+        if not part.uncertain:  # rows data/parts/SOURCES.md asks to verify are left out
+            recs.append({"wavelength_nm": part.wavelength_nm, "fwhm_nm": part.fwhm_nm,
+                         "power_mw": 1.0})
+            srcs.append(part.part)
+            caps.append(part.power_mw)
     for part, wl, fwhm, p_mw in SWIR_LED_RECORDS:
         recs.append({"wavelength_nm": wl, "fwhm_nm": fwhm, "power_mw": 1.0})
         srcs.append(part)
@@ -182,9 +189,12 @@ def candidate_records(preset: str = REQUIREMENTS_PRESET, detector: str | None = 
     -------
     Candidates
         The usable records (the detector sees them with at least
-        :data:`MIN_RELATIVE_RESPONSIVITY` of its peak), each driven for a mid-scale
-        median code (:func:`~nirglucose.design.search.drive_powers_mw`) but at most
-        10 mW (a generic record or the study's LED) or its datasheet power (a part).
+        :data:`MIN_RELATIVE_RESPONSIVITY` of its peak), sorted by centre, each driven
+        for a mid-scale median code (:func:`~nirglucose.design.search.drive_powers_mw`)
+        but at most 10 mW (a generic record or the study's LED) or its datasheet power
+        (a part: the catalogue's certain NIR LEDs, ``nirglucose parts``, and
+        :data:`~nirglucose.design.levers.SWIR_LED_RECORDS`). A centre taken twice keeps
+        the first record of: the study's, the catalogue's, the SWIR parts', the grid's.
     """
     if detector is None:
         recs = [e.model_dump(exclude={"part"}) for e in DEFAULT_LEDS]

@@ -131,10 +131,13 @@ def _jsonable(x: Any) -> Any:
 
 def _knowledge_text(row: pd.Series) -> str:
     parts = []
+    ppg = "ppg_perfusion_spo2" in str(row["capabilities"])
     for k in KNOWLEDGE:
         frac = row[f"fraction_{k.name}"]
         sd = row[f"sd_{k.name}"]
         name = k.name.replace("_", " ")
+        if k.key.startswith("device.") and not ppg:
+            continue  # blood volume and SpO2 are measured by the PPG front end only
         if frac == 0:
             parts.append(f"{name} exact (no instrument)")
             continue
