@@ -280,6 +280,7 @@ class DesignEvaluator:
         self.mean_inverse_glucose = float(np.mean(1.0 / g.to_numpy(float)))
         self._terms: dict[tuple, DesignTerms] = {}
         self._priors: dict[tuple, np.ndarray] = {}
+        self._lags: dict[float, float] = {}
 
     # -- cached pieces ------------------------------------------------------------------
     def _all_leds(self, design: Design) -> Design:
@@ -313,19 +314,25 @@ class DesignEvaluator:
 
     def lag_rmse_mgdl(self, window_s: float) -> float:
         """The averaging lag of a window. [mg/dL]"""
-        return float(glucose_lag_rmse_mgdl(window_s, self.base)[0]) if window_s > 0 else 0.0
+        if window_s not in self._lags:
+            self._lags[window_s] = (float(glucose_lag_rmse_mgdl(window_s, self.base)[0])
+                                    if window_s > 0 else 0.0)
+        return self._lags[window_s]
 
     # -- evaluation ---------------------------------------------------------------------
     def _averaged(self, design: Design, n_leds: int,
                   window_s: float | None = None) -> tuple[DesignTerms, int, float]:
+        """The design's LEDs' terms (only those), with its prior and averaged noise."""
         window = float(design.value("window_s") if window_s is None else window_s)
         n = readings_in(window, n_leds, self.base.hardware.bandwidth_hz)
         t = self.terms(design)
-        return replace(t, nuisance_cov=self.prior(design), noise_var=t.noise_var / n), n, window
+        idx = list(design.leds)
+        return replace(t, jacobian=t.jacobian[:, idx], noise_var=t.noise_var[:, idx] / n,
+                       saturated=t.saturated[:, idx], nuisance_cov=self.prior(design)), n, window
 
-    def _evaluation(self, state: float, terms: DesignTerms, leds, n: int,
+    def _evaluation(self, state: float, terms: DesignTerms, n: int,
                     window: float) -> Evaluation:
-        row = np.array([leds])
+        row = np.arange(terms.jacobian.shape[1])[None, :]
         lag = self.lag_rmse_mgdl(window)
         total = math.hypot(state, lag)
         return Evaluation(
@@ -347,8 +354,8 @@ class DesignEvaluator:
         """The error of one design (at another averaging window than its level's when
         ``window_s`` is given [s])."""
         terms, n, window = self._averaged(design, len(design.leds), window_s)
-        state = state_bounds(terms, [design.leds])[0]
-        return self._evaluation(state, terms, design.leds, n, window)
+        state = state_bounds(terms, [range(len(design.leds))])[0]
+        return self._evaluation(state, terms, n, window)
 
     def feasible(self, e: Evaluation) -> bool:
         """Whether an evaluation reaches both targets."""
@@ -358,12 +365,12 @@ class DesignEvaluator:
         """Each design with one LED fewer and its total RMSE (one batched evaluation)."""
         if len(design.leds) < 2:
             return []
-        subsets = [tuple(i for i in design.leds if i != j) for j in design.leds]
-        terms, _, window = self._averaged(design, len(design.leds) - 1)
-        states = state_bounds(terms, subsets)
+        k = len(design.leds)
+        terms, _, window = self._averaged(design, k - 1)  # the window holds k - 1 LEDs
+        states = state_bounds(terms, [[i for i in range(k) if i != j] for j in range(k)])
         lag = self.lag_rmse_mgdl(window)
-        return [(replace(design, leds=s), math.hypot(st, lag))
-                for s, st in zip(subsets, states, strict=True)]
+        return [(replace(design, leds=tuple(i for i in design.leds if i != drop)),
+                 math.hypot(st, lag)) for drop, st in zip(design.leds, states, strict=True)]
 
     # -- reference designs --------------------------------------------------------------
     def ceiling(self) -> Design:
