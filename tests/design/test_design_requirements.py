@@ -156,3 +156,13 @@ def test_confirm_design_simulates_the_averaged_design_and_scores_models():
     assert (out["n_readings_emulated"] == 16).all() and (out["n_rows"] == 20).all()
     assert np.all(out["rmse_ci_low"] <= out["rmse_mgdl"])
     assert np.all(out["rmse_mgdl"] <= out["rmse_ci_high"])
+
+
+def test_the_studys_own_device_line_names_the_tissue_knowledge_it_needs():
+    res = requirements_study(detectors=(None,), n_states=32, confirm=False)
+    (line,) = res.answer_lines()
+    assert "the study's photodiode and four LEDs" in line
+    row = res.minimal_designs.iloc[0]
+    assert row["detector"] == "study" and row["n_leds"] <= 4
+    if row["reached"]:  # four LEDs cannot infer eight nuisances: it must be told some
+        assert "exact (no instrument)" in line or "no published instrument" in line

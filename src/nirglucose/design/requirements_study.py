@@ -62,6 +62,8 @@ REQUIREMENTS_FILES = ("minimal_designs.csv", "averaging_curve.csv", "lever_gains
 #: (exact physiology) at published magnitudes, the 12-bit design where the privileged
 #: estimators' noise floor does not bind (the issue's table's row).
 _CHECK = "check: paper's five capabilities, exact physiology"
+#: Name of the study's own photodiode with its four LEDs (``detectors`` entry None).
+STUDY = "study"
 
 
 @dataclass
@@ -195,16 +197,23 @@ def _answer(row: pd.Series, meta: dict[str, Any], conf: pd.DataFrame) -> str:
             f"top){simulated}")
 
 
-def _design_row(ev: DesignEvaluator, d: Design, detector: str, reached: bool,
+def _label(detector: str | None) -> tuple[str, str]:
+    """(name, label) of a detector; None is the study's photodiode with its four LEDs."""
+    if detector is None:
+        return STUDY, "the study's photodiode and four LEDs (S1336 responsivities)"
+    return detector, f"{detector_part(detector).material} ({detector})"
+
+
+def _design_row(ev: DesignEvaluator, d: Design, reached: bool,
                 gains: pd.DataFrame) -> dict[str, Any]:
     """One row of ``minimal_designs``."""
     e = ev.evaluate(d)
-    part = detector_part(detector)
+    name, label = _label(ev.candidates.detector)
     wl = ev.candidates.wavelengths_nm
     best = gains.loc[gains["worth_at_ceiling_mgdl"].idxmax()]
     row: dict[str, Any] = {
-        "detector": detector, "detector_label": f"{part.material} ({detector})",
-        "design": f"{detector}: {'least' if reached else 'ceiling'}",
+        "detector": name, "detector_label": label,
+        "design": f"{name}: {'least' if reached else 'ceiling'}",
         "reached": reached, "n_leds": len(d.leds),
         "leds_nm": ",".join(f"{wl[i]:g}" for i in d.leds),
         "led_sources": ",".join(ev.candidates.sources[i] for i in d.leds),
@@ -231,13 +240,14 @@ def _get(cfg, key: str) -> float:
     return float(node)
 
 
-def _detector_part(ev: DesignEvaluator, detector: str, relax_order) -> dict[str, Any]:
+def _detector_part(ev: DesignEvaluator, relax_order) -> dict[str, Any]:
     """Search one detector: its row, gains, averaging rows, trace and the named design."""
+    detector, _ = _label(ev.candidates.detector)
     d, trace = least_design(ev, relax_order)
     reached = d is not None
     named = d if reached else ev.ceiling()
     gains = lever_gains(ev).assign(detector=detector)
-    row = _design_row(ev, named, detector, reached, gains)
+    row = _design_row(ev, named, reached, gains)
     curve = averaging_rows(ev, named, row["design"])
     if reached:
         curve += averaging_rows(ev, ev.ceiling(), f"{detector}: ceiling")
@@ -285,7 +295,7 @@ def _confirmations(preset: str, named: list[tuple[str, dict, dict]], opts: dict
 
 def requirements_study(
     preset: str = REQUIREMENTS_PRESET,
-    detectors: Sequence[str] = SEARCH_DETECTORS,
+    detectors: Sequence[str | None] = (None, *SEARCH_DETECTORS),
     *,
     target_rmse_mgdl: float = TARGET_RMSE_MGDL,
     target_mard_pct: float = TARGET_MARD_PCT,
@@ -306,8 +316,10 @@ def requirements_study(
     preset : str
         The regime (default ``physical``: glucose's optical effect at its published
         magnitude).
-    detectors : sequence of str
-        Catalogue photodiodes, one answer line each (default a Si and an InGaAs part).
+    detectors : sequence of str or None
+        One answer line each: None, the study's own photodiode with its four LEDs (its
+        LED set can only shrink), and catalogue photodiodes with every candidate LED
+        they see (default: those three, a Si and an InGaAs part).
     target_rmse_mgdl, target_mard_pct : float
         What the least design must reach. [mg/dL], [%]
     wavelengths_nm : sequence of float
@@ -337,7 +349,8 @@ def requirements_study(
     if not detectors:
         raise ConfigError("give at least one detector (nirglucose parts lists them)")
     for det in detectors:
-        detector_part(det)
+        if det is not None:
+            detector_part(det)
     check_positive_int("confirm_subjects", confirm_subjects)
     base = resolve_config(preset)
     with warnings.catch_warnings():
@@ -365,8 +378,8 @@ def _run(preset, detectors, base, ev_opts, wavelengths_nm, relax_order, confirm,
     parts, candidates = [], {}
     for det in detectors:
         ev = DesignEvaluator(preset, candidate_records(preset, det, wavelengths_nm), **ev_opts)
-        parts.append((ev, _detector_part(ev, det, relax_order)))
-        candidates[det] = [{**r, "source": s} for r, s in
+        parts.append((ev, _detector_part(ev, relax_order)))
+        candidates[_label(det)[0]] = [{**r, "source": s} for r, s in
                            zip(ev.candidates.records, ev.candidates.sources, strict=True)]
     timings["search_s"] = time.perf_counter() - t
     rows = [p["row"] for _, p in parts]
@@ -398,7 +411,7 @@ def _meta(preset, base, detectors, target_rmse, target_mard, relax_order, n_stat
     return {
         "package_version": __version__, "preset": preset,
         "glucose_signal_gain": float(base.glucose.signal_gain),
-        "detectors": list(detectors), "target_rmse_mgdl": float(target_rmse),
+        "detectors": [_label(d)[0] for d in detectors], "target_rmse_mgdl": float(target_rmse),
         "target_mard_pct": float(target_mard), "relax_order": list(relax_order),
         "n_states": int(n_states), "confirm": bool(confirm),
         "confirm_subjects": int(confirm_subjects), "confirm_per_subject": int(confirm_per_subject),
