@@ -7,6 +7,8 @@ computes a bound.
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
@@ -63,6 +65,7 @@ def plot_averaging_curve(
         ax.axhline(target_rmse_mgdl, color=GREY, linestyle="--", linewidth=0.8,
                    label=f"target {target_rmse_mgdl:g} mg/dL")
     ax.set_xscale("symlog", linthresh=_LINEAR_BELOW_S)
+    ax.set_xlim(left=0.0)
     ax.set_yscale("log")
     ax.set_xlabel("averaging window [s] (0: one reading)")
     ax.set_ylabel("RMSE [mg/dL] (solid: with lag; dotted: bound)")
@@ -93,13 +96,25 @@ _TABLE_ROWS = (
 )
 
 
-def _cell(value) -> str:
+#: Display names of the capabilities in the table.
+_CAPABILITY_LABELS = {"monitor_photodiode": "monitor photodiode",
+                      "constant_force_probe": "constant-force probe",
+                      "ppg_perfusion_spo2": "PPG perfusion/SpO2",
+                      "humidity_compensation": "humidity compensation"}
+#: Characters per line of a table cell. [-]
+_WRAP = 26
+
+
+def _cell(column: str, value) -> str:
     if isinstance(value, bool | np.bool_):
         return "yes" if value else "no"
     if isinstance(value, float | np.floating):
         return f"{value:.3g}"
-    text = str(value).replace("_", " ")
-    return text if len(text) <= 28 else text.replace(",", ", ")
+    text = str(value)
+    if column == "capabilities":
+        names = [_CAPABILITY_LABELS.get(c, c) for c in text.split(",") if c and c != "nan"]
+        return "\n".join(names) if names else "none"
+    return textwrap.fill(text.replace(",", ", "), _WRAP)
 
 
 @styled
@@ -127,14 +142,17 @@ def plot_minimal_designs(
         The table is ``ax.tables[0]``; the axes' frame is off.
     """
     rows = [(col, label) for col, label in _TABLE_ROWS if col in designs.columns]
-    ax = new_axes(ax, figsize=(2.2 + 2.6 * max(len(designs), 1), 0.32 * len(rows) + 0.9))
-    cells = [[_cell(v) for v in designs[col]] for col, _ in rows]
-    table = ax.table(cellText=cells, rowLabels=[label for _, label in rows],
-                     colLabels=[str(v) for v in designs["detector_label"]], loc="center",
-                     cellLoc="center")
+    cells = [[_cell(col, v) for v in designs[col]] for col, _ in rows]
+    heads = [textwrap.fill(str(v), _WRAP) for v in designs["detector_label"]]
+    lines = [max(t.count("\n") + 1 for t in row) for row in [heads, *cells]]
+    ax = new_axes(ax, figsize=(2.2 + 2.0 * max(len(designs), 1), 0.2 * sum(lines) + 0.8))
+    table = ax.table(cellText=cells, rowLabels=[label for _, label in rows], colLabels=heads,
+                     loc="center", cellLoc="center")
     table.auto_set_font_size(False)
     table.set_fontsize(7)
-    table.scale(1.0, 1.25)
+    unit = 1.0 / (sum(lines) + 1)
+    for (r, _c), cell in table.get_celld().items():
+        cell.set_height(unit * lines[r])
     ax.axis("off")
     if title:
         ax.set_title(title)
