@@ -71,7 +71,8 @@ def test_power_lever_respects_each_records_cap(cands):
         assert led["power_mw"] <= cap + 1e-12
 
 
-@pytest.mark.parametrize("kwargs", [dict(leds=()), dict(leds=(0,), levels=(0,) * 3),
+@pytest.mark.parametrize("kwargs", [dict(leds=()), dict(leds=(1, 1)), dict(leds=(-1,)),
+                                    dict(leds=(0,), levels=(0,) * 3),
                                     dict(leds=(0,), levels=(99,) + (0,) * (len(LEVERS) - 1))])
 def test_bad_designs_are_refused(kwargs):
     with pytest.raises(ConfigError):

@@ -246,9 +246,10 @@ class Design:
         for lv, i in zip(LEVERS, self.levels, strict=True):
             if not 0 <= i < len(lv.values):
                 raise ConfigError(f"lever {lv.name}: level {i} outside 0-{len(lv.values) - 1}")
-        if not self.leds:
-            raise ConfigError("a design needs at least one LED")
-        object.__setattr__(self, "leds", tuple(sorted(int(i) for i in self.leds)))
+        leds = tuple(sorted(int(i) for i in self.leds))
+        if not leds or leds[0] < 0 or len(set(leds)) != len(leds):
+            raise ConfigError(f"a design needs one or more distinct LED indices, got {leds}")
+        object.__setattr__(self, "leds", leds)
 
     def level(self, name: str) -> int:
         """The level index of lever ``name``."""
