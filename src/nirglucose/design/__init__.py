@@ -1,6 +1,9 @@
-"""Designing a device: the bound each design allows (:mod:`.bound`), the search
-over LED sets ranked by it (:mod:`.search`), and a fleet of units drawn from the parts'
-tolerances (:mod:`~nirglucose.design.fleet`).
+"""Designing a device: the bound each design allows (:mod:`.bound`, and the per-state
+form :mod:`.state_bound`), the search over LED sets ranked by it (:mod:`.search`), a
+fleet of units drawn from the parts' tolerances (:mod:`~nirglucose.design.fleet`), and
+what it takes to read glucose at published magnitudes (:mod:`.requirements`,
+:mod:`.requirements_study`; its levers :mod:`.levers`, exposure limits
+:mod:`.exposure`, averaging :mod:`.averaging`).
 
 The parts a design is made of (photodiodes, NIR LEDs) are in the config's catalogue,
 :mod:`nirglucose.config.parts`.
@@ -16,7 +19,9 @@ from .bound import (
     design_terms,
     noise_covariance,
 )
+from .exposure import max_led_power_mw
 from .fleet import FleetTolerances, Unit, draw_units, simulate_unit
+from .requirements_study import RequirementsResult, requirements_study
 from .search import (
     CANDIDATE_WAVELENGTHS_NM,
     SEARCH_DETECTORS,
@@ -25,6 +30,7 @@ from .search import (
     rank_designs,
     subset_bounds,
 )
+from .state_bound import state_bound, state_bounds
 
 __all__ = [
     "CANDIDATE_WAVELENGTHS_NM",
@@ -43,4 +49,9 @@ __all__ = [
     "Unit",
     "draw_units",
     "simulate_unit",
+    "max_led_power_mw",
+    "RequirementsResult",
+    "requirements_study",
+    "state_bound",
+    "state_bounds",
 ]
