@@ -1,4 +1,4 @@
-"""Reading real files (nirglucose.io_files), the ADC-resolution policy and the
+"""Reading real files (nirglucose.dataset.files), the ADC-resolution policy and the
 small-data policy, at the Python level (issue 28)."""
 
 from __future__ import annotations
@@ -10,13 +10,13 @@ import pandas as pd
 import pytest
 
 import nirglucose as ng
-from nirglucose.adc_resolution import resolve_adc_bits
 from nirglucose.constants import MGDL_PER_MMOLL_GLUCOSE
+from nirglucose.dataset.adc import resolve_adc_bits
+from nirglucose.dataset.files import canonical_columns, sniff_csv
+from nirglucose.dataset.small_data import MIN_SIGNIFICANCE_SUBJECTS, significance_withheld
 from nirglucose.exceptions import DataError
-from nirglucose.io_files import canonical_columns, sniff_csv
 from nirglucose.metrics import clarke_zones, rmse
 from nirglucose.metrics.iso15197 import iso15197_2013_passes
-from nirglucose.small_data import MIN_SIGNIFICANCE_SUBJECTS, significance_withheld
 
 
 @pytest.mark.parametrize(

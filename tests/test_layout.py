@@ -370,7 +370,7 @@ def test_private_names_imported_across_modules_do_not_grow():
 
 def test_the_graph_resolves_relative_imports_and_packages():
     graph = import_graph()
-    assert "nirglucose.dataset" in graph["nirglucose.schema"]
+    assert "nirglucose.dataset.container" in graph["nirglucose.dataset.schema"]
     # importing models.registry runs the models package too (an edge to each) ...
     assert {"nirglucose.models", "nirglucose.models.registry"} <= graph[
         "nirglucose.evaluation.benchmark"
@@ -394,7 +394,7 @@ def _closure(graph: dict[str, set[str]], start: str) -> set[str]:
 
 def test_the_data_container_does_not_need_the_simulator():
     graph = import_graph()
-    for module in ("nirglucose.dataset", "nirglucose.schema", "nirglucose.features"):
+    for module in ("nirglucose.dataset", "nirglucose.dataset.schema", "nirglucose.features"):
         reached = _closure(graph, module)
         assert not any(m.startswith("nirglucose.simulation") for m in reached), (module, reached)
     assert "nirglucose.simulation.partitioned" not in _closure(graph, "nirglucose.dataset")

@@ -1,14 +1,27 @@
-"""Old import paths of renamed modules, kept working for one release with a warning.
+"""Old import paths of moved modules, kept working for one release with a warning.
 
-The simulator package was ``nirglucose.simulate`` in 0.1, the same name as the function
-:func:`nirglucose.simulate`; it is :mod:`nirglucose.simulation` now, so that no module
-and function share a name. ``import nirglucose.simulate.wear`` (and every other old
-path) still works until 0.3 and warns (``DeprecationWarning``) once per old path.
+Two moves are served here, by one mechanism:
+
+* 0.1 -> 0.2: the simulator package was ``nirglucose.simulate``, the same name as the
+  function :func:`nirglucose.simulate`; it is :mod:`nirglucose.simulation` now, so that
+  no module and function share a name.
+* 0.2 (issue 42, "one room per verb"): the data boundary moved into
+  :mod:`nirglucose.dataset` (``nirglucose.schema`` is ``nirglucose.dataset.schema``, ...),
+  intervals and calibration into :mod:`nirglucose.calibration`, the evaluation into
+  ``evaluation.engine``/``benchmark``/``sweep``, its statistics into
+  :mod:`nirglucose.metrics.resampling`, and ``nirglucose.config_keys`` (a shim since
+  0.1) is :mod:`nirglucose.config.keys`.
+
+Every old path in :data:`RENAMED_MODULES` still imports until :data:`REMOVED_IN` and
+warns (``DeprecationWarning``) once per old path; ``tests/test_renamed.py`` fails once
+the version reaches :data:`REMOVED_IN` while any remain.
 
 How: a finder on :data:`sys.meta_path` answers for the old names only
-(:class:`RenamedModuleFinder`, the mechanism of PEP 451 [1]_). An old submodule path is
-the new module object itself (``nirglucose.simulate.wear is nirglucose.simulation.wear``).
-The old package path is a module whose calls go to the function: Python's import
+(:class:`RenamedModuleFinder`, the mechanism of PEP 451 [1]_). An old module path is the
+new module object itself (``nirglucose.schema is nirglucose.dataset.schema``), unless
+names left that module in the move (:data:`MOVED_NAMES`): then it is an alias module
+with the new module's names that resolves the departed ones where they live now. The
+old simulator package path is a module whose calls go to the function: Python's import
 system binds an imported submodule as an attribute of its parent package, which would
 replace ``nirglucose.simulate`` the function by the module; a callable module keeps
 ``ng.simulate(...)`` working after any old import.
@@ -29,10 +42,29 @@ import types
 import warnings
 from typing import Any
 
-__all__ = ["RENAMED_MODULES", "RenamedModuleFinder", "install"]
+__all__ = ["RENAMED_MODULES", "MOVED_NAMES", "REMOVED_IN", "RenamedModuleFinder", "install"]
+
+_DATASET = {f"nirglucose.{old}": f"nirglucose.dataset.{new}" for old, new in {
+    "schema": "schema", "io_files": "files", "dataset_meta": "meta", "columns": "columns",
+    "adc_resolution": "adc", "small_data": "small_data"}.items()}
 
 #: Old dotted module name -> new one; every submodule follows its package.
-RENAMED_MODULES = {"nirglucose.simulate": "nirglucose.simulation"}
+RENAMED_MODULES: dict[str, str] = {
+    "nirglucose.simulate": "nirglucose.simulation",
+    "nirglucose.config_keys": "nirglucose.config.keys",
+    **_DATASET,
+}
+#: Names that left their module in a move: old dotted name -> new dotted name (the old
+#: module's path gives them, with a warning, until :data:`REMOVED_IN`).
+MOVED_NAMES: dict[str, str] = {
+    "nirglucose.schema.MeasurementTransformer":
+        "nirglucose.features.transform.MeasurementTransformer",
+    "nirglucose.schema.fit_schema": "nirglucose.fitted.fit_schema",
+    "nirglucose.schema.as_raw_input": "nirglucose.fitted.as_raw_input",
+}
+#: Old package paths that are also a function of their parent package (a call of the
+#: old module goes to the function).
+_CALLABLE = frozenset({"nirglucose.simulate"})
 #: The release that removes the old names.
 REMOVED_IN = "0.3"
 
@@ -44,6 +76,11 @@ def _new_name(fullname: str) -> str | None:
     return None
 
 
+def _warn(old: str, new: str, stacklevel: int) -> None:
+    warnings.warn(f"{old} was renamed {new}; the old name is removed in nirglucose "
+                  f"{REMOVED_IN}: import {new}", DeprecationWarning, stacklevel=stacklevel)
+
+
 class _CallableModule(types.ModuleType):
     """The old package path: the new package's names, and calls go to the function of the
     same name in the parent package (``nirglucose.simulate(...)``)."""
@@ -52,28 +89,40 @@ class _CallableModule(types.ModuleType):
         return self.__dict__["_function"](*args, **kwargs)
 
 
+class _AliasModule(types.ModuleType):
+    """An old module path that lost names in the move: the new module's names, and each
+    departed name (:data:`MOVED_NAMES`) from its new home, with a warning."""
+
+    def __getattr__(self, name: str) -> Any:
+        new = MOVED_NAMES.get(f"{self.__name__}.{name}")
+        if new is None:
+            raise AttributeError(f"module {self.__name__!r} has no attribute {name!r}")
+        _warn(f"{self.__name__}.{name}", new, stacklevel=3)
+        module, _, attr = new.rpartition(".")
+        return getattr(importlib.import_module(module), attr)
+
+
 class _Loader(importlib.abc.Loader):
     def __init__(self, new: str):
         self.new = new
 
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
-        warnings.warn(
-            f"{spec.name} was renamed {self.new}; the old name is removed in "
-            f"nirglucose {REMOVED_IN}: import {self.new}",
-            DeprecationWarning,
-            stacklevel=2,
-        )
+        _warn(spec.name, self.new, stacklevel=3)
         module = importlib.import_module(self.new)
-        if spec.name not in RENAMED_MODULES:
-            # a submodule: the very same module object; the import system overwrites its
-            # __spec__ with the old name's, which exec_module puts back
+        if spec.name in _CALLABLE:
+            alias = _CallableModule(spec.name, module.__doc__)
+            parent, _, child = spec.name.rpartition(".")
+            alias.__dict__["_function"] = getattr(sys.modules[parent], child)
+        elif any(name.rpartition(".")[0] == spec.name for name in MOVED_NAMES):
+            alias = _AliasModule(spec.name, module.__doc__)
+        else:
+            # the very same module object; the import system overwrites its __spec__
+            # with the old name's, which exec_module puts back
             self.spec = module.__spec__
             return module
-        alias = _CallableModule(spec.name, module.__doc__)
         alias.__dict__.update({k: v for k, v in vars(module).items() if not k.startswith("__")})
-        parent, _, child = spec.name.rpartition(".")
-        alias.__dict__["_function"] = getattr(sys.modules[parent], child)
-        alias.__path__ = []  # a package: its submodules are found by this finder
+        if hasattr(module, "__path__"):
+            alias.__path__ = []  # a package: its submodules are found by this finder
         return alias
 
     def exec_module(self, module: types.ModuleType) -> None:
@@ -90,8 +139,7 @@ class RenamedModuleFinder(importlib.abc.MetaPathFinder):
         new = _new_name(fullname)
         if new is None:
             return None
-        is_package = fullname in RENAMED_MODULES or hasattr(importlib.import_module(new),
-                                                              "__path__")
+        is_package = hasattr(importlib.import_module(new), "__path__")
         return importlib.machinery.ModuleSpec(fullname, _Loader(new), is_package=is_package)
 
 

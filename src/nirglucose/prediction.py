@@ -18,21 +18,21 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .columns import ID_COLUMNS
 from .dataset import Dataset, load_dataset
-from .evaluation.calibration import apply_offset
-from .evaluation.conformal import calibration_of, interval
-from .exceptions import ConfigError, DataError
-from .io_files import (
+from .dataset.columns import ID_COLUMNS
+from .dataset.files import (
     check_codes,
     check_glucose_unit,
     file_rows,
     glucose_to_unit,
     validate_frame,
 )
+from .dataset.schema import meter_flags
+from .evaluation.calibration import apply_offset
+from .evaluation.conformal import calibration_of, interval
+from .exceptions import ConfigError, DataError
 from .models._validate import check_predictions
 from .models.registry import model_from
-from .schema import meter_flags
 
 __all__ = [
     "INTERVAL_LEVEL",

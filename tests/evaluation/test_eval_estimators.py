@@ -216,7 +216,7 @@ def test_sweep_takes_objects(tmp_path):
 def test_measured_frame_reads_channels_as_the_schema_does(data):
     """A reference learner sees the schema's channels: every adc_<nm> (850.5 included),
     ascending whatever the file's order; a partial set of references is refused."""
-    from nirglucose.schema import DeviceSchema
+    from nirglucose.dataset.schema import DeviceSchema
 
     frame = data.frame.rename(columns={"adc_940": "adc_940.5", "adc_ref_940": "adc_ref_940.5"})
     shuffled = frame[list(reversed(frame.columns))]

@@ -7,9 +7,9 @@ import pytest
 
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError, DataError
+from nirglucose.features import MeasurementTransformer
 from nirglucose.models import load_model, make_model
 from nirglucose.models.reference import GBRReference, GPReference, MeanReference
-from nirglucose.schema import MeasurementTransformer
 
 
 @pytest.fixture(scope="module")

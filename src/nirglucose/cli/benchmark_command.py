@@ -124,8 +124,8 @@ def benchmark(
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
                           out, glucose_unit=None) -> list[str] | None:
     """The checks of ``benchmark`` after the counts, in order; the --models names."""
+    from ..dataset.files import check_glucose_unit
     from ..evaluation.splits import check_protocol
-    from ..io_files import check_glucose_unit
     from ..models.registry import get_model_class
 
     check_glucose_unit(glucose_unit)
@@ -242,7 +242,7 @@ def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
 
     table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
                   box=box.SIMPLE_HEAD)
-    from ..io_files import glucose_to_unit
+    from ..dataset.files import glucose_to_unit
 
     u = unit or "mg/dL"
     d = 2 if u == "mmol/L" else 1

@@ -126,7 +126,7 @@ def _check_simulate_out(out: Path, subjects: int, per_subject: int) -> None:
 def keys() -> None:
     """List every config key accepted by --set: paper preset default, unit, range, meaning."""
     from ..config import resolve_config, valid_keys
-    from ..config_keys import key_info, key_range
+    from ..config.keys import key_info, key_range
 
     data = resolve_config("paper").model_dump(mode="json")
     for key in valid_keys():

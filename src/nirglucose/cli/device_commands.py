@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ..small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
+from ..dataset.small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
 from ._app import app
 from ._common import (
     GlucoseUnitOption,
@@ -101,7 +101,7 @@ def _load_device_data(model: str, data: Path, adc_bits: int | None, unit: str | 
     """``(measurements, schema)``: the file read and validated, its ADC resolution
     resolved by the one policy; a device file for any model but the oracle (schema
     None), checked against the small-data policy."""
-    from ..small_data import fit_size_warning
+    from ..dataset.small_data import fit_size_warning
 
     if model == "oracle":
         from ..dataset import load_dataset
@@ -179,7 +179,7 @@ def predict_glucose(
     mmol/L`` the glucose columns are ``*_mmoll`` in mmol/L.
     """
     from ..dataset import atomic_write
-    from ..io_files import check_glucose_unit
+    from ..dataset.files import check_glucose_unit
     from ..prediction import predict
 
     if out.suffix != ".csv":

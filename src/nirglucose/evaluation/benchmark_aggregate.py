@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..dataset.small_data import significance_withheld
 from ..metrics import summary
-from ..small_data import significance_withheld
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,

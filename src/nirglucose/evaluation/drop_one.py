@@ -41,10 +41,10 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-from ..columns import led_wavelengths_in
 from ..dataset import Dataset
+from ..dataset.columns import led_wavelengths_in
+from ..dataset.small_data import MIN_SIGNIFICANCE_SUBJECTS
 from ..exceptions import ConfigError, DataError
-from ..small_data import MIN_SIGNIFICANCE_SUBJECTS
 from .benchmark_aggregate import scored
 from .benchmark_result import DROP_ONE_COLUMNS, ablation_base
 from .finding import Finding, Value, label
@@ -282,7 +282,7 @@ def led_verdicts(table: pd.DataFrame | None) -> list[dict[str, Any]]:
     """Per model of ``drop_one.csv``: the LED whose removal costs most, where it is shown.
 
     One dict per model: ``model``, ``n_subjects`` (held-out subjects), ``withheld``
-    (fewer than :data:`~nirglucose.small_data.MIN_SIGNIFICANCE_SUBJECTS`: nothing is
+    (fewer than :data:`~nirglucose.dataset.small_data.MIN_SIGNIFICANCE_SUBJECTS`: nothing is
     claimed), ``row`` (the LED with the largest Δ RMSE among those whose 95 % CI lies
     above 0; None when no CI does, or when withheld). An LED whose CI includes 0 is
     never named as the one that matters.

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from ..config.presets import DEVICE_CAPABILITIES
-from ..small_data import significance_withheld
+from ..dataset.small_data import significance_withheld
 from .benchmark_result import LAMBDA_ROW, ORACLE, ablation_base
 from .drop_one import drop_one_findings
 from .finding import Finding, Value, label

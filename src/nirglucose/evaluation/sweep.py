@@ -65,8 +65,8 @@ from .._version import __version__
 from ..api import simulate
 from ..config import resolve_config
 from ..dataset import Dataset
+from ..dataset.files import check_result_table
 from ..exceptions import ConfigError, DataError, check_positive_int
-from ..io_files import check_result_table
 from ..metrics import summary
 from ..models.registry import get_model_class
 from . import tasks

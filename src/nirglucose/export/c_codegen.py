@@ -38,6 +38,7 @@ import numpy as np
 
 from .._version import __version__
 from ..dataset import atomic_write
+from ..dataset.schema import DeviceSchema
 from ..exceptions import ConfigError, DataError
 from ..features import _ENV as ENV_SYMBOLS
 from ..features import (
@@ -48,7 +49,6 @@ from ..features import (
     feature_table,
 )
 from ..models.registry import model_from
-from ..schema import DeviceSchema
 from .c_guard import estimate_body, estimate_decl
 
 __all__ = [

@@ -79,9 +79,9 @@ from sklearn.utils import check_random_state
 from torch import nn
 
 from ..dataset import Dataset
+from ..dataset.schema import DeviceSchema
 from ..exceptions import DataError
 from ..fitted import require_fitted
-from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
 from ._constructor import (
     DEFAULT_EPOCHS,

@@ -46,9 +46,9 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from ..config import ScenarioConfig
 from ..dataset import Dataset
+from ..dataset.schema import DeviceSchema, check_fit_size, check_reference_glucose
 from ..exceptions import DataError
 from ..fitted import require_fitted
-from ..schema import DeviceSchema, check_fit_size, check_reference_glucose
 from ..simulation.simulator import _tables, detected_fraction_given_glucose
 from ._json_io import JsonModelMixin
 from ._params import Integral, Interval, Real, ValidatedParamsMixin

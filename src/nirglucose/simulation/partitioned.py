@@ -40,8 +40,8 @@ import pyarrow.parquet as pq
 from .._version import __version__
 from ..config import ScenarioConfig
 from ..dataset import (
-    _META_KEY,
     MANIFEST,
+    META_KEY,
     PART_PATTERN,
     PartitionedDataset,
     atomic_write,
@@ -72,7 +72,7 @@ def _write_block(cfg, seed, block, start, n_sub, per_subject, tables, out: Path,
     cols, _ = simulate_block(cfg, seed, block, start, n_sub, per_subject, tables)
     table = pa.Table.from_pandas(pd.DataFrame(cols), preserve_index=False)
     del cols
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), _META_KEY: meta})
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), META_KEY: meta})
     atomic_write(out / _part_name(block), lambda tmp: pq.write_table(table, tmp))
     return block, table.num_rows
 

@@ -44,7 +44,7 @@ import pandas as pd
 from .._version import __version__
 from ..config import ScenarioConfig
 from ..constants import MINUTES_PER_DAY
-from ..dataset import _META_KEY, MANIFEST, atomic_write
+from ..dataset import MANIFEST, META_KEY, atomic_write
 from ..exceptions import ConfigError
 from . import contact, diurnal, environment, hardware, measurement, physiology, therapy
 from . import meal_scenario as meals
@@ -410,7 +410,7 @@ def _write_chunk(cfg, seed, chunk, start, k, n_subjects, wear_days, every_min, o
                                 tables)
     table = pa.Table.from_pandas(frame, preserve_index=False)
     del frame
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), _META_KEY: meta})
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), META_KEY: meta})
     atomic_write(out / f"part-{chunk:06d}.parquet", lambda tmp: pq.write_table(table, tmp))
     return chunk, table.num_rows
 

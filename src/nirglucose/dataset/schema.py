@@ -1,7 +1,9 @@
 """The one schema boundary: any device's measured columns -> named absorbances and physiology.
 
-Every estimator reads its input through :class:`DeviceSchema` (and the scikit-learn
-transformer :class:`MeasurementTransformer` around it); nothing after it knows how many
+Every estimator reads its input through :class:`DeviceSchema` (the estimators' side,
+which records the fitted input on an estimator, is :mod:`nirglucose.fitted`; the
+scikit-learn transformer around it is
+:class:`nirglucose.features.MeasurementTransformer`); nothing after it knows how many
 LEDs a device has, whether it records a reference reading, its ADC resolution, or which
 physiological columns it measures.
 
@@ -37,31 +39,28 @@ from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
-from sklearn.base import BaseEstimator, TransformerMixin
 
-from .adc_resolution import resolve_adc_bits
-from .columns import has_reference_columns, led_wavelengths_in
-from .constants import DEFAULT_LED_WAVELENGTHS_NM
-from .dataset import (
+from ..constants import DEFAULT_LED_WAVELENGTHS_NM, PHYSIOLOGICAL_RANGES
+from ..exceptions import DataError, is_finite_number
+from .adc import resolve_adc_bits
+from .columns import (
     DEFAULT_ADC_BITS,
     GLUCOSE_REPORTING_RANGE_MGDL,
     KNOWN_PHYSIOLOGY,
-    MIN_FIT_ROWS,
-    MIN_FIT_SUBJECTS,
-    PHYSIOLOGICAL_RANGES,
-    Dataset,
+    has_reference_columns,
+    led_wavelengths_in,
 )
-from .exceptions import DataError, is_finite_number
-from .fitted import require_fitted
-from .io_files import check_frame
+from .container import Dataset
+from .files import check_frame
+from .small_data import MIN_FIT_ROWS, MIN_FIT_SUBJECTS
 
 __all__ = [
     "DeviceSchema",
     "Measurements",
-    "MeasurementTransformer",
     "check_fit_size",
     "check_reference_glucose",
     "meter_flags",
+    "schema_for_fit",
 ]
 
 
@@ -137,7 +136,7 @@ class DeviceSchema:
         adc_bits : int, optional
             Declared ADC resolution; else the Dataset's ``metadata["adc_bits"]`` (what
             ``nirglucose fit --adc-bits`` sets), the scenario's ``hardware.adc_bits``,
-            else the policy of :mod:`~nirglucose.adc_resolution`. [bit]
+            else the policy of :mod:`~nirglucose.dataset.adc`. [bit]
 
         Raises
         ------
@@ -499,47 +498,6 @@ def meter_flags(glucose_mgdl: Any) -> np.ndarray:
     return out
 
 
-class MeasurementTransformer(TransformerMixin, BaseEstimator):
-    """scikit-learn transformer: a device's columns -> [absorbances | physiology].
-
-    ``fit`` records the device (:class:`DeviceSchema`, from the column names, or plain
-    for an array); ``transform`` returns the (n, k + m) float64 array of the k
-    absorbances and the m physiological columns.
-
-    Parameters
-    ----------
-    adc_bits : int, optional
-        Declared ADC resolution (else from the data's scenario/metadata, or 12). [bit]
-
-    Examples
-    --------
-    >>> import nirglucose as ng
-    >>> ds = ng.simulate("wearable", n_subjects=2, per_subject=2, seed=0)
-    >>> t = MeasurementTransformer().fit(ds)
-    >>> t.transform(ds).shape, t.get_feature_names_out()[0]
-    ((4, 16), 'A_850')
-    """
-
-    def __init__(self, adc_bits: int | None = None):
-        self.adc_bits = adc_bits
-
-    def fit(self, X, y=None):
-        """Record the device's schema; returns self."""
-        self.schema_ = fit_schema(self, X, self.adc_bits)
-        if isinstance(X, pd.DataFrame | Dataset):
-            self.schema_.raw(X)  # validate the device's columns now
-        return self
-
-    def transform(self, X) -> np.ndarray:
-        """(n, k + m) absorbances then physiology."""
-        require_fitted(self, "schema_")
-        return self.schema_.stacked(self.schema_.raw(as_raw_input(self, X, self.schema_)))
-
-    def get_feature_names_out(self, input_features=None) -> np.ndarray:
-        """``A_<nm>`` for each LED, then the physiological column names."""
-        return np.asarray(self.schema_.stacked_names, dtype=object)
-
-
 def _is_device_frame(frame: pd.DataFrame) -> bool:
     """True when a frame names any schema column (a device's file, perhaps malformed)."""
     known = set(KNOWN_PHYSIOLOGY) | {"glucose_mgdl", "subject_id", "measurement_id"}
@@ -549,53 +507,30 @@ def _is_device_frame(frame: pd.DataFrame) -> bool:
     )
 
 
-def fit_schema(est: Any, X: Any, adc_bits: int | None = None) -> DeviceSchema:
-    """The schema of fitting input ``X`` (and record ``n_features_in_`` on ``est``).
+def schema_for_fit(X: Any, adc_bits: int | None = None) -> DeviceSchema | None:
+    """The device schema of fitting input ``X``, with its training range; None for
+    generic input.
 
-    Datasets and frames that name any schema column give a device schema from their
-    column names; arrays, and frames naming none (generic tables), a plain one
-    (through :func:`sklearn.utils.validation.validate_data`, for scikit-learn's
-    standard messages and feature-name bookkeeping).
+    Datasets and frames that name any schema column are a device's measurements: their
+    schema comes from the column names (:meth:`DeviceSchema.infer`) and records the
+    training range of the raw columns. Arrays, and frames naming none (generic tables),
+    are generic input: None, and the estimator takes a plain schema after scikit-learn's
+    own input checks (:func:`nirglucose.fitted.fit_schema`). Nothing is written onto any
+    estimator here.
+
+    Parameters
+    ----------
+    X : Dataset, pandas.DataFrame or array_like
+        The fitting input.
+    adc_bits : int, optional
+        Declared ADC resolution. [bit]
+
+    Returns
+    -------
+    DeviceSchema or None
     """
     frame = X.frame if isinstance(X, Dataset) else X
     if isinstance(frame, pd.DataFrame) and (isinstance(X, Dataset) or _is_device_frame(frame)):
         schema = DeviceSchema.infer(X, adc_bits)
-        schema = schema.with_training_range(schema.raw(X))
-        est.n_features_in_ = len(schema.raw_columns)
-        est.feature_names_in_ = np.asarray(schema.raw_columns, dtype=object)
-        return schema
-    from sklearn.utils.validation import validate_data
-
-    est.__dict__.pop("feature_names_in_", None)
-    Xa = validate_data(est, frame, reset=True, dtype=np.float64)
-    return DeviceSchema.plain(Xa.shape[1])
-
-
-def as_raw_input(est: Any, X: Any, schema: DeviceSchema) -> Any:
-    """X for :meth:`DeviceSchema.raw`: device frames as they are, arrays checked."""
-    if schema.is_plain:
-        from sklearn.utils.validation import validate_data
-
-        frame = X.frame if isinstance(X, Dataset) else X
-        return validate_data(est, frame, reset=False, dtype=np.float64)
-    if isinstance(X, pd.DataFrame | Dataset):
-        return X
-    if type(X) is np.ndarray and X.dtype == np.float64 and X.ndim == 2 and X.size:
-        Xa = X  # the common case, without check_array's overhead on one row
-    else:
-        from sklearn.utils import check_array
-
-        want = (f"X must be a Dataset, a DataFrame or a 2-D array of the model's "
-                f"{len(schema.raw_columns)} columns (its schema_.raw_columns)")
-        if X is None or isinstance(X, str | bytes | dict):
-            raise DataError(f"{want}, got {type(X).__name__}")
-        try:
-            Xa = check_array(X, dtype=np.float64, estimator=est, input_name="X")
-        except ValueError as exc:
-            raise DataError(f"{want}: {str(exc).splitlines()[0].rstrip(':')}") from None
-    if Xa.shape[1] != len(schema.raw_columns):
-        raise DataError(
-            f"X has {Xa.shape[1]} features, but {type(est).__name__} is expecting "
-            f"{len(schema.raw_columns)} features as input ({schema.describe()})"
-        )
-    return Xa
+        return schema.with_training_range(schema.raw(X))
+    return None

@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..exceptions import DataError
 from .columns import CODE_COLUMN_RE, DEFAULT_ADC_BITS
-from .exceptions import DataError
 
 __all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits"]
 

@@ -8,8 +8,8 @@ import re
 from collections.abc import Iterable
 from typing import Any
 
-from .constants import DEFAULT_LED_WAVELENGTHS_NM
-from .exceptions import DataError
+from ..constants import DEFAULT_LED_WAVELENGTHS_NM
+from ..exceptions import DataError
 
 __all__ = [
     "PMF_COLUMNS",
@@ -46,7 +46,7 @@ PMF_COLUMNS = (
     "pressure_mbar",
 )
 #: Identity columns, in the order outputs give them: read as written, kept whole, never
-#: empty (:func:`nirglucose.io_files.validate_frame`).
+#: empty (:func:`nirglucose.dataset.files.validate_frame`).
 ID_COLUMNS = ("measurement_id", "subject_id")
 
 #: Columns of the PPG perfusion and saturation estimates (``device.ppg_perfusion_spo2``),

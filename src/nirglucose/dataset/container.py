@@ -1,4 +1,4 @@
-"""The Dataset container: column registry with units, Parquet/CSV IO, validation.
+"""The Dataset container: its frame and scenario, Parquet/CSV IO, partitioned datasets.
 
 One row per snapshot measurement (DESIGN.md, "Dataset schema"):
 
@@ -28,26 +28,15 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ._version import __version__
-from .adc_resolution import check_adc_bits
+from .._version import __version__
+from ..config import ScenarioConfig
+from ..exceptions import DataError
+from .adc import check_adc_bits
 from .columns import (
-    COLUMN_UNITS,
-    DEFAULT_ADC_BITS,
-    GLUCOSE_REPORTING_RANGE_MGDL,
-    KNOWN_PHYSIOLOGY,
-    PMF_COLUMNS,
-    PPG_COLUMNS,
-    WEAR_COLUMNS,
-    adc_columns,
     led_wavelengths_in,
-    measured_columns,
-    ref_columns,
 )
-from .config import ScenarioConfig
-from .constants import PHYSIOLOGICAL_RANGES
-from .dataset_meta import parse_meta
-from .exceptions import DataError
-from .io_files import check_frame, check_glucose_unit, read_frame, validate_frame
+from .files import check_frame, check_glucose_unit, read_frame, validate_frame
+from .meta import parse_meta
 
 __all__ = [
     "Dataset",
@@ -55,38 +44,22 @@ __all__ = [
     "load_dataset",
     "open_partitioned",
     "scan_dataset",
-    "PMF_COLUMNS",
-    "PPG_COLUMNS",
-    "MANIFEST",
-    "PART_PATTERN",
-    "COLUMN_UNITS",
-    "WEAR_COLUMNS",
-    "adc_columns",
-    "ref_columns",
-    "measured_columns",
     "atomic_write",
+    "MANIFEST",
+    "META_KEY",
+    "PART_PATTERN",
     "SUFFIXES",
-    "KNOWN_PHYSIOLOGY",
-    "PHYSIOLOGICAL_RANGES",
-    "GLUCOSE_REPORTING_RANGE_MGDL",
-    "DEFAULT_ADC_BITS",
-    "MIN_FIT_ROWS",
-    "MIN_FIT_SUBJECTS",
 ]
 
 #: File suffixes :meth:`Dataset.save` and :func:`load_dataset` understand.
 SUFFIXES = (".parquet", ".csv")
-_META_KEY = b"nirglucose"
+#: Key of the package's JSON metadata in a Parquet file's schema metadata.
+META_KEY = b"nirglucose"
 #: Name of the file listing the parts of a finished partitioned write.
 MANIFEST = "manifest.json"
 #: Glob pattern of the part files of a partitioned dataset.
 PART_PATTERN = "part-*.parquet"
 
-#: Fewest rows any model fits on (the inner CV's default 5 folds need one row each). [-]
-MIN_FIT_ROWS = 5
-#: Fewest subjects any model fits on when subject ids are known (subject-grouped inner
-#: validation holds out at least one subject). [-]
-MIN_FIT_SUBJECTS = 2
 
 
 def atomic_write(path: str | os.PathLike, write) -> Path:
@@ -204,7 +177,7 @@ class Dataset:
         if path.suffix == ".parquet":
             table = pa.Table.from_pandas(self.frame, preserve_index=False)
             meta = dict(table.schema.metadata or {})
-            meta[_META_KEY] = json.dumps(self._meta(), sort_keys=True).encode()
+            meta[META_KEY] = json.dumps(self._meta(), sort_keys=True).encode()
             table = table.replace_schema_metadata(meta)
             return atomic_write(path, lambda tmp: pq.write_table(table, tmp))
         return atomic_write(path, lambda tmp: self.frame.to_csv(tmp, index=False))
@@ -346,7 +319,7 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
                   sum(pq.ParquetFile(p).metadata.num_rows for p in parts))
     except (OSError, ValueError, KeyError, TypeError, pa.ArrowException) as exc:
         raise DataError(f"cannot read {str(path)!r}: {exc}") from None
-    meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
+    meta, config, seed = parse_meta(raw.get(META_KEY), path)  # one-line errors (issue 20)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     if manifest is not None:
         extra.update(n_subjects=manifest.get("n_subjects"), per_subject=manifest.get("per_subject"))
@@ -360,7 +333,7 @@ def load_dataset(
     """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
 
     A user's file is read as a prototype team writes it
-    (:mod:`~nirglucose.io_files`): the CSV delimiter (``,``, ``;`` or tab) and a decimal
+    (:mod:`~nirglucose.dataset.files`): the CSV delimiter (``,``, ``;`` or tab) and a decimal
     comma are detected; headers are matched after stripping and case-folding
     (``ADC_940`` is ``adc_940``); the reference glucose may be ``glucose_mgdl`` or
     ``glucose_mmoll`` and is converted to ``glucose_mgdl``; the whole file is validated
@@ -404,7 +377,7 @@ def load_dataset(
         raise DataError(f"cannot read {str(path)!r}: {exc}") from None
     if not len(frame):
         raise DataError(f"{str(path)!r} holds no measurements (a header, no rows)")
-    meta, config, seed = parse_meta(raw.get(_META_KEY), path)  # one-line errors (issue 20)
+    meta, config, seed = parse_meta(raw.get(META_KEY), path)  # one-line errors (issue 20)
     notes += validate_frame(frame, csv=path.suffix == ".csv", glucose_unit=glucose_unit)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     extra.update(source=str(path), read_notes=notes)

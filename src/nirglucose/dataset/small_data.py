@@ -33,8 +33,6 @@ True
 
 from __future__ import annotations
 
-from .dataset import MIN_FIT_ROWS, MIN_FIT_SUBJECTS
-
 __all__ = [
     "MIN_FIT_ROWS",
     "MIN_FIT_SUBJECTS",
@@ -46,6 +44,11 @@ __all__ = [
     "significance_withheld",
 ]
 
+#: Fewest rows any model fits on (the inner CV's default 5 folds need one row each). [-]
+MIN_FIT_ROWS = 5
+#: Fewest subjects any model fits on when subject ids are known (subject-grouped inner
+#: validation holds out at least one subject). [-]
+MIN_FIT_SUBJECTS = 2
 #: Fewest subjects for a fit to be more than a per-person offset. [-]
 MIN_LEARNING_SUBJECTS = 10
 #: Fewest subjects for a grouped cross-validated error worth quoting. [-]

@@ -20,8 +20,8 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from .config import ScenarioConfig, resolve_config
-from .exceptions import ConfigError, DataError
+from ..config import ScenarioConfig, resolve_config
+from ..exceptions import ConfigError, DataError
 
 __all__ = ["parse_meta"]
 

@@ -37,6 +37,8 @@ import numpy as np
 import pandas as pd
 from pydantic import TypeAdapter, ValidationError
 
+from ..constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
+from ..exceptions import DataError
 from .columns import (
     CODE_COLUMN_RE,
     GLUCOSE_REPORTING_RANGE_MGDL,
@@ -44,8 +46,6 @@ from .columns import (
     KNOWN_PHYSIOLOGY,
     WEAR_COLUMNS,
 )
-from .constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
-from .exceptions import DataError
 
 __all__ = [
     "GLUCOSE_UNITS",
@@ -101,7 +101,7 @@ def check_glucose_unit(unit: Any) -> str | None:
 
 def canonical_name(name: Any) -> str:
     """A header as the schema spells it: stripped, case-folded, spaces and '-' as '_',
-    an LED's wavelength as :func:`~nirglucose.columns.adc_columns` writes it
+    an LED's wavelength as :func:`~nirglucose.dataset.columns.adc_columns` writes it
     (``adc_0850``, ``adc_850.0`` -> ``adc_850``).
 
     Examples
@@ -427,7 +427,7 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
     """Check every schema column of the whole file once, in place; notes to show.
 
     ADC codes become floats and must be finite and > 0 (their upper bound depends on
-    the resolution, :mod:`~nirglucose.adc_resolution`); physiological columns lie in
+    the resolution, :mod:`~nirglucose.dataset.adc`); physiological columns lie in
     :data:`~nirglucose.dataset.PHYSIOLOGICAL_RANGES`; the reference glucose becomes
     ``glucose_mgdl`` in mg/dL within the meter's range.
 
