@@ -1,13 +1,13 @@
 """How far a reading can be trusted: interval coverage and personal calibration (issue 23).
 
 Acceptance: on ``paper`` and ``wearable``, simulation seeds 0-4, the benchmark's
-subject-grouped conformal intervals (:mod:`nirglucose.evaluation.conformal`; the
+subject-grouped conformal intervals (:mod:`nirglucose.calibration.conformal`; the
 other folds' held-out residuals calibrate each test fold) cover held-out subjects'
 readings within +-3 points of the nominal 90 % and 80 %, for every model: coverage is
 averaged over the seeds per model and preset.
 
 The same runs score the personal calibration protocol
-(:mod:`nirglucose.evaluation.calibration`) with k = 1 calibration reading per test
+(:mod:`nirglucose.calibration.personal`) with k = 1 calibration reading per test
 subject; a second, smaller part varies the readings per subject (``--per-subject-sweep``)
 with k = 1 and 2.
 

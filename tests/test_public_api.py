@@ -49,7 +49,7 @@ def test_unknown_attribute_is_an_attribute_error():
 
 
 def test_loading_a_model_does_not_import_the_evaluation_package(tmp_path):
-    from nirglucose.evaluation.conformal import attach
+    from nirglucose.calibration.conformal import attach
     from nirglucose.models import make_model
 
     model = make_model("ebl").fit(ng.simulate("paper", 12, 2, seed=0))

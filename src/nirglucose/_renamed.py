@@ -53,6 +53,10 @@ RENAMED_MODULES: dict[str, str] = {
     "nirglucose.simulate": "nirglucose.simulation",
     "nirglucose.config_keys": "nirglucose.config.keys",
     **_DATASET,
+    "nirglucose.evaluation.stats": "nirglucose.metrics.resampling",
+    "nirglucose.evaluation.conformal": "nirglucose.calibration.conformal",
+    "nirglucose.evaluation.calibration": "nirglucose.calibration.personal",
+    "nirglucose.evaluation.wear_calibration": "nirglucose.calibration.schedules",
 }
 #: Names that left their module in a move: old dotted name -> new dotted name (the old
 #: module's path gives them, with a warning, until :data:`REMOVED_IN`).

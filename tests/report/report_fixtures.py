@@ -128,12 +128,12 @@ def write_preset_results(out: Path, preset: str, *, lambda_phys: float, seed: in
 
     Predictions are the reference plus noise; ``comparisons.csv`` and ``ablation.csv``
     come from the package's own paired statistics
-    (:func:`nirglucose.evaluation.stats.compare_models`), ``meta.json`` records each
+    (:func:`nirglucose.metrics.resampling.compare_models`), ``meta.json`` records each
     model's tuned parameters with the PINN's ``lambda_phys`` and the preset's
     configuration. With ``lambda_phys == 0`` the ablation refit is the same fit (equal
     predictions), as in the benchmark.
     """
-    from nirglucose.evaluation.stats import compare_models
+    from nirglucose.metrics.resampling import compare_models
 
     d = write_synthetic_results(out, models=PRESET_TEST_MODELS, networks=("original-pinn",),
                                 n_subjects=n_subjects, repeats=repeats, seed=seed)

@@ -15,12 +15,12 @@ from typing import Annotated
 
 import typer
 
+from ..calibration.personal import MAX_CALIBRATION_READINGS
 from ..config import PRESETS
-from ..evaluation.calibration import MAX_CALIBRATION_READINGS
-from ..evaluation.stats import DEFAULT_N_BOOT
 from ..evaluation.studies import STUDIES
 from ..evaluation.tasks import clear_outputs
 from ..exceptions import NirGlucoseError
+from ..metrics.resampling import DEFAULT_N_BOOT
 from ._app import console, out_console
 
 #: Preset names for the --preset help texts.

@@ -140,7 +140,7 @@ def _choose_intervals(ds, intervals: str, share: float) -> tuple[str, str]:
 
 def _fit_with_intervals(estimator, ds, share: float, seed: int) -> tuple[int, str]:
     """Fit on the subjects not held out, calibrate on the rest: ``(n fitted, note)``."""
-    from ..evaluation.conformal import calibration_of, split_conformal
+    from ..calibration.conformal import calibration_of, split_conformal
 
     if "subject_id" not in ds.frame:
         raise UserError("--intervals split needs a subject_id column to hold out subjects")

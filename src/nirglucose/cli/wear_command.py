@@ -30,7 +30,7 @@ from .benchmark_command import _benchmark_runs
 
 
 def _schedule_names(schedules: str) -> list[str]:
-    from ..evaluation.wear_calibration import SCHEDULES
+    from ..calibration.schedules import SCHEDULES
 
     names = [s.strip() for s in schedules.split(",") if s.strip()]
     unknown = [s for s in names if s not in SCHEDULES]

@@ -2,7 +2,7 @@
 
 :func:`run_benchmark` fits each model on each split of the protocol
 (:mod:`~nirglucose.evaluation.splits`), scores the held-out predictions with cluster
-bootstrap intervals and paired comparisons (:mod:`~nirglucose.evaluation.stats`),
+bootstrap intervals and paired comparisons (:mod:`~nirglucose.metrics.resampling`),
 times every model the same way (:mod:`~nirglucose.evaluation.timing`) and refits
 chosen models without each LED (:mod:`~nirglucose.evaluation.drop_one`).
 It computes only; figures and the report read the :class:`BenchmarkResult`.
@@ -87,8 +87,11 @@ import numpy as np
 import pandas as pd
 
 from .._version import __version__
+from ..calibration.conformal import LEVELS
+from ..calibration.personal import personal_calibration
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError, check_positive_int
+from ..metrics.resampling import DEFAULT_N_BOOT
 from ..models import tuned_params
 from ..models.registry import available_models, get_model_class, is_pinn
 from ..models.tuning import best_positive_lambda, untuned_params
@@ -109,8 +112,6 @@ from .benchmark_result import (
     ablation_base,
     lambda_row,
 )
-from .calibration import personal_calibration
-from .conformal import LEVELS
 from .drop_one import (
     DROP_ONE_COLUMNS,
     DROP_ONE_REPEATS,
@@ -137,7 +138,6 @@ from .progress import task_hooks
 from .protocol import Protocol, resolve_protocol
 from .reference import STUDY_PROTOCOL
 from .splits import Split, effective_layout, make_splits
-from .stats import DEFAULT_N_BOOT
 from .tasks import TASK_FORMAT
 from .timing import measure_latency, timing_inputs
 
@@ -737,7 +737,7 @@ def run_benchmark(
     calibration : int
         Personal calibration protocol: each test subject's first ``calibration``
         readings (1 or 2) calibrate that person and only their later readings are
-        scored (:mod:`~nirglucose.evaluation.calibration`; ``calibration.csv``);
+        scored (:mod:`~nirglucose.calibration.personal`; ``calibration.csv``);
         0 (default) runs none. The main metrics always score every held-out reading.
 
     Returns

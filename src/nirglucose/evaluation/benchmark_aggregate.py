@@ -16,8 +16,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..calibration.conformal import LEVELS, coverage_summary, out_of_fold_intervals
 from ..dataset.small_data import significance_withheld
 from ..metrics import summary
+from ..metrics.resampling import cluster_bootstrap_metrics, compare_models
 from .benchmark_result import (
     ABLATION_COLUMNS,
     COMPARISON_COLUMNS,
@@ -27,10 +29,8 @@ from .benchmark_result import (
     PREDICTION_COLUMNS,
     BenchmarkResult,
 )
-from .conformal import LEVELS, coverage_summary, out_of_fold_intervals
 from .finding import label
 from .reference import STUDY_ORDER
-from .stats import cluster_bootstrap_metrics, compare_models
 
 __all__ = ["aggregate", "count_invalid", "fallback_mgdl", "scored"]
 

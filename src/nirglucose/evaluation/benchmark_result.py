@@ -17,11 +17,11 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
+from ..calibration.personal import CALIBRATION_COLUMNS
 from ..dataset import Dataset, atomic_write
-from .calibration import CALIBRATION_COLUMNS
+from ..metrics.resampling import PAIRED_COLUMNS
 from .inverse import INVERSE_COLUMNS
 from .reference import STUDY_TABLE
-from .stats import PAIRED_COLUMNS
 from .tasks import prepare_out
 
 __all__ = [
@@ -228,7 +228,7 @@ class BenchmarkResult:
     dataset : Dataset, optional
         The dataset benchmarked (written to ``dataset.parquet``).
     calibration : pandas.DataFrame
-        Personal calibration (:data:`~nirglucose.evaluation.calibration.CALIBRATION_COLUMNS`);
+        Personal calibration (:data:`~nirglucose.calibration.personal.CALIBRATION_COLUMNS`);
         empty without ``calibration=k``.
     inverse : pandas.DataFrame
         The inverse task (:data:`~nirglucose.evaluation.inverse.INVERSE_COLUMNS`): each

@@ -7,7 +7,7 @@ the copy is a valid device with one LED fewer, :func:`without_led`) and scored o
 same held-out subjects. The answer is the paired difference in RMSE, *without the LED
 minus with all LEDs*, with a percentile cluster-bootstrap 95 % CI over subjects and a
 bootstrap p-value, Holm-adjusted over the model's LEDs
-(:func:`~nirglucose.evaluation.stats.compare_models`, the benchmark's own paired
+(:func:`~nirglucose.metrics.resampling.compare_models`, the benchmark's own paired
 statistics): positive means the LED carries information the others do not.
 
 Why refits and not permutation importance
@@ -45,10 +45,10 @@ from ..dataset import Dataset
 from ..dataset.columns import led_wavelengths_in
 from ..dataset.small_data import MIN_SIGNIFICANCE_SUBJECTS
 from ..exceptions import ConfigError, DataError
+from ..metrics.resampling import compare_models
 from .benchmark_aggregate import scored
 from .benchmark_result import DROP_ONE_COLUMNS, ablation_base
 from .finding import Finding, Value, label
-from .stats import compare_models
 
 __all__ = [
     "DEFAULT_DROP_ONE_MODELS",

@@ -13,9 +13,9 @@ comparisons against the best model, Holm-adjusted, and the study's orderings),
 model refitted without each LED), ``meta.json`` (the tuned
 parameters, among them each PINN's physics weight ``lambda_phys``, and the resolved
 configuration) and the predictions (subjects and reference glucose). The statistics are
-the benchmark's own (:mod:`nirglucose.evaluation.stats`); no test is re-run here except
+the benchmark's own (:mod:`nirglucose.metrics.resampling`); no test is re-run here except
 the paired comparison of each model with no skill (:func:`no_skill_comparisons`), which
-uses :func:`~nirglucose.evaluation.stats.compare_models` on the same predictions.
+uses :func:`~nirglucose.metrics.resampling.compare_models` on the same predictions.
 
 Sources
     ``"<preset>/metrics.json:<model>:<column>"``,
@@ -38,11 +38,11 @@ import pandas as pd
 
 from ..config.presets import DEVICE_CAPABILITIES
 from ..dataset.small_data import significance_withheld
+from ..metrics.resampling import compare_models
 from .benchmark_result import LAMBDA_ROW, ORACLE, ablation_base
 from .drop_one import drop_one_findings
 from .finding import Finding, Value, label
 from .reference import STUDY_ORDER, STUDY_TABLE
-from .stats import compare_models
 
 __all__ = [
     "HYPO_MGDL",
@@ -197,7 +197,7 @@ def no_skill_comparisons(run: RunData, *, n_boot: int = 2000, seed: int = 0,
                          alpha: float = 0.05) -> pd.DataFrame:
     """Each competitor against no skill: paired cluster bootstrap, Holm-adjusted.
 
-    :func:`~nirglucose.evaluation.stats.compare_models` with the pairs
+    :func:`~nirglucose.metrics.resampling.compare_models` with the pairs
     ``(model, "mean")`` on the run's scored predictions (empty without a no-skill row).
     """
     p = run.predictions

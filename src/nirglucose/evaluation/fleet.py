@@ -41,11 +41,11 @@ from ..dataset import Dataset
 from ..design.fleet import FleetTolerances, draw_units, simulate_unit
 from ..exceptions import ConfigError, DataError, unknown_name
 from ..metrics import summary
+from ..metrics.resampling import cluster_bootstrap_metrics
 from ..models.registry import get_model_class
 from . import tasks
 from .benchmark import _model_params, seeded_params
 from .benchmark_aggregate import count_invalid, fallback_mgdl, scored
-from .stats import cluster_bootstrap_metrics
 from .transfer import fit_transfer
 
 __all__ = [

@@ -13,10 +13,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+from ..calibration.personal import check_k
 from ..exceptions import ConfigError, check_positive_int, check_seed
-from .calibration import check_k
+from ..metrics.resampling import DEFAULT_N_BOOT
 from .splits import check_protocol
-from .stats import DEFAULT_N_BOOT
 
 __all__ = ["Protocol", "resolve_protocol"]
 

@@ -4,7 +4,7 @@ An optical sensor has to show that it does not fail darker skin, and a glucose s
 that it does not fail the people who need it most. Each subgroup's metrics are computed
 like the benchmark's (per repeat, averaged over repeats) on the snapshots of that
 subgroup's subjects, with a percentile cluster bootstrap that resamples *those*
-subjects (:func:`~nirglucose.evaluation.stats.cluster_bootstrap_metrics`).
+subjects (:func:`~nirglucose.metrics.resampling.cluster_bootstrap_metrics`).
 
 A subgroup holds whole subjects: the grouping columns are traits of the subject
 (one diabetes status and one skin type per subject); a subject whose snapshots disagree
@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 
 from ..exceptions import DataError
+from ..metrics.resampling import DEFAULT_N_BOOT, cluster_bootstrap_metrics
 from .findings import Finding, Value, label
-from .stats import DEFAULT_N_BOOT, cluster_bootstrap_metrics
 
 __all__ = ["SUBGROUP_COLUMNS", "SUBGROUP_LABELS", "subgroup_errors", "subject_groups",
            "subgroup_findings"]

@@ -68,6 +68,7 @@ from ..dataset import Dataset
 from ..dataset.files import check_result_table
 from ..exceptions import ConfigError, DataError, check_positive_int
 from ..metrics import summary
+from ..metrics.resampling import cluster_bootstrap_metrics
 from ..models.registry import get_model_class
 from . import tasks
 from .benchmark import METRIC_COLUMNS, _model_params, run_benchmark
@@ -86,7 +87,6 @@ from .fleet import fleet_metrics, fleet_table
 from .progress import task_hooks
 from .protocol import Protocol, resolve_protocol
 from .splits import effective_layout
-from .stats import cluster_bootstrap_metrics
 from .studies import (
     COHORT_SHIFTS,
     DATA_SIZE_PRESETS,
@@ -732,7 +732,7 @@ def run_sweep(
         Called as ``on_task(spec, cached)`` for every task as it is loaded or finished.
     calibration : int
         Personal calibration readings per test subject (0, 1 or 2) of every
-        cross-validated task (:mod:`~nirglucose.evaluation.calibration`): adds
+        cross-validated task (:mod:`~nirglucose.calibration.personal`): adds
         :data:`CALIBRATION_METRICS` (shift tasks leave them empty).
 
     Returns

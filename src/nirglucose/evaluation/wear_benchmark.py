@@ -14,7 +14,7 @@ user's own series with a time column):
    training subjects only: the model is fitted on four fifths of them and predicts the
    other fifth's full series, on which the smoother's grid is scored; the tuned
    smoother then filters the held-out predictions. ``smoothed`` rows show what it buys.
-3. **Calibration schedules** (:mod:`~.wear_calibration`) on the held-out predictions,
+3. **Calibration schedules** (:mod:`~nirglucose.calibration.schedules`) on the held-out predictions,
    raw and smoothed, paired on the same readings.
 4. **The standards a worn monitor is judged by** (:mod:`nirglucose.metrics.cgm`,
    :mod:`~nirglucose.metrics.trend`, :mod:`~nirglucose.metrics.time_in_range`, the DTS
@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..calibration.schedules import SCHEDULES, apply_schedule, schedule_table
 from ..dataset import Dataset, atomic_write
 from ..exceptions import ConfigError, DataError
 from ..metrics import (
@@ -50,7 +51,6 @@ from ..models.registry import get_model_class
 from ..models.smoothing import tune_smoother
 from .benchmark import _model_params
 from .splits import grouped_kfold
-from .wear_calibration import SCHEDULES, apply_schedule, schedule_table
 
 __all__ = ["WEAR_MODELS", "WearResult", "run_wear_benchmark"]
 
@@ -112,9 +112,9 @@ def _standards(g: pd.DataFrame, schedule: str, a: pd.DataFrame, time: str, n_boo
                seed: int) -> tuple[dict, pd.DataFrame]:
     """One model, variant and schedule: a row of ``wear_standards.csv`` and its iCGM table.
 
-    ``a`` is :func:`~.wear_calibration.apply_schedule` of ``schedule`` on ``g``. Accuracy
-    is scored on every held-out reading after the subject's first that is not one of
-    this schedule's fingersticks; trend agreement and lag on the whole series.
+    ``a`` is :func:`~nirglucose.calibration.schedules.apply_schedule` of ``schedule`` on
+    ``g``. Accuracy is scored on every held-out reading after the subject's first that is
+    not one of this schedule's fingersticks; trend agreement and lag on the whole series.
     """
     first = g.groupby("subject_id")[time].transform("min")
     keep = ((g[time] > first) & ~a["is_calibration"]).to_numpy()
@@ -198,7 +198,7 @@ def run_wear_benchmark(
     n_splits, seed : int
         Subject-grouped folds and the seed of splits, fits and the bootstrap.
     schedules : sequence of str
-        Calibration schedules (:data:`~.wear_calibration.SCHEDULES`).
+        Calibration schedules (:data:`~nirglucose.calibration.schedules.SCHEDULES`).
     train_readings_per_subject : int
         Readings each training subject contributes (step 1 of the module docstring).
     n_boot : int

@@ -32,13 +32,13 @@ from scipy import stats
 
 from .._version import __version__
 from ..api import simulate_wear
+from ..calibration.schedules import SCHEDULES
 from ..config import resolve_config
 from ..dataset import atomic_write
 from ..exceptions import ConfigError
 from . import tasks
 from .executors import check_scheduler, resolve_backend, run_unordered
 from .wear_benchmark import WEAR_MODELS, run_wear_benchmark
-from .wear_calibration import SCHEDULES
 
 __all__ = ["WEAR_DAYS", "WEAR_PRESETS", "WEAR_SWEEP_FILES", "run_wear_sweep", "run_wear_task"]
 

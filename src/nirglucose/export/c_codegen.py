@@ -16,7 +16,7 @@ centred on its training mean before the dot product, so single precision keeps t
 prediction within a few thousandths of a mg/dL of Python's double-precision one.
 
 When the model carries a split-conformal calibration
-(:func:`nirglucose.evaluation.conformal.split_conformal`, ``nirglucose fit``), whose
+(:func:`nirglucose.calibration.conformal.split_conformal`, ``nirglucose fit``), whose
 interval is the prediction ± a constant half-width, the source also defines
 ``nirglucose_predict_interval`` (:func:`interval_prototype`): the same inputs, the
 90 % interval's bounds written to ``lower_mgdl`` / ``upper_mgdl`` (the lower one not

@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from nirglucose.evaluation.wear_calibration import (
+from nirglucose.calibration.schedules import (
     SCHEDULES,
     apply_schedule,
     calibration_times,

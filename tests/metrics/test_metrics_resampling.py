@@ -7,7 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from nirglucose.evaluation.stats import (
+from nirglucose.exceptions import DataError
+from nirglucose.metrics import summary
+from nirglucose.metrics.resampling import (
     CI_METRICS,
     bootstrap_weights,
     cluster_bootstrap_metrics,
@@ -16,8 +18,6 @@ from nirglucose.evaluation.stats import (
     metric_draws,
     subject_sums,
 )
-from nirglucose.exceptions import DataError
-from nirglucose.metrics import summary
 
 
 def _problem(rng, n_sub=60, per=3, sd_subject=8.0, sd_noise=6.0, shift=0.0, ref=None):

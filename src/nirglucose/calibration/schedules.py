@@ -5,7 +5,7 @@ skin's temperature follows the day, each re-seating changes the contact. A sched
 says when the user takes a fingerstick; each fingerstick's reference glucose sets a
 one-point offset (the reference minus the model's prediction at that reading), applied
 to every later reading until the next calibration — the offset calibration of
-:mod:`~nirglucose.evaluation.calibration`, now in time.
+:mod:`~nirglucose.calibration.personal`, now in time.
 
 Schedules (:data:`SCHEDULES`):
 
@@ -37,7 +37,7 @@ import pandas as pd
 
 from ..constants import MINUTES_PER_DAY
 from ..exceptions import ConfigError, DataError
-from .stats import subject_draws
+from ..metrics.resampling import subject_draws
 
 __all__ = ["SCHEDULES", "calibration_times", "apply_schedule", "schedule_table"]
 

@@ -46,7 +46,7 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from ..exceptions import ConfigError, DataError
-from ..metrics import clarke_zones, parkes_zones
+from .error_grids import clarke_zones, parkes_zones
 
 __all__ = [
     "CI_METRICS",

@@ -41,8 +41,8 @@ import pandas as pd
 
 from ..dataset import Dataset
 from ..exceptions import ConfigError, DataError
+from ..metrics.resampling import repeat_subject_cells, resampled_ratios, subject_draws
 from ..models._validate import check_calibration_doc
-from .stats import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
     "LEVELS",

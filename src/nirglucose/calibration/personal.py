@@ -31,7 +31,7 @@ import pandas as pd
 
 from ..exceptions import ConfigError, DataError
 from ..features import EnhancedBeerLambertFeatures
-from .stats import repeat_subject_cells, resampled_ratios, subject_draws
+from ..metrics.resampling import repeat_subject_cells, resampled_ratios, subject_draws
 
 __all__ = [
     "CALIBRATION_COLUMNS",

@@ -10,18 +10,18 @@ import pandas as pd
 import pytest
 
 import nirglucose as ng
-from nirglucose.evaluation.benchmark import METRIC_COLUMNS, PREDICTION_COLUMNS, run_benchmark
-from nirglucose.evaluation.calibration import (
+from nirglucose.calibration.conformal import (
+    grouped_conformal_quantile,
+    out_of_fold_intervals,
+    split_conformal,
+)
+from nirglucose.calibration.personal import (
     CALIBRATION_COLUMNS,
     apply_offset,
     calibration_mask,
     personal_calibration,
 )
-from nirglucose.evaluation.conformal import (
-    grouped_conformal_quantile,
-    out_of_fold_intervals,
-    split_conformal,
-)
+from nirglucose.evaluation.benchmark import METRIC_COLUMNS, PREDICTION_COLUMNS, run_benchmark
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models import PLSBaseline, load_model
 
