@@ -42,11 +42,23 @@ import types
 import warnings
 from typing import Any
 
-__all__ = ["RENAMED_MODULES", "MOVED_NAMES", "REMOVED_IN", "RenamedModuleFinder", "install"]
+__all__ = ["RENAMED_MODULES", "MOVED_NAMES", "REMOVED_IN", "RenamedModuleFinder", "install",
+           "moved_name"]
 
 _DATASET = {f"nirglucose.{old}": f"nirglucose.dataset.{new}" for old, new in {
     "schema": "schema", "io_files": "files", "dataset_meta": "meta", "columns": "columns",
     "adc_resolution": "adc", "small_data": "small_data"}.items()}
+
+_EVALUATION = {f"nirglucose.evaluation.{old}": f"nirglucose.evaluation.{new}" for old, new in {
+    "tasks": "engine.tasks", "executors": "engine.executors", "progress": "engine.progress",
+    "benchmark_aggregate": "benchmark.aggregate", "benchmark_result": "benchmark.result",
+    "drop_one": "benchmark.drop_one", "inverse": "benchmark.inverse",
+    "subgroups": "benchmark.subgroups", "findings": "benchmark.findings",
+    "finding": "benchmark.finding", "timing": "benchmark.timing",
+    "sweep_analysis": "sweep.analysis", "studies": "sweep.studies",
+    "scenario": "sweep.scenarios", "wavelength_study": "sweep.wavelengths",
+    "fleet": "sweep.fleet", "transfer": "sweep.transfer", "wear_benchmark": "wear",
+    "wear_sweep": "wear"}.items()}
 
 #: Old dotted module name -> new one; every submodule follows its package.
 RENAMED_MODULES: dict[str, str] = {
@@ -57,6 +69,7 @@ RENAMED_MODULES: dict[str, str] = {
     "nirglucose.evaluation.conformal": "nirglucose.calibration.conformal",
     "nirglucose.evaluation.calibration": "nirglucose.calibration.personal",
     "nirglucose.evaluation.wear_calibration": "nirglucose.calibration.schedules",
+    **_EVALUATION,
 }
 #: Names that left their module in a move: old dotted name -> new dotted name (the old
 #: module's path gives them, with a warning, until :data:`REMOVED_IN`).
@@ -65,6 +78,8 @@ MOVED_NAMES: dict[str, str] = {
         "nirglucose.features.transform.MeasurementTransformer",
     "nirglucose.schema.fit_schema": "nirglucose.fitted.fit_schema",
     "nirglucose.schema.as_raw_input": "nirglucose.fitted.as_raw_input",
+    "nirglucose.evaluation.finding.label": "nirglucose.models.labels.label",
+    "nirglucose.evaluation.reference.MODEL_LABELS": "nirglucose.models.labels.MODEL_LABELS",
 }
 #: Old package paths that are also a function of their parent package (a call of the
 #: old module goes to the function).
@@ -93,17 +108,27 @@ class _CallableModule(types.ModuleType):
         return self.__dict__["_function"](*args, **kwargs)
 
 
+def moved_name(module: str, name: str, stacklevel: int = 3) -> Any:
+    """Name ``name`` that left ``module`` (:data:`MOVED_NAMES`), from its new home, with a
+    warning; an AttributeError for any other name.
+
+    A module that stays but lost a name serves it through this, as its ``__getattr__``
+    (PEP 562), e.g. ``nirglucose.evaluation.reference.MODEL_LABELS``.
+    """
+    new = MOVED_NAMES.get(f"{module}.{name}")
+    if new is None:
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+    _warn(f"{module}.{name}", new, stacklevel=stacklevel + 1)
+    home, _, attr = new.rpartition(".")
+    return getattr(importlib.import_module(home), attr)
+
+
 class _AliasModule(types.ModuleType):
     """An old module path that lost names in the move: the new module's names, and each
     departed name (:data:`MOVED_NAMES`) from its new home, with a warning."""
 
     def __getattr__(self, name: str) -> Any:
-        new = MOVED_NAMES.get(f"{self.__name__}.{name}")
-        if new is None:
-            raise AttributeError(f"module {self.__name__!r} has no attribute {name!r}")
-        _warn(f"{self.__name__}.{name}", new, stacklevel=3)
-        module, _, attr = new.rpartition(".")
-        return getattr(importlib.import_module(module), attr)
+        return moved_name(self.__name__, name)
 
 
 class _Loader(importlib.abc.Loader):

@@ -21,7 +21,8 @@ from nirglucose.calibration.personal import (
     calibration_mask,
     personal_calibration,
 )
-from nirglucose.evaluation.benchmark import METRIC_COLUMNS, PREDICTION_COLUMNS, run_benchmark
+from nirglucose.evaluation import Protocol
+from nirglucose.evaluation.benchmark.run import METRIC_COLUMNS, PREDICTION_COLUMNS, run_benchmark
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models import PLSBaseline, load_model
 
@@ -95,7 +96,8 @@ def bench():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return run_benchmark(
-            ds, ["pls", "mean"], repeats=1, n_boot=200, drop_one_models="none", calibration=1
+            ds, ["pls", "mean"], protocol=Protocol(repeats=1, resamples=200, calibration=1),
+            drop_one_models="none",
         )
 
 
@@ -150,7 +152,7 @@ def test_personal_calibration_refuses_bad_k(bench):
     with pytest.raises(ConfigError, match="0, 1 or 2"):
         personal_calibration(bench.dataset, bench.predictions, [], 3)
     with pytest.raises(ConfigError):
-        run_benchmark(bench.dataset, ["mean"], calibration=-1)
+        run_benchmark(bench.dataset, ["mean"], protocol=Protocol(calibration=-1), )
 
 
 def test_network_carries_its_calibration(tmp_path):

@@ -9,7 +9,7 @@ import pytest
 import nirglucose as ng
 from nirglucose.cli import main
 from nirglucose.dataset import measured_columns
-from nirglucose.evaluation.sweep import run_sweep
+from nirglucose.evaluation.sweep.run import run_sweep
 from nirglucose.models import load_model
 
 

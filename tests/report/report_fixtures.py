@@ -15,8 +15,8 @@ import numpy as np
 import pandas as pd
 
 import nirglucose as ng
-from nirglucose.evaluation.reference import MODEL_LABELS
 from nirglucose.metrics import summary
+from nirglucose.models.labels import label
 
 #: Models of the synthetic run: a linear one, a baseline, the bound, two networks.
 SYNTHETIC_MODELS = ("ebl", "pls", "oracle", "original-pinn", "sdnn")
@@ -55,7 +55,7 @@ def write_synthetic_results(out: Path, *, models=SYNTHETIC_MODELS, networks=_NET
     for m in models:
         p = preds[preds["model"] == m]
         s = summary(p["reference_mgdl"], p["scored_mgdl"])
-        row = {"model": m, "label": MODEL_LABELS.get(m, m),
+        row = {"model": m, "label": label(m),
                **{k: v for k, v in s.items() if k != "n"}}
         for stem, col in (("rmse", "rmse_mgdl"), ("mard", "mard_pct"),
                           ("clarke_a", "clarke_a_pct"), ("within15", "within15_pct"),

@@ -10,14 +10,13 @@ output, below :func:`nirglucose.predict` and the evaluation.
   for days (factory, day-1, every 24 h or 12 h).
 
 The package imports the models, the features, the dataset and the metrics' resampling,
-never the evaluation: using a fitted model does not load the study engine.
+never the evaluation: using a fitted model does not load the study engine. The names
+below are imported on first access.
 """
 
 from __future__ import annotations
 
-from .conformal import LEVELS, attach, calibration_of, interval, split_conformal
-from .personal import apply_offset, calibration_mask, personal_calibration
-from .schedules import SCHEDULES, apply_schedule, calibration_times
+import importlib
 
 __all__ = [
     "LEVELS",
@@ -32,3 +31,22 @@ __all__ = [
     "apply_schedule",
     "calibration_times",
 ]
+
+_LAZY = {
+    **dict.fromkeys(("LEVELS", "attach", "calibration_of", "interval", "split_conformal"),
+                    "nirglucose.calibration.conformal"),
+    **dict.fromkeys(("apply_offset", "calibration_mask", "personal_calibration"),
+                    "nirglucose.calibration.personal"),
+    **dict.fromkeys(("SCHEDULES", "apply_schedule", "calibration_times"),
+                    "nirglucose.calibration.schedules"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})

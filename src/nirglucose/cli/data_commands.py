@@ -24,10 +24,12 @@ from ._common import (
     _jobs,
     _parse_sets,
     _say,
+    runs_workers,
 )
 
 
 @app.command()
+@runs_workers
 def simulate(
     out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
     preset: Annotated[
@@ -149,13 +151,14 @@ def list_models(
     ] = None,
 ) -> None:
     """List the registered model names, one line each (or describe one fitted model)."""
-    from ..models.registry import available_models, describe_model, load_model
+    from ..models.labels import describe
+    from ..models.registry import available_models, load_model
 
     if model is not None:
-        _say(describe_model(load_model(model)), err=False)
+        _say(describe(load_model(model)), err=False)
         return
     for name in available_models():
-        _say(f"{name:<20} {describe_model(name)}".rstrip(), err=False)
+        _say(f"{name:<20} {describe(name)}".rstrip(), err=False)
 
 
 @app.command("parts")

@@ -59,7 +59,7 @@ def fit_model(
     subject-grouped split-conformal 90 % and 80 % intervals, saved with the model.
     The same data, options and --seed write byte-identical model files.
     """
-    from ..evaluation.benchmark import seeded_params
+    from ..evaluation.estimators import seeded_params
     from ..models.registry import get_model_class
     from ..models.tuning import untuned_params
 

@@ -59,7 +59,7 @@ from ..dataset.columns import (
 )
 from ..exceptions import ConfigError
 from ..models.registry import available_models, get_model_class
-from .tasks import derived_seed, external_code_digest
+from .engine.tasks import derived_seed, external_code_digest
 
 __all__ = [
     "OBJECT_TUNING",

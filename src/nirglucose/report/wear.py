@@ -1,7 +1,7 @@
 """The report of a worn run (``nirglucose wear-benchmark``): findings first, then the
 traces, the error by days since calibration, the schedules and the CGM standards.
 
-Reads the files of :class:`~nirglucose.evaluation.wear_benchmark.WearResult`; computes
+Reads the files of :class:`~nirglucose.evaluation.wear.WearResult`; computes
 no metric except the schedule applied to the drawn traces
 (:func:`~nirglucose.calibration.schedules.apply_schedule`, the same function the
 benchmark scored).
