@@ -169,7 +169,8 @@ def test_the_package_uses_no_old_path():
     old = sorted(_renamed.RENAMED_MODULES, key=len, reverse=True)
     found = []
     for path in [*root.glob("src/**/*.py"), *root.glob("tests/**/*.py"),
-                 *root.glob("examples/*.py")]:
+                 *root.glob("benchmarks/*.py"), *root.glob("studies/*.py"),
+                 *root.glob("tools/*.py"), *root.glob("examples/*.py")]:
         if path.name in ("_renamed.py", "test_renamed.py"):
             continue
         for node in ast.walk(ast.parse(path.read_text())):

@@ -12,7 +12,7 @@ training mean as the prediction (the no-skill reference).
 
 Usage::
 
-    python benchmarks/neural_accuracy.py [--seeds 0,1,2,3,4] [--threads 1]
+    python studies/neural_accuracy.py [--seeds 0,1,2,3,4] [--threads 1]
 
 The last line of the output is one JSON object.
 """

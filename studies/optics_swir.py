@@ -21,16 +21,20 @@ About 45 s of one CPU. Prints one JSON object on its last line.
 from __future__ import annotations
 
 import json
+import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 
 from nirglucose.optics import absorption, scattering
 from nirglucose.optics.diffusion import differential_pathlength_factor, farrell_reflectance
 from nirglucose.optics.layers import skin_layer_optics, three_layer_reflectance
-from nirglucose.optics.reference.adding_doubling import slab_rt
-from nirglucose.optics.reference.monte_carlo import mc_slab
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))  # nirglucose_reference
+from nirglucose_reference.adding_doubling import slab_rt  # noqa: E402
+from nirglucose_reference.monte_carlo import mc_slab  # noqa: E402
 
 G, N_TISSUE, RHO_CM = 0.9, 1.4, 0.3
 

@@ -18,8 +18,8 @@ changing the simulator or a model.
 
 Usage::
 
-    python benchmarks/tune.py [--presets wearable,paper] [--models ...] [--out PATH]
-    python benchmarks/tune.py --lambda-curve-only [--presets ...]
+    python tools/tune.py [--presets wearable,paper] [--models ...] [--out PATH]
+    python tools/tune.py --lambda-curve-only [--presets ...]
 
 The validation curve of each PINN (its ``lambda_curve`` in ``scores``): the tuned
 training parameters refitted with every value of ``LAMBDA_PHYS_GRID`` on the same
@@ -225,7 +225,7 @@ def main() -> None:
     doc = {
         "format": "nirglucose-tuned-params",
         "format_version": 1,
-        "made_by": "benchmarks/tune.py",
+        "made_by": "tools/tune.py",
         "budget": {
             "configurations_per_family": N_CONFIGS,
             "folds": N_FOLDS,

@@ -6,7 +6,7 @@ PINNs, ``ablation=True``, subject-grouped 5-fold CV, **one repeat** (the package
 default is 3), tuned parameters. Where tuning chose ``lambda_phys = 0`` the PINN *is*
 its no-physics fit (no test, no verdict) and the benchmark also runs it at the best
 λ > 0 of the tuning's validation curve (``<pinn>/lambda=<λ>``, the slice at the tuned
-training parameters, recorded by ``benchmarks/tune.py`` on the tuning seeds),
+training parameters, recorded by ``tools/tune.py`` on the tuning seeds),
 paired against ``<pinn>/no-physics``. Per preset, seed and pair: Δ RMSE (with physics
 minus without, mg/dL) with its paired subject-bootstrap 95 % CI and Holm p over the
 tested pairs; over seeds, the mean Δ with a Student-t 95 % interval.
@@ -14,7 +14,7 @@ tested pairs; over seeds, the mean Δ with a Student-t 95 % interval.
 Also prints each PINN's tuning validation curve (``lambda_curve``). Not a timed test.
 Prints one JSON object on its last line.
 
-Usage: python benchmarks/pinn_ablation.py [--seeds 3] [--jobs 2] [--presets paper,wearable]
+Usage: python studies/pinn_ablation.py [--seeds 3] [--jobs 2] [--presets paper,wearable]
 """
 
 from __future__ import annotations
@@ -31,11 +31,12 @@ PINNS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn")
 
 def _one(preset: str, seed: int, jobs: int) -> list[dict]:
     import nirglucose as ng
-    from nirglucose.evaluation import run_benchmark
+    from nirglucose.evaluation import Protocol, run_benchmark
 
     ds = ng.simulate(preset, n_subjects=80, per_subject=3, seed=seed)
     res = run_benchmark(
-        ds, list(PINNS), n_splits=5, repeats=1, seed=seed, jobs=jobs, ablation=True,
+        ds, list(PINNS), protocol=Protocol(n_splits=5, repeats=1, seed=seed), jobs=jobs,
+        ablation=True,
         oracle_reference=False, drop_one_models="none",
         timing={"n_single": 2, "min_single": 1, "batch_rows": 50, "batch_repeats": 1},
     )

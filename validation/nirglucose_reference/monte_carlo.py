@@ -1,10 +1,10 @@
 """MCML Monte Carlo of layered turbid media: reflectance, transmittance, absorption.
 
-The front end of the photon engine (:mod:`~nirglucose.optics.reference.photon_engine`)
+The front end of the photon engine (:mod:`~nirglucose_reference.photon_engine`)
 with MCML's own physics (discrete absorption, Fresnel reflection and refraction at every
 interface; Wang, Jacques & Zheng 1995) and a tally of the classic MCML outputs. It exists
 to validate the deterministic solvers
-(:mod:`~nirglucose.optics.reference.adding_doubling`, :mod:`~nirglucose.optics.diffusion`)
+(:mod:`~nirglucose_reference.adding_doubling`, :mod:`~nirglucose.optics.diffusion`)
 in tests and scripts; it is not on any hot path.
 
 Packet bookkeeping
@@ -35,8 +35,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nirglucose.exceptions import ConfigError
+from nirglucose.optics._inputs import as_generator
 
-from .._inputs import as_generator
 from .photon_engine import (
     N_BATCHES,
     Packets,
@@ -328,7 +328,7 @@ def mc_slab(
 ) -> MCResult:
     r"""Monte Carlo reflectance and transmittance of one homogeneous slab.
 
-    Same conventions as :func:`~nirglucose.optics.reference.adding_doubling.slab_rt`: a normally
+    Same conventions as :func:`~nirglucose_reference.adding_doubling.slab_rt`: a normally
     incident pencil beam, the same ambient medium on both sides. ``thickness_cm =
     inf`` gives a semi-infinite medium (then ``mua_per_cm > 0``).
 

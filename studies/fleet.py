@@ -13,7 +13,7 @@
 
 One JSON object on the last line: wall times and both tables' numbers.
 
-Usage: python benchmarks/fleet.py [--seeds 3] [--jobs 2] [--models ebl,gp,oracle]
+Usage: python studies/fleet.py [--seeds 3] [--jobs 2] [--models ebl,gp,oracle]
     [--scales 0,0.25,0.5,1,2] [--out DIR] [--no-attribution]
 """
 
@@ -28,7 +28,7 @@ def _attribution(seeds: int) -> dict:
     from dataclasses import asdict
 
     from nirglucose.design.fleet import FleetTolerances
-    from nirglucose.evaluation.fleet import FLEET_DEFAULTS, fleet_metrics
+    from nirglucose.evaluation.sweep.fleet import FLEET_DEFAULTS, fleet_metrics
 
     full = asdict(FleetTolerances())
     none = {"wavelength_half_width_nm": 0.0, "power_min_ratio": 1.0, "responsivity_rel": 0.0,
@@ -50,8 +50,8 @@ def _attribution(seeds: int) -> dict:
 
 
 def main() -> None:
-    from nirglucose.evaluation.fleet import format_fleet_table
-    from nirglucose.evaluation.sweep import run_sweep
+    from nirglucose.evaluation.sweep.fleet import format_fleet_table
+    from nirglucose.evaluation.sweep.run import run_sweep
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3)

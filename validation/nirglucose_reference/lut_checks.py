@@ -16,12 +16,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ...exceptions import ConfigError
-from .. import layers
-from .._inputs import as_generator
-from ..kernels import mc_white
-from ..lut.build import _mc_run_kwargs
-from ..lut.grid import (
+from nirglucose.exceptions import ConfigError
+from nirglucose.optics import layers
+from nirglucose.optics._inputs import as_generator
+from nirglucose.optics.kernels import mc_white
+from nirglucose.optics.lut.build import _mc_run_kwargs
+from nirglucose.optics.lut.grid import (
     LUT_AXES,
     SkinLUT,
     _inverse,
@@ -29,7 +29,7 @@ from ..lut.grid import (
     _resolve_grid,
     grid_mc_settings,
 )
-from ..lut.interpolate import interpolate_lut
+from nirglucose.optics.lut.interpolate import interpolate_lut
 
 __all__ = ["random_lut_points", "direct_solve", "lut_errors"]
 

@@ -1,7 +1,7 @@
 """Where an LED band's light comes from in the ``swir`` table: shares by dermal absorption.
 
 The ``swir`` table's own error grows with the dermal absorption (fewer photons reach the
-detector with a path short enough to count; ``benchmarks/optics_reference.py --grid
+detector with a path short enough to count; ``studies/optics_reference.py --grid
 swir`` measures it per absorption bin). What a device sees is the band integral, in which
 the nodes near the 1450 nm water peak weigh little. For LED bands at 1300-1650 nm (FWHM
 50 and 100 nm, the simulator's band nodes and weights), nominal skin of

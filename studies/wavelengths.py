@@ -15,7 +15,7 @@ ranking alone, the subsets ranked, per confirmed design its bounds and RMSEs (mg
 designs whose oracle interval lies wholly below the oracle-conditioned bound (should be
 none), and the machine's 1-minute load average at the end (other work inflates times).
 
-Usage: python benchmarks/wavelengths.py [--preset wearable] [--subjects 60] [--folds 3]
+Usage: python studies/wavelengths.py [--preset wearable] [--subjects 60] [--folds 3]
     [--seeds 1] [--jobs 2] [--out DIR]
 """
 
@@ -31,7 +31,7 @@ import time
 
 def main() -> None:
     from nirglucose.design import rank_designs
-    from nirglucose.evaluation.sweep import run_sweep
+    from nirglucose.evaluation.sweep.run import run_sweep
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default="wearable")

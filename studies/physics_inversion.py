@@ -4,7 +4,7 @@ Protocol: ``nirglucose.simulate(preset, 80, 3, seed)`` for ``paper`` and ``weara
 seeds 0-4; :func:`nirglucose.evaluation.run_benchmark` with subject-grouped 5-fold CV,
 **one repeat** (the package's default is 3; one keeps the run to a few minutes on two
 cores), its subject-level bootstrap CIs, and every model with its tuned parameters
-(``tuned_params``: ``benchmarks/tune.py`` tunes the new models on the same footing as
+(``tuned_params``: ``tools/tune.py`` tunes the new models on the same footing as
 every family where ``tuned_params.json`` holds them; ``--untuned`` runs their defaults,
 with ``physics-inversion+gp`` at ``cv=0`` to keep the run short, as before they were
 tuned). Per preset and model: the RMSE of each seed with its 95 % CI, the mean and SD
@@ -14,7 +14,7 @@ the recovered tissue state against the truth, mean over seeds, next to the truth
 
 Not a timed test. Prints one JSON object on its last line.
 
-Usage: python benchmarks/physics_inversion.py [--seeds 5] [--jobs 2]
+Usage: python studies/physics_inversion.py [--seeds 5] [--jobs 2]
 """
 
 from __future__ import annotations
@@ -33,11 +33,11 @@ TIMING = {"n_single": 3, "min_single": 2, "batch_rows": 100, "batch_repeats": 1}
 
 def _one(preset: str, seed: int, jobs: int, params: dict) -> tuple[dict, list]:
     import nirglucose as ng
-    from nirglucose.evaluation import run_benchmark
+    from nirglucose.evaluation import Protocol, run_benchmark
 
     ds = ng.simulate(preset, n_subjects=80, per_subject=3, seed=seed)
     res = run_benchmark(
-        ds, list(MODELS), n_splits=5, repeats=1, seed=seed, jobs=jobs,
+        ds, list(MODELS), protocol=Protocol(n_splits=5, repeats=1, seed=seed), jobs=jobs,
         model_params=params, timing=TIMING, drop_one_models="none",
     )
     m = res.metrics.set_index("model")

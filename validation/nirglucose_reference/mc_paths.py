@@ -8,7 +8,7 @@ that make it the right tool for partial path lengths:
 * absorption is applied continuously along each step, w <- w exp(-mua s) (the
   microscopic Beer-Lambert law), instead of as a fraction at each interaction, so a
   photon's trajectory does not depend on mua (the photon engine's ``"continuous"``
-  model, :mod:`~nirglucose.optics.reference.photon_engine`);
+  model, :mod:`~nirglucose_reference.photon_engine`);
 * for every weight packet that escapes inside the detector ring it records the escaping
   weight and the path it travelled in each layer.
 
@@ -40,9 +40,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ... import portable as pm
-from ...exceptions import ConfigError
-from .._inputs import as_generator
+from nirglucose import portable as pm
+from nirglucose.exceptions import ConfigError
+from nirglucose.optics._inputs import as_generator
+
 from .photon_engine import N_BATCHES, Packets, Stack, as_layers, check_range, run_photons
 
 __all__ = ["DetectedPaths", "mc_detected_paths", "reweight_detected"]
@@ -144,7 +145,7 @@ def mc_detected_paths(
     ------
     ConfigError
         If an input is out of range (the roulette settings and ``n_photons`` are checked
-        by the engine, :func:`~nirglucose.optics.reference.photon_engine.check_run`).
+        by the engine, :func:`~nirglucose_reference.photon_engine.check_run`).
 
     Notes
     -----

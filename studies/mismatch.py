@@ -11,7 +11,7 @@ Prints, per (data model, assumed model), the inversion's RMSE per seed with its
 subject-bootstrap 95 % CI and the mean over seeds; per data model the references'.
 One JSON object on the last line.
 
-Usage: python benchmarks/mismatch.py [--seeds 2] [--subjects 40] [--folds 3] [--jobs 1]
+Usage: python studies/mismatch.py [--seeds 2] [--subjects 40] [--folds 3] [--jobs 1]
     [--out DIR]
 """
 
@@ -23,7 +23,7 @@ import time
 
 
 def main() -> None:
-    from nirglucose.evaluation.sweep import run_sweep
+    from nirglucose.evaluation.sweep.run import run_sweep
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=2)

@@ -9,11 +9,11 @@ the no-skill ``mean``. For each network: its RMSE with the cluster-bootstrap 95 
 whole CI above the no-skill RMSE, i.e. significantly worse than predicting the training
 mean: the defect the issue forbids on every preset) and ``ci_below_no_skill`` (what it
 asks for on ``paper``). This reads the reported seeds to *check* the tuned models; the
-tuning itself (``benchmarks/tune.py``) never does.
+tuning itself (``tools/tune.py``) never does.
 
 Usage::
 
-    python benchmarks/neural_acceptance.py [--presets paper,field] [--seeds 0] [--repeats 3]
+    python studies/neural_acceptance.py [--presets paper,field] [--seeds 0] [--repeats 3]
 
 Torch runs on one thread. The last line of the output is one JSON object.
 """
@@ -27,7 +27,7 @@ import time
 import torch
 
 import nirglucose as ng
-from nirglucose.evaluation import run_benchmark
+from nirglucose.evaluation import Protocol, run_benchmark
 from nirglucose.models.registry import MODELS, is_network
 from nirglucose.models.tuning import TUNED_PRESETS
 
@@ -60,9 +60,7 @@ def main() -> None:
             res = run_benchmark(
                 ds,
                 list(MODELS),
-                repeats=args.repeats,
-                seed=seed,
-                n_boot=args.resamples,
+                protocol=Protocol(repeats=args.repeats, seed=seed, resamples=args.resamples),
                 oracle_reference=False,
                 drop_one_models="none",  # reads the metrics only
             )

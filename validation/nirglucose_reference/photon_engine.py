@@ -6,9 +6,9 @@ paths, Henyey-Greenstein scattering, Fresnel splitting at the outer surfaces and
 roulette. All live packets advance together, one step per loop iteration (no Python loop
 over photons). What is recorded is not the engine's business: a :class:`Tally` receives
 the absorbed weight and every packet that escapes, and the front ends build their
-results from their tallies (:func:`~nirglucose.optics.reference.monte_carlo.mc_layers`:
+results from their tallies (:func:`~nirglucose_reference.monte_carlo.mc_layers`:
 reflectance, transmittance, absorption, radial profile;
-:func:`~nirglucose.optics.reference.mc_paths.mc_detected_paths`: the packets detected in
+:func:`~nirglucose_reference.mc_paths.mc_detected_paths`: the packets detected in
 a ring with their path per layer).
 
 Two absorption models (:data:`ABSORPTION_MODELS`):
@@ -53,9 +53,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ... import portable as pm
-from ...exceptions import ConfigError
-from .._inputs import check_n_photons
+from nirglucose import portable as pm
+from nirglucose.exceptions import ConfigError
+from nirglucose.optics._inputs import check_n_photons
 
 __all__ = ["ABSORPTION_MODELS", "N_BATCHES", "Packets", "Stack", "Tally", "as_layers",
            "check_range", "check_run", "fresnel", "hg_cos", "run_photons"]

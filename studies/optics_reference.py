@@ -1,6 +1,6 @@
 """The rte-lut table against independent Monte Carlo references precise enough to judge 1 %.
 
-One direct Monte Carlo solve (``nirglucose.optics.reference.lut_checks.direct_solve``) is
+One direct Monte Carlo solve (``nirglucose_reference.lut_checks.direct_solve``) is
 not precise enough to tell a table error of 1 % from 1.5 % at one point: solves of the same point
 with different random numbers scatter more than their reported standard errors say,
 because the re-weighting by the epidermal absorption makes the weights' distribution
@@ -32,7 +32,7 @@ about 4 CPU-minutes a group and seed, one Monte Carlo run each).
 
 Usage::
 
-    python benchmarks/optics_reference.py [--grid default] [--groups 8] [--thin-groups 1]
+    python studies/optics_reference.py [--grid default] [--groups 8] [--thin-groups 1]
         [--per-group 12] [--rng 31] [--seeds 1001,1002,1003,1004] [--photons 4000000] [--workers 2]
         [--work DIR]
 
@@ -47,11 +47,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 from _workdir import work_dir
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))  # nirglucose_reference
 
 RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 
@@ -81,7 +84,7 @@ def use_bench_cache() -> None:
 def _points(lut, groups: int, per_group: int, rng: int, thin_groups: int,
             ) -> tuple[dict, np.ndarray]:
     """The random points, and the group of each (thin-corner groups last)."""
-    from nirglucose.optics.reference import lut_checks as LV
+    from nirglucose_reference import lut_checks as LV
 
     pts = LV.random_lut_points(lut, groups * per_group, rng=rng, groups=groups)
     parts = [pts]
@@ -101,7 +104,7 @@ def _solve(task: tuple) -> tuple[int, int]:
     lut_dir, grid, group_pts, photons, seed, path = task
     os.environ["NIRGLUCOSE_CACHE"] = lut_dir
     from nirglucose.optics import lut as L
-    from nirglucose.optics.reference import lut_checks as LV
+    from nirglucose_reference import lut_checks as LV
 
     lut = L.get_lut(RHO_CM, T_EPI_CM, N_TISSUE, grid=grid)  # memoised: read once per worker
     r, se, paths = LV.direct_solve(lut, group_pts, n_photons=photons, seed=seed)

@@ -5,7 +5,7 @@ The default table stores the three-layer diffusion model plus a least-squares fi
 ``_residual_fit``). Its degrees, ``LUT_MC_SETTINGS["residual_fit_degrees"]`` (in
 ln mus'_dermis, musp_ratio, ln tau), trade the nodes' Monte Carlo noise against bias.
 This script chooses them from the table's own runs, without the hold-out references of
-``benchmarks/optics_reference.py``:
+``studies/optics_reference.py``:
 
 * node values from two disjoint halves of the default build's photons: photons
   0 .. N/2 - 1 and N/2 .. N - 1 of every run (N the default photons per run;
@@ -24,7 +24,7 @@ This script chooses them from the table's own runs, without the hold-out referen
 
 Usage::
 
-    python benchmarks/optics_fit_degrees.py [--work DIR]
+    python studies/optics_fit_degrees.py [--work DIR]
 
 Prints one JSON object on its last line.
 """

@@ -27,7 +27,7 @@ Cost on one core: about 4 min per Beer-Lambert PINN and preset with the default 
 seeds (the Optimized PINN about twice that), about 10 min per RTE PINN and preset;
 ``--inverse`` about 3 min per preset and seed.
 
-Usage: python benchmarks/pinn_forward.py [--seeds 2] [--presets paper,wearable]
+Usage: python studies/pinn_forward.py [--seeds 2] [--presets paper,wearable]
        [--pinns original-pinn,optimized-pinn] [--collocation 0] [--inverse]
 """
 
@@ -103,12 +103,13 @@ def _inverse(preset: str, seeds: list[int]) -> dict:
     import pandas as pd
 
     import nirglucose as ng
-    from nirglucose.evaluation import run_benchmark
+    from nirglucose.evaluation import Protocol, run_benchmark
 
     rows = []
     for seed in seeds:
         ds = ng.simulate(preset, n_subjects=80, per_subject=3, seed=seed)
-        res = run_benchmark(ds, list(INVERSE_MODELS), n_splits=N_SPLITS, repeats=1, seed=seed,
+        res = run_benchmark(ds, list(INVERSE_MODELS),
+                            protocol=Protocol(n_splits=N_SPLITS, repeats=1, seed=seed),
                             jobs=1, oracle_reference=False, drop_one_models="none",
                             timing={"n_single": 2, "min_single": 1, "batch_rows": 50,
                                     "batch_repeats": 1})

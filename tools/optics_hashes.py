@@ -8,7 +8,7 @@ interpolation (both variants) and of a small ``optics.model = rte-lut`` simulati
 output recorded at main's HEAD before the issue-22 split; ``tests/optics/
 test_optics_hashes.py`` compares against it.
 
-Usage: ``python benchmarks/optics_hashes.py [--default-diffusion]`` (the flag adds the
+Usage: ``python tools/optics_hashes.py [--default-diffusion]`` (the flag adds the
 default grid's diffusion table and a simulation through it: about a minute of CPU).
 """
 
@@ -20,8 +20,11 @@ import json
 import os
 import sys
 import tempfile
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))  # nirglucose_reference
 
 
 def _h(*arrays) -> str:
@@ -36,8 +39,8 @@ def _h(*arrays) -> str:
 def _mc_hashes() -> dict:
     import dataclasses
 
-    from nirglucose.optics import mc_layers, mc_slab
-    from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose_reference.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose_reference.monte_carlo import mc_layers, mc_slab
 
     out = {}
     res = mc_layers([1.0, 0.3, 2.0], [120.0, 80.0, 60.0], [0.9, 0.8, 0.7], [0.01, 0.05, 0.1],
@@ -63,7 +66,7 @@ def _mc_hashes() -> dict:
 
 def _lut_hashes(default_diffusion: bool) -> dict:
     from nirglucose.optics import lut as L
-    from nirglucose.optics.reference import lut_checks as LV
+    from nirglucose_reference import lut_checks as LV
 
     out = {}
     rng = np.random.default_rng(11)

@@ -10,7 +10,7 @@ the learned stacking weights ``(backbone_weight_, shrinkage_)`` (absent before i
 
 Not a timed test. Prints one JSON object on its last line.
 
-Usage: python benchmarks/hybrid_shrinkage.py [--presets field paper] [--seed 1000]
+Usage: python studies/hybrid_shrinkage.py [--presets field paper] [--seed 1000]
 """
 
 from __future__ import annotations

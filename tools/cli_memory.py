@@ -4,7 +4,7 @@ Runs ``simulate_frame`` on the paper preset in a fresh process for two sizes and
 prints the slope of peak RSS (ru_maxrss) against the number of snapshots, so the
 interpreter's and the tables' fixed cost cancels. The last line is one JSON object.
 
-Usage: python benchmarks/cli_memory.py [--small 300] [--large 3000]
+Usage: python tools/cli_memory.py [--small 300] [--large 3000]
 """
 
 from __future__ import annotations

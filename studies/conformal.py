@@ -13,7 +13,7 @@ with k = 1 and 2.
 
 Usage::
 
-    python benchmarks/conformal.py [--presets paper,wearable] [--seeds 0,1,2,3,4]
+    python studies/conformal.py [--presets paper,wearable] [--seeds 0,1,2,3,4]
         [--models ebl,pls,mean,gbr | all] [--subjects 80] [--per-subject 3]
         [--folds 5] [--repeats 1] [--per-subject-sweep 3,5] [--sweep-seeds 0,1,2]
 
@@ -30,7 +30,8 @@ import warnings
 import numpy as np
 
 import nirglucose as ng
-from nirglucose.evaluation.benchmark import run_benchmark
+from nirglucose.evaluation import Protocol
+from nirglucose.evaluation.benchmark.run import run_benchmark
 from nirglucose.models.registry import available_models
 
 #: Models run by default: every non-network row except the GP (cheap on 2 shared cores);
@@ -52,14 +53,11 @@ def _bench(preset, seed, models, subjects, per_subject, folds, repeats, k):
         return run_benchmark(
             ds,
             models,
-            n_splits=folds,
-            repeats=repeats,
-            seed=seed,
-            n_boot=500,
+            protocol=Protocol(n_splits=folds, repeats=repeats, seed=seed, resamples=500,
+                              calibration=k),
             timing=dict(_TIMING),
             drop_one_models="none",
             oracle_reference=False,
-            calibration=k,
         )
 
 
