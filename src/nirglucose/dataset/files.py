@@ -451,5 +451,6 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
         bad = (vals < lo) | (vals > hi)
         if bad.any():
             raise DataError(f"column {col!r} has values outside the physiological range "
-                            f"{lo:g}-{hi:g} at {file_rows(bad, csv)} (docs/user_data.md)")
+                            f"{lo:g}-{hi:g} at {file_rows(bad, csv)} "
+                            "(docs/user_guide/your_data.md)")
     return _glucose(frame, unit, csv)

@@ -373,7 +373,7 @@ class DeviceSchema:
             if bad.any():
                 raise DataError(
                     f"column {c!r} has values outside the physiological range {lo:g}-{hi:g} "
-                    f"at {_first_rows(bad)} (ranges and sources: docs/user_data.md)"
+                    f"at {_first_rows(bad)} (ranges and sources: docs/user_guide/your_data.md)"
                 )
 
     def split(self, Xa: np.ndarray) -> Measurements:

@@ -194,7 +194,7 @@ def _header(
 #define NIRGLUCOSE_ADC_BITS {schema.adc_bits}
 
 /* Measured physiological vector pmf[], in this order (dataset column names; units in
- * docs/user_data.md). */
+ * docs/user_guide/your_data.md). */
 #define NIRGLUCOSE_N_PMF {len(schema.physiology)}
 #define NIRGLUCOSE_PMF_COLUMNS {cols}
 
