@@ -4,10 +4,10 @@ glucose, environment -> physiology (traits, state) -> measured physiology -> con
 -> LED temperatures and ages -> optics -> ambient light -> hardware -> PPG. The layer
 engine (:func:`measure_readings`) runs the layers from physiology on, in that order, for
 the snapshot simulator here (:func:`simulate_block`) and the worn one
-(:mod:`.wear`), which differ only in how they draw glucose, the environment and the
-traits over time. Work is done per block of subjects (:data:`BLOCK_SUBJECTS`) with its
-own random streams, so the output is the same whatever the chunking or the number of
-workers.
+(:mod:`nirglucose.simulation.wear`), which differ only in how they draw glucose, the
+environment and the traits over time. Work is done per block of subjects
+(:data:`BLOCK_SUBJECTS`) with its own random streams, so the output is the same whatever
+the chunking or the number of workers.
 """
 
 from __future__ import annotations
