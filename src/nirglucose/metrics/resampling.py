@@ -185,7 +185,7 @@ def subject_sums(
         ],
         axis=-1,
     ).reshape(n_r, n_s, -1)
-    return SubjectSums(subjects=subjects, counts=counts, sums=sums)
+    return SubjectSums(subjects=subjects, counts=counts, sums=sums.astype(np.float64))
 
 
 def bootstrap_weights(
@@ -209,8 +209,9 @@ def repeat_subject_cells(
     """Sums of ``values`` and row counts per (repeat, subject) cell, each of ``shape``."""
     sums = np.zeros(shape)
     counts = np.zeros(shape)
-    np.add.at(sums, (repeat_idx, subject_idx), values)
-    np.add.at(counts, (repeat_idx, subject_idx), 1.0)
+    cells = (np.asarray(repeat_idx, dtype=np.intp), np.asarray(subject_idx, dtype=np.intp))
+    np.add.at(sums, cells, values)
+    np.add.at(counts, cells, 1.0)
     return sums, counts
 
 
