@@ -8,9 +8,9 @@ PRESET ?= paper,wearable
 SEED   ?= 0
 OUT    ?= results
 # every registered model but the two GP hybrids (ebl+gp, physics-inversion+gp: each fit is
-# several backbone fits and a GP, 2.5 min more on 2 cores; benchmarks/physics_inversion.py
+# several backbone fits and a GP, 2.5 min more on 2 cores; studies/physics_inversion.py
 # runs them) and the forward-model PINNs (original-pinn-fm, optimized-pinn-fm, rte-pinn-fm,
-# selective-rte-pinn-fm: a physics-inversion fit per task; benchmarks/pinn_forward.py
+# selective-rte-pinn-fm: a physics-inversion fit per task; studies/pinn_forward.py
 # runs them);
 # tests/test_makefile.py keeps this list equal to the registry minus those
 MODELS ?= ebl,pls,oracle,physics-inversion,original-pinn,optimized-pinn,rte-pinn,selective-rte-pinn,sdnn,mean,gp,gbr
@@ -38,8 +38,10 @@ test: $(STAMP)
 	$(BIN)/python -m pytest -q -n 2 --dist worksteal
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks studies tools validation
 
+# the speed checks only (each prints one JSON object on its last line); the research
+# scripts are in studies/ and the tools that write package data in tools/
 bench: $(STAMP)
 	for b in benchmarks/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 

@@ -6,7 +6,7 @@
 * accuracy: table / direct solve - 1 at 120 random off-grid points uniform in each axis'
   coordinate over the table's box, in 12 groups sharing (musp_ratio, thickness) (one
   Monte Carlo run each); "direct solve" is
-  nirglucose.optics.reference.lut_checks.direct_solve, a run at
+  nirglucose_reference.lut_checks.direct_solve, a run at
   the point with the table's settings and common random numbers (at the default
   table's 3.2 million photons per run about 90 CPU-minutes: 45 measured at 1.6 million);
   with the direct solve's own standard error;
@@ -21,9 +21,9 @@
 * accuracy_independent (only with NIRGLUCOSE_BENCH_REFERENCE=1, about 17 CPU-minutes):
   the table against independent direct solves (4 000 000 photons, other random
   numbers) at 36 points in 3 groups (one solve per point: too noisy to judge 1 % at a
-  point; benchmarks/optics_reference.py averages seeds for that);
+  point; studies/optics_reference.py averages seeds for that);
 * Monte Carlo (only with NIRGLUCOSE_BENCH_MC=1, about 2 min of CPU): the three-layer
-  model against nirglucose.optics.reference.mc_paths at a few skin states.
+  model against nirglucose_reference.mc_paths at a few skin states.
 
 Prints one JSON object on its last line.
 """
@@ -45,13 +45,15 @@ import numpy as np  # noqa: E402
 
 os.environ.setdefault("NIRGLUCOSE_BENCH_SNAPSHOTS", "200000")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(_ROOT, "validation"))  # nirglucose_reference (not installed)
 
 import simulate as sim_bench  # noqa: E402  (benchmarks/simulate.py)
 
 from nirglucose.optics import layers, tissue  # noqa: E402
 from nirglucose.optics import lut as L  # noqa: E402
 from nirglucose.optics.lut import interpolate as LI  # noqa: E402
-from nirglucose.optics.reference import lut_checks as LV  # noqa: E402
+from nirglucose_reference import lut_checks as LV  # noqa: E402
 
 RHO_CM, T_EPI_CM, N_TISSUE = 0.3, 0.008, 1.4
 
@@ -173,7 +175,7 @@ def _simulator() -> dict:
 
 
 def _monte_carlo() -> list[dict]:
-    from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose_reference.mc_paths import mc_detected_paths, reweight_detected
 
     start = time.process_time()
     run = mc_detected_paths([0.2, 0.1, 0.03], [200.0, 200.0, 140.0], 0.9, [0.008, 0.15],

@@ -20,11 +20,13 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from nirglucose.optics.reference.adding_doubling import slab_rt
-from nirglucose.optics.reference.monte_carlo import mc_slab
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))  # nirglucose_reference
+from nirglucose_reference.adding_doubling import slab_rt  # noqa: E402
+from nirglucose_reference.monte_carlo import mc_slab  # noqa: E402
 
 MCML_RD = 0.09734
 MCML_TT = 0.66096

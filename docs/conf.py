@@ -3,7 +3,7 @@
 Sphinx + numpydoc + the PyData theme, because the docstrings are already numpydoc with
 doctested examples (the convention of pvlib, scikit-learn and xarray, whose sites use
 the same stack); myst-parser renders the Markdown pages (the user guide moved out of the
-README, ``features.md``, ``user_data.md``); sphinx-gallery runs ``examples/`` in the build.
+README, ``features.md``, ``user_guide/your_data.md``); sphinx-gallery runs ``examples/`` in the build.
 The CLI reference is generated here at build time from ``nirglucose <command> --help``.
 """
 
@@ -170,7 +170,7 @@ def _skip_member(app, what, name, obj, skip, options):  # noqa: ARG001
 def setup(app):
     from pygments.lexers.special import TextLexer
 
-    app.add_lexer("csv", TextLexer)  # the device files in user_data.md
+    app.add_lexer("csv", TextLexer)  # the device files in user_guide/your_data.md
     app.connect("builder-inited", _write_cli_reference)
     app.connect("autodoc-process-docstring", _module_citations, priority=100)
     app.connect("autodoc-skip-member", _skip_member)

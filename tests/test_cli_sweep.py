@@ -74,6 +74,6 @@ def test_sweep_data_size(tmp_path, capsys):
 
 def test_sweep_help_names_every_study():
     from nirglucose.cli import _STUDY_NAMES
-    from nirglucose.evaluation.sweep import STUDIES
+    from nirglucose.evaluation.sweep.run import STUDIES
 
     assert _STUDY_NAMES.split(", ") == list(STUDIES)

@@ -19,7 +19,7 @@ from nirglucose.config import (
     resolve_config,
     valid_keys,
 )
-from nirglucose.config_keys import key_info
+from nirglucose.config.keys import key_info
 from nirglucose.exceptions import ConfigError
 
 
@@ -280,7 +280,7 @@ def test_every_numeric_value_has_an_explicit_physical_bound():
     """Each number of the config (fields, tuple items, dict values) has both bounds,
     narrower than the generic +-MAX_ABS_VALUE rule: a new unbounded field fails here."""
     from nirglucose.config import MAX_ABS_VALUE
-    from nirglucose.config_keys import numeric_leaves
+    from nirglucose.config.keys import numeric_leaves
 
     leaves = numeric_leaves()
     assert len(leaves) > 150  # the walk sees the whole model (tuples, dicts, LED records)
@@ -298,7 +298,7 @@ def test_bound_walk_sees_an_unbounded_field():
 
     from pydantic import BaseModel, Field
 
-    from nirglucose.config_keys import numeric_leaves
+    from nirglucose.config.keys import numeric_leaves
 
     class Probe(BaseModel):
         free: float = 1.0
@@ -313,7 +313,7 @@ def test_bound_walk_sees_an_unbounded_field():
 
 @pytest.mark.parametrize("preset", list(PRESETS))
 def test_presets_lie_within_the_bounds(preset):
-    from nirglucose.config_keys import bounds_of, numeric_leaves
+    from nirglucose.config.keys import bounds_of, numeric_leaves
 
     data = resolve_config(preset).model_dump(mode="json")
     checked = 0
@@ -359,7 +359,7 @@ def test_out_of_range_message_names_key_value_range_and_unit(key, value, words):
 
 
 def test_bounds_text():
-    from nirglucose.config_keys import Bounds, key_range
+    from nirglucose.config.keys import Bounds, key_range
 
     assert str(Bounds(8, 24)) == "between 8 and 24"
     assert str(Bounds(0, 1, lo_open=True)) == "> 0 and <= 1"

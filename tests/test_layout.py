@@ -76,7 +76,56 @@ UNREASONED_FUNCTION_IMPORTS: frozenset[str] = frozenset()
 
 #: Imports of another module's private (``_x``) names: a ratchet at this count, which
 #: may only fall (lower it when you remove some).
-MAX_UNDERSCORE_IMPORTS = 152
+MAX_UNDERSCORE_IMPORTS = 139
+
+#: The package's layers, lowest first (issue 42): a module imports modules of its own
+#: layer or lower ones, never a higher one, so no arrow runs back up. By top-level name
+#: under ``nirglucose`` (``""``: the package's ``__init__``); a new subpackage fails
+#: :func:`test_every_module_has_a_layer` until it is placed here.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("_version", "exceptions", "constants", "portable", "resources", "formatting", "data",
+     "_renamed"),
+    ("config",),
+    ("dataset", "optics", "metrics"),  # the data boundary, the physics, the scores
+    ("simulation", "fitted"),  # the simulator; the estimators' side of the schema
+    ("api", "features"),
+    ("", "models", "design"),
+    ("calibration",),  # intervals and calibration of a fitted model
+    ("prediction", "export"),  # using a fitted model
+    ("evaluation",),  # judging the models
+    ("plots",),
+    ("report",),
+    ("cli",),
+)
+#: The evaluation's own floors, lowest first (``""``: its ``__init__``, which imports
+#: nothing): the task engine, the pieces both verbs share, the benchmark, then what
+#: runs benchmarks (sweeps, the worn-device study).
+EVALUATION_LAYERS: tuple[tuple[str, ...], ...] = (
+    ("", "engine"),
+    ("splits", "protocol", "reference", "estimators"),
+    ("benchmark",),
+    ("sweep", "wear"),
+)
+
+
+def layer_of(module: str) -> tuple[int, int]:
+    """``(layer, evaluation floor)`` of a dotted module name (the floor is 0 outside
+    :mod:`nirglucose.evaluation`); a KeyError for a module no layer names."""
+    parts = module.split(".")
+    top = parts[1] if len(parts) > 1 else ""
+    rank = next(i for i, names in enumerate(LAYERS) if top in names)
+    if top != "evaluation":
+        return rank, 0
+    sub = parts[2] if len(parts) > 2 else ""
+    return rank, next(i for i, names in enumerate(EVALUATION_LAYERS) if sub in names)
+
+
+def arrows_back_up(graph: dict[str, set[str]], layer=layer_of) -> list[str]:
+    """Every import ``a -> b`` with ``b`` on a higher layer (or evaluation floor) than
+    ``a``."""
+    return sorted(f"{a} -> {b}" for a, targets in graph.items() for b in targets
+                  if layer(b) > layer(a))
+
 
 #: Functions over 60 code lines without the reason in their docstring, qualname ->
 #: reason; empty: every function is short or says why it is not.
@@ -99,21 +148,23 @@ def _is_type_checking(test: ast.expr) -> bool:
     )
 
 
-def _imports(node: ast.AST, function: str = ""):
+def _imports(node: ast.AST, function: str = "", typing: bool = False):
     """``(import statement, enclosing function's qualname or "")`` for every import that
-    can run (not under ``if TYPE_CHECKING``); ``""``: it runs when the module loads."""
+    can run (not under ``if TYPE_CHECKING``, unless ``typing``: then those too);
+    ``""``: it runs when the module loads."""
     for child in ast.iter_child_nodes(node):
         if isinstance(child, ast.Import | ast.ImportFrom):
             yield child, function
         elif isinstance(child, ast.If) and _is_type_checking(child.test):
-            for sub in child.orelse:
-                yield from _imports(ast.Module(body=[sub], type_ignores=[]), function)
+            for sub in (*child.body, *child.orelse) if typing else child.orelse:
+                yield from _imports(ast.Module(body=[sub], type_ignores=[]), function, typing)
         elif isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef):
-            yield from _imports(child, f"{function}.{child.name}" if function else child.name)
+            yield from _imports(child, f"{function}.{child.name}" if function else child.name,
+                                typing)
         elif isinstance(child, ast.ClassDef) and function:
-            yield from _imports(child, f"{function}.{child.name}")
+            yield from _imports(child, f"{function}.{child.name}", typing)
         else:
-            yield from _imports(child, function)
+            yield from _imports(child, function, typing)
 
 
 def _named(node: ast.Import | ast.ImportFrom, name: str, is_pkg: bool,
@@ -140,21 +191,23 @@ def _named(node: ast.Import | ast.ImportFrom, name: str, is_pkg: bool,
     return out
 
 
-def import_graph(*, functions: bool = False, root: Path = _ROOT,
+def import_graph(*, functions: bool = False, typing: bool = False, root: Path = _ROOT,
                  package: str = _PACKAGE) -> dict[str, set[str]]:
     """Module -> the package's modules its imports run (see the module docstring).
 
     ``functions``: imports inside functions count too (they run when the function is
-    first called, so a circle closed by one is a circle all the same). A name read
-    from one of the module's own ancestor packages (``from . import __version__``)
-    is an edge to that package's ``__init__``, which may still be initialising.
+    first called, so a circle closed by one is a circle all the same). ``typing``:
+    imports under ``if TYPE_CHECKING:`` count too (a circle of types is a circle for
+    the reader and the type checker). A name read from one of the module's own
+    ancestor packages (``from . import __version__``) is an edge to that package's
+    ``__init__``, which may still be initialising.
     """
     mods = _modules(root, package)
     graph = {}
     for name, (path, is_pkg) in mods.items():
         ancestors = {".".join(name.split(".")[:k]) for k in range(1, name.count(".") + 2)}
         edges = set()
-        for node, function in _imports(ast.parse(path.read_text())):
+        for node, function in _imports(ast.parse(path.read_text()), typing=typing):
             if function and not functions:
                 continue
             for target, read in _named(node, name, is_pkg, mods):
@@ -310,6 +363,51 @@ def test_no_import_circle_at_any_depth():
     assert found == [], "import circles: " + "; ".join(" <-> ".join(c) for c in found)
 
 
+def test_no_import_circle_even_through_type_only_imports():
+    # ``if TYPE_CHECKING:`` imports count too: a circle of types is a circle to read
+    # (the report's figure sections once shared a class that way)
+    found = circles(import_graph(functions=True, typing=True))
+    assert found == [], "import circles: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_every_module_has_a_layer():
+    unplaced = []
+    for module in _modules():
+        try:
+            layer_of(module)
+        except StopIteration:
+            unplaced.append(module)
+    assert not unplaced, f"place these in LAYERS / EVALUATION_LAYERS: {unplaced}"
+
+
+def test_no_import_runs_back_up_the_layers():
+    # at run time, imports inside functions included (they run all the same)
+    found = arrows_back_up(import_graph(functions=True))
+    assert not found, "imports of a higher layer: " + "; ".join(found)
+
+
+def test_the_layer_check_finds_an_arrow_back_up():
+    graph = {"nirglucose.dataset.schema": {"nirglucose.models.registry"},
+             "nirglucose.evaluation.engine.tasks": {"nirglucose.evaluation.benchmark.run"},
+             "nirglucose.models.registry": {"nirglucose.dataset.schema"},
+             "nirglucose.evaluation.sweep.run": {"nirglucose.evaluation.benchmark.run"}}
+    assert arrows_back_up(graph) == [
+        "nirglucose.dataset.schema -> nirglucose.models.registry",
+        "nirglucose.evaluation.engine.tasks -> nirglucose.evaluation.benchmark.run",
+    ]
+    assert layer_of("nirglucose") == layer_of("nirglucose.models") > layer_of("nirglucose.api")
+
+
+def test_prediction_imports_only_models_dataset_and_calibration():
+    # using a fitted model never loads the study engine (issue 42)
+    reached = _closure(import_graph(functions=True), "nirglucose.prediction")
+    tops = {m.split(".")[1] for m in reached if m.count(".")}
+    assert {"models", "dataset", "calibration"} <= tops
+    assert not tops & {"evaluation", "report", "plots", "cli", "export"}, tops
+    calibration = _closure(import_graph(functions=True), "nirglucose.calibration.conformal")
+    assert not any(m.startswith("nirglucose.evaluation") for m in calibration)
+
+
 def test_the_circle_finder_finds_every_circle():
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"e"}, "e": {"d", "a"}, "f": {"a"}}
     assert circles(graph) == [["a", "b", "c"], ["d", "e"]]
@@ -373,10 +471,10 @@ def test_private_names_imported_across_modules_do_not_grow():
 
 def test_the_graph_resolves_relative_imports_and_packages():
     graph = import_graph()
-    assert "nirglucose.dataset" in graph["nirglucose.schema"]
+    assert "nirglucose.dataset.container" in graph["nirglucose.dataset.schema"]
     # importing models.registry runs the models package too (an edge to each) ...
     assert {"nirglucose.models", "nirglucose.models.registry"} <= graph[
-        "nirglucose.evaluation.benchmark"
+        "nirglucose.evaluation.benchmark.run"
     ]
     # ... but a module's own ancestors are no edges (they are initialised first)
     assert "nirglucose.models" not in graph["nirglucose.models.linear"]
@@ -397,7 +495,7 @@ def _closure(graph: dict[str, set[str]], start: str) -> set[str]:
 
 def test_the_data_container_does_not_need_the_simulator():
     graph = import_graph()
-    for module in ("nirglucose.dataset", "nirglucose.schema", "nirglucose.features"):
+    for module in ("nirglucose.dataset", "nirglucose.dataset.schema", "nirglucose.features"):
         reached = _closure(graph, module)
         assert not any(m.startswith("nirglucose.simulation") for m in reached), (module, reached)
     assert "nirglucose.simulation.partitioned" not in _closure(graph, "nirglucose.dataset")
@@ -405,8 +503,8 @@ def test_the_data_container_does_not_need_the_simulator():
 
 def test_the_evaluation_modules_import_in_any_order():
     # a fresh interpreter per entry point: a hidden cycle shows as an ImportError
-    for module in ("nirglucose.evaluation.tasks", "nirglucose.evaluation.sweep",
-                   "nirglucose.evaluation.benchmark_aggregate", "nirglucose.features",
+    for module in ("nirglucose.evaluation.engine.tasks", "nirglucose.evaluation.sweep",
+                   "nirglucose.evaluation.benchmark.aggregate", "nirglucose.features",
                    "nirglucose.fitted", "nirglucose.simulation.partitioned"):
         run = subprocess.run([sys.executable, "-c", f"import {module}"], capture_output=True,
                              text=True, check=False)

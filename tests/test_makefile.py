@@ -18,7 +18,7 @@ LEFT_OUT = {
     "ebl+gp": "a GP on EBL's out-of-fold residual: several fits per task",
     "physics-inversion+gp": "a GP on the inversion's out-of-fold residual: 4 inversions a task",
     "original-pinn-fm": "a physics-inversion fit per task besides the network (and its "
-                        "no-physics row); benchmarks/pinn_forward.py scores it",
+                        "no-physics row); studies/pinn_forward.py scores it",
     "optimized-pinn-fm": "the same, on the attention network",
     "rte-pinn-fm": "the same, on the RTE network",
     "selective-rte-pinn-fm": "the same, on the selective RTE network",

@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 
 import nirglucose as ng
+from nirglucose.calibration.conformal import attach
 from nirglucose.cli import app
-from nirglucose.evaluation.conformal import attach
 from nirglucose.exceptions import ConfigError, DataError
 
 COLUMNS = ["measurement_id", "subject_id", "predicted_glucose_mgdl", "glucose_lower_mgdl",

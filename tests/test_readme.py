@@ -53,8 +53,9 @@ def test_readme_python_example_runs_with_other_resolutions_and_led_sets(tmp_path
 
 
 def test_user_data_doc_runs_end_to_end(tmp_path, monkeypatch, capsys):
-    """docs/user_data.md: its one-LED and three-LED files through fit, predict, export-c."""
-    doc = (README.parent / "docs" / "user_data.md").read_text()
+    """docs/user_guide/your_data.md: its one-LED and three-LED files through fit, predict,
+    export-c."""
+    doc = (README.parent / "docs" / "user_guide" / "your_data.md").read_text()
     monkeypatch.chdir(tmp_path)
     files = _blocks(doc, "csv ")
     assert {info.strip() for info, _ in files} == {"one_led.csv", "three_led.csv"}
@@ -89,6 +90,6 @@ def test_user_data_doc_runs_end_to_end(tmp_path, monkeypatch, capsys):
 def test_user_data_doc_lists_the_physiological_ranges():
     from nirglucose.dataset import PHYSIOLOGICAL_RANGES
 
-    doc = (README.parent / "docs" / "user_data.md").read_text()
+    doc = (README.parent / "docs" / "user_guide" / "your_data.md").read_text()
     for col, (lo, hi, _) in PHYSIOLOGICAL_RANGES.items():
         assert f"| `{col}` |" in doc and f"{lo:g}–{hi:g}" in doc, col

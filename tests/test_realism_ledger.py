@@ -1,4 +1,4 @@
-"""The realism ledger's record (benchmarks/records/realism_ledger.json) is the package's:
+"""The realism ledger's record (studies/records/realism_ledger.json) is the package's:
 its per-band numbers recomputed here; the slow sections on request (-m slow)."""
 
 from __future__ import annotations
@@ -11,14 +11,14 @@ import numpy as np
 import pytest
 
 _ROOT = Path(__file__).resolve().parents[1]
-_RECORD = json.loads((_ROOT / "benchmarks" / "records" / "realism_ledger.json").read_text())
+_RECORD = json.loads((_ROOT / "studies" / "records" / "realism_ledger.json").read_text())
 
 pytestmark = pytest.mark.filterwarnings("ignore:lipid absorption above")
 
 
 def _script():
     spec = importlib.util.spec_from_file_location(
-        "realism_ledger", _ROOT / "benchmarks" / "realism_ledger.py")
+        "realism_ledger", _ROOT / "studies" / "realism_ledger.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

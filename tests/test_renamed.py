@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import subprocess
 import sys
 import textwrap
@@ -88,3 +89,96 @@ def test_every_renamed_module_exists_under_its_new_name(name):
     import importlib
 
     assert importlib.import_module(_renamed.RENAMED_MODULES[name])
+
+
+# --------------------------------------------------------------------------- issue 42
+def _release(version: str) -> tuple[int, ...]:
+    """``"0.2.0"`` -> ``(0, 2)``: the release a version belongs to (major, minor)."""
+    return tuple(int(p) for p in version.split("+")[0].split(".")[:2])
+
+
+def overdue(version: str) -> list[str]:
+    """The old names still served at ``version`` though their release removed them."""
+    if _release(version) < _release(_renamed.REMOVED_IN):
+        return []
+    return sorted([*_renamed.RENAMED_MODULES, *_renamed.MOVED_NAMES])
+
+
+def test_the_old_names_are_removed_on_schedule():
+    # fails once the package's version reaches REMOVED_IN while old paths remain
+    import tomllib
+    from pathlib import Path
+
+    pyproject = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml")
+                              .read_text())
+    for version in (pyproject["project"]["version"], ng.__version__):
+        assert not overdue(version), (f"nirglucose {version} still serves the old names it "
+                                      f"promised to remove in {_renamed.REMOVED_IN}: "
+                                      f"{overdue(version)[:5]}...")
+
+
+def test_the_schedule_check_can_fail():
+    assert overdue("0.2.0") == [] and overdue("0.2.9+dev") == []
+    assert "nirglucose.schema" in overdue("0.3.0") and "nirglucose.simulate" in overdue("1.0")
+
+
+def test_every_old_path_warns_once_and_gives_the_new_objects():
+    # one fresh interpreter for every old module path and departed name
+    res = _run("""
+        import importlib, sys, warnings
+        import nirglucose
+        from nirglucose import _renamed
+        bad = []
+        for old, new in sorted(_renamed.RENAMED_MODULES.items()):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                alias = importlib.import_module(old)
+                importlib.import_module(old)  # a second import: no second warning
+            msgs = [str(w.message) for w in caught if w.category is DeprecationWarning]
+            if len(msgs) != 1 or f"{old} was renamed {new}" not in msgs[0]:
+                bad.append((old, msgs))
+            module = importlib.import_module(new)
+            names = getattr(module, "__all__", [])
+            same = all(getattr(alias, n) is getattr(module, n) for n in names)
+            if not same or not (alias is module or callable(alias)
+                                or type(alias).__name__ == "_AliasModule"):
+                bad.append((old, "not the new module's objects"))
+        for old, new in sorted(_renamed.MOVED_NAMES.items()):
+            module, _, name = old.rpartition(".")
+            home, _, attr = new.rpartition(".")
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                got = getattr(importlib.import_module(module), name)
+            msgs = [str(w.message) for w in caught if w.category is DeprecationWarning]
+            if got is not getattr(importlib.import_module(home), attr):
+                bad.append((old, "another object"))
+            if not any(f"{old} was renamed {new}" in m for m in msgs):
+                bad.append((old, msgs))
+        print(bad or "ok")
+    """)
+    assert res.returncode == 0 and res.stdout.strip() == "ok", (res.stdout[-3000:],
+                                                                res.stderr[-2000:])
+
+
+def test_the_package_uses_no_old_path():
+    # the package's own code and tests import the new homes (pyproject turns a
+    # DeprecationWarning raised from nirglucose.* into an error, this checks the source)
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    old = sorted(_renamed.RENAMED_MODULES, key=len, reverse=True)
+    found = []
+    for path in [*root.glob("src/**/*.py"), *root.glob("tests/**/*.py"),
+                 *root.glob("benchmarks/*.py"), *root.glob("studies/*.py"),
+                 *root.glob("tools/*.py"), *root.glob("examples/*.py")]:
+        if path.name in ("_renamed.py", "test_renamed.py"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            mod = None
+            if isinstance(node, ast.ImportFrom) and not node.level:
+                mod = node.module
+            elif isinstance(node, ast.Import):
+                mod = node.names[0].name
+            if mod and any(mod == o or mod.startswith(o + ".") for o in old):
+                found.append(f"{path.relative_to(root)}: {mod}")
+    assert not found, found

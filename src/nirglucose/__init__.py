@@ -47,13 +47,13 @@ __all__ = [
 #: Subpackages reachable as attributes (``ng.models``, ``ng.metrics``, ...), imported on
 #: first access so that ``import nirglucose`` stays light (torch, numba and matplotlib
 #: load only when a model, kernel or figure asks for them).
-SUBPACKAGES = ("config", "design", "evaluation", "export", "features", "metrics", "models",
-               "optics", "plots", "portable", "report", "twin")
+SUBPACKAGES = ("calibration", "config", "dataset", "design", "evaluation", "export", "features",
+               "metrics", "models", "optics", "plots", "portable", "report", "twin")
 
 
 #: Functions and classes reachable as attributes, name -> module, imported on first
-#: access: ``ng.predict`` needs the evaluation package's interval code, which loading a
-#: model file must not import.
+#: access: ``ng.predict`` needs the models and their intervals (:mod:`.calibration`), which
+#: ``import nirglucose`` does not load.
 LAZY_ATTRIBUTES = {"predict": "nirglucose.prediction", "PredictionResult": "nirglucose.prediction",
                    "fit_twin": "nirglucose.twin", "load_twin": "nirglucose.twin",
                    "Twin": "nirglucose.twin"}

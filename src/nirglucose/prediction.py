@@ -2,9 +2,10 @@
 meter flags and the inputs outside the training range (what ``nirglucose predict`` writes).
 
 :func:`predict` (``ng.predict``) is the entry point; the other functions are its steps,
-each on an already loaded estimator and :class:`~nirglucose.dataset.Dataset`. The
-package exposes this module's names lazily, so that ``import nirglucose`` (and loading a
-model file) does not import the evaluation package.
+each on an already loaded estimator and :class:`~nirglucose.dataset.Dataset`. It
+imports the models, the dataset and :mod:`nirglucose.calibration` only (never the
+evaluation); the package exposes its names lazily, so that ``import nirglucose`` does
+not load the models.
 """
 
 from __future__ import annotations
@@ -18,21 +19,21 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .columns import ID_COLUMNS
+from .calibration.conformal import calibration_of, interval
+from .calibration.personal import apply_offset
 from .dataset import Dataset, load_dataset
-from .evaluation.calibration import apply_offset
-from .evaluation.conformal import calibration_of, interval
-from .exceptions import ConfigError, DataError
-from .io_files import (
+from .dataset.columns import ID_COLUMNS
+from .dataset.files import (
     check_codes,
     check_glucose_unit,
     file_rows,
     glucose_to_unit,
     validate_frame,
 )
+from .dataset.schema import meter_flags
+from .exceptions import ConfigError, DataError
 from .models._validate import check_predictions
 from .models.registry import model_from
-from .schema import meter_flags
 
 __all__ = [
     "INTERVAL_LEVEL",

@@ -20,7 +20,7 @@ __all__ = ["SIM_BYTES_PER_SNAPSHOT", "check_simulation_size", "physical_memory_b
            "simulation_bytes"]
 
 #: Memory a simulated snapshot needs: ``simulate_frame`` peaks at 1,125 B per snapshot
-#: (``benchmarks/cli_memory.py``, slope of peak RSS between 9,000 and 90,000
+#: (``tools/cli_memory.py``, slope of peak RSS between 9,000 and 90,000
 #: snapshots), times about 3.5 for the copies made on saving, summarising and
 #: benchmarking. Only used to refuse runs that cannot fit, before they start. [B]
 SIM_BYTES_PER_SNAPSHOT = 4_000

@@ -82,7 +82,7 @@ def test_text_in_a_worn_device_time_is_one_line(cli, workdir):
 
 
 def test_report_refuses_text_in_a_metric_and_a_garbage_sweep(cli, workdir):
-    from nirglucose.evaluation.sweep import load_sweep
+    from nirglucose.evaluation.sweep.run import load_sweep
 
     (workdir / "b").mkdir()
     pd.DataFrame({"model": ["pls"], "rmse_mgdl": [20.0], "rmse_ci_high": ["abc"]}).to_csv(

@@ -18,7 +18,7 @@ psutil = pytest.importorskip("psutil")
 
 from cli_helpers import PROGRESS, all_gone, subprocess_env  # noqa: E402
 
-from nirglucose.evaluation.executors import resolve_backend, run_unordered  # noqa: E402
+from nirglucose.evaluation.engine.executors import resolve_backend, run_unordered  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
 
@@ -153,7 +153,7 @@ def test_a_scheduler_that_does_not_answer_is_one_line_before_any_task(
         cli, tmp_path, deaf_scheduler, monkeypatch):
     from cli_helpers import assert_one_line_error
 
-    from nirglucose.evaluation import executors
+    from nirglucose.evaluation.engine import executors
 
     monkeypatch.setattr(executors, "SCHEDULER_TIMEOUT_S", 1.0)
     t0 = time.monotonic()
@@ -167,7 +167,7 @@ def test_a_scheduler_that_does_not_answer_is_one_line_before_any_task(
 
 
 def test_a_live_scheduler_passes_the_check(remote):
-    from nirglucose.evaluation.executors import check_scheduler
+    from nirglucose.evaluation.engine.executors import check_scheduler
 
     cluster, _ = remote
     check_scheduler(cluster.scheduler_address, timeout_s=5)

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from cli_helpers import PROGRESS, all_gone, subprocess_env
 
-import nirglucose.evaluation.benchmark as bench_mod
+import nirglucose.evaluation.benchmark.run as bench_mod
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="uses /proc")
 
@@ -87,7 +87,7 @@ def test_workers_die_with_a_killed_parent(tmp_path):
     script = tmp_path / "run.py"
     script.write_text(textwrap.dedent("""
         import time
-        from nirglucose.evaluation.executors import run_unordered
+        from nirglucose.evaluation.engine.executors import run_unordered
 
         def nap(s):
             time.sleep(s)

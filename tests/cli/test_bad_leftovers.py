@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 from cli_helpers import assert_one_line_error, listing
 
-import nirglucose.evaluation.benchmark as bench_mod
-import nirglucose.evaluation.sweep as sweep_mod
+import nirglucose.evaluation.benchmark.run as bench_mod
+import nirglucose.evaluation.sweep.run as sweep_mod
 from nirglucose.exceptions import DataError
 
 BENCH = ["benchmark", "--out", "res", "--subjects", 10, "--per-subject", 2, "--models", "ebl",

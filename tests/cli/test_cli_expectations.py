@@ -8,9 +8,9 @@ import pytest
 from cli_helpers import PROGRESS, assert_one_line_error
 
 import nirglucose
-import nirglucose.evaluation.executors as executors
+import nirglucose.evaluation.engine.executors as executors
 from nirglucose.config import PRESETS, valid_keys
-from nirglucose.evaluation.progress import MAX_LINES, TaskProgress
+from nirglucose.evaluation.engine.progress import MAX_LINES, TaskProgress
 from nirglucose.models.registry import available_models
 
 

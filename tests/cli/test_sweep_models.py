@@ -1,7 +1,7 @@
 """Which models a sweep runs when --models is not given."""
 
 from nirglucose.cli.sweep_command import _sweep_models
-from nirglucose.evaluation.studies import STUDY_MODELS
+from nirglucose.evaluation.sweep.studies import STUDY_MODELS
 from nirglucose.models.registry import available_models
 
 

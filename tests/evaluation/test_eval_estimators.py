@@ -3,6 +3,8 @@ side, a clone per fold, the task seed in random_state, bad objects refused, any 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from sklearn.base import BaseEstimator, RegressorMixin, clone
@@ -14,7 +16,9 @@ from sklearn.utils.validation import check_is_fitted
 
 import nirglucose as ng
 from nirglucose.dataset import Dataset
-from nirglucose.evaluation.benchmark import run_benchmark
+from nirglucose.evaluation import Protocol
+from nirglucose.evaluation.benchmark.run import run_benchmark
+from nirglucose.evaluation.engine.tasks import derived_seed
 from nirglucose.evaluation.estimators import (
     build_estimator,
     estimator_identity,
@@ -22,14 +26,14 @@ from nirglucose.evaluation.estimators import (
     resolve_entries,
 )
 from nirglucose.evaluation.splits import make_splits
-from nirglucose.evaluation.sweep import run_sweep
-from nirglucose.evaluation.tasks import derived_seed
+from nirglucose.evaluation.sweep.run import run_sweep
 from nirglucose.exceptions import ConfigError
 from nirglucose.models.registry import make_model
 
+TWO = Protocol(n_splits=2, repeats=1, resamples=30)
 FAST = dict(
     timing={"n_single": 2, "min_single": 1, "warmup": 0, "batch_rows": 20, "batch_repeats": 1},
-    n_boot=30, oracle_reference=False, n_splits=2, repeats=1, drop_one_models="none",
+    oracle_reference=False, drop_one_models="none", protocol=TWO,
 )
 
 
@@ -113,7 +117,8 @@ def test_object_of_a_registered_class_takes_its_name(data):
 
 def test_task_seed_reaches_random_state(data):
     echo, nested, fixed = SeedEcho(), make_pipeline(StandardScaler(), SeedEcho()), SeedEcho(5)
-    res = run_benchmark(data, [echo, ("nested", nested), ("fixed", fixed)], seed=3, **FAST)
+    res = run_benchmark(data, [echo, ("nested", nested), ("fixed", fixed)],
+                        **{**FAST, "protocol": dataclasses.replace(TWO, seed=3)})
     p = res.predictions
     for (repeat, fold), g in p.groupby(["repeat", "fold"]):
         task_seed = derived_seed(3, "SeedEcho", repeat, fold)  # as a registered model's
@@ -216,7 +221,7 @@ def test_sweep_takes_objects(tmp_path):
 def test_measured_frame_reads_channels_as_the_schema_does(data):
     """A reference learner sees the schema's channels: every adc_<nm> (850.5 included),
     ascending whatever the file's order; a partial set of references is refused."""
-    from nirglucose.schema import DeviceSchema
+    from nirglucose.dataset.schema import DeviceSchema
 
     frame = data.frame.rename(columns={"adc_940": "adc_940.5", "adc_ref_940": "adc_ref_940.5"})
     shuffled = frame[list(reversed(frame.columns))]

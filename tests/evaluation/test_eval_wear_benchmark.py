@@ -5,7 +5,7 @@ import pytest
 
 import nirglucose as ng
 from nirglucose.dataset import Dataset
-from nirglucose.evaluation.wear_benchmark import run_wear_benchmark
+from nirglucose.evaluation.wear import run_wear_benchmark
 from nirglucose.exceptions import ConfigError, DataError
 
 

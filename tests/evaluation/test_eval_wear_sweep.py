@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from nirglucose.cli import main
-from nirglucose.evaluation.wear_sweep import run_wear_sweep
+from nirglucose.evaluation.wear import run_wear_sweep
 from nirglucose.exceptions import ConfigError
 
 #: Two tasks (two seeds) of a tiny worn run: 6 subjects, one day, a reading an hour.

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import nirglucose as ng
+from nirglucose.calibration.conformal import interval, split_conformal
 from nirglucose.dataset import measured_columns
-from nirglucose.evaluation.conformal import interval, split_conformal
 from nirglucose.export import export_c, generate_c
 from nirglucose.export.c_codegen import interval_prototype
 from nirglucose.models import EnhancedBeerLambert, PLSBaseline, load_model

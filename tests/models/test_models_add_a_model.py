@@ -8,7 +8,7 @@ import textwrap
 import pytest
 
 import nirglucose as ng
-from nirglucose.evaluation import run_benchmark
+from nirglucose.evaluation import Protocol, run_benchmark
 from nirglucose.models import registry
 from nirglucose.models.tuning import search_space
 
@@ -65,9 +65,7 @@ def test_a_new_module_and_one_registry_line_make_a_benchmarked_model(toy_models)
     res = run_benchmark(
         ds,
         ["toy-ridge", "toy-pinn", "mean"],
-        n_splits=3,
-        repeats=1,
-        n_boot=50,
+        protocol=Protocol(n_splits=3, repeats=1, resamples=50),
         ablation=True,
         drop_one_models="none",
         oracle_reference=False,

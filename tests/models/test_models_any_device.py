@@ -9,9 +9,10 @@ import pytest
 import nirglucose as ng
 from device_data import LED_SETS, simulate_device
 from nirglucose.dataset import Dataset
+from nirglucose.dataset.schema import DeviceSchema, meter_flags
 from nirglucose.exceptions import DataError
+from nirglucose.features import MeasurementTransformer
 from nirglucose.models import available_models, get_model_class, load_model, make_model
-from nirglucose.schema import DeviceSchema, MeasurementTransformer, meter_flags
 
 NETWORKS = ("original-pinn", "optimized-pinn", "rte-pinn", "selective-rte-pinn", "sdnn",
             "original-pinn-fm", "optimized-pinn-fm", "rte-pinn-fm", "selective-rte-pinn-fm")

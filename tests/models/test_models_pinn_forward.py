@@ -12,7 +12,7 @@ import pytest
 import torch
 
 import nirglucose as ng
-from nirglucose.evaluation.inverse import task_state
+from nirglucose.evaluation.benchmark.inverse import task_state
 from nirglucose.exceptions import ConfigError
 from nirglucose.models import (
     RTEPINN,

@@ -7,9 +7,9 @@ import pytest
 
 import nirglucose as ng
 from nirglucose.exceptions import ConfigError, DataError
+from nirglucose.features import MeasurementTransformer
 from nirglucose.models import load_model, make_model
 from nirglucose.models.reference import GBRReference, GPReference, MeanReference
-from nirglucose.schema import MeasurementTransformer
 
 
 @pytest.fixture(scope="module")
@@ -187,7 +187,7 @@ def _tune_script():
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "tune.py"
+    path = Path(__file__).resolve().parents[2] / "tools" / "tune.py"
     spec = importlib.util.spec_from_file_location("_tune_script", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -1,4 +1,4 @@
-"""Tests of nirglucose.optics.reference.adding_doubling.slab_rt (iadpython wrapper)."""
+"""Tests of nirglucose_reference.adding_doubling.slab_rt (iadpython wrapper)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from nirglucose.exceptions import ConfigError
-from nirglucose.optics.reference.adding_doubling import slab_rt
+from nirglucose_reference.adding_doubling import slab_rt
 
 pytest.importorskip("iadpython")
 

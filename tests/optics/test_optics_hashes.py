@@ -1,7 +1,7 @@
 """Refactors change no optics result: hashes against those recorded at main.
 
 ``tests/optics/data/optics_hashes_main.json`` is the output of
-``benchmarks/optics_hashes.py --default-diffusion``, first at main 2a4031c (before the
+``tools/optics_hashes.py --default-diffusion``, first at main 2a4031c (before the
 photon engines were merged and ``lut.py`` was split), re-recorded after issue 27 routed
 the optics' matrix products and elementary functions through :mod:`nirglucose.portable`
 (same bits under every OpenBLAS kernel and NumPy/numba instruction set; checked under
@@ -25,7 +25,7 @@ _RECORDED = json.loads((Path(__file__).parent / "data" / "optics_hashes_main.jso
 
 def _script():
     spec = importlib.util.spec_from_file_location(
-        "optics_hashes", _ROOT / "benchmarks" / "optics_hashes.py")
+        "optics_hashes", _ROOT / "tools" / "optics_hashes.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

@@ -1,7 +1,7 @@
 """Tests of nirglucose.optics.lut (the rte-lut look-up table) and its simulator wiring.
 
 Every test uses a temporary cache directory (NIRGLUCOSE_CACHE) and never a pre-existing
-cache. "Direct solve" below is nirglucose.optics.reference.lut_checks.direct_solve: a
+cache. "Direct solve" below is nirglucose_reference.lut_checks.direct_solve: a
 white Monte Carlo run at the point with the table's settings and common random numbers
 (the model the table is built from).
 """
@@ -21,7 +21,7 @@ from nirglucose.optics.kernels import mc_white
 from nirglucose.optics.lut import build as LB
 from nirglucose.optics.lut import cache as LC
 from nirglucose.optics.lut import grid as LG
-from nirglucose.optics.reference import lut_checks as LV
+from nirglucose_reference import lut_checks as LV
 
 RHO, T_EPI = 0.3, 0.008
 

@@ -2,7 +2,7 @@
 
 Every test uses a temporary cache directory (NIRGLUCOSE_CACHE). The whole ``swir``
 table's errors against independent Monte Carlo references are measured by
-``benchmarks/optics_reference.py --grid swir`` (README, "Layered skin optics").
+``studies/optics_reference.py --grid swir`` (README, "Layered skin optics").
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import nirglucose as ng
 from nirglucose.exceptions import ConfigError
 from nirglucose.optics import lut as L
 from nirglucose.optics.lut import grid as LG
-from nirglucose.optics.reference import lut_checks as LV
+from nirglucose_reference import lut_checks as LV
 
 RHO, T_EPI = 0.3, 0.008
 pytestmark = pytest.mark.filterwarnings("ignore:lipid absorption above:UserWarning")
@@ -201,7 +201,7 @@ def test_white_monte_carlo_matches_the_numpy_engine_at_swir_absorption():
     # goes. Ring 0.5-1.5 mm, so both detect enough light in seconds (measured: R 0.2713
     # and 0.2715 /cm^2, standard errors 0.007 and 0.008; dermal path within 2 %).
     from nirglucose.optics.kernels.mc_white import white_mc_run
-    from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
+    from nirglucose_reference.mc_paths import mc_detected_paths, reweight_detected
 
     musp, q, g, ring = 9.0, 0.9, 0.9, (0.05, 0.15)
     t_epi, t_skin, mua = 0.008, 0.15, (0.5, 8.0, 2.5)

@@ -1,4 +1,4 @@
-"""Tests of nirglucose.optics.reference.mc_paths (per-layer paths at a detector ring)."""
+"""Tests of nirglucose_reference.mc_paths (per-layer paths at a detector ring)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import pytest
 
 from nirglucose.exceptions import ConfigError
 from nirglucose.optics.layers import three_layer_reflectance
-from nirglucose.optics.reference.mc_paths import DetectedPaths, mc_detected_paths, reweight_detected
-from nirglucose.optics.reference.monte_carlo import mc_layers
+from nirglucose_reference.mc_paths import DetectedPaths, mc_detected_paths, reweight_detected
+from nirglucose_reference.monte_carlo import mc_layers
 
 # a strongly absorbing medium: photons die fast, so these runs take a second or two
 FAST = dict(mus_per_cm=[100.0, 100.0], g=0.8, thickness_cm=[0.05], n_tissue=1.4)

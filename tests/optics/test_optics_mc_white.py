@@ -12,7 +12,7 @@ from nirglucose.optics.kernels.mc_white import (
     white_mc_run,
     white_mc_tally,
 )
-from nirglucose.optics.reference.mc_paths import mc_detected_paths, reweight_detected
+from nirglucose_reference.mc_paths import mc_detected_paths, reweight_detected
 
 
 def test_mcml_benchmark_slab():

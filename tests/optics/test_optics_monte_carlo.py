@@ -1,4 +1,4 @@
-"""Tests of nirglucose.optics.reference.monte_carlo (the photon engine's MCML front end)."""
+"""Tests of nirglucose_reference.monte_carlo (the photon engine's MCML front end)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from scipy import integrate
 
 from nirglucose.exceptions import ConfigError
 from nirglucose.optics.diffusion import differential_pathlength_factor, farrell_reflectance
-from nirglucose.optics.reference.adding_doubling import slab_rt
-from nirglucose.optics.reference.monte_carlo import MCResult, mc_layers, mc_slab
+from nirglucose_reference.adding_doubling import slab_rt
+from nirglucose_reference.monte_carlo import MCResult, mc_layers, mc_slab
 
 # MCML benchmark slab (Wang, Jacques & Zheng 1995; van de Hulst 1980):
 # mua = 10 /cm, mus = 90 /cm, g = 0.75, d = 0.02 cm, n = 1.

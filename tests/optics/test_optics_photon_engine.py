@@ -1,4 +1,4 @@
-"""Tests of nirglucose.optics.reference.photon_engine (one engine, pluggable tallies)."""
+"""Tests of nirglucose_reference.photon_engine (one engine, pluggable tallies)."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from nirglucose.exceptions import ConfigError
-from nirglucose.optics.reference.mc_paths import mc_detected_paths
-from nirglucose.optics.reference.monte_carlo import mc_layers
-from nirglucose.optics.reference.photon_engine import Stack, run_photons
+from nirglucose_reference.mc_paths import mc_detected_paths
+from nirglucose_reference.monte_carlo import mc_layers
+from nirglucose_reference.photon_engine import Stack, run_photons
 
 LAYERS = dict(mua_per_cm=[1.0, 0.3], mus_per_cm=[100.0, 60.0], g=[0.9, 0.8],
               thickness_cm=[0.02, np.inf], n_layers=[1.4, 1.4])

@@ -163,8 +163,8 @@ def test_dermis_is_in_the_high_absorption_regime():
 @pytest.mark.parametrize("wl", SWIR_NM)
 def test_adding_doubling_and_monte_carlo_agree_at_high_absorption(wl):
     pytest.importorskip("iadpython")
-    from nirglucose.optics.reference.adding_doubling import slab_rt
-    from nirglucose.optics.reference.monte_carlo import mc_slab
+    from nirglucose_reference.adding_doubling import slab_rt
+    from nirglucose_reference.monte_carlo import mc_slab
 
     (mua,), (musp,) = _dermis([wl])
     mus = musp / (1.0 - G)
@@ -178,7 +178,7 @@ def test_adding_doubling_and_monte_carlo_agree_at_high_absorption(wl):
 
 def test_diffusion_falls_behind_transport_as_absorption_rises():
     """States the regime: the dipole model's error grows with mua / mus'."""
-    from nirglucose.optics.reference.monte_carlo import mc_slab
+    from nirglucose_reference.monte_carlo import mc_slab
 
     mua, musp = _dermis(SWIR_NM)
     ratio, path_ratio = [], []

@@ -88,14 +88,21 @@ def test_band_spectra_weights_and_narrow_band_limit():
     assert (wide.spectra["water"] * wide.weights).sum() > water
 
 
-def test_solvers_are_exported_lazily():
+def test_the_validation_solvers_are_outside_the_package():
     import subprocess
     import sys
+    from pathlib import Path
 
+    validation = str(Path(__file__).resolve().parents[2] / "validation")
     code = (
         "import sys, nirglucose as ng; ng.simulate('paper', 2, 1, 0);"
         "assert 'iadpython' not in sys.modules;"
-        "from nirglucose.optics import slab_rt; r, t = slab_rt(10, 90, 0.75, 0.02, 1.0);"
+        "import nirglucose.optics as o\n"
+        "try:\n    o.slab_rt\nexcept AttributeError as e:\n"
+        "    assert 'nirglucose_reference.adding_doubling.slab_rt' in str(e)\n"
+        f"sys.path.insert(0, {validation!r})\n"
+        "from nirglucose_reference.adding_doubling import slab_rt\n"
+        "r, t = slab_rt(10, 90, 0.75, 0.02, 1.0)\n"
         "assert abs(r - 0.09734) / 0.09734 < 0.01 and abs(t - 0.66096) / 0.66096 < 0.01"
     )
     subprocess.run([sys.executable, "-c", code], check=True)

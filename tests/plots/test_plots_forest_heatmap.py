@@ -78,7 +78,7 @@ def test_forest_every_row_has_a_visible_marker():
 
 
 def _headline_table():
-    from nirglucose.evaluation.findings import headline_table  # noqa: F401 (the producer)
+    from nirglucose.evaluation.benchmark.findings import headline_table  # noqa: F401 (the producer)
 
     rows = []
     for preset, vals in (("paper", {"gp": 4.0, "ebl": 13.6, "pls": 25.0}),

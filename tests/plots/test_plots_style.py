@@ -45,7 +45,7 @@ def test_figure_bytes_png():
 
 def test_every_registered_model_has_its_own_label_colour_and_marker():
     """No registered model falls back to a colour another model owns (issue 32)."""
-    from nirglucose.evaluation.reference import MODEL_LABELS
+    from nirglucose.models.labels import MODEL_LABELS
     from nirglucose.models.registry import MODELS
     from nirglucose.plots.style import MODEL_COLORS, MODEL_MARKERS
 

@@ -15,8 +15,8 @@ import numpy as np
 import pandas as pd
 
 import nirglucose as ng
-from nirglucose.evaluation.reference import MODEL_LABELS
 from nirglucose.metrics import summary
+from nirglucose.models.labels import label
 
 #: Models of the synthetic run: a linear one, a baseline, the bound, two networks.
 SYNTHETIC_MODELS = ("ebl", "pls", "oracle", "original-pinn", "sdnn")
@@ -55,7 +55,7 @@ def write_synthetic_results(out: Path, *, models=SYNTHETIC_MODELS, networks=_NET
     for m in models:
         p = preds[preds["model"] == m]
         s = summary(p["reference_mgdl"], p["scored_mgdl"])
-        row = {"model": m, "label": MODEL_LABELS.get(m, m),
+        row = {"model": m, "label": label(m),
                **{k: v for k, v in s.items() if k != "n"}}
         for stem, col in (("rmse", "rmse_mgdl"), ("mard", "mard_pct"),
                           ("clarke_a", "clarke_a_pct"), ("within15", "within15_pct"),
@@ -128,12 +128,12 @@ def write_preset_results(out: Path, preset: str, *, lambda_phys: float, seed: in
 
     Predictions are the reference plus noise; ``comparisons.csv`` and ``ablation.csv``
     come from the package's own paired statistics
-    (:func:`nirglucose.evaluation.stats.compare_models`), ``meta.json`` records each
+    (:func:`nirglucose.metrics.resampling.compare_models`), ``meta.json`` records each
     model's tuned parameters with the PINN's ``lambda_phys`` and the preset's
     configuration. With ``lambda_phys == 0`` the ablation refit is the same fit (equal
     predictions), as in the benchmark.
     """
-    from nirglucose.evaluation.stats import compare_models
+    from nirglucose.metrics.resampling import compare_models
 
     d = write_synthetic_results(out, models=PRESET_TEST_MODELS, networks=("original-pinn",),
                                 n_subjects=n_subjects, repeats=repeats, seed=seed)

@@ -7,7 +7,7 @@ from html.parser import HTMLParser
 
 import pandas as pd
 
-from nirglucose.evaluation.drop_one import led_verdicts
+from nirglucose.evaluation.benchmark.drop_one import led_verdicts
 from nirglucose.report import build_report, load_results
 
 

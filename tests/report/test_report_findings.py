@@ -294,7 +294,7 @@ def test_every_preset_gets_its_training_and_pipeline_figures(preset_report):
 
 def test_ablation_rows_never_compete_and_are_named():
     """``<pinn>/lambda=<v>`` and ``<pinn>/no-physics`` rows are ablations, not models."""
-    from nirglucose.evaluation.findings import _is_competitor, label
+    from nirglucose.evaluation.benchmark.findings import _is_competitor, label
 
     assert not _is_competitor("rte-pinn/lambda=0.1")
     assert not _is_competitor("rte-pinn/no-physics")

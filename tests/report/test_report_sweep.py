@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from nirglucose.config import NOISE_SOURCES
-from nirglucose.evaluation.sweep import SweepResult, ablation_effects, summarize_sweep
+from nirglucose.evaluation.sweep.run import SweepResult, ablation_effects, summarize_sweep
 from nirglucose.exceptions import DataError
 from nirglucose.report.sweep import save_sweep_figures, sweep_figures, sweep_section
 

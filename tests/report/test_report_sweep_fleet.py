@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from nirglucose.evaluation.sweep import run_sweep
+from nirglucose.evaluation.sweep.run import run_sweep
 from nirglucose.report.sweep import sweep_figures, sweep_section
 
 

@@ -1,4 +1,4 @@
-"""`nirglucose report` on a benchmark of a user's own measurements (docs/user_data.md).
+"""`nirglucose report` on a benchmark of a user's own measurements (docs/user_guide/your_data.md).
 
 The file holds what a device logs (ADC codes, its references, three physiological
 columns, the meter's glucose, subject ids): no scenario, no preset, no ambient
@@ -18,7 +18,7 @@ from device_data import simulate_device
 from nirglucose.cli import main
 from nirglucose.report.figures import forest_table, load_results
 
-#: Columns a user's device file holds (docs/user_data.md): a three-LED device.
+#: Columns a user's device file holds (docs/user_guide/your_data.md): a three-LED device.
 _PHYSIOLOGY = ("age_yr", "skin_temp_c", "heart_rate_bpm")
 
 

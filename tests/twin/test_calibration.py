@@ -1,5 +1,5 @@
 """Simulation-based calibration in `make test`: 30 synthetic devices (the benchmark runs
-100 with the default training budget, benchmarks/twin_calibration.py)."""
+100 with the default training budget, studies/twin_calibration.py)."""
 
 from __future__ import annotations
 

@@ -4,7 +4,8 @@ Every error a user can cause (bad option, unknown preset or key, malformed data 
 an output path that cannot be written) ends the program with exit status 2 and one
 line on stderr saying what is wrong and how to fix it; no traceback. Ctrl-C ends it
 with status 130 and SIGTERM with 143, each with one line; worker processes never
-outlive the command (:func:`nirglucose.evaluation.executors.worker_guard`). Text
+outlive the command (the commands that start them run inside
+:func:`nirglucose.evaluation.engine.executors.worker_guard`). Text
 that came from the user or a file is printed without Rich markup.
 
 One module per command group, registered on :data:`app` in the order ``--help``

@@ -15,12 +15,12 @@ from typing import Annotated
 
 import typer
 
+from ..calibration.personal import MAX_CALIBRATION_READINGS
 from ..config import PRESETS
-from ..evaluation.calibration import MAX_CALIBRATION_READINGS
-from ..evaluation.stats import DEFAULT_N_BOOT
-from ..evaluation.studies import STUDIES
-from ..evaluation.tasks import clear_outputs
+from ..evaluation.engine.tasks import clear_outputs
+from ..evaluation.sweep.studies import STUDIES
 from ..exceptions import NirGlucoseError
+from ..metrics.resampling import DEFAULT_N_BOOT
 from ._app import console, out_console
 
 #: Preset names for the --preset help texts.
@@ -138,7 +138,7 @@ def _check_size(subjects: int, per_subject: int) -> None:
 
 def _check_jobs(jobs: int | None) -> None:
     """Warn (one line) when more workers are asked for than there are cores."""
-    from ..evaluation.executors import available_cores
+    from ..evaluation.engine.executors import available_cores
 
     cores = available_cores()
     if jobs is not None and jobs > cores:
@@ -164,7 +164,7 @@ def _check_seed(seed: int) -> None:
 
 def _jobs(jobs: int | None) -> int:
     """``--jobs`` checked (positive; a warning beyond the cores), None as the cores."""
-    from ..evaluation.executors import available_cores
+    from ..evaluation.engine.executors import available_cores
 
     if jobs is None:
         return available_cores()
@@ -214,6 +214,26 @@ def _tidy_out(command):
                     except OSError:
                         pass
             raise
+
+    return wrapper
+
+
+def runs_workers(command):
+    """Run ``command`` inside
+    :func:`~nirglucose.evaluation.engine.executors.worker_guard`, so that every joblib
+    (loky) worker it starts exits when this process dies.
+
+    Only the commands that start worker processes (``simulate``, ``benchmark``,
+    ``sweep``, ``wear-benchmark``: each has ``--jobs``) run in it; the others leave
+    joblib's configuration alone.
+    """
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        from ..evaluation.engine.executors import worker_guard
+
+        with worker_guard():
+            return command(*args, **kwargs)
 
     return wrapper
 

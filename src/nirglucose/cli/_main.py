@@ -89,13 +89,11 @@ def main(argv: list[str] | None = None) -> int:
     """
     import numpy as np
 
-    from ..evaluation.executors import worker_guard
-
     with _Signals() as signals:
         try:
             # numpy's overflow chatter would add lines; a result that overflowed is
             # refused by the library (non-finite ADC input, model checks) in one line
-            with worker_guard(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 rv = app(args=argv, standalone_mode=False)
         except typer.Exit as exc:
             return int(getattr(exc, "exit_code", 0) or 0)

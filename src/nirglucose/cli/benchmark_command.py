@@ -38,6 +38,7 @@ from ._common import (
     _warnings_as_lines,
     clear_previous_runs,
     refuse_simulation_options,
+    runs_workers,
 )
 from .fit_report import say_notes
 
@@ -55,6 +56,7 @@ _DropOneOption = Annotated[
 
 @app.command()
 @_tidy_out
+@runs_workers
 def benchmark(
     ctx: typer.Context,
     out: OutDirOption,
@@ -124,8 +126,8 @@ def benchmark(
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
                           out, glucose_unit=None) -> list[str] | None:
     """The checks of ``benchmark`` after the counts, in order; the --models names."""
+    from ..dataset.files import check_glucose_unit
     from ..evaluation.splits import check_protocol
-    from ..io_files import check_glucose_unit
     from ..models.registry import get_model_class
 
     check_glucose_unit(glucose_unit)
@@ -168,7 +170,7 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
         out.mkdir(exist_ok=True)
     runs = [(p, out / p if len(presets) > 1 else out) for p in presets]
     if stale is None:
-        from ..evaluation.benchmark_result import STALE_FILES as stale
+        from ..evaluation.benchmark.result import STALE_FILES as stale
     clear_previous_runs(runs, out, stale)
     return runs, overrides
 
@@ -211,23 +213,20 @@ def _check_run_data(ds, k: int, protocol: str, folds: int) -> None:
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
                    references, ablation, calibration=0, unit=None, drop_one=None) -> None:
     """Run the benchmark of one dataset, then print its table and summary lines."""
-    from ..evaluation.benchmark import run_benchmark
+    from ..evaluation.benchmark.run import run_benchmark
+    from ..evaluation.protocol import Protocol
 
     with _warnings_as_lines():
         res = run_benchmark(
             ds,
             names,
-            protocol=protocol,
-            n_splits=folds,
-            repeats=repeats,
-            seed=seed,
+            protocol=Protocol(splitter=protocol, n_splits=folds, repeats=repeats, seed=seed,
+                              resamples=resamples, calibration=calibration),
             out=out,
             jobs=jobs,
             progress=True,
-            n_boot=resamples,
             references=references,
             ablation=ablation,
-            calibration=calibration,
             drop_one_models=drop_one,
             # the oracle bound needs the simulator's true_* columns: not asked of user data
             oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
@@ -242,7 +241,7 @@ def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
 
     table = Table(title=escape(f"benchmark ({res.meta['protocol']}): {ds!r}"),
                   box=box.SIMPLE_HEAD)
-    from ..io_files import glucose_to_unit
+    from ..dataset.files import glucose_to_unit
 
     u = unit or "mg/dL"
     d = 2 if u == "mmol/L" else 1

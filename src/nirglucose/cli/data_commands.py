@@ -25,11 +25,13 @@ from ._common import (
     _jobs,
     _parse_sets,
     _say,
+    runs_workers,
     twin_base,
 )
 
 
 @app.command()
+@runs_workers
 def simulate(
     out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
     preset: Annotated[
@@ -138,7 +140,7 @@ def _check_simulate_out(out: Path, subjects: int, per_subject: int) -> None:
 def keys() -> None:
     """List every config key accepted by --set: paper preset default, unit, range, meaning."""
     from ..config import resolve_config, valid_keys
-    from ..config_keys import key_info, key_range
+    from ..config.keys import key_info, key_range
 
     data = resolve_config("paper").model_dump(mode="json")
     for key in valid_keys():
@@ -152,16 +154,6 @@ def keys() -> None:
         _say(f"{key} = {node}{unit}{rng}{desc}", err=False)
 
 
-def _plain(text: str) -> str:
-    """A docstring line as plain text: reST roles and literals without their markup
-    (``:class:`~a.B``` -> ``B``, double back-quotes dropped)."""
-    def role(m: re.Match) -> str:
-        target = m.group(1)
-        return target.rsplit(".", 1)[-1] if target.startswith("~") else target
-
-    return re.sub(r"``(.+?)``", r"\1", re.sub(r":[a-z:]+:`([^`]+)`", role, text))
-
-
 @app.command("models")
 def list_models(
     model: Annotated[
@@ -171,15 +163,16 @@ def list_models(
     ] = None,
 ) -> None:
     """List the registered model names, one line each (or describe one fitted model)."""
-    from ..models.registry import available_models, describe_model, load_model
+    from ..models.labels import describe
+    from ..models.registry import available_models, load_model
 
     if model is not None:
-        _say(describe_model(load_model(model)), err=False)
+        _say(describe(load_model(model)), err=False)
         return
     names = available_models()
     width = max(map(len, names)) + 2
     for name in names:
-        _say(f"{name:<{width}}{_plain(describe_model(name))}".rstrip(), err=False)
+        _say(f"{name:<{width}}{describe(name)}".rstrip(), err=False)
 
 
 @app.command("parts")

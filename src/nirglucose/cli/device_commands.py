@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ..small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
+from ..dataset.small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJECTS
 from ._app import app
 from ._common import (
     GlucoseUnitOption,
@@ -59,7 +59,7 @@ def fit_model(
     subject-grouped split-conformal 90 % and 80 % intervals, saved with the model.
     The same data, options and --seed write byte-identical model files.
     """
-    from ..evaluation.benchmark import seeded_params
+    from ..evaluation.estimators import seeded_params
     from ..models.registry import get_model_class
     from ..models.tuning import untuned_params
 
@@ -101,7 +101,7 @@ def _load_device_data(model: str, data: Path, adc_bits: int | None, unit: str | 
     """``(measurements, schema)``: the file read and validated, its ADC resolution
     resolved by the one policy; a device file for any model but the oracle (schema
     None), checked against the small-data policy."""
-    from ..small_data import fit_size_warning
+    from ..dataset.small_data import fit_size_warning
 
     if model == "oracle":
         from ..dataset import load_dataset
@@ -140,7 +140,7 @@ def _choose_intervals(ds, intervals: str, share: float) -> tuple[str, str]:
 
 def _fit_with_intervals(estimator, ds, share: float, seed: int) -> tuple[int, str]:
     """Fit on the subjects not held out, calibrate on the rest: ``(n fitted, note)``."""
-    from ..evaluation.conformal import calibration_of, split_conformal
+    from ..calibration.conformal import calibration_of, split_conformal
 
     if "subject_id" not in ds.frame:
         raise UserError("--intervals split needs a subject_id column to hold out subjects")
@@ -179,7 +179,7 @@ def predict_glucose(
     mmol/L`` the glucose columns are ``*_mmoll`` in mmol/L.
     """
     from ..dataset import atomic_write
-    from ..io_files import check_glucose_unit
+    from ..dataset.files import check_glucose_unit
     from ..prediction import predict
 
     if out.suffix != ".csv":

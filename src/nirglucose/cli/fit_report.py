@@ -17,12 +17,12 @@ GROUP_COLUMNS = ("cohort", "group", "site", "study_arm")
 def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None, *,
                      need_glucose: bool):
     """The file as a Dataset, its read notes printed, the ADC resolution resolved by
-    the one policy (:mod:`nirglucose.adc_resolution`) and recorded in its metadata."""
+    the one policy (:mod:`nirglucose.dataset.adc`) and recorded in its metadata."""
     import warnings
 
     from ..dataset import load_dataset
-    from ..io_files import check_codes
-    from ..schema import DeviceSchema
+    from ..dataset.files import check_codes
+    from ..dataset.schema import DeviceSchema
 
     ds = load_dataset(data, glucose_unit=glucose_unit, adc_bits=adc_bits)
     if need_glucose and "glucose_mgdl" not in ds.frame.columns:
@@ -30,7 +30,7 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None,
         raise UserError(f"{str(data)!r} has no reference glucose: add a 'glucose_mgdl' "
                         f"(mg/dL) or 'glucose_mmoll' (mmol/L) column; columns read: {cols}")
     if need_glucose and ds.frame["glucose_mgdl"].isna().any():
-        from ..io_files import file_rows
+        from ..dataset.files import file_rows
 
         rows = file_rows(ds.frame["glucose_mgdl"].isna().to_numpy(), Path(data).suffix == ".csv")
         raise UserError(f"column 'glucose_mgdl' (the reference glucose) has empty cells at "
@@ -55,7 +55,7 @@ def say_notes(ds) -> None:
 
 def in_unit(value_mgdl: float, unit: str | None) -> str:
     """A glucose value or error printed in the requested unit."""
-    from ..io_files import glucose_to_unit
+    from ..dataset.files import glucose_to_unit
 
     unit = unit or "mg/dL"
     v = float(glucose_to_unit(value_mgdl, unit))
@@ -94,7 +94,7 @@ def _rmse(a, b) -> float:
 
 def report_cv(estimator, ds, schema, folds: int, unit: str | None) -> None:
     """Print the grouped-CV RMSE beside no skill, and the per-group breakdown."""
-    from ..small_data import MIN_CV_SUBJECTS
+    from ..dataset.small_data import MIN_CV_SUBJECTS
 
     n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else len(ds)
     if folds < 2 or n_sub < 2:

@@ -34,6 +34,7 @@ from ._common import (
     _say,
     _tidy_out,
     _warnings_as_lines,
+    runs_workers,
 )
 
 #: The sweep's own options (the shared ones are in :mod:`._common`).
@@ -79,6 +80,7 @@ SweepCalibrationOption = Annotated[
 
 @app.command()
 @_tidy_out
+@runs_workers
 def sweep(
     out: OutDirOption,
     vary: VaryOption = None,
@@ -100,7 +102,7 @@ def sweep(
     set_: SetOption = None,
 ) -> None:
     """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks)."""
-    from ..evaluation.sweep import run_sweep
+    from ..evaluation.sweep.run import run_sweep
 
     if study == "wear":
         from .wear_command import wear_sweep
@@ -144,7 +146,7 @@ def _check_sweep_args(seed, subjects, per_subject, calibration, study, vary, mod
 
 def _sweep_grid(vary: list[str] | None) -> dict:
     """``--vary KEY=V1,V2`` options as ``{key: values}``; a key given twice is refused."""
-    from ..evaluation.sweep import parse_vary
+    from ..evaluation.sweep.run import parse_vary
 
     grid: dict = {}
     for text in vary or []:
@@ -156,10 +158,11 @@ def _sweep_grid(vary: list[str] | None) -> dict:
 
 
 def _sweep_models(models: str | None, study: str | None) -> list[str]:
-    """--models, else the study's own models (:data:`~nirglucose.evaluation.studies.STUDY_MODELS`),
-    every registered model (data-size) or the registered defaults."""
-    from ..evaluation.studies import STUDY_MODELS
-    from ..evaluation.sweep import DEFAULT_MODELS
+    """--models, else the study's own models
+    (:data:`~nirglucose.evaluation.sweep.studies.STUDY_MODELS`), every registered model
+    (data-size) or the registered defaults."""
+    from ..evaluation.sweep.run import DEFAULT_MODELS
+    from ..evaluation.sweep.studies import STUDY_MODELS
     from ..models.registry import available_models
 
     if models is None and study in STUDY_MODELS:
@@ -195,7 +198,7 @@ def _print_sweep(res, out: Path) -> None:
 
 def _print_crossings(summary, key: str) -> None:
     """Where each model's MARD crosses 15 % along the one varied key."""
-    from ..evaluation.sweep import threshold_crossing
+    from ..evaluation.sweep.run import threshold_crossing
 
     for _, r in threshold_crossing(summary, key).iterrows():
         where = {"crosses": f"crosses 15 % at {key} = {r['crossing']:.2f}",
@@ -225,7 +228,7 @@ def _print_effects(effects) -> None:
     if "oracle_bound_rmse_mgdl" in effects:
         _print_designs(effects)
     if "rmse_vs_same_unit" in effects:
-        from ..evaluation.fleet import format_fleet_table
+        from ..evaluation.sweep.fleet import format_fleet_table
 
         out_console.print(format_fleet_table(effects), markup=False, highlight=False)
     if "shift" in effects:

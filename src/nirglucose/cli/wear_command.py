@@ -25,12 +25,13 @@ from ._common import (
     _tidy_out,
     _warnings_as_lines,
     refuse_simulation_options,
+    runs_workers,
 )
 from .benchmark_command import _benchmark_runs
 
 
 def _schedule_names(schedules: str) -> list[str]:
-    from ..evaluation.wear_calibration import SCHEDULES
+    from ..calibration.schedules import SCHEDULES
 
     names = [s.strip() for s in schedules.split(",") if s.strip()]
     unknown = [s for s in names if s not in SCHEDULES]
@@ -42,6 +43,7 @@ def _schedule_names(schedules: str) -> list[str]:
 
 @app.command("wear-benchmark")
 @_tidy_out
+@runs_workers
 def wear_benchmark(
     ctx: typer.Context,
     out: OutDirOption,
@@ -76,8 +78,8 @@ def wear_benchmark(
 ) -> None:
     """Benchmark a device worn for days: every model on the series, a causal smoother,
     calibration schedules and the CGM standards (wear_*.csv)."""
-    from ..evaluation.tasks import clear_outputs
-    from ..evaluation.wear_benchmark import WEAR_FILES, WEAR_MODELS, run_wear_benchmark
+    from ..evaluation.engine.tasks import clear_outputs
+    from ..evaluation.wear import WEAR_FILES, WEAR_MODELS, run_wear_benchmark
 
     _check_counts(("--subjects", subjects), ("--wear-days", wear_days),
                   ("--every-min", every_min), ("--folds", folds),
@@ -142,8 +144,8 @@ def _print(res, name: str, out: Path) -> None:
 def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects: int,
                folds: int, resamples: int, set_, jobs: int | None = 1,
                scheduler: str | None = None) -> None:
-    """``sweep --study wear``: :func:`nirglucose.evaluation.wear_sweep.run_wear_sweep`."""
-    from ..evaluation.wear_sweep import WEAR_DAYS, WEAR_PRESETS, WEAR_SWEEP_FILES, run_wear_sweep
+    """``sweep --study wear``: :func:`nirglucose.evaluation.wear.run_wear_sweep`."""
+    from ..evaluation.wear import WEAR_DAYS, WEAR_PRESETS, WEAR_SWEEP_FILES, run_wear_sweep
 
     _check_counts(("--subjects", subjects), ("--folds", folds), ("--seeds", seeds),
                   ("--resamples", resamples))
@@ -184,6 +186,6 @@ def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects:
 
 
 def _default_models() -> list[str]:
-    from ..evaluation.wear_benchmark import WEAR_MODELS
+    from ..evaluation.wear import WEAR_MODELS
 
     return list(WEAR_MODELS)

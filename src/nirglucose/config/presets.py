@@ -25,7 +25,7 @@ WEARABLE_SIGNAL_GAIN = 12.5
 #: Glucose-signal gain of ``paper`` (the study's regime with the capabilities its
 #: accuracy implies), chosen for the raw correlation alone: the gain whose raw
 #: correlation (20,000 snapshots, mean over seeds 0-4) is closest to the study's 0.21,
-#: on a grid of 0.5 (README, "Presets and calibration"; benchmarks/presets.py).
+#: on a grid of 0.5 (README, "Presets and calibration"; studies/presets.py).
 PAPER_SIGNAL_GAIN = 11.0
 
 

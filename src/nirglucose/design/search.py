@@ -5,7 +5,7 @@
 rule), and :func:`rank_designs` ranks every subset of k = 1 ... ``k_max`` candidates
 per detector by the Cramér–Rao bound of :mod:`~nirglucose.design.bound`
 (``condition="device"`` by default), in a tidy DataFrame. The ``wavelengths`` sweep
-study (:mod:`~nirglucose.evaluation.studies`) confirms the best designs with the
+study (:mod:`~nirglucose.evaluation.sweep.studies`) confirms the best designs with the
 benchmark.
 
 Rules (assumptions, stated):

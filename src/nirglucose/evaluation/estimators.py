@@ -49,17 +49,17 @@ import numpy as np
 import pandas as pd
 from sklearn.base import clone
 
-from ..columns import (
+from ..dataset import Dataset
+from ..dataset.columns import (
     KNOWN_PHYSIOLOGY,
     adc_columns,
     has_reference_columns,
     led_wavelengths_in,
     ref_columns,
 )
-from ..dataset import Dataset
 from ..exceptions import ConfigError
 from ..models.registry import available_models, get_model_class
-from .tasks import derived_seed, external_code_digest
+from .engine.tasks import derived_seed, external_code_digest
 
 __all__ = [
     "OBJECT_TUNING",
@@ -376,10 +376,10 @@ def measured_frame(data: Dataset) -> pd.DataFrame:
     """The device's measured columns of ``data`` (what any other estimator gets as ``X``).
 
     ``adc_<nm>`` for each LED, ascending, and ``adc_ref_<nm>`` where the device has them,
-    then the measured physiology it records (:data:`~nirglucose.columns.KNOWN_PHYSIOLOGY`),
+    then the measured physiology it records (:data:`~nirglucose.dataset.columns.KNOWN_PHYSIOLOGY`),
     in that order; never ``true_*``, ids or ``glucose_mgdl``. The LEDs and references are
-    read by the schema's rule (:func:`~nirglucose.columns.led_wavelengths_in`,
-    :func:`~nirglucose.columns.has_reference_columns`), so a reference learner sees the
+    read by the schema's rule (:func:`~nirglucose.dataset.columns.led_wavelengths_in`,
+    :func:`~nirglucose.dataset.columns.has_reference_columns`), so a reference learner sees the
     channels a package model sees, in the same order whatever the file's column order.
 
     Raises

@@ -1,24 +1,27 @@
 """The evaluation protocol as one value: how the data are split, how often, with which
 seed, how many bootstrap resamples, and how many personal calibration readings.
 
-:func:`~nirglucose.evaluation.benchmark.run_benchmark` and
-:func:`~nirglucose.evaluation.sweep.run_sweep` accept a :class:`Protocol` as their
-``protocol`` argument (as scikit-learn's ``cross_validate`` takes one splitter object)
-or, as before, the protocol's name with the options as keywords.
+:func:`~nirglucose.evaluation.benchmark.run_benchmark` takes a :class:`Protocol` as its
+``protocol`` argument (as scikit-learn's ``cross_validate`` takes one splitter object),
+or a splitter name with the Protocol's defaults; its former keywords for the same
+options (:data:`LEGACY_KEYWORDS`) warn until 0.3. :func:`~nirglucose.evaluation.sweep.run_sweep`
+takes a :class:`Protocol` or, as before, the protocol's name with the options as
+keywords.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+from ..calibration.personal import check_k
 from ..exceptions import ConfigError, check_positive_int, check_seed
-from .calibration import check_k
+from ..metrics.resampling import DEFAULT_N_BOOT
 from .splits import check_protocol
-from .stats import DEFAULT_N_BOOT
 
-__all__ = ["Protocol", "resolve_protocol"]
+__all__ = ["Protocol", "resolve_protocol", "protocol_of", "LEGACY_KEYWORDS"]
 
 
 @dataclass(frozen=True)
@@ -117,3 +120,54 @@ def resolve_protocol(
                           f"{type(protocol).__name__}")
     known = {f.name for f in fields(Protocol)}
     return Protocol(splitter=protocol, **{k: v for k, v in given.items() if k in known})
+
+
+#: :func:`~nirglucose.evaluation.benchmark.run_benchmark`'s former keywords for the
+#: Protocol's options -> the :class:`Protocol` field each sets (deprecated; removed in 0.3).
+LEGACY_KEYWORDS = {"n_splits": "n_splits", "repeats": "repeats", "seed": "seed",
+                   "n_boot": "resamples", "calibration": "calibration"}
+
+
+def protocol_of(protocol: str | Protocol, legacy: Mapping[str, Any],
+                caller: str = "run_benchmark") -> Protocol:
+    """The :class:`Protocol` of a call that may still give its options as keywords.
+
+    Parameters
+    ----------
+    protocol : str or Protocol
+        The call's ``protocol`` argument.
+    legacy : mapping
+        The call's other keywords: only :data:`LEGACY_KEYWORDS`, each folded into the
+        Protocol with a ``DeprecationWarning`` (once per call).
+    caller : str
+        The function's name, for the messages.
+
+    Raises
+    ------
+    TypeError
+        A keyword that is none of :data:`LEGACY_KEYWORDS` (as Python says of any
+        unexpected keyword argument).
+    ConfigError
+        A Protocol together with a keyword that differs from its default, or invalid
+        options.
+
+    Examples
+    --------
+    >>> protocol_of(Protocol(repeats=1), {}).repeats
+    1
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", DeprecationWarning)
+    ...     protocol_of("grouped-cv", {"n_boot": 200}).resamples
+    200
+    """
+    unknown = sorted(set(legacy) - set(LEGACY_KEYWORDS))
+    if unknown:
+        raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
+    if legacy:
+        given = ", ".join(f"{k}=" for k in legacy)
+        fields_ = ", ".join(f"{LEGACY_KEYWORDS[k]}=" for k in legacy)
+        warnings.warn(f"{caller}({given}...) is deprecated and removed in nirglucose 0.3: "
+                      f"give protocol=Protocol({fields_}...)", DeprecationWarning,
+                      stacklevel=3)
+    return resolve_protocol(protocol, {LEGACY_KEYWORDS[k]: v for k, v in legacy.items()})

@@ -8,7 +8,9 @@ holds 48 snapshots of 16 subjects.
 
 from __future__ import annotations
 
-__all__ = ["STUDY_TABLE", "STUDY_PROTOCOL", "STUDY_COLUMNS", "MODEL_LABELS", "STUDY_ORDER"]
+from .._renamed import moved_name
+
+__all__ = ["STUDY_TABLE", "STUDY_PROTOCOL", "STUDY_COLUMNS", "STUDY_ORDER"]
 
 #: Columns of :data:`STUDY_TABLE` (besides ``model``), with their units.
 STUDY_COLUMNS: dict[str, str] = {
@@ -86,29 +88,12 @@ STUDY_PROTOCOL: dict[str, object] = {
     "n_test": 48,
 }
 
-#: Display names of the registered models.
-MODEL_LABELS: dict[str, str] = {
-    "ebl": "Enhanced Beer–Lambert",
-    "pls": "PLS",
-    "oracle": "Oracle (true nuisances)",
-    "original-pinn": "Original PINN",
-    "optimized-pinn": "Optimized PINN",
-    "rte-pinn": "RTE-inspired PINN",
-    "selective-rte-pinn": "Selective RTE PINN",
-    "sdnn": "SDNN",
-    "mean": "No skill (training mean)",
-    "gp": "Gaussian process (ARD)",
-    "gbr": "Gradient boosting",
-    "physics-inversion": "Physics inversion (forward model)",
-    "ebl+gp": "EBL + residual GP",
-    "physics-inversion+gp": "Physics inversion + residual GP",
-    "original-pinn-fm": "Original PINN, forward-model physics",
-    "optimized-pinn-fm": "Optimized PINN, forward-model physics",
-    "rte-pinn-fm": "RTE-inspired PINN, forward-model physics",
-    "selective-rte-pinn-fm": "Selective RTE PINN, forward-model physics",
-}
-
 #: The study's ranking by RMSE, best first.
 STUDY_ORDER: tuple[str, ...] = tuple(
     row["model"] for row in sorted(STUDY_TABLE, key=lambda r: float(r["rmse_mgdl"]))
 )
+
+
+def __getattr__(name: str):
+    """``MODEL_LABELS`` moved to :mod:`nirglucose.models.labels` (a warning until 0.3)."""
+    return moved_name(__name__, name)

@@ -16,7 +16,7 @@ centred on its training mean before the dot product, so single precision keeps t
 prediction within a few thousandths of a mg/dL of Python's double-precision one.
 
 When the model carries a split-conformal calibration
-(:func:`nirglucose.evaluation.conformal.split_conformal`, ``nirglucose fit``), whose
+(:func:`nirglucose.calibration.conformal.split_conformal`, ``nirglucose fit``), whose
 interval is the prediction ± a constant half-width, the source also defines
 ``nirglucose_predict_interval`` (:func:`interval_prototype`): the same inputs, the
 90 % interval's bounds written to ``lower_mgdl`` / ``upper_mgdl`` (the lower one not
@@ -38,6 +38,7 @@ import numpy as np
 
 from .._version import __version__
 from ..dataset import atomic_write
+from ..dataset.schema import DeviceSchema
 from ..exceptions import ConfigError, DataError
 from ..features import _ENV as ENV_SYMBOLS
 from ..features import (
@@ -48,7 +49,6 @@ from ..features import (
     feature_table,
 )
 from ..models.registry import model_from
-from ..schema import DeviceSchema
 from .c_guard import estimate_body, estimate_decl
 
 __all__ = [
@@ -194,7 +194,7 @@ def _header(
 #define NIRGLUCOSE_ADC_BITS {schema.adc_bits}
 
 /* Measured physiological vector pmf[], in this order (dataset column names; units in
- * docs/user_data.md). */
+ * docs/user_guide/your_data.md). */
 #define NIRGLUCOSE_N_PMF {len(schema.physiology)}
 #define NIRGLUCOSE_PMF_COLUMNS {cols}
 

@@ -15,7 +15,7 @@ its inputs first and returns a status bit mask, writing the glucose through a po
 
 Examples
 --------
->>> from nirglucose.schema import DeviceSchema
+>>> from nirglucose.dataset.schema import DeviceSchema
 >>> estimate_prototype(DeviceSchema((940.0,), reference=False, physiology=()))
 'int nirglucose_estimate(const float adc[1], float *glucose_mgdl)'
 """
@@ -23,7 +23,7 @@ Examples
 from __future__ import annotations
 
 from ..dataset import GLUCOSE_REPORTING_RANGE_MGDL
-from ..schema import DeviceSchema
+from ..dataset.schema import DeviceSchema
 
 __all__ = ["STATUS_BITS", "estimate_prototype", "estimate_decl", "estimate_body"]
 

@@ -83,7 +83,7 @@ def _torch():
 
 
 def _absorbance_and_physiology(torch, schema, raw):
-    """Torch twin of :meth:`nirglucose.schema.DeviceSchema.split` plus the status."""
+    """Torch twin of :meth:`nirglucose.dataset.schema.DeviceSchema.split` plus the status."""
     k = schema.n_channels
     full = float(schema.full_scale)
     adc = raw[:, :k]

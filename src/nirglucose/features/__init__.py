@@ -165,7 +165,11 @@ from .blocks import (
 )
 from .device import compute_features, feature_table
 from .study import FEATURE_NAMES, FEATURE_TABLE, N_FEATURES, ebl_feature_matrix, features_markdown
-from .transform import EnhancedBeerLambertFeatures, enhanced_beer_lambert
+from .transform import (
+    EnhancedBeerLambertFeatures,
+    MeasurementTransformer,
+    enhanced_beer_lambert,
+)
 
 __all__ = [
     "N_FEATURES",
@@ -191,6 +195,7 @@ __all__ = [
     "perfusion_index",
     "features_markdown",
     "EnhancedBeerLambertFeatures",
+    "MeasurementTransformer",
     "feature_table",
     "compute_features",
     "nuisance_alphas",

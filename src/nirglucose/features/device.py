@@ -1,7 +1,7 @@
 """The Enhanced Beer–Lambert features of any device, and their evaluation.
 
 :func:`feature_table` is the feature table of a device's
-:class:`~nirglucose.schema.DeviceSchema` (any LEDs, optional reference codes, any known
+:class:`~nirglucose.dataset.schema.DeviceSchema` (any LEDs, optional reference codes, any known
 physiological columns), from the one builder
 :func:`~nirglucose.features.table.build_feature_table`; at the study's device it is the
 study's :data:`~nirglucose.features.study.FEATURE_TABLE`. :func:`compute_features` evaluates

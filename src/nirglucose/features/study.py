@@ -21,8 +21,8 @@ import numpy as np
 
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import PMF_COLUMNS
+from ..dataset.schema import DeviceSchema
 from ..exceptions import DataError
-from ..schema import DeviceSchema
 from .blocks import (
     _ENV2,
     _MEASURED,

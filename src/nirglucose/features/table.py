@@ -1,7 +1,7 @@
 """The one builder of Enhanced Beer–Lambert feature tables, for any device.
 
 :func:`build_feature_table` lays out the features of a device's
-:class:`~nirglucose.schema.DeviceSchema` block by block from the shared blocks of
+:class:`~nirglucose.dataset.schema.DeviceSchema` block by block from the shared blocks of
 :mod:`~nirglucose.features.blocks` (the blocks and their arithmetic are in the
 :mod:`nirglucose.features` docstring). The study's table
 (:data:`~nirglucose.features.study.FEATURE_TABLE`) is this builder at the study's
@@ -159,7 +159,7 @@ def build_feature_table(
 
     Examples
     --------
-    >>> from nirglucose.schema import DeviceSchema
+    >>> from nirglucose.dataset.schema import DeviceSchema
     >>> t = build_feature_table(DeviceSchema(wavelengths_nm=(940.0, 1050.0), physiology=()))
     >>> [f.name for f in t]
     ['A_940', 'A_1050', 'dA_1050_940', 'A_940_x_A_940', 'A_940_x_A_1050', 'A_1050_x_A_1050']

@@ -1,4 +1,5 @@
-"""The feature transform: a device's measurements -> its Enhanced Beer–Lambert features.
+"""The feature transforms: a device's measurements -> its absorbances and physiology
+(:class:`MeasurementTransformer`) or its Enhanced Beer–Lambert features.
 
 :func:`enhanced_beer_lambert` (a DataFrame in, a DataFrame out) and the scikit-learn
 transformer :class:`EnhancedBeerLambertFeatures`; both take the vectorised study path
@@ -19,12 +20,12 @@ import pandas as pd
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from ..dataset import Dataset
-from ..fitted import require_fitted
-from ..schema import DeviceSchema, as_raw_input, fit_schema
+from ..dataset.schema import DeviceSchema
+from ..fitted import as_raw_input, fit_schema, require_fitted
 from .device import compute_features, feature_table
 from .study import ebl_feature_matrix
 
-__all__ = ["enhanced_beer_lambert", "EnhancedBeerLambertFeatures"]
+__all__ = ["enhanced_beer_lambert", "EnhancedBeerLambertFeatures", "MeasurementTransformer"]
 
 
 def enhanced_beer_lambert(
@@ -79,7 +80,7 @@ def enhanced_beer_lambert(
 class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
     """scikit-learn transformer: a device's measured columns -> its EBL features.
 
-    ``fit`` records the device (:class:`~nirglucose.schema.DeviceSchema`: from the
+    ``fit`` records the device (:class:`~nirglucose.dataset.schema.DeviceSchema`: from the
     column names of a frame, or plain for an array) and the feature table
     (:func:`feature_table`; 56 features at the study's device), so it can sit in a
     :class:`~sklearn.pipeline.Pipeline` before a scaler and a regressor.
@@ -129,3 +130,44 @@ class EnhancedBeerLambertFeatures(TransformerMixin, BaseEstimator):
         if tags.transformer_tags is not None:
             tags.transformer_tags.preserves_dtype = ["float64"]  # always float64 out
         return tags
+
+
+class MeasurementTransformer(TransformerMixin, BaseEstimator):
+    """scikit-learn transformer: a device's columns -> [absorbances | physiology].
+
+    ``fit`` records the device (:class:`~nirglucose.dataset.schema.DeviceSchema`, from
+    the column names, or plain for an array); ``transform`` returns the (n, k + m)
+    float64 array of the k absorbances and the m physiological columns.
+
+    Parameters
+    ----------
+    adc_bits : int, optional
+        Declared ADC resolution (else from the data's scenario/metadata, or 12). [bit]
+
+    Examples
+    --------
+    >>> import nirglucose as ng
+    >>> ds = ng.simulate("wearable", n_subjects=2, per_subject=2, seed=0)
+    >>> t = MeasurementTransformer().fit(ds)
+    >>> t.transform(ds).shape, t.get_feature_names_out()[0]
+    ((4, 16), 'A_850')
+    """
+
+    def __init__(self, adc_bits: int | None = None):
+        self.adc_bits = adc_bits
+
+    def fit(self, X, y=None):
+        """Record the device's schema; returns self."""
+        self.schema_ = fit_schema(self, X, self.adc_bits)
+        if isinstance(X, pd.DataFrame | Dataset):
+            self.schema_.raw(X)  # validate the device's columns now
+        return self
+
+    def transform(self, X) -> np.ndarray:
+        """(n, k + m) absorbances then physiology."""
+        require_fitted(self, "schema_")
+        return self.schema_.stacked(self.schema_.raw(as_raw_input(self, X, self.schema_)))
+
+    def get_feature_names_out(self, input_features=None) -> np.ndarray:
+        """``A_<nm>`` for each LED, then the physiological column names."""
+        return np.asarray(self.schema_.stacked_names, dtype=object)

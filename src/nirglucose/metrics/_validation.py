@@ -18,7 +18,7 @@ from nirglucose.exceptions import DataError
 
 __all__ = ["MGDL_PER_MMOLL", "VALID_UNITS"]
 
-#: Below this median a mg/dL reference reads as mmol/L (as nirglucose.io_files). [mg/dL]
+#: Below this median a mg/dL reference reads as mmol/L (as nirglucose.dataset.files). [mg/dL]
 _MMOLL_SUSPECT_MEDIAN_MGDL = 35.0
 
 #: mg/dL per mmol/L of glucose (molar mass 180.16 g/mol / 10 dL/L). [mg/dL per mmol/L]

@@ -3,15 +3,20 @@ physics term, ``-fm``), a shallow DNN, three references.
 
 The reference learners are the no-skill mean, a Gaussian process and gradient boosting.
 
-Classes are imported lazily (torch loads only when a network is used).
+Classes are imported lazily (torch loads only when a network is used). What a model is
+called in tables, figures and reports is :func:`label` (:mod:`.labels`, beside the
+registry).
 """
 
 from __future__ import annotations
 
+from .labels import MODEL_LABELS, label
 from .registry import available_models, get_model_class, load_model, make_model, register
 from .tuning import tuned_params
 
 __all__ = [
+    "MODEL_LABELS",
+    "label",
     "available_models",
     "get_model_class",
     "load_model",

@@ -2,13 +2,13 @@
 
 Estimators take a :class:`~nirglucose.dataset.Dataset` or a DataFrame of any device
 (``adc_<nm>`` for any LEDs, optional ``adc_ref_<nm>``, any known physiological
-columns; :class:`~nirglucose.schema.DeviceSchema` reads them), or a plain 2-D numeric
+columns; :class:`~nirglucose.dataset.schema.DeviceSchema` reads them), or a plain 2-D numeric
 array. ``fit`` records the device as ``schema_``; ``predict`` requires the same columns
-(an array: the schema's :attr:`~nirglucose.schema.DeviceSchema.raw_columns` in order).
+(an array: the schema's :attr:`~nirglucose.dataset.schema.DeviceSchema.raw_columns` in order).
 They read measured columns only, never ``true_*`` ones (except
 :class:`~nirglucose.models.oracle.Oracle`). Every model applies the same fitting-size
-policy (:func:`~nirglucose.schema.check_fit_size`) and refuses reference glucose a meter
-would not report (:func:`~nirglucose.schema.check_reference_glucose`).
+policy (:func:`~nirglucose.dataset.schema.check_fit_size`) and refuses reference glucose a meter
+would not report (:func:`~nirglucose.dataset.schema.check_reference_glucose`).
 """
 
 from __future__ import annotations
@@ -20,15 +20,14 @@ from sklearn.utils.validation import column_or_1d
 
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
 from ..dataset import Dataset, measured_columns
-from ..exceptions import DataError
-from ..schema import (
+from ..dataset.schema import (
     DeviceSchema,
     _first_rows,
-    as_raw_input,
     check_fit_size,
     check_reference_glucose,
-    fit_schema,
 )
+from ..exceptions import DataError
+from ..fitted import as_raw_input, fit_schema
 from ._json_io import JsonModelMixin
 
 __all__ = [
@@ -119,7 +118,7 @@ def predict_input(est, X) -> np.ndarray:
 class SchemaJsonMixin(JsonModelMixin):
     """JSON save/load for estimators that read their input through the schema boundary.
 
-    The one place a fitted ``schema_`` (:class:`~nirglucose.schema.DeviceSchema`) is
+    The one place a fitted ``schema_`` (:class:`~nirglucose.dataset.schema.DeviceSchema`) is
     written to and read back from a model file, and the input record scikit-learn
     expects rebuilt from it. Subclasses list ``"schema_": "json"`` in ``_STATE`` and
     call :meth:`_restore_schema` first thing in their ``_restore`` (run after ``fit``

@@ -25,7 +25,7 @@ __all__ = [
 
 #: Default training: full-batch AdamW for a fixed number of epochs with cosine annealing
 #: and no validation split (the epoch count, lr and weight decay are hyper-parameters,
-#: chosen per preset by ``benchmarks/tune.py``; see :func:`nirglucose.models.tuned_params`).
+#: chosen per preset by ``tools/tune.py``; see :func:`nirglucose.models.tuned_params`).
 #: These untuned defaults are mid-grid values of that search's space.
 DEFAULT_EPOCHS = 300
 DEFAULT_LR = 3e-3

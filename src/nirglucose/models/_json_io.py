@@ -7,7 +7,7 @@ A model file is one JSON document::
      "conformal": {...}}
 
 ``conformal`` (optional) is the model's prediction-interval calibration
-(:func:`nirglucose.evaluation.conformal.split_conformal`), validated on load.
+(:func:`nirglucose.calibration.conformal.split_conformal`), validated on load.
 
 ``params`` are the constructor's keyword arguments (``get_params()``); ``state`` holds
 the learned attributes as numbers and lists. Loading validates the schema, the model

@@ -79,9 +79,9 @@ from sklearn.utils import check_random_state
 from torch import nn
 
 from ..dataset import Dataset
+from ..dataset.schema import DeviceSchema
 from ..exceptions import DataError
 from ..fitted import require_fitted
-from ..schema import DeviceSchema
 from ._base import fit_input, predict_input, target_of
 from ._constructor import (
     DEFAULT_EPOCHS,
@@ -229,7 +229,7 @@ class TorchRegressor(
         tissue); without decorrelation gradient descent learns the high-variance
         directions first and memorises the training subjects before it finds them
         (on a quiet regime, 80 subjects x 3, grouped 5-fold: SDNN 39 -> 16 mg/dL, the
-        training mean 58; ``benchmarks/tune.py``). False gives the plain study
+        training mean 58; ``tools/tune.py``). False gives the plain study
         network on standardised inputs.
     patience : int or None
         Stop after this many epochs without a relative improvement of 1e-4 in the

@@ -16,8 +16,8 @@ import torch
 
 from .._version import __version__
 from ..dataset import atomic_write
+from ..dataset.schema import DeviceSchema
 from ..exceptions import DataError
-from ..schema import DeviceSchema
 from ._validate import (
     MODEL_FORMAT,
     check_calibration_doc,

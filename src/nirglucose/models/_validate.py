@@ -224,7 +224,7 @@ def check_calibration_doc(doc: Any, where: str = "model file") -> dict[str, Any]
     """Validate a stored split-conformal calibration (from a model file); returns it.
 
     Lives with the model-file checks, so loading a model never imports the evaluation
-    package; :mod:`nirglucose.evaluation.conformal` writes what it reads.
+    package; :mod:`nirglucose.calibration.conformal` writes what it reads.
     """
     ok = (
         isinstance(doc, dict)

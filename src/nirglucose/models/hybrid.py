@@ -59,7 +59,7 @@ __all__ = ["EBLGP", "PhysicsInversionGP", "SHRINKAGE_FOLDS"]
 
 #: Subject-grouped folds the stacking weight is learned over when ``cv`` is 0 or 1 (the
 #: GP learns in-sample residuals, so there are no folds to reuse): the hybrids' default
-#: ``cv`` and the tuning's grouped 3-fold CV (``benchmarks/tune.py``).
+#: ``cv`` and the tuning's grouped 3-fold CV (``tools/tune.py``).
 SHRINKAGE_FOLDS = 3
 
 

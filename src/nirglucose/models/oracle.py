@@ -46,10 +46,10 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from ..config import ScenarioConfig
 from ..dataset import Dataset
+from ..dataset.schema import DeviceSchema, check_fit_size, check_reference_glucose
 from ..exceptions import DataError
 from ..fitted import require_fitted
-from ..schema import DeviceSchema, check_fit_size, check_reference_glucose
-from ..simulation.simulator import _tables, detected_fraction_given_glucose
+from ..simulation.simulator import scenario_tables, detected_fraction_given_glucose
 from ._json_io import JsonModelMixin
 from ._params import Integral, Interval, Real, ValidatedParamsMixin
 from .registry import register
@@ -282,7 +282,7 @@ class Oracle(ValidatedParamsMixin, JsonModelMixin, RegressorMixin, BaseEstimator
         lo, hi = GLUCOSE_SEARCH_RANGE_MGDL
         g = np.full(n, float(np.clip(self.prior_mean_, lo, hi)))
 
-        tables = _tables(cfg)  # once per call, not twice per Gauss-Newton step
+        tables = scenario_tables(cfg)  # once per call, not twice per Gauss-Newton step
         for _ in range(int(self.max_iter)):
             m = _model_log_ratio(cfg, frame, g, tables)
             J = (_model_log_ratio(cfg, frame, g + _STEP_MGDL, tables) - m) / _STEP_MGDL

@@ -34,7 +34,7 @@ decoupled weight decay the data gradient never vanishes; so the parameter-space 
 (0.006-0.5 for that term at :math:`\lambda = 1`) overstates what the term does, which
 is to shift the predictions to where the data term's restoring force balances it:
 :math:`4\times10^{-4}` SD, 0.026 mg/dL on ``paper``
-(``benchmarks/records/pinn_physics_gradient.json``). A first-order estimate, and a
+(``studies/records/pinn_physics_gradient.json``). A first-order estimate, and a
 good one: at :math:`\lambda = 1000` the predicted mean shift is 26 mg/dL and the fitted
 Original PINN's held-out predictions rise by 27-33 mg/dL (``paper``, 40 x 3, seeds
 0-2 of ``random_state``).
@@ -79,7 +79,7 @@ GRADIENT_KEYS = ("grad_norm_data", "grad_norm_physics", "grad_norm_physics_unit"
                  "pull_sd", "indirect_ratio")
 #: Probed epochs per training run besides the first: 6 of 200 epochs. Each probe costs
 #: two or three extra backward passes through the retained graph: 3-4 % of the fit's CPU
-#: time (``benchmarks/pinn_physics_gradient.py`` measures it per model).
+#: time (``studies/pinn_physics_gradient.py`` measures it per model).
 GRADIENT_PROBES = 5
 #: A term whose median pull over the probes is below this displaces the predictions by
 #: less than a hundredth of the training glucose's standard deviation (0.6 mg/dL on

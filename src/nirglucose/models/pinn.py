@@ -46,8 +46,8 @@ each prediction has moved by
 :math:`\lambda\,\sigma_y^2\sum_\lambda\varepsilon_\lambda r_{i\lambda}`
 (:math:`\sigma_y` the training glucose's SD, 58 mg/dL), which at
 :math:`\lambda_\mathrm{phys} = 1` is 0.026 mg/dL on ``paper`` and 0.029 mg/dL on
-``wearable`` (:math:`4\text{-}5\times10^{-4}` SD; ``benchmarks/pinn_physics_gradient.py``,
-40 x 3, seed 0; the record in ``benchmarks/records/pinn_physics_gradient.json``). The
+``wearable`` (:math:`4\text{-}5\times10^{-4}` SD; ``studies/pinn_physics_gradient.py``,
+40 x 3, seed 0; the record in ``studies/records/pinn_physics_gradient.json``). The
 estimate holds: at :math:`\lambda = 1000` it predicts 26 mg/dL and the Original PINN's
 held-out predictions rise by 27-33 mg/dL (``random_state`` 0-2). So the study's term is
 constant during training and cannot change the fit at the study's weights
@@ -343,7 +343,7 @@ class OriginalPINN(_BeerLambertPINN):
     respect to :math:`\hat c`, :math:`2\lambda\sum_\lambda\varepsilon(\varepsilon\hat c - A)`
     per mg/dL, pushes every prediction up by the same tiny amount: against the MSE it
     displaces them by 0.03 mg/dL at :math:`\lambda_\mathrm{phys} = 1` (module notes,
-    ``benchmarks/pinn_physics_gradient.py``). The term is constant during training
+    ``studies/pinn_physics_gradient.py``). The term is constant during training
     and does not move the fit at the study's weights; the history's gradient probes
     say so (:func:`~nirglucose.models.physics_effect.physics_verdict`). The 'relative' form
     is the physically sensible variant; it is not the default because it is not the
@@ -421,7 +421,7 @@ _FORWARD_NOTES = """
     training glucose; a device whose nuisances swamp glucose's signal gets small
     :math:`w_i` and hence a weak term. Its grid is the study PINNs'
     (:data:`~nirglucose.models.tuning.LAMBDA_PHYS_GRID`, 0 included); the training
-    parameters are its study twin's until ``benchmarks/tune.py`` has tuned it.
+    parameters are its study twin's until ``tools/tune.py`` has tuned it.
     """
 
 
@@ -745,7 +745,7 @@ _RTE_FORWARD_NOTES = """
     study's reflectance tie (the optics heads stay, as features of the glucose head).
     ``estimate_state`` returns the state head's blood, saturation, water, fat, melanin,
     thickness, LED shift and coupling (the benchmark's inverse table). Training
-    parameters: its study twin's until ``benchmarks/tune.py`` has tuned it.
+    parameters: its study twin's until ``tools/tune.py`` has tuned it.
     """
 
 

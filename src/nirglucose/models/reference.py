@@ -6,7 +6,7 @@ more than an off-the-shelf learner on the same inputs (``gp``, ``gbr``).
 
 All three read their input through the package's one schema boundary
 (:func:`~nirglucose.models._base.fit_input`, :func:`~nirglucose.models._base.predict_input`,
-:class:`~nirglucose.schema.DeviceSchema`), as PLS does: the device's absorbances
+:class:`~nirglucose.dataset.schema.DeviceSchema`), as PLS does: the device's absorbances
 ``log10(I0 / I)``, one per LED, then whichever physiological columns it records, so
 they fit, predict, save and load on any LED set, ADC resolution and physiology (the
 study's device: 4 + 12 = 16 inputs). The fitted device is saved with the model

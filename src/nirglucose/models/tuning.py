@@ -1,6 +1,6 @@
 """Tuned hyper-parameters per preset and model, and the search space they came from.
 
-``benchmarks/tune.py`` chooses each model family's hyper-parameters per preset by
+``tools/tune.py`` chooses each model family's hyper-parameters per preset by
 subject-grouped cross-validation on simulation seeds disjoint from the reported ones
 (reported: 0-4; tuning: :data:`TUNING_SEEDS`), with the same budget for every family
 (:data:`N_CONFIGS` configurations x :data:`N_FOLDS` folds x the tuning seeds), and
@@ -35,6 +35,7 @@ from .registry import get_model_class, is_network, is_pinn
 __all__ = [
     "tuned_params",
     "untuned_params",
+    "preset_params",
     "UNTUNED_NETWORK_PARAMS",
     "tuning_record",
     "search_space",
@@ -54,13 +55,13 @@ TUNING_SEEDS = (1000, 1001, 1002)
 N_CONFIGS = 12
 #: Subject-grouped folds per tuning seed.
 N_FOLDS = 3
-#: Presets tuned by ``benchmarks/tune.py``.
+#: Presets tuned by ``tools/tune.py``.
 TUNED_PRESETS = ("wearable", "paper", "lab", "field", "physical")
 
 #: Physics weights tried for every PINN; 0 (the plain network) is always on the grid.
 LAMBDA_PHYS_GRID = (0.0, 0.01, 0.1, 1.0)
 
-#: Networks tuned as their study twin until ``benchmarks/tune.py`` has run for them: the
+#: Networks tuned as their study twin until ``tools/tune.py`` has run for them: the
 #: forward-model PINNs are the study networks with another physics term, so they take
 #: the twin's tuned training parameters (same network, same data, same grid; their own
 #: ``lambda_phys`` default, as the twin's λ was chosen for the study's term).
@@ -132,7 +133,7 @@ _NO_GRID = {
 
 
 def search_space(name: str) -> dict[str, tuple]:
-    """The grid ``benchmarks/tune.py`` samples :data:`N_CONFIGS` points of, for ``name``.
+    """The grid ``tools/tune.py`` samples :data:`N_CONFIGS` points of, for ``name``.
 
     Networks share one training grid (learning rate, AdamW weight decay, epochs,
     dropout, early stopping on a subject split or not); the PINNs add
@@ -185,7 +186,7 @@ def tuning_record() -> dict:
 
 
 def tuned_params(name: str, preset: str) -> dict:
-    """Hyper-parameters chosen by ``benchmarks/tune.py`` for model ``name`` on ``preset``.
+    """Hyper-parameters chosen by ``tools/tune.py`` for model ``name`` on ``preset``.
 
     Parameters
     ----------
@@ -251,6 +252,24 @@ def untuned_params(name: str) -> dict:
     {}
     """
     return dict(UNTUNED_NETWORK_PARAMS) if is_network(name) else {}
+
+
+def preset_params(name: str, preset: str | None) -> dict:
+    """The constructor arguments every evaluation gives model ``name`` on ``preset``: its
+    tuned ones (:func:`tuned_params`), or without a preset (a user's own data)
+    :func:`untuned_params`.
+
+    The one place the benchmark, the sweeps and the worn benchmark ask for tuned
+    hyper-parameters.
+
+    Examples
+    --------
+    >>> preset_params("sdnn", None) == untuned_params("sdnn")
+    True
+    """
+    if preset is None:  # user data: networks early-stop on held-out subjects
+        return untuned_params(name)
+    return dict(tuned_params(name, preset))
 
 
 def lambda_curve(name: str, preset: str) -> dict | None:

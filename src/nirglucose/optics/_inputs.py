@@ -1,8 +1,8 @@
 """Input checks shared by the optics' Monte Carlo front ends (no physics here).
 
 One place for what the photon engine's front ends
-(:mod:`~nirglucose.optics.reference.monte_carlo`,
-:mod:`~nirglucose.optics.reference.mc_paths`), the white Monte Carlo
+(``nirglucose_reference.monte_carlo``,
+``nirglucose_reference.mc_paths``), the white Monte Carlo
 (:mod:`~nirglucose.optics.kernels.mc_white`) and the table grid
 (:mod:`~nirglucose.optics.lut.grid`) all ask of their inputs: a photon count and a
 random generator. Imports NumPy only, so any of them may use it.

@@ -19,7 +19,7 @@ diffusion coefficient D = 1/(3 mus') does not depend on mua), computed by a forw
 finite difference, so the partial paths sum to the total mean path by construction.
 
 Accuracy against Monte Carlo (the radiative transport equation), measured with
-:func:`nirglucose.optics.reference.mc_paths.mc_detected_paths`, is given in the README section
+``nirglucose_reference.mc_paths.mc_detected_paths``, is given in the README section
 "Layered skin optics" and checked by the slow tests.
 
 References

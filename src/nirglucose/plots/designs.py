@@ -1,7 +1,7 @@
 """Device-design figures: the best achievable RMSE against the number of LEDs.
 
 The input is the ``wavelengths`` study's design table
-(:func:`~nirglucose.evaluation.wavelength_study.wavelength_designs`, the sweep's
+(:func:`~nirglucose.evaluation.sweep.wavelengths.wavelength_designs`, the sweep's
 ``effects.csv``); nothing here computes a bound or a metric.
 """
 

@@ -1,6 +1,6 @@
 """The fleet study's figure: RMSE against the tolerance scale, one line per variant.
 
-The input is :func:`~nirglucose.evaluation.fleet.fleet_table`; nothing here computes a
+The input is :func:`~nirglucose.evaluation.sweep.fleet.fleet_table`; nothing here computes a
 metric.
 """
 
@@ -29,7 +29,7 @@ def figure_fleet(table: pd.DataFrame, *, log_y: bool = True) -> Figure:
     Parameters
     ----------
     table : pandas.DataFrame
-        :func:`~nirglucose.evaluation.fleet.fleet_table`: ``tolerance_scale``,
+        :func:`~nirglucose.evaluation.sweep.fleet.fleet_table`: ``tolerance_scale``,
         ``variant``, ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high``.
         [-, -, -, mg/dL, mg/dL, mg/dL]
     log_y : bool

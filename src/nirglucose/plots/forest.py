@@ -179,7 +179,7 @@ def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, f
     ----------
     table : pandas.DataFrame
         ``preset``, ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high``,
-        ``status`` (:func:`nirglucose.evaluation.findings.headline_table`). [mg/dL]
+        ``status`` (:func:`nirglucose.evaluation.benchmark.findings.headline_table`). [mg/dL]
     references : mapping
         Preset -> ``{"mean": ..., "oracle": ...}``. [mg/dL]
 

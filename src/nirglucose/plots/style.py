@@ -24,7 +24,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..dataset import atomic_write
-from ..evaluation.reference import MODEL_LABELS
+from ..models.labels import label
 
 __all__ = [
     "OKABE_ITO",
@@ -203,14 +203,14 @@ def model_marker(model: str) -> str:
 
 
 def model_label(model: str) -> str:
-    """Display name of a model: the study's name for registered models, else the name.
+    """Display name of a model in a figure: :func:`nirglucose.models.labels.label`.
 
     Examples
     --------
     >>> model_label("ebl")
     'Enhanced Beer–Lambert'
     """
-    return MODEL_LABELS.get(model, model)
+    return label(model)
 
 
 @contextmanager

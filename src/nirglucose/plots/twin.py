@@ -2,7 +2,7 @@
 rank histograms of its simulation-based calibration.
 
 The inputs are ``twin.json``'s entries and the calibration record
-(``benchmarks/records/twin_calibration.json``); nothing here computes a posterior.
+(``studies/records/twin_calibration.json``); nothing here computes a posterior.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 One panel per model: for each LED, the paired RMSE difference of the model refitted
 without that LED minus the model with every LED, with its 95 % CI (``drop_one.csv``,
-computed by :mod:`nirglucose.evaluation.drop_one`). Above zero: the LED carries
+computed by :mod:`nirglucose.evaluation.benchmark.drop_one`). Above zero: the LED carries
 information the others do not.
 """
 

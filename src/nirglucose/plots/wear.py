@@ -1,6 +1,6 @@
 """Figures of a worn device: traces over the days and error by days since calibration.
 
-Inputs are the worn benchmark's tables (:mod:`nirglucose.evaluation.wear_benchmark`:
+Inputs are the worn benchmark's tables (:mod:`nirglucose.evaluation.wear`:
 ``wear_predictions.csv`` with the schedule applied by the caller, ``wear_by_day.csv``);
 nothing here computes a metric.
 """

@@ -1,7 +1,7 @@
 """The findings section at the top of the report: sentences, headline figure, distances.
 
 The sentences and the numbers in them are computed by
-:mod:`nirglucose.evaluation.findings`; this module only renders them. Every number is a
+:mod:`nirglucose.evaluation.benchmark.findings`; this module only renders them. Every number is a
 ``<span class="v">`` carrying the unrounded value (``data-value``), the file, row and
 column it was read from (``data-src``, sources joined by ``|``) and how it was derived
 (``data-op``), so that a reader or a test can check it against the results files;
@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from ..evaluation.findings import (
+from ..evaluation.benchmark.findings import (
     Finding,
     RunData,
     Value,
@@ -26,7 +26,7 @@ from ..evaluation.findings import (
     headline_table,
     label,
 )
-from ..evaluation.subgroups import subgroup_findings
+from ..evaluation.benchmark.subgroups import subgroup_findings
 from ..formatting import format_number
 from .markup import esc as _esc
 from .markup import preset_of

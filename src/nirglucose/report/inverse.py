@@ -1,6 +1,6 @@
 """The inverse-task section: how well each state-predicting estimator recovers the tissue.
 
-The numbers are computed by :mod:`nirglucose.evaluation.inverse` (``inverse.csv`` of
+The numbers are computed by :mod:`nirglucose.evaluation.benchmark.inverse` (``inverse.csv`` of
 each preset's results directory); this module only renders them.
 """
 

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from ..evaluation.reference import MODEL_LABELS
 from ..formatting import format_number
+from ..models.labels import label
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -110,10 +110,11 @@ def markdown_to_html(text: str, *, skip_tables: bool = False, skip_h1: bool = Fa
 
 
 def model_label(model: str, metrics_row: pd.Series | None = None) -> str:
-    """The model's label: the run's own (``metrics.csv``'s ``label``) or the plots'."""
+    """The model's label: the run's own (``metrics.csv``'s ``label``), else
+    :func:`nirglucose.models.labels.label`."""
     if metrics_row is not None and isinstance(metrics_row.get("label"), str):
         return metrics_row["label"]
-    return MODEL_LABELS.get(model, model)
+    return label(model)
 
 
 def user_data_md(md: str) -> str:

@@ -89,7 +89,7 @@ def hyperparameter_section(runs: Sequence[Results]) -> str:
                 f"</thead><tbody>{''.join(body)}</tbody></table></div>")
     return ('<h2 id="hyperparameters">Tuned hyper-parameters</h2>'
             "<p>What each model was fitted with on each preset (chosen by "
-            "<code>benchmarks/tune.py</code> and recorded in <code>meta.json</code>; a model "
+            "<code>tools/tune.py</code> and recorded in <code>meta.json</code>; a model "
             "absent here ran on its defaults), the physics weight λ first. A λ of 0 means "
             "tuning switched the physics term off: "
             "that network is trained as a plain one, and its physics is not tested.</p>"

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import pandas as pd
 
-from ..evaluation.findings import RunData, physics_verdicts
+from ..evaluation.benchmark.findings import RunData, physics_verdicts
 from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
 from ..formatting import as_number, format_number
@@ -83,7 +83,7 @@ def ablation_section(results_dir: str | Path, heading: str = "Physics ablation",
 
     Where tuning set the physics weight to 0 (``lambda_phys`` of ``meta.json``), or the
     two fits are identical, no question was asked: the row says so and shows no Δ, p
-    or verdict (:func:`nirglucose.evaluation.findings.physics_verdicts`).
+    or verdict (:func:`nirglucose.evaluation.benchmark.findings.physics_verdicts`).
     """
     d = Path(results_dir)
     a = _read_ablation(d)

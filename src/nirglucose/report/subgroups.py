@@ -1,6 +1,6 @@
 """The subgroups section: error by diabetes status and by Fitzpatrick type, per preset.
 
-The numbers are computed by :mod:`nirglucose.evaluation.subgroups` (cluster bootstrap
+The numbers are computed by :mod:`nirglucose.evaluation.benchmark.subgroups` (cluster bootstrap
 over each subgroup's subjects); this module only renders them.
 """
 
@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from ..evaluation.subgroups import SUBGROUP_COLUMNS, SUBGROUP_LABELS, subgroup_errors
+from ..evaluation.benchmark.subgroups import SUBGROUP_COLUMNS, SUBGROUP_LABELS, subgroup_errors
 from ..formatting import MISSING, format_ci
 from .figures.inputs import competitors
 from .markup import esc as _esc
@@ -25,7 +25,8 @@ __all__ = ["subgroup_tables", "subgroups_section"]
 
 
 def subgroup_tables(runs: Sequence[Results], *, n_boot: int = 2000) -> dict[str, pd.DataFrame]:
-    """Each preset's :func:`~nirglucose.evaluation.subgroups.subgroup_errors`, all groupings.
+    """Each preset's :func:`~nirglucose.evaluation.benchmark.subgroups.subgroup_errors`, all
+    groupings.
 
     Competitors only (no oracle, no-skill or ablation rows); a run without its dataset
     (or without the grouping columns) has no entry.

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from pydantic import BaseModel
 
 from ..config import ScenarioConfig
-from ..evaluation.sweep import SweepResult, load_sweep, threshold_crossing
+from ..evaluation.sweep.run import SweepResult, load_sweep, threshold_crossing
 from ..formatting import MISSING, format_ci, format_number
 from ..plots.designs import plot_design_curve
 from ..plots.fleet import figure_fleet

@@ -1,9 +1,9 @@
 """The report of a worn run (``nirglucose wear-benchmark``): findings first, then the
 traces, the error by days since calibration, the schedules and the CGM standards.
 
-Reads the files of :class:`~nirglucose.evaluation.wear_benchmark.WearResult`; computes
+Reads the files of :class:`~nirglucose.evaluation.wear.WearResult`; computes
 no metric except the schedule applied to the drawn traces
-(:func:`~nirglucose.evaluation.wear_calibration.apply_schedule`, the same function the
+(:func:`~nirglucose.calibration.schedules.apply_schedule`, the same function the
 benchmark scored).
 """
 
@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..calibration.schedules import apply_schedule
 from ..dataset import atomic_write
-from ..evaluation.wear_calibration import apply_schedule
 from ..exceptions import DataError
 from ..formatting import format_number
 from ..plots.style import figure_bytes, model_label

@@ -32,7 +32,7 @@ from ..config import ScenarioConfig
 from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..optics import tissue
 from ..optics.forward import FORWARD_MODELS
-from .simulator import _band_detected_fraction, _tables, water_temperature_delta_c
+from .simulator import _band_detected_fraction, scenario_tables, water_temperature_delta_c
 
 __all__ = ["NUISANCES", "PHYSICAL_BOUNDS", "TEMPERATURE_NUISANCE", "ForwardModel"]
 
@@ -87,7 +87,7 @@ class ForwardModel:
             raise ValueError(f"unknown forward model {model!r}")
         optics = cfg.optics.model_copy(update={"model": model})
         self.cfg = cfg.model_copy(update={"optics": optics})
-        self.tables = _tables(self.cfg)
+        self.tables = scenario_tables(self.cfg)
         #: The unknowns besides glucose that :meth:`log_ratio` reads: :data:`NUISANCES`,
         #: then :data:`TEMPERATURE_NUISANCE` where ``noise.water_temperature`` is on.
         self.nuisances = NUISANCES + (

@@ -40,8 +40,8 @@ import pyarrow.parquet as pq
 from .._version import __version__
 from ..config import ScenarioConfig
 from ..dataset import (
-    _META_KEY,
     MANIFEST,
+    META_KEY,
     PART_PATTERN,
     PartitionedDataset,
     atomic_write,
@@ -49,7 +49,7 @@ from ..dataset import (
     scan_dataset,
 )
 from ..exceptions import DataError
-from .simulator import _tables, block_ranges, simulate_block
+from .simulator import scenario_tables, block_ranges, simulate_block
 
 __all__ = [
     "MANIFEST",
@@ -72,7 +72,7 @@ def _write_block(cfg, seed, block, start, n_sub, per_subject, tables, out: Path,
     cols, _ = simulate_block(cfg, seed, block, start, n_sub, per_subject, tables)
     table = pa.Table.from_pandas(pd.DataFrame(cols), preserve_index=False)
     del cols
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), _META_KEY: meta})
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), META_KEY: meta})
     atomic_write(out / _part_name(block), lambda tmp: pq.write_table(table, tmp))
     return block, table.num_rows
 
@@ -133,7 +133,7 @@ def write_partitioned(
     meta_doc = {"nirglucose_version": __version__, "seed": seed,
                 "config": json.loads(cfg.to_json())}
     meta = json.dumps(meta_doc, sort_keys=True).encode()
-    tables = _tables(cfg)
+    tables = scenario_tables(cfg)
     blocks = block_ranges(n_subjects)
     args = [(cfg, seed, b, s, k, per_subject, tables, out, meta) for b, s, k in blocks]
     if n_jobs == 1 or len(blocks) == 1:

@@ -1,15 +1,19 @@
 """The simulator facade: the only place that knows the order of the layers.
 
-environment -> glucose -> physiology (traits, state) -> contact -> optics -> hardware
--> measurement. Work is done per block of subjects (:data:`BLOCK_SUBJECTS`) with its
-own random streams, so the output is the same whatever the chunking or the number of
-workers.
+glucose, environment -> physiology (traits, state) -> measured physiology -> contact
+-> LED temperatures and ages -> optics -> ambient light -> hardware -> PPG. The layer
+engine (:func:`measure_readings`) runs the layers from physiology on, in that order, for
+the snapshot simulator here (:func:`simulate_block`) and the worn one
+(:mod:`nirglucose.simulation.wear`), which differ only in how they draw glucose, the
+environment and the traits over time. Work is done per block of subjects
+(:data:`BLOCK_SUBJECTS`) with its own random streams, so the output is the same whatever
+the chunking or the number of workers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -25,6 +29,10 @@ from .glucose import sample_glucose
 __all__ = [
     "block_ranges",
     "simulate_block",
+    "Readings",
+    "measure_readings",
+    "ScenarioTables",
+    "scenario_tables",
     "iter_blocks",
     "simulate_frame",
     "nominal_tissue",
@@ -35,7 +43,10 @@ __all__ = [
 ]
 
 @dataclass(frozen=True)
-class _Tables:
+class ScenarioTables:
+    """A scenario's precomputed optics (band spectra, geometry factor, look-up table),
+    shared by every block of a run and passed to its workers."""
+
     spectra: tissue.BandSpectra
     geometry: np.ndarray
     lut: object = None  # the rte-lut model's table, specialised to the band nodes
@@ -83,7 +94,8 @@ def water_temperature_delta_c(cfg: ScenarioConfig, skin_temp_c) -> np.ndarray | 
     return np.asarray(skin_temp_c, dtype=float) - t_table
 
 
-def _tables(cfg: ScenarioConfig) -> _Tables:
+def scenario_tables(cfg: ScenarioConfig) -> ScenarioTables:
+    """The scenario's precomputed optics (:class:`ScenarioTables`), once per run."""
     spectra = scenario_band_spectra(cfg)
     ref = cfg.optics.reference_tissue
     # the reference skin at the thermoneutral skin temperature (physiology.skin_temp_c_neutral)
@@ -107,7 +119,7 @@ def _tables(cfg: ScenarioConfig) -> _Tables:
     lut = None
     if cfg.optics.model == "rte-lut":
         lut = _node_tables(cfg, spectra, optics["musp_subcutis"][0] / optics["musp_dermis"][0])
-    return _Tables(spectra, geometry, lut)
+    return ScenarioTables(spectra, geometry, lut)
 
 
 def _node_tables(cfg: ScenarioConfig, spectra, ratio: np.ndarray):
@@ -259,48 +271,122 @@ def simulate_block(
     first_subject: int,
     n_sub: int,
     per_subject: int,
-    tables: _Tables | None = None,
+    tables: ScenarioTables | None = None,
 ) -> tuple[dict, int]:
-    """Simulate one block of subjects; returns ``(columns, n_random_variates)``.
+    """Simulate one block of subjects' snapshots; returns ``(columns, n_random_variates)``.
 
-    Orders the layers (each draws from its own named streams of the block):
-    glucose, environment, physiology, measurement, contact, LED temperatures and ages,
-    optics, ambient light, hardware, PPG.
+    Draws what happens to the block's people (glucose, environment, physiological
+    traits), each from its own named streams of the block, and hands the readings to
+    the layer engine (:func:`measure_readings`), which orders every later layer.
     """
-    tables = _tables(cfg) if tables is None else tables
+    tables = scenario_tables(cfg) if tables is None else tables
     streams = RandomStreams(seed, block)
     n = n_sub * per_subject
     rep = np.repeat(np.arange(n_sub), per_subject)
-    first = np.arange(0, n, per_subject)
 
     glucose = sample_glucose(cfg, n_sub, per_subject, streams)
     env = environment.apply_environment(cfg, n_sub, per_subject, streams)
     traits = physiology.sample_traits(cfg, n_sub, streams)
-    traits_rows = {k: v[rep] for k, v in traits.items()}
-    phys = physiology.apply_physiology(cfg, traits_rows, env, glucose, n, streams)
-    pmf = measurement.measure_physiology(cfg, {**phys, **env}, streams)
-    probe = contact.apply_contact(cfg, phys, env, pmf, streams)
-
-    temps = hardware.led_temperatures_c(
-        cfg, env["true_ambient_temperature_c"], phys["true_skin_temp_c"], first, streams
+    readings = Readings(
+        ids={
+            "subject_id": (first_subject + rep).astype(np.int64),
+            "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
+        },
+        subject_index=rep,
+        startup=np.arange(0, n, per_subject),
+        traits={k: v[rep] for k, v in traits.items()},
+        glucose=glucose,
+        env=env,
+        led_ages=lambda st: hardware.led_ages_h(cfg, rep, n_sub, st),
     )
-    temps.update(hardware.led_ages_h(cfg, rep, n_sub, streams))
-    shift_nm, fraction = _optics_layer(cfg, tables, glucose, phys, probe, temps)
-    temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, env)
-    hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
+    return measure_readings(cfg, tables, streams, readings), streams.n_variates
+
+
+@dataclass(frozen=True)
+class Readings:
+    """The readings a simulator hands the layer engine (:func:`measure_readings`), with
+    what that simulator drew itself for them: who is read when (``ids``), the glucose
+    and environment at each reading, and the subjects' traits.
+
+    The snapshot simulator (:func:`simulate_block`) fills it per block of subjects; the
+    worn one (:func:`nirglucose.simulation.wear.simulate_wear_chunk`) per subject's
+    series, with the hooks below for what a worn device adds.
+
+    Attributes
+    ----------
+    ids : dict
+        Identity columns, in column order (``subject_id``, ``measurement_id``, ...).
+    subject_index : numpy.ndarray
+        Each reading's subject within the batch (0-based), (n,).
+    startup : numpy.ndarray
+        The readings at which a subject's device starts (its LED temperatures' start).
+    traits : dict
+        The subjects' physiological traits at each reading, (n,) each.
+    glucose : dict
+        The reference glucose layer at each reading (``glucose_mgdl``, ...).
+    env : dict
+        The environment layer at each reading.
+    led_ages : callable
+        ``led_ages(streams) -> {"age_h", "age_cal_h"}``: the LEDs' ages. [h]
+    seen : dict, optional
+        The glucose the optics see (a worn device: the interstitial one); default
+        ``glucose``.
+    placement : callable, optional
+        ``placement(streams) -> (pressure, coupling_z)`` per reading, where the probe's
+        placement persists over readings (a worn device between re-seatings).
+    adjust_physiology : callable, optional
+        ``adjust_physiology(phys) -> phys`` after the physiology layer (a worn
+        device's diurnal heart rate).
+    truth : dict
+        Further ``true_*`` columns.
+    """
+
+    ids: dict
+    subject_index: np.ndarray
+    startup: np.ndarray
+    traits: dict
+    glucose: dict
+    env: dict
+    led_ages: Callable[[RandomStreams], dict]
+    seen: dict | None = None
+    placement: Callable[[RandomStreams], tuple] | None = None
+    adjust_physiology: Callable[[dict], dict] | None = None
+    truth: dict = field(default_factory=dict)
+
+
+def measure_readings(cfg: ScenarioConfig, tables: ScenarioTables, streams: RandomStreams,
+                     readings: Readings) -> dict:
+    """The layer engine: the one order of the simulator's layers after glucose and the
+    environment, for snapshots and worn series alike; returns the dataset's columns.
+
+    physiology -> measured physiology -> probe contact -> LED temperatures and ages ->
+    optics -> ambient light -> hardware -> PPG; each layer draws from its own named
+    streams of ``streams``.
+    """
+    r = readings
+    n = len(r.subject_index)
+    phys = physiology.apply_physiology(cfg, r.traits, r.env, r.glucose, n, streams)
+    if r.adjust_physiology is not None:
+        phys = r.adjust_physiology(phys)
+    pmf = measurement.measure_physiology(cfg, {**phys, **r.env}, streams)
+    placement = None if r.placement is None else r.placement(streams)
+    probe = contact.apply_contact(cfg, phys, r.env, pmf, streams, placement=placement)
+    temps = hardware.led_temperatures_c(
+        cfg, r.env["true_ambient_temperature_c"], phys["true_skin_temp_c"], r.startup, streams
+    )
+    temps.update(r.led_ages(streams))
+    seen = r.glucose if r.seen is None else r.seen
+    shift_nm, fraction = _optics_layer(cfg, tables, seen, phys, probe, temps)
+    temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, r.env)
+    hwout = hardware.apply_hardware(cfg, fraction, temps, r.subject_index, streams)
     if cfg.device.ppg_perfusion_spo2:
         pmf.update(
             measurement.measure_ppg(
                 cfg, probe["true_blood_fraction_detected"], phys["true_saturation"], streams
             )
         )
-    ids = {
-        "subject_id": (first_subject + rep).astype(np.int64),
-        "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
-    }
-    truth = {**phys, **env, **probe, **_hidden(glucose, temps)}
-    cols = _columns(cfg, ids, glucose, hwout, pmf, env, truth, fraction, shift_nm)
-    return cols, streams.n_variates
+    truth = {**phys, **r.env, **probe, **_hidden(r.glucose, temps), **r.truth}
+    return _columns(cfg, r.ids, r.glucose, hwout, pmf, r.env, truth, fraction, shift_nm)
 
 
 def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: dict):
@@ -407,7 +493,7 @@ def iter_blocks(
     cfg: ScenarioConfig, n_subjects: int, per_subject: int, seed: int
 ) -> Iterator[pd.DataFrame]:
     """Yield the dataset block by block (bounded memory)."""
-    tables = _tables(cfg)
+    tables = scenario_tables(cfg)
     for block, start, n_sub in block_ranges(n_subjects):
         cols, _ = simulate_block(cfg, seed, block, start, n_sub, per_subject, tables)
         yield pd.DataFrame(cols)
@@ -423,7 +509,7 @@ def simulate_frame(
     else:
         from joblib import Parallel, delayed
 
-        tables = _tables(cfg)
+        tables = scenario_tables(cfg)
         results = Parallel(n_jobs=n_jobs)(
             delayed(simulate_block)(cfg, seed, b, s, k, per_subject, tables) for b, s, k in blocks
         )
@@ -456,7 +542,7 @@ def detected_fraction_given_glucose(
     cfg: ScenarioConfig,
     frame: pd.DataFrame,
     glucose_mgdl: np.ndarray,
-    tables: _Tables | None = None,
+    tables: ScenarioTables | None = None,
 ) -> np.ndarray:
     """Noise-free detected fraction for each row's true nuisance state and any glucose.
 
@@ -473,7 +559,7 @@ def detected_fraction_given_glucose(
     glucose_mgdl : numpy.ndarray
         Glucose per row, (n,). [mg/dL]
     tables : optional
-        The scenario's precomputed tables (``_tables(cfg)``), for callers that call
+        The scenario's precomputed tables (:func:`scenario_tables`), for callers that call
         this repeatedly with one scenario; computed when omitted.
 
     Returns
@@ -481,7 +567,7 @@ def detected_fraction_given_glucose(
     numpy.ndarray
         (n, n_led) fraction of LED power detected. [-]
     """
-    tables = _tables(cfg) if tables is None else tables
+    tables = scenario_tables(cfg) if tables is None else tables
     wl = [f"{w:g}" for w in cfg.leds.wavelengths_nm]
     shift = frame[[f"true_led_shift_nm_{w}" for w in wl]].to_numpy(float)
     fraction = _fraction_per_gain(

@@ -44,16 +44,16 @@ import pandas as pd
 from .._version import __version__
 from ..config import ScenarioConfig
 from ..constants import MINUTES_PER_DAY
-from ..dataset import _META_KEY, MANIFEST, atomic_write
+from ..dataset import MANIFEST, META_KEY, atomic_write
 from ..exceptions import ConfigError
-from . import contact, diurnal, environment, hardware, measurement, physiology, therapy
+from . import contact, diurnal, environment, physiology, therapy
 from . import meal_scenario as meals
 from . import uva_padova as uva
 from ._random import BLOCK_SUBJECTS, RandomStreams, SubjectStreams
 from .glucose import reflect_into_range
 from .interstitial import ISF_LAG_MIN, interstitial_glucose_mgdl
 from .partitioned import prepare_partitioned_dir
-from .simulator import _columns, _hidden, _optics_layer, _tables
+from .simulator import Readings, measure_readings, scenario_tables
 
 __all__ = [
     "MINUTES_PER_DAY",
@@ -292,48 +292,56 @@ def _wear_glucose(cfg, status_code: int, blood, isf, meal_min, times_min) -> tup
 
 def _wear_subject(cfg, seed: int, sid: int, status_code: int, traits: dict, glucose: tuple,
                   times_min, options: WearOptions, tables) -> pd.DataFrame:
-    """One subject's readings through the snapshot engine's layers, in its order.
+    """One subject's readings through the simulator's layer engine
+    (:func:`~nirglucose.simulation.simulator.measure_readings`).
 
     ``glucose`` is (plasma, interstitial, meal minutes) at the reading times; ``traits``
-    the subject's, scalars.
+    the subject's, scalars. What a worn device adds to a snapshot: the glucose over
+    time (the optics see the interstitial one), the day's environment and heart rate,
+    the probe's placement kept between re-seatings, and the LEDs ageing with the wear.
     """
     streams = SubjectStreams(seed, sid)
     n = len(times_min)
-    rep = np.zeros(n, dtype=np.int64)
     ref, seen = _wear_glucose(cfg, status_code, *glucose, times_min)
     env = _wear_environment(cfg, streams, times_min, options)
-    phys = physiology.apply_physiology(
-        cfg, {k: np.repeat(v, n) for k, v in traits.items()}, env, ref, n, streams)
-    phys["true_heart_rate_bpm"] = np.clip(
-        phys["true_heart_rate_bpm"] + diurnal.diurnal_cosine(
-            ref["true_hour_of_day"], options.heart_rate_amplitude_bpm,
-            diurnal.HEART_RATE_PEAK_HOUR),
-        *cfg.physiology.heart_rate_bpm)
-    pmf = measurement.measure_physiology(cfg, {**phys, **env}, streams)
     seating = diurnal.seating_index(times_min, options.shower_hour)
-    pressure, coupling_z = contact.sample_contact(cfg, int(seating[-1]) + 1, streams)
-    probe = contact.apply_contact(cfg, phys, env, pmf, streams,
-                                  placement=(pressure[seating], coupling_z[seating]))
-    temps = hardware.led_temperatures_c(cfg, env["true_ambient_temperature_c"],
-                                        phys["true_skin_temp_c"], np.zeros(1, np.int64), streams)
-    temps["age_cal_h"] = streams("led_ageing").uniform(*cfg.hardware.led_age_h, size=1)
-    temps["age_h"] = temps["age_cal_h"][0] + times_min / 60.0
-    shift_nm, fraction = _optics_layer(cfg, tables, seen, phys, probe, temps)
-    temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, env)
-    hwout = hardware.apply_hardware(cfg, fraction, temps, rep, streams)
-    if cfg.device.ppg_perfusion_spo2:
-        pmf.update(measurement.measure_ppg(
-            cfg, probe["true_blood_fraction_detected"], phys["true_saturation"], streams))
-    ids = {
-        "subject_id": np.full(n, sid, dtype=np.int64),
-        "measurement_id": sid * n + np.arange(n, dtype=np.int64),
-        "time_min": times_min.astype(np.int64),
-        "wear_day": (times_min // MINUTES_PER_DAY).astype(np.int64),
-        "seating_id": seating,
-    }
-    truth = {**phys, **env, **probe, **_hidden(ref, temps),
-             "true_isf_glucose_mgdl": seen["glucose_mgdl"]}
-    return pd.DataFrame(_columns(cfg, ids, ref, hwout, pmf, env, truth, fraction, shift_nm))
+
+    def heart_rate(phys: dict) -> dict:
+        phys["true_heart_rate_bpm"] = np.clip(
+            phys["true_heart_rate_bpm"] + diurnal.diurnal_cosine(
+                ref["true_hour_of_day"], options.heart_rate_amplitude_bpm,
+                diurnal.HEART_RATE_PEAK_HOUR),
+            *cfg.physiology.heart_rate_bpm)
+        return phys
+
+    def placement(st) -> tuple:
+        pressure, coupling_z = contact.sample_contact(cfg, int(seating[-1]) + 1, st)
+        return pressure[seating], coupling_z[seating]
+
+    def led_ages(st) -> dict:
+        age_cal_h = st("led_ageing").uniform(*cfg.hardware.led_age_h, size=1)
+        return {"age_cal_h": age_cal_h, "age_h": age_cal_h[0] + times_min / 60.0}
+
+    readings = Readings(
+        ids={
+            "subject_id": np.full(n, sid, dtype=np.int64),
+            "measurement_id": sid * n + np.arange(n, dtype=np.int64),
+            "time_min": times_min.astype(np.int64),
+            "wear_day": (times_min // MINUTES_PER_DAY).astype(np.int64),
+            "seating_id": seating,
+        },
+        subject_index=np.zeros(n, dtype=np.int64),
+        startup=np.zeros(1, np.int64),
+        traits={k: np.repeat(v, n) for k, v in traits.items()},
+        glucose=ref,
+        env=env,
+        led_ages=led_ages,
+        seen=seen,
+        placement=placement,
+        adjust_physiology=heart_rate,
+        truth={"true_isf_glucose_mgdl": seen["glucose_mgdl"]},
+    )
+    return pd.DataFrame(measure_readings(cfg, tables, streams, readings))
 
 
 def simulate_wear_chunk(cfg: ScenarioConfig, seed: int, first: int, n: int, n_subjects: int,
@@ -342,7 +350,7 @@ def simulate_wear_chunk(cfg: ScenarioConfig, seed: int, first: int, n: int, n_su
     """The readings of subjects ``first`` .. ``first + n - 1`` of ``n_subjects``, subject
     by subject."""
     options = options or WearOptions()
-    tables = _tables(cfg) if tables is None else tables
+    tables = scenario_tables(cfg) if tables is None else tables
     times = wear_times_min(wear_days, every_min)
     codes, traits = subject_profiles(cfg, seed, first, n, n_subjects)
     sids = np.arange(first, first + n)
@@ -367,7 +375,7 @@ def iter_wear_chunks(cfg: ScenarioConfig, n_subjects: int, wear_days: int, every
                      chunk_subjects: int | None = None) -> Iterator[pd.DataFrame]:
     """Yield the wear dataset chunk by chunk (bounded memory)."""
     readings_per_subject(wear_days, every_min)
-    tables = _tables(cfg)
+    tables = scenario_tables(cfg)
     for _, start, k in _chunks(n_subjects, chunk_subjects):
         yield simulate_wear_chunk(cfg, seed, start, k, n_subjects, wear_days, every_min,
                                   options, tables)
@@ -386,7 +394,7 @@ def simulate_wear_frame(cfg: ScenarioConfig, n_subjects: int, wear_days: int, ev
     else:
         from joblib import Parallel, delayed
 
-        tables = _tables(cfg)
+        tables = scenario_tables(cfg)
         frames = Parallel(n_jobs=n_jobs)(
             delayed(simulate_wear_chunk)(cfg, seed, s, k, n_subjects, wear_days, every_min,
                                          options, tables)
@@ -410,7 +418,7 @@ def _write_chunk(cfg, seed, chunk, start, k, n_subjects, wear_days, every_min, o
                                 tables)
     table = pa.Table.from_pandas(frame, preserve_index=False)
     del frame
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), _META_KEY: meta})
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), META_KEY: meta})
     atomic_write(out / f"part-{chunk:06d}.parquet", lambda tmp: pq.write_table(table, tmp))
     return chunk, table.num_rows
 
@@ -428,7 +436,7 @@ def write_wear_partitioned(cfg: ScenarioConfig, out: str | Path, n_subjects: int
                 "config": json.loads(cfg.to_json()),
                 "wear": wear_metadata(wear_days, every_min, options)}
     meta = json.dumps(meta_doc, sort_keys=True).encode()
-    tables = _tables(cfg)
+    tables = scenario_tables(cfg)
     chunks = _chunks(n_subjects, chunk_subjects)
     args = [(cfg, seed, c, s, k, n_subjects, wear_days, every_min, options, tables, out, meta)
             for c, s, k in chunks]

@@ -5,6 +5,6 @@ lut_kernel (the table's interpolation on the simulator's fast path) and band_ker
 (band-integrated layer optics and detected fraction, one pass per slice). lut_kernel and
 band_kernel are imported lazily by their callers; mc_white is imported at module level by
 :mod:`~nirglucose.optics.lut.grid`, :mod:`~nirglucose.optics.lut.build` and
-:mod:`~nirglucose.optics.reference.lut_checks`, so importing
+``nirglucose_reference.lut_checks``, so importing
 :mod:`nirglucose.optics.lut` imports numba. ``import nirglucose`` alone does not.
 """

@@ -43,7 +43,7 @@ Design choices, each for low or smooth noise:
   which cancels the u^2 term (bias O(h^4 R'''')) and vanishes at its edges (a photon's
   weight is continuous in its exit radius, for smooth common-random-number noise).
 
-Relation to the NumPy photon engine (:mod:`nirglucose.optics.reference.photon_engine`,
+Relation to the NumPy photon engine (``nirglucose_reference.photon_engine``,
 the one reference engine, with pluggable tallies): same MCML physics, but this kernel
 stays separate and compiled because its random numbers are counter-based per photon and
 flight (common random numbers across the table's nodes), its optical depth is carried

@@ -74,7 +74,7 @@ maximum 0.41 % (0.17 % and 0.85 % through uncentred node values); the table's ow
 Carlo noise, RMS 0.18 % (two tables from disjoint halves of the photons compared);
 against independent references (the mean of four 4 000 000-photon solves with other
 seeds, standard error 0.15 %) at 204 random off-grid points in three sets
-(``benchmarks/optics_reference.py``) and 24 at the thin-skin weak spot: median 0.30 %,
+(``studies/optics_reference.py``) and 24 at the thin-skin weak spot: median 0.30 %,
 RMS 0.40 %, maximum 0.98 %, none beyond 1 %.
 Over the paper cohort the table is 0.90-1.05 x the diffusion model (median 0.98).
 ``optics.lut_solver = "diffusion"`` fills the table with the diffusion model alone
@@ -87,7 +87,7 @@ environment variables the optics read), :mod:`.interpolate` (:func:`interpolate_
 :func:`node_lut`, :func:`interpolate_node_lut`, :func:`reflectance_from_tissue_optics`).
 The checks against direct solves (``random_lut_points``, ``direct_solve``,
 ``lut_errors``) are validation references: import them from
-:mod:`nirglucose.optics.reference.lut_checks`.
+``nirglucose_reference.lut_checks``.
 
 References
 ----------

@@ -396,7 +396,7 @@ def _monte_carlo_nodes(ax: dict, grid: dict, geo: dict, photons: int,
 
     ``first_photon``: trace photons ``first_photon .. first_photon + photons - 1`` of each
     run (:func:`~nirglucose.optics.kernels.mc_white.white_mc_run`); disjoint ranges give
-    independent node values (``benchmarks/optics_fit_degrees.py``).
+    independent node values (``studies/optics_fit_degrees.py``).
     """
     musp = ax["musp_dermis_per_cm"]
     rho, half = geo["rho_cm"], float(grid_mc_settings(grid)["half_width_cm"])

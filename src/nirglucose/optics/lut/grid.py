@@ -215,7 +215,7 @@ LUT_MC_GRID_SETTINGS: dict[str, dict] = {
 #: Monte Carlo of the RTE above, about 2 CPU-hours for the default grid, with 0.3-0.7 %
 #: noise per node. ``"diffusion"``: the three-layer diffusion model
 #: (:func:`nirglucose.optics.layers.three_layer_reflectance`), about 40 s, smooth, within
-#: 1.5-3 % of Monte Carlo for most skin (``nirglucose.optics.reference.mc_paths``) and 0.90-1.05 x
+#: 1.5-3 % of Monte Carlo for most skin (``nirglucose_reference.mc_paths``) and 0.90-1.05 x
 #: the Monte Carlo table over the paper cohort: for quick sweeps of the probe geometry.
 LUT_SOLVERS = ("monte-carlo", "diffusion")
 

@@ -8,7 +8,7 @@ overlay, and each model's zone shares and fit written in the panel.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -21,9 +21,7 @@ from .inputs import (
     pooled,
     scored_column,
 )
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .sections import _Page
+from .page import Page
 
 __all__ = ["scatter_inputs", "residual_inputs", "fold_scores"]
 
@@ -105,7 +103,7 @@ def fold_scores(predictions: pd.DataFrame, models: Sequence[str]) -> pd.DataFram
     return t.rename("rmse_mgdl").reset_index()
 
 
-def section_scatter(page: _Page) -> None:
+def section_scatter(page: Page) -> None:
     """The agreement scatter (replaces the Clarke, Parkes and linearity grids)."""
     from ...plots import diagnostics
 
@@ -126,7 +124,7 @@ def section_scatter(page: _Page) -> None:
              note=None if panels else "No predictions: figure not drawn.")
 
 
-def section_residuals(page: _Page) -> None:
+def section_residuals(page: Page) -> None:
     """Residuals against prediction."""
     from ...plots import diagnostics
 
@@ -141,7 +139,7 @@ def section_residuals(page: _Page) -> None:
              note=None if panels else "Too few predictions: figure not drawn.")
 
 
-def section_spread(page: _Page) -> None:
+def section_spread(page: Page) -> None:
     """Score spread across folds and repeats."""
     from ...plots import diagnostics
 

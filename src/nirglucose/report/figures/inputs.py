@@ -250,7 +250,7 @@ def _per_repeat_limits(ref: np.ndarray, pred: np.ndarray, rep: np.ndarray
     """Bias and limits of agreement per repeat, averaged over repeats (the table's).
 
     Each repeat predicts every snapshot once; the benchmark computes every metric per
-    repeat and averages (:mod:`nirglucose.evaluation.stats`), so the figure does too.
+    repeat and averages (:mod:`nirglucose.metrics.resampling`), so the figure does too.
     Returns (bias, lower, upper, snapshots per repeat, the smallest).
     """
     per = [bland_altman(ref[rep == r], pred[rep == r]) for r in np.unique(rep)

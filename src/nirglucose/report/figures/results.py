@@ -18,8 +18,8 @@ import pandas as pd
 
 from ...config import ScenarioConfig
 from ...dataset import load_dataset
+from ...dataset.files import check_result_table
 from ...exceptions import DataError
-from ...io_files import check_result_table
 from .inputs import model_order
 
 __all__ = ["REQUIRED_METRIC_COLUMNS", "REQUIRED_PREDICTION_COLUMNS", "Results",

@@ -2,14 +2,13 @@
 
 :func:`render_figures` runs each section builder in page order; a builder computes its
 figures' inputs (:mod:`.inputs`, :mod:`.descriptive`), writes their captions and hands
-a drawing function to :meth:`_Page.add`, which numbers, draws and saves the figure.
+a drawing function to :meth:`Page.add`, which numbers, draws and saves the figure.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
@@ -50,6 +49,7 @@ from .inputs import (
     radar_scores,
     reference_values,
 )
+from .page import Page
 from .results import RenderedFigure, Results
 
 __all__ = ["render_figures"]
@@ -57,86 +57,7 @@ __all__ = ["render_figures"]
 logger = logging.getLogger(__package__)  # the package's name, as before the split
 
 
-@dataclass
-class _Page:
-    """What every section builder of :func:`render_figures` reads, and the figures so far.
-
-    ``add`` numbers every figure in page order (so the contents and the captions
-    agree), draws the wanted ones and keeps them in :attr:`rendered`.
-    """
-
-    results: Results
-    out_dir: Path | None
-    formats: Sequence[str]
-    wanted: set[str] | None
-    compare: Mapping[str, pd.DataFrame] | None
-    #: The other presets' runs of the same benchmark (figures drawn for each too).
-    peers: Sequence[Results] = ()
-    rendered: list[RenderedFigure] = field(default_factory=list)
-    count: int = 0
-    #: Models fitted for the architecture figure, by name (the features figure reuses EBL).
-    fitted: dict[str, Any] = field(default_factory=dict)
-    #: Added to every key and title (a preset's figures drawn for each preset).
-    key_suffix: str = ""
-    title_suffix: str = ""
-
-    @property
-    def models(self) -> list[str]:
-        return self.results.models
-
-    @property
-    def preds(self) -> pd.DataFrame:
-        return self.results.predictions
-
-    @property
-    def pred_models(self) -> list[str]:
-        have = set(self.preds["model"])
-        return [m for m in self.models if m in have and not is_ablation_row(m)]
-
-    @property
-    def user_data(self) -> bool:
-        """A user's measurements (:attr:`Results.user_data`)."""
-        return self.results.user_data
-
-    @property
-    def rep_note(self) -> str:
-        p = self.preds
-        n_rep = int(p["repeat"].nunique()) if "repeat" in p.columns else 1
-        return (f"every out-of-fold prediction of all {n_rep} repeats pooled, so the zone "
-                f"shares equal the table's" if n_rep > 1 else "every out-of-fold prediction")
-
-    def wants(self, *keys: str) -> bool:
-        """Whether any of ``keys`` is to be drawn."""
-        return self.wanted is None or bool(self.wanted & set(keys))
-
-    def add(self, key: str, title: str, caption: str, build: Callable[[], Any] | None,
-            note: str | None = None) -> None:
-        """Number the next figure; draw it (``build``) if it is wanted."""
-        from ...plots.style import figure_bytes, save_figure
-
-        self.count += 1
-        number = str(self.count)
-        key, title = key + self.key_suffix, title + self.title_suffix
-        if not self.wants(key):
-            return
-        out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
-        fig = None
-        if build is not None:
-            try:
-                fig = build()
-            except (ValueError, KeyError, TypeError, IndexError) as exc:
-                logger.exception("figure %s could not be drawn", number)
-                out.note = f"Figure {number} could not be drawn: {exc}"
-        if fig is not None:
-            out.png = figure_bytes(fig, "png")
-            if self.out_dir is not None:
-                out.files = save_figure(fig, self.out_dir / f"fig{number}_{key}", self.formats)
-            else:
-                fig.clear()
-        self.rendered.append(out)
-
-
-def _section_data(page: _Page) -> None:
+def _section_data(page: Page) -> None:
     """Figures 1a-1c: glucose and the NIR signal, environment, physiology."""
     from ...plots import data
 
@@ -187,7 +108,7 @@ def _section_data(page: _Page) -> None:
                  lambda: data.figure_distributions(phys, ncols=5))
 
 
-def _section_pipeline(page: _Page) -> None:
+def _section_pipeline(page: Page) -> None:
     """Figure 2: the simulator's layers."""
     from ...plots import pipeline
     from ...plots.style import plot_style
@@ -226,7 +147,7 @@ def _pipeline_caption(cfg) -> str:
             f"(device.physiology = {cfg.device.physiology}).")
 
 
-def _section_architecture(page: _Page) -> None:
+def _section_architecture(page: Page) -> None:
     """The model architectures, from models fitted for one epoch."""
     from ...plots import architecture
 
@@ -260,7 +181,7 @@ def _section_architecture(page: _Page) -> None:
              note=arch_err)
 
 
-def _section_features(page: _Page) -> None:
+def _section_features(page: Page) -> None:
     """The Enhanced Beer–Lambert feature engineering."""
     from ...plots import architecture
 
@@ -285,7 +206,7 @@ def _section_features(page: _Page) -> None:
              note=None if feat else "No dataset.parquet in the results: diagram not drawn.")
 
 
-def _section_agreement(page: _Page) -> None:
+def _section_agreement(page: Page) -> None:
     """Bland–Altman (the linearity panels are part of the agreement scatter now)."""
     from ...plots import agreement
 
@@ -302,7 +223,7 @@ def _section_agreement(page: _Page) -> None:
              note=None if ba else "Too few predictions: figure not drawn.")
 
 
-def _points(page: _Page) -> str:
+def _points(page: Page) -> str:
     """Which predictions a scatter draws (no claim about the table)."""
     p = page.preds
     n_rep = int(p["repeat"].nunique()) if "repeat" in p.columns else 1
@@ -310,7 +231,7 @@ def _points(page: _Page) -> str:
             else "every out-of-fold prediction")
 
 
-def _section_training(page: _Page) -> None:
+def _section_training(page: Page) -> None:
     """Training dynamics of the networks, one figure per preset that recorded them."""
     _training_figure(page, page.results, "training", "Training dynamics")
     for peer in page.peers:
@@ -318,7 +239,7 @@ def _section_training(page: _Page) -> None:
         _training_figure(page, peer, f"training_{preset}", f"Training dynamics on {preset}")
 
 
-def _training_figure(page: _Page, res: Results, key: str, title: str) -> None:
+def _training_figure(page: Page, res: Results, key: str, title: str) -> None:
     from ...plots import training
 
     histories = res.histories
@@ -380,7 +301,7 @@ def _reference_text(refs: Mapping[str, float]) -> str:
                " is drawn as a horizontal reference line."))
 
 
-def _section_physics_weight(page: _Page) -> None:
+def _section_physics_weight(page: Page) -> None:
     """The tuning's validation curve of each PINN against λ, every preset of the run."""
     from ...plots.physics_weight import figure_lambda_curves
 
@@ -403,7 +324,7 @@ def _section_physics_weight(page: _Page) -> None:
              note=None if curves else "No tuned PINN in this run.")
 
 
-def _section_radar(page: _Page) -> None:
+def _section_radar(page: Page) -> None:
     """Figure 8: normalised scores."""
     from ...plots import tradeoffs
 
@@ -423,7 +344,7 @@ def _section_radar(page: _Page) -> None:
              note=None if len(scores) else "No model besides the oracle.")
 
 
-def _section_costs(page: _Page) -> None:
+def _section_costs(page: Page) -> None:
     """Figures 9-10: accuracy against physics depth and against cost."""
     from ...plots import tradeoffs
     from ...plots.style import plot_style
@@ -460,13 +381,13 @@ def _section_costs(page: _Page) -> None:
              lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
 
 
-def _latency_ok(page: _Page) -> bool:
+def _latency_ok(page: Page) -> bool:
     """Whether latencies differ by more than their timing noise (True when unknown)."""
     res = latency_resolution(page.results.metrics, [p.metrics for p in page.peers])
     return res is None or bool(res["resolved"])
 
 
-def _section_performance(page: _Page) -> None:
+def _section_performance(page: Page) -> None:
     """The performance panel: the presets on shared axes."""
     from ...plots import architecture
 
@@ -488,7 +409,7 @@ def _section_performance(page: _Page) -> None:
              note=None if len(perf) else "No competitor models in this run.")
 
 
-def _section_wavelengths(page: _Page) -> None:
+def _section_wavelengths(page: Page) -> None:
     """Wavelength utilisation: each model refitted without each LED (``drop_one.csv``)."""
     from ...plots import wavelengths as wl_plots
 
@@ -519,7 +440,7 @@ def _section_wavelengths(page: _Page) -> None:
              lambda: wl_plots.figure_drop_one(table, models))
 
 
-def _section_forest(page: _Page) -> None:
+def _section_forest(page: Page) -> None:
     """Figure 12: RMSE with its confidence interval, the study's values beside it."""
     from ...plots import forest
     from ...plots.style import plot_style
@@ -535,7 +456,7 @@ def _section_forest(page: _Page) -> None:
 
 
 #: The report's figures, section by section in page order (each builder adds its figures).
-_SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
+_SECTIONS: Final[tuple[Callable[[Page], None], ...]] = (
     _section_data, _section_pipeline, _section_architecture, _section_features,
     section_scatter, _section_agreement, section_residuals, section_spread,
     _section_training, _section_physics_weight, _section_radar, _section_costs,
@@ -544,7 +465,7 @@ _SECTIONS: Final[tuple[Callable[[_Page], None], ...]] = (
 
 #: Sections drawn once per preset of a multi-preset run (each preset's figure right
 #: after the primary's, its key and title suffixed with the preset).
-_PER_PRESET: Final[tuple[Callable[[_Page], None], ...]] = (
+_PER_PRESET: Final[tuple[Callable[[Page], None], ...]] = (
     _section_data, _section_features, section_scatter, _section_agreement,
     section_residuals, section_spread, _section_radar, _section_costs, _section_wavelengths,
 )
@@ -554,7 +475,7 @@ def _preset_name(res: Results) -> str:
     return str(res.meta.get("preset") or res.directory.name)
 
 
-def _run_sections(page: _Page) -> None:
+def _run_sections(page: Page) -> None:
     """Every section in page order; the per-preset ones once more for each peer.
 
     With peers, the primary's per-preset figures say their preset in the title too.
@@ -612,7 +533,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
         if not out_dir.parent.exists():
             raise DataError(f"figure directory's parent {str(out_dir.parent)!r} does not exist")
         out_dir.mkdir(exist_ok=True)
-    page = _Page(results=results, out_dir=out_dir, formats=formats,
+    page = Page(results=results, out_dir=out_dir, formats=formats,
                  wanted=None if include is None else set(include), compare=compare,
                  peers=tuple(peers))
     _run_sections(page)
