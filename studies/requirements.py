@@ -1,4 +1,4 @@
-"""Benchmark of the "what it takes" study (:mod:`nirglucose.design.requirements_study`).
+"""Benchmark of the "what it takes" study (:mod:`nirglucose.evaluation.sweep.requirements`).
 
 Runs the study at its default size (preset ``physical``, the study's photodiode with its
 four LEDs, the Si BPW34 and InGaAs G17190-010K detectors, targets 15 mg/dL RMSE and
@@ -32,7 +32,7 @@ from pathlib import Path
 
 from nirglucose.design.levers import KNOWLEDGE_FRACTIONS
 from nirglucose.design.requirements import DesignEvaluator, candidate_records, least_design
-from nirglucose.design.requirements_study import requirements_study
+from nirglucose.evaluation.sweep.requirements import requirements_study
 
 
 def _design_times(repeats: int) -> dict:

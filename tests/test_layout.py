@@ -90,6 +90,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("simulation", "fitted"),  # the simulator; the estimators' side of the schema
     ("api", "features"),
     ("", "models", "design"),
+    ("twin",),  # the simulator fitted to a device file (estimators and the bound inside)
     ("calibration",),  # intervals and calibration of a fitted model
     ("prediction", "export"),  # using a fitted model
     ("evaluation",),  # judging the models

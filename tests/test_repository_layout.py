@@ -53,7 +53,7 @@ def test_the_records_are_with_the_studies():
     assert not (ROOT / "benchmarks" / "records").exists()
     for path in [*ROOT.glob("docs/**/*.md"), ROOT / "README.md", ROOT / "Makefile"]:
         text = path.read_text()
-        assert "studies/records" not in text, path
+        assert "benchmarks/records" not in text, path
         for moved in (*_scripts("studies"), *_scripts("tools")):
             assert f"benchmarks/{moved.name}" not in text, (path, moved.name)
 

@@ -33,6 +33,7 @@ __all__ = [
     "fit_twin",
     "load_twin",
     "Twin",
+    "twin_scenario",
     "load_dataset",
     "Dataset",
     "ScenarioConfig",
@@ -56,7 +57,7 @@ SUBPACKAGES = ("calibration", "config", "dataset", "design", "evaluation", "expo
 #: ``import nirglucose`` does not load.
 LAZY_ATTRIBUTES = {"predict": "nirglucose.prediction", "PredictionResult": "nirglucose.prediction",
                    "fit_twin": "nirglucose.twin", "load_twin": "nirglucose.twin",
-                   "Twin": "nirglucose.twin"}
+                   "Twin": "nirglucose.twin", "twin_scenario": "nirglucose.twin"}
 
 
 def __getattr__(name: str):

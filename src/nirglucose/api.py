@@ -12,7 +12,7 @@ from .dataset import Dataset, load_dataset
 from .exceptions import ConfigError, check_positive_int, check_seed
 from .resources import check_simulation_size
 
-__all__ = ["simulate", "simulate_wear", "twin_scenario"]
+__all__ = ["simulate", "simulate_wear"]
 
 
 def simulate(
@@ -25,8 +25,6 @@ def simulate(
     wear_days: int | None = None,
     every_min: int | None = None,
     overrides: dict[str, Any] | None = None,
-    twin: Any = None,
-    twin_mode: str = "map",
     **dotted: Any,
 ) -> Dataset:
     """Simulate snapshots of the noise-stressed NIR sensor.
@@ -49,11 +47,6 @@ def simulate(
         must then stay at its default). [d], [min]
     overrides : dict, optional
         Dotted config keys to values, e.g. ``{"hardware.adc_bits": 14}``.
-    twin : str, path or nirglucose.twin.Twin, optional
-        A device's twin (``twin.json`` of ``nirglucose twin``, or a folder holding it):
-        its scenario replaces ``preset`` (overrides still apply on top).
-    twin_mode : {"map", "posterior"}
-        The twin's most probable parameters, or one posterior draw chosen by ``seed``.
     **dotted
         Overrides as keywords, with ``__`` for dots: ``hardware__adc_bits=14``.
 
@@ -83,21 +76,9 @@ def simulate(
         check_positive_int(name, value)
     _check_seed_and_jobs(seed, n_jobs)
     check_simulation_size(n_subjects, per_subject)  # refuse up front, not by OOM (issue 20)
-    if twin is not None:
-        preset = twin_scenario(twin, twin_mode, seed)
     cfg = _resolve(preset, overrides, dotted)
     frame = simulate_frame(cfg, int(n_subjects), int(per_subject), int(seed), n_jobs=n_jobs)
     return Dataset(frame, config=cfg, seed=int(seed))
-
-
-def twin_scenario(twin: Any, mode: str = "map", seed: int = 0) -> ScenarioConfig:
-    """The scenario of a device's twin (a :class:`nirglucose.twin.Twin`, or the path of
-    its ``twin.json`` or folder) in ``mode`` ``"map"`` or ``"posterior"`` (a draw chosen
-    by ``seed``): the hook by which the simulator and the studies take ``--twin``."""
-    # deferred: the twin package loads the simulator and sbi's estimator code on use
-    from .twin.twin import Twin, load_twin
-
-    return (twin if isinstance(twin, Twin) else load_twin(twin)).scenario(mode, int(seed))
 
 
 def _check_seed_and_jobs(seed: Any, n_jobs: Any) -> None:

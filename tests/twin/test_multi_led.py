@@ -37,5 +37,5 @@ def test_three_leds_with_references(tmp_path, monkeypatch):
     twin.save(tmp_path / "tw")
     cfg = load_twin(tmp_path / "tw").scenario("posterior", seed=2)
     assert cfg.leds.wavelengths_nm == (850.0, 940.0, 1150.0) and cfg.hardware.adc_bits == 14
-    sim = ng.simulate(n_subjects=3, per_subject=2, seed=0, twin=tmp_path / "tw")
+    sim = ng.simulate(ng.twin_scenario(tmp_path / "tw"), n_subjects=3, per_subject=2, seed=0)
     assert np.all(sim.frame[["adc_850", "adc_940", "adc_1150"]].to_numpy() <= 2 ** 14 - 1)

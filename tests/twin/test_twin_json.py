@@ -62,8 +62,8 @@ def test_scenario_is_the_device_with_the_values(twin):
 
 def test_simulate_takes_a_twin(tmp_path, twin):
     twin.save(tmp_path)
-    a = ng.simulate(n_subjects=3, per_subject=2, seed=1, twin=tmp_path / "twin.json")
-    b = ng.simulate(n_subjects=3, per_subject=2, seed=1, twin=twin)
+    a = ng.simulate(ng.twin_scenario(tmp_path / "twin.json"), n_subjects=3, per_subject=2, seed=1)
+    b = ng.simulate(ng.twin_scenario(twin), n_subjects=3, per_subject=2, seed=1)
     assert list(a.frame.columns[:5]) == ["subject_id", "measurement_id", "glucose_mgdl",
                                          "diabetes_status", "adc_940"]
     assert a.frame.equals(b.frame)

@@ -277,7 +277,7 @@ def twin_base(preset: str, twin: Path | None, twin_mode: str, seed: int):
     ``preset``. ``--twin`` replaces ``--preset`` (given both, one line)."""
     if twin is None:
         return preset
-    from ..api import twin_scenario
+    from ..twin import twin_scenario
 
     if preset != "paper":
         raise UserError("--twin replaces --preset: give one of them")

@@ -2,8 +2,9 @@
 form :mod:`.state_bound`), the search over LED sets ranked by it (:mod:`.search`), a
 fleet of units drawn from the parts' tolerances (:mod:`~nirglucose.design.fleet`), and
 what it takes to read glucose at published magnitudes (:mod:`.requirements`,
-:mod:`.requirements_study`; its levers :mod:`.levers`, exposure limits
-:mod:`.exposure`, averaging :mod:`.averaging`).
+:mod:`.levers`, exposure limits :mod:`.exposure`, averaging :mod:`.averaging`; the
+study that confirms its designs by simulation is a sweep study,
+:mod:`nirglucose.evaluation.sweep.requirements`).
 
 The parts a design is made of (photodiodes, NIR LEDs) are in the config's catalogue,
 :mod:`nirglucose.config.parts`.
@@ -21,7 +22,6 @@ from .bound import (
 )
 from .exposure import max_led_power_mw
 from .fleet import FleetTolerances, Unit, draw_units, simulate_unit
-from .requirements_study import RequirementsResult, requirements_study
 from .search import (
     CANDIDATE_WAVELENGTHS_NM,
     SEARCH_DETECTORS,
@@ -50,8 +50,6 @@ __all__ = [
     "draw_units",
     "simulate_unit",
     "max_led_power_mw",
-    "RequirementsResult",
-    "requirements_study",
     "state_bound",
     "state_bounds",
 ]

@@ -7,7 +7,7 @@ quantity is known) for the least design whose error reaches a target (15 mg/dL R
 and MARD 10 % by default) in preset ``physical`` (glucose's optical effect at its
 published magnitude, ``glucose.signal_gain`` 1), states how far the best design falls
 short where none does, which lever buys most, and confirms the named designs by
-simulation (:mod:`~nirglucose.design.confirmation`).
+simulation (:mod:`~nirglucose.evaluation.sweep.confirmation`).
 
 Criterion
     A design's error is the per-state bound of :mod:`~nirglucose.design.state_bound`

@@ -49,7 +49,7 @@ from ..dataset import Dataset
 from ..dataset.schema import DeviceSchema, check_fit_size, check_reference_glucose
 from ..exceptions import DataError
 from ..fitted import require_fitted
-from ..simulation.simulator import scenario_tables, detected_fraction_given_glucose
+from ..simulation.simulator import detected_fraction_given_glucose, scenario_tables
 from ._json_io import JsonModelMixin
 from ._params import Integral, Interval, Real, ValidatedParamsMixin
 from .registry import register

@@ -1,6 +1,6 @@
 """Figures of the "what it takes" study: error against averaging time, minimal designs.
 
-The inputs are the tables of :class:`~nirglucose.design.requirements_study.
+The inputs are the tables of :class:`~nirglucose.evaluation.sweep.requirements.
 RequirementsResult` (``averaging_curve.csv``, ``minimal_designs.csv``); nothing here
 computes a bound.
 """

@@ -49,7 +49,7 @@ from ..dataset import (
     scan_dataset,
 )
 from ..exceptions import DataError
-from .simulator import scenario_tables, block_ranges, simulate_block
+from .simulator import block_ranges, scenario_tables, simulate_block
 
 __all__ = [
     "MANIFEST",

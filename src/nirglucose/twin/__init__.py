@@ -14,17 +14,17 @@ import importlib
 from typing import TYPE_CHECKING
 
 from .inference import InferenceSettings
-from .twin import TWIN_MODES, Twin, load_twin
+from .twin import TWIN_MODES, Twin, load_twin, twin_scenario
 
 if TYPE_CHECKING:
     from .fit import fit_twin
 
-__all__ = ["InferenceSettings", "TWIN_MODES", "Twin", "fit_twin", "load_twin"]
+__all__ = ["InferenceSettings", "TWIN_MODES", "Twin", "fit_twin", "load_twin", "twin_scenario"]
 
 
 def __getattr__(name: str):
-    """``fit_twin``, imported on first access: fitting reaches the design bound, whose
-    package reaches :func:`nirglucose.simulate`, which reads twins (this package)."""
+    """``fit_twin``, imported on first access: fitting loads the estimators and the
+    design bound, which reading a twin does not need."""
     if name == "fit_twin":
         return importlib.import_module(".fit", __name__).fit_twin
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -22,10 +22,10 @@ import numpy as np
 import pandas as pd
 
 from .._version import __version__
-from ..columns import PPG_COLUMNS
 from ..dataset import Dataset
+from ..dataset.columns import PPG_COLUMNS
+from ..dataset.schema import DeviceSchema
 from ..exceptions import DataError
-from ..schema import DeviceSchema
 
 __all__ = [
     "BASE_PRESET",

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..columns import KNOWN_PHYSIOLOGY
 from ..config import resolve_config
 from ..config.instrument import MeasurementConfig
 from ..config.presets import PAPER_SIGNAL_GAIN, WEARABLE_SIGNAL_GAIN
+from ..dataset.columns import KNOWN_PHYSIOLOGY
 from .device import BASE_PRESET, NOMINAL_POWER_MW, TwinDevice
 from .simulate import nominal_levels
 

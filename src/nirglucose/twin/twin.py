@@ -28,7 +28,8 @@ from ..exceptions import ConfigError, DataError
 from .device import BASE_PRESET, TwinDevice, base_overrides
 from .parameters import IDENTIFIED_WIDTH_RATIO, Parameter
 
-__all__ = ["FORMAT", "TWIN_MODES", "Twin", "load_twin", "INTERVAL", "parameter_entry"]
+__all__ = ["FORMAT", "TWIN_MODES", "Twin", "load_twin", "twin_scenario", "INTERVAL",
+           "parameter_entry"]
 
 #: ``twin.json``'s format tag and version.
 FORMAT = ("nirglucose-twin", 1)
@@ -205,3 +206,12 @@ def parameter_entry(p: Parameter, fit_draws: np.ndarray | None) -> dict[str, Any
         "width_ratio": round(ratio, 3), "fitted": fit_draws is not None,
         "reason": p.reason,
     }
+
+
+def twin_scenario(twin: Twin | str | Path, mode: str = "map", seed: int = 0) -> ScenarioConfig:
+    """The scenario of a device's twin (a :class:`Twin`, or the path of its ``twin.json``
+    or folder) in ``mode`` ``"map"`` or ``"posterior"`` (a draw chosen by ``seed``): what
+    the simulator and every study take in place of a preset
+    (``ng.simulate(twin_scenario("twin/"), ...)``, ``--twin`` on the command line).
+    """
+    return (twin if isinstance(twin, Twin) else load_twin(twin)).scenario(mode, int(seed))

@@ -26,11 +26,12 @@ from typing import Any
 
 import pandas as pd
 
-from ..api import simulate
-from ..config import resolve_config
-from ..evaluation.benchmark import run_benchmark
-from ..exceptions import check_positive_int
-from .averaging import averaging_overrides
+from ...api import simulate
+from ...config import resolve_config
+from ...design.averaging import averaging_overrides
+from ...exceptions import check_positive_int
+from ..benchmark import run_benchmark
+from ..protocol import Protocol
 
 __all__ = ["CONFIRM_MODELS", "confirm_design"]
 
@@ -78,9 +79,9 @@ def confirm_design(preset: str, overrides: dict[str, Any], n_readings: int = 1, 
     ov = {**overrides, **averaging_overrides(cfg, n)}
     ds = simulate(preset, n_subjects=n_subjects, per_subject=per_subject, seed=seed,
                   overrides=ov)
-    res = run_benchmark(ds, list(models), n_splits=n_splits, repeats=1, seed=seed,
-                        jobs=jobs, n_boot=n_boot, drop_one_models="none",
-                        oracle_reference=False)
+    protocol = Protocol(n_splits=n_splits, repeats=1, seed=seed, resamples=n_boot)
+    res = run_benchmark(ds, list(models), protocol=protocol, jobs=jobs,
+                        drop_one_models="none", oracle_reference=False)
     out = res.metrics[["model", *_METRICS]].copy()
     out["n_readings_emulated"] = n
     out["n_rows"] = len(ds)

@@ -3,7 +3,7 @@
 :func:`requirements_study` runs the search of :mod:`~nirglucose.design.requirements`
 for each detector in preset ``physical``, evaluates what each lever group is worth,
 draws the averaging curve of the study's device and of the named designs, confirms the
-named designs by simulation (:mod:`~nirglucose.design.confirmation`) and returns a
+named designs by simulation (:mod:`~nirglucose.evaluation.sweep.confirmation`) and returns a
 :class:`RequirementsResult`: one answer line per detector
 (:meth:`RequirementsResult.answer_lines`) and its tables, which
 :meth:`RequirementsResult.to_dir` writes atomically (the figures:
@@ -27,17 +27,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .._version import __version__
-from ..config import resolve_config
-from ..config.parts import detector_part
-from ..config.presets import DEVICE_CAPABILITIES
-from ..dataset import atomic_write
-from ..exceptions import ConfigError, check_positive_int
-from .averaging import glucose_lag_rmse_mgdl
-from .bound import design_bound, design_terms
-from .confirmation import CONFIRM_MODELS, confirm_design
-from .levers import KNOWLEDGE, LEVERS, Design, lever_table
-from .requirements import (
+from ..._version import __version__
+from ...config import resolve_config
+from ...config.parts import detector_part
+from ...config.presets import DEVICE_CAPABILITIES
+from ...dataset import atomic_write
+from ...design.averaging import glucose_lag_rmse_mgdl
+from ...design.bound import design_bound, design_terms
+from ...design.levers import KNOWLEDGE, LEVERS, Design, lever_table
+from ...design.requirements import (
     GENERIC_WAVELENGTHS_NM,
     RELAX_ORDER,
     REQUIREMENTS_PRESET,
@@ -49,8 +47,10 @@ from .requirements import (
     least_design,
     lever_gains,
 )
-from .search import SEARCH_DETECTORS
-from .state_bound import state_bound
+from ...design.search import SEARCH_DETECTORS
+from ...design.state_bound import state_bound
+from ...exceptions import ConfigError, check_positive_int
+from .confirmation import CONFIRM_MODELS, confirm_design
 
 __all__ = ["REQUIREMENTS_FILES", "RequirementsResult", "requirements_study"]
 
@@ -275,7 +275,7 @@ def _check_row(ev: DesignEvaluator) -> dict[str, Any]:
 
 def _bounds(ev: DesignEvaluator, d: Design) -> dict[str, Any]:
     """A named design's errors, and its per-state bound at the privileged estimators'
-    noise floor (12 bits, one reading: :mod:`~nirglucose.design.confirmation`)."""
+    noise floor (12 bits, one reading: :mod:`~nirglucose.evaluation.sweep.confirmation`)."""
     floor = ev.evaluate(d.with_level("adc_bits", 0), window_s=0.0).state_rmse_mgdl
     return {**vars(ev.evaluate(d)), "state_at_estimator_floor_rmse_mgdl": floor}
 

@@ -11,7 +11,6 @@ import pytest
 from nirglucose.config import resolve_config
 from nirglucose.design import design_terms
 from nirglucose.design.averaging import averaging_overrides
-from nirglucose.design.confirmation import confirm_design
 from nirglucose.design.exposure import max_led_power_mw
 from nirglucose.design.levers import KNOWLEDGE, LEVERS
 from nirglucose.design.requirements import (
@@ -21,8 +20,9 @@ from nirglucose.design.requirements import (
     least_design,
     lever_gains,
 )
-from nirglucose.design.requirements_study import REQUIREMENTS_FILES, requirements_study
 from nirglucose.design.state_bound import state_bound
+from nirglucose.evaluation.sweep.confirmation import confirm_design
+from nirglucose.evaluation.sweep.requirements import REQUIREMENTS_FILES, requirements_study
 from nirglucose.exceptions import ConfigError
 
 SMALL_NM = (800.0, 900.0, 1000.0, 1100.0)
