@@ -13,7 +13,7 @@ OUT    ?= results
 # selective-rte-pinn-fm: a physics-inversion fit per task; studies/pinn_forward.py
 # runs them);
 # tests/test_makefile.py keeps this list equal to the registry minus those
-MODELS ?= ebl,pls,oracle,physics-inversion,original-pinn,optimized-pinn,rte-pinn,selective-rte-pinn,sdnn,mean,gp,gbr
+MODELS ?= ebl,pls,oracle,physics-inversion,device-inversion,original-pinn,optimized-pinn,rte-pinn,selective-rte-pinn,sdnn,mean,gp,gbr
 
 .PHONY: run test install lint bench docs clean
 

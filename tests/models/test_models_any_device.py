@@ -22,10 +22,11 @@ FAST = {name: FAST_NET for name in NETWORKS} | {
     "gp": {"random_state": 0},
     "gbr": {"n_estimators": 20, "random_state": 0},
     "physics-inversion": {"n_em": 3},
+    "device-inversion": {"n_em": 3, "cv": 2},
     "ebl+gp": {"random_state": 0},
     "physics-inversion+gp": {"cv": 0, "backbone_params": {"n_em": 3}, "random_state": 0},
 }
-PHYSICS = ("physics-inversion", "ebl+gp", "physics-inversion+gp")
+PHYSICS = ("physics-inversion", "device-inversion", "ebl+gp", "physics-inversion+gp")
 
 
 def _make(name):

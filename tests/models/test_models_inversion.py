@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 import nirglucose as ng
+from nirglucose.dataset import load_dataset
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models import Oracle, load_model, make_model
 from nirglucose.models._base import predict_input
@@ -107,14 +108,22 @@ def test_bad_input_one_line(paper):
         PhysicsInversion().predict(test)
 
 
-def test_plain_frame_uses_the_paper_optics_or_says_why(paper):
+def test_data_without_a_scenario_is_refused_never_read_as_a_preset(paper, tmp_path):
+    """A frame or CSV carries no scenario: one line naming the deployable estimator,
+    never the paper preset's optics and gain (issue 39)."""
     train, _ = paper
-    PhysicsInversion(n_em=1).fit(train.frame)  # the study's LEDs: the paper preset's optics
+    csv = load_dataset(train.save(tmp_path / "train.csv"))
+    assert csv.config is None  # a CSV keeps the columns only
+    for data in (train.frame, csv):
+        with pytest.raises(DataError, match="reads the generating scenario.*'device-inversion'"):
+            PhysicsInversion(n_em=1).fit(data)
+        with pytest.raises(DataError, match="reads the generating scenario"):
+            PhysicsInversionGP(backbone_params={"n_em": 1}, cv=0).fit(data)
     from device_data import simulate_device
 
-    other = simulate_device(3, 12)
+    other = simulate_device(3, 12)  # the scenario's LEDs are not the columns'
     with pytest.raises(DataError, match="pass the Dataset"):
-        PhysicsInversion(n_em=1).fit(other.frame)
+        PhysicsInversion(n_em=1).fit(ng.Dataset(other.frame, config=train.config))
 
 
 @pytest.mark.parametrize("cls", [EBLGP, PhysicsInversionGP])

@@ -108,15 +108,17 @@ def test_study_pull_matches_its_closed_form(paper, study_fit):
     """At epoch 1 the network predicts the training mean (start_at_mean), so the
     Beer-Lambert term pulls prediction i by lambda * y_scale * sum_l eps_l r_il with
     r_il = A_il - eps_l * mean(y) (in training SD): computed here from the data alone."""
+    phys = study_fit.physics_  # the published glucose (gain 1), never the data's gain
     cfg = paper.config
+    assert phys["signal_gain"] == 1.0 != cfg.glucose.signal_gain
     eps = glucose_absorptivity_per_cm_per_mgdl(
-        cfg.leds.wavelengths_nm, cfg.glucose.absorptivity_per_cm_per_mm, cfg.glucose.signal_gain)
+        cfg.leds.wavelengths_nm, phys["glucose_peak_per_cm_per_mm"], phys["signal_gain"])
     Xa, y, _ = study_fit._measurements(paper, require_target=True)
     a, _ = study_fit._nir_pmf(Xa)
     shift = 1.0 * y.std() * ((a - eps * y.mean()) * eps).sum(axis=1)
     expected = float(np.sqrt(np.mean(shift ** 2)))
     assert study_fit.history_[0]["pull_sd"] == pytest.approx(expected, rel=1e-3)
-    assert expected < 1e-3  # 0.0004 SD: 0.03 mg/dL at a 58 mg/dL spread
+    assert expected < 1e-4  # at the published gain: under 0.01 mg/dL at a 58 mg/dL spread
 
 
 def test_study_term_is_inert_and_the_forward_term_is_not(paper, study_fit):

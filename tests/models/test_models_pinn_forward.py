@@ -296,12 +296,14 @@ def test_variant_fits_as_its_twin_with_those_parameters(paper):
 def test_a_file_saved_by_the_class_of_its_own_still_loads():
     """A model file written by the pre-variant code (commit 8eb8f05, when
     OriginalPINNForward was a class of its own) loads as the variant and predicts the
-    same numbers, to the last bit."""
+    same numbers: to float32 rounding, since torch's float32 kernels round differently
+    on CPUs with and without AVX-512 (seen: 3e-6 relative on an AMD EPYC without it)."""
     check = json.loads((DATA / "original-pinn-fm_8eb8f05_check.json").read_text())
     model = load_model(DATA / "original-pinn-fm_8eb8f05.json")
     assert type(model) is OriginalPINNForward and model.physics_form == "forward"
     rows = pd.DataFrame(check["rows"])
-    np.testing.assert_array_equal(model.predict(rows), np.array(check["predicted_mgdl"]))
+    np.testing.assert_allclose(model.predict(rows), np.array(check["predicted_mgdl"]),
+                               rtol=2e-5, atol=0)
 
 
 @pytest.mark.parametrize(

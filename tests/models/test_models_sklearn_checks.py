@@ -47,6 +47,7 @@ FIT_ON_ARRAYS: dict[str, dict] = {
 NEED_A_DEVICE: dict[str, str] = {
     "oracle": "reads true_* columns and the scenario config",
     "physics-inversion": "inverts a forward model of a device's ADC columns",
+    "device-inversion": "inverts a forward model of a device's ADC columns",
     "ebl+gp": "its backbone's residuals are learned per device (needs ADC columns)",
     "physics-inversion+gp": "inverts a forward model of a device's ADC columns",
 }

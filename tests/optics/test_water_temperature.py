@@ -13,7 +13,7 @@ from nirglucose.exceptions import ConfigError
 from nirglucose.optics import absorption, tissue
 from nirglucose.optics.kernels.band_kernel import band_detected_fraction
 from nirglucose.simulation.simulator import (
-    _tables,
+    scenario_tables,
     detected_fraction_given_glucose,
     water_temperature_delta_c,
 )
@@ -82,7 +82,7 @@ def test_first_overtone_height_is_a_parameter():
     with pytest.raises(ConfigError, match=">= 0"):
         f(1670.0, 1e-4, -1.0)
     cfg = resolve_config("physical", {"glucose.first_overtone_relative_peak": 3.0})
-    tab = _tables(cfg).spectra.spectra["glucose"]
+    tab = scenario_tables(cfg).spectra.spectra["glucose"]
     assert np.all(tab >= 0)
 
 

@@ -161,17 +161,26 @@ def list_models(
                      "device it was fitted on (its inputs and parameters)."),
     ] = None,
 ) -> None:
-    """List the registered model names, one line each (or describe one fitted model)."""
+    """List the registered model names, one line each (or describe one fitted model).
+
+    A model that knows more than the measured columns (the oracle's truth, the
+    generating scenario) is marked ``[privileged: ...]``: a reference, never "best".
+    """
     from ..models.labels import describe
-    from ..models.registry import available_models, load_model
+    from ..models.registry import available_models, load_model, privileged_knowledge
+
+    def tag(m) -> str:
+        known = privileged_knowledge(m)
+        return f"  [privileged: {known}; a reference]" if known else ""
 
     if model is not None:
-        _say(describe(load_model(model)), err=False)
+        fitted = load_model(model)
+        _say(f"{describe(fitted)}{tag(fitted)}", err=False)
         return
     names = available_models()
     width = max(map(len, names)) + 2
     for name in names:
-        _say(f"{name:<{width}}{describe(name)}".rstrip(), err=False)
+        _say(f"{name:<{width}}{describe(name)}{tag(name)}".rstrip(), err=False)
 
 
 @app.command("parts")

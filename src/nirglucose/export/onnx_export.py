@@ -28,7 +28,7 @@ them to float32 as scikit-learn's trees do; the trees themselves are one ONNX-ML
 the model's node arrays: ``BRANCH_LEQ`` splits, summed leaf values plus ``init_``).
 
 Models without an ONNX path (:data:`NO_ONNX_PATH` says why): the oracle (it reads the
-truth), the forward-model estimator and its hybrid.
+truth), the forward-model estimators (privileged and deployable) and the hybrid.
 
 Needs the optional packages ``onnx`` (and ``onnxruntime`` to run the file):
 ``pip install "nirglucose[onnx]"``.
@@ -73,6 +73,8 @@ NO_ONNX_PATH = {
     "physics-inversion": "an iterative solver per reading (Levenberg-Marquardt), not a "
                          "fixed graph",
     "physics-inversion+gp": "its physics-inversion backbone has no ONNX path",
+    "device-inversion": "an iterative solver per reading (Levenberg-Marquardt), not a "
+                        "fixed graph",
 }
 
 

@@ -1,5 +1,8 @@
 """Estimators by name: EBL, PLS, the oracle, four PINNs (and each with the forward-model
-physics term, ``-fm``), a shallow DNN, three references.
+physics term, ``-fm``), a shallow DNN, three references, the forward-model inversions.
+
+Each declares what it knows beyond the measured columns (:func:`privileged_knowledge`):
+the privileged ones are references, never "best model".
 
 The reference learners are the no-skill mean, a Gaussian process and gradient boosting.
 
@@ -11,7 +14,14 @@ registry).
 from __future__ import annotations
 
 from .labels import MODEL_LABELS, label
-from .registry import available_models, get_model_class, load_model, make_model, register
+from .registry import (
+    available_models,
+    get_model_class,
+    load_model,
+    make_model,
+    privileged_knowledge,
+    register,
+)
 from .tuning import tuned_params
 
 __all__ = [
@@ -21,6 +31,7 @@ __all__ = [
     "get_model_class",
     "load_model",
     "make_model",
+    "privileged_knowledge",
     "register",
     "tuned_params",
     "EnhancedBeerLambert",

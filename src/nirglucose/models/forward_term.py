@@ -47,7 +47,7 @@ from ..dataset import Dataset
 from ..exceptions import DataError
 from ._base import predict_input
 from ._inversion_solver import NUISANCES
-from .inversion import PhysicsInversion
+from .inversion import DEPLOYABLE_INVERSION, PhysicsInversion
 from .physics_losses import forward_likelihood_loss, state_mode_loss
 
 __all__ = ["FM_KEYS", "CO_KEYS", "ST_KEYS", "ForwardTerm", "BeerLambertForwardTerm",
@@ -73,7 +73,14 @@ class ForwardTerm:
 
     def _fit_forward(self: Any, source: Any, y: np.ndarray) -> dict:
         """The term's model: a :class:`PhysicsInversion` fitted on the training rows
-        (kept for this fit only), or why the term is off (``enabled`` False)."""
+        (kept for this fit only), or why the term is off (``enabled`` False).
+
+        Raises
+        ------
+        DataError
+            Where the term is on and ``source`` carries no scenario (a file is never
+            read as if it were a preset).
+        """
         self.__dict__.pop("_fm_inversion", None)
         cfg = source.config if isinstance(source, Dataset) else None
         name = self.forward_model or (cfg.optics.model if cfg is not None else "beer-lambert")
@@ -83,6 +90,14 @@ class ForwardTerm:
                     "constants_from": "none: a plain array has no device (physics term off)"}
         if self.lambda_phys == 0:  # the term is left out of the loss: nothing to fit
             return {**out, "enabled": False, "constants_from": "none: lambda_phys is 0"}
+        if cfg is None:  # a file without a scenario is never read as if it were a preset
+            who = getattr(self, "registry_name", type(self).__name__)
+            raise DataError(
+                f"{who}'s physics term inverts the generating scenario's forward model "
+                "(Dataset.config), which this data does not carry (a CSV, a DataFrame or a "
+                f"device's own file): fit another model, e.g. {DEPLOYABLE_INVERSION!r} (it "
+                "reads only the device's parts)"
+            )
         try:
             inv = PhysicsInversion(forward_model=name).fit(source, y)
         except DataError as exc:  # no optics for this device: the term is off
@@ -90,8 +105,7 @@ class ForwardTerm:
         self._fm_inversion = inv
         seed = check_random_state(self.random_state).randint(0, 2**31 - 1)
         self._fm_draws = (np.asarray(y, float), np.random.default_rng(seed))
-        where = "dataset" if cfg is not None else "paper preset"
-        return {**out, "enabled": True, "constants_from": f"forward model of the {where}",
+        return {**out, "enabled": True, "constants_from": "forward model of the dataset",
                 **self._forward_summary(inv, source, y)}
 
     def _forward_summary(self, inv: PhysicsInversion, source: Any, y: np.ndarray) -> dict:

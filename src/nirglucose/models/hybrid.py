@@ -52,6 +52,7 @@ from ._base import SchemaJsonMixin, fit_input, predict_input
 from ._json_io import _state_value, _to_json
 from ._params import Integral, Interval, ValidatedParamsMixin
 from ._validate import check_loaded_params
+from .inversion import PRIVILEGED_SCENARIO
 from .reference import GP_RANDOM_STATE
 from .registry import get_model_class, make_model, register
 
@@ -315,6 +316,8 @@ class EBLGP(_ResidualHybrid):
     (60,)
     """
 
+    privileged: ClassVar[str | None] = None
+
     backbone_name = "ebl"
 
 
@@ -331,6 +334,8 @@ class PhysicsInversionGP(_ResidualHybrid):
     >>> PhysicsInversionGP(random_state=0, cv=0).fit(ds).predict(ds).shape
     (60,)
     """
+
+    privileged: ClassVar[str | None] = PRIVILEGED_SCENARIO  # its backbone's
 
     backbone_name = "physics-inversion"
 

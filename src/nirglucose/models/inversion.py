@@ -1,36 +1,39 @@
-"""A forward-model estimator: per reading, the posterior mode of glucose and the nuisances.
+"""Forward-model inversion: per reading, the posterior mode of glucose and the nuisances.
 
 Where the oracle (:mod:`nirglucose.models.oracle`) inverts the forward model with the
-true tissue and probe state, this estimator knows the forward model but not the state.
-Per reading it estimates glucose *and* the nuisances the device does not measure --
+true tissue and probe state, these estimators know a forward model but not the state.
+Per reading they estimate glucose *and* the nuisances the device does not measure --
 detected blood fraction, saturation, water and fat fractions, melanin, the skin
 thickness under the probe, the LEDs' thermal peak shift and the optical coupling
 (:data:`~nirglucose.models._inversion_solver.NUISANCES`) -- as the mode of
 
     p(theta, g | y) ~ N(y; a + b m(g, theta), S) N(theta; mu(x), diag(s^2)) N(g; mu_g, s_g^2)
 
-with y = ln(adc / adc_ref) per LED, m the noise-free forward model
-(:class:`~nirglucose.models._inversion_solver.ForwardModel`, chosen by
-``forward_model``), x the reading's measured physiological columns, (a, b) a per-channel
-calibration and S the residual covariance. Everything is solved for all rows at once by
-Levenberg-Marquardt.
+with y = ln(adc / adc_ref) per LED, m a noise-free forward model, x the reading's
+measured physiological columns, (a, b) a per-channel calibration and S the residual
+covariance. Everything is solved for all rows at once by Levenberg-Marquardt.
 
-What it learns from the training rows' measured columns and reference glucose (never
+What they learn from the training rows' measured columns and reference glucose (never
 a ``true_*`` column), by empirical Bayes [1]_ (an EM iteration with a Laplace posterior):
 
-* the prior means mu(x): a documented physical start from the measured columns
-  (:func:`prior_start`: PPG blood volume and SpO2 where measured, hydration -> water,
-  BMI -> fat, melanin, skin thickness, skin temperature -> LED temperature -> peak
-  shift, each through the scenario's own documented relation), plus a ridge correction
-  linear in the standardised physiology, refitted to the training rows' posterior modes
-  at their known glucose;
+* the prior means mu(x): a physical start from the measured columns, plus a ridge
+  correction linear in the standardised physiology, refitted to the training rows'
+  posterior modes at their known glucose;
 * the prior widths s, from the spread of those modes plus their posterior variance;
 * the calibration (a, b) per channel and S, from the residuals at the modes;
 * the glucose prior: the training mean and variance.
 
-Everything the estimator knows about the device and optics comes from the scenario
-config (``Dataset.config``): LED bands, geometry, the chromophore tables and glucose's
-optical signal -- the "forward model" of the issue; the nuisance values do not.
+:class:`ForwardModelInversion` is that machinery. The two registered estimators differ
+only in what they read besides the measured columns (``privileged``):
+
+* :class:`PhysicsInversion` (``physics-inversion``, privileged, a reference): the
+  generating scenario (``Dataset.config``) -- the simulator's own forward model with
+  glucose's optical signal at the scenario's ``glucose.signal_gain``, its LED bands,
+  geometry and tables, and the simulator's relations as prior starts
+  (:func:`prior_start`). It refuses data without a scenario (:func:`require_scenario`).
+* :class:`~nirglucose.models.device_inversion.DeviceInversion` (``device-inversion``,
+  deployable): the device's declared parts and published tables only; glucose's
+  response per channel is learned.
 
 References
 ----------
@@ -48,7 +51,7 @@ import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, RegressorMixin
 
-from ..config import ScenarioConfig, resolve_config
+from ..config import ScenarioConfig
 from ..constants import LED_REFERENCE_TEMPERATURE_C
 from ..dataset import Dataset
 from ..exceptions import DataError
@@ -66,7 +69,22 @@ from ._inversion_solver import (
 from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from .registry import register
 
-__all__ = ["PhysicsInversion", "START_SD", "prior_start"]
+__all__ = [
+    "ForwardModelInversion",
+    "PhysicsInversion",
+    "PRIVILEGED_SCENARIO",
+    "DEPLOYABLE_INVERSION",
+    "START_SD",
+    "prior_start",
+    "require_scenario",
+]
+
+#: What the estimators that read the generating scenario know beyond the measured
+#: columns: their ``privileged`` declaration
+#: (:func:`~nirglucose.models.registry.privileged_knowledge`).
+PRIVILEGED_SCENARIO = "the generating scenario and the simulator's forward model (Dataset.config)"
+#: The registered forward-model estimator that reads no scenario: what a refusal names.
+DEPLOYABLE_INVERSION = "device-inversion"
 
 #: Prior standard deviation of each nuisance before the empirical-Bayes updates (an
 #: assumption: about a quarter of each one's population spread in SOURCES.md's layer
@@ -167,25 +185,59 @@ def prior_start(cfg: ScenarioConfig, schema, phys: np.ndarray) -> np.ndarray:
     return out
 
 
-def _scenario(X, schema) -> ScenarioConfig:
-    """The scenario of a Dataset, else the ``paper`` preset when its LEDs are the device's."""
+def require_scenario(X, schema, who: str) -> ScenarioConfig:
+    """The generating scenario of ``X``, which a privileged estimator reads.
+
+    Parameters
+    ----------
+    X : Dataset
+        Training data; a Dataset from :func:`nirglucose.simulate` (or its Parquet file)
+        carries its scenario (``Dataset.config``).
+    schema : DeviceSchema
+        The fitted device (its LEDs must be the scenario's).
+    who : str
+        The estimator's registered name, for the message.
+
+    Raises
+    ------
+    DataError
+        In one line, where ``X`` carries no scenario (a DataFrame, a CSV file, a
+        device's own file: never read as if it were a preset), naming the deployable
+        estimator to use instead; or where its LEDs are not the scenario's.
+    """
     cfg = X.config if isinstance(X, Dataset) else None
     if cfg is None:
-        cfg = resolve_config("paper")
+        raise DataError(
+            f"{who} reads the generating scenario (the simulator's forward model and "
+            "glucose gain), which only a Dataset from `nirglucose simulate` or its "
+            "Parquet file carries; this data has none (a CSV, a DataFrame or a "
+            f"device's own file): use {DEPLOYABLE_INVERSION!r}, which needs only the "
+            "device's parts"
+        )
     leds = tuple(float(w) for w in cfg.leds.wavelengths_nm)
     if leds != tuple(schema.wavelengths_nm):
         raise DataError(
-            f"physics-inversion needs the device's optics: the data's LEDs {schema.labels} "
+            f"{who} needs the device's optics: the data's LEDs {schema.labels} "
             f"are not the scenario's {leds}; pass the Dataset (with its config)"
         )
     return cfg
 
 
-@register("physics-inversion")
-class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, BaseEstimator):
-    """Forward-model inversion for glucose and the unmeasured nuisances (MAP).
+class ForwardModelInversion(
+    ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, BaseEstimator
+):
+    """Forward-model inversion for glucose and the unmeasured nuisances (MAP; not registered).
 
-    See the module docstring for the model, what it learns and from what.
+    The machinery the registered inversions share (see the module docstring for the
+    model, what it learns and from what). A subclass says what it reads besides the
+    measured columns, and nothing else:
+
+    * :meth:`_assume`: what ``fit`` takes from the training data (a scenario, the
+      device's declared parts);
+    * :meth:`_build_forward`: the forward model from the fitted state;
+    * :meth:`_prior_start`: the physical start of the nuisances' prior means;
+    * optionally :meth:`_calibrate` (the per-channel calibration) and
+      :meth:`_var_floor`.
 
     Parameters
     ----------
@@ -203,8 +255,6 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
     ----------
     schema_ : DeviceSchema
         The fitted device.
-    config_ : ScenarioConfig
-        The scenario whose optics are assumed.
     offset_, gain_ : numpy.ndarray
         (k,) per-channel calibration a, b of ln(adc / adc_ref). [-]
     noise_cov_ : numpy.ndarray
@@ -218,13 +268,6 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         (m,) standardisation of the physiology.
     glucose_mean_, glucose_var_ : float
         Prior of glucose: [mg/dL] and [(mg/dL)^2].
-
-    Examples
-    --------
-    >>> import nirglucose as ng
-    >>> ds = ng.simulate("paper", 20, 3, seed=0)
-    >>> PhysicsInversion().fit(ds).predict(ds).shape
-    (60,)
     """
 
     _parameter_constraints: ClassVar[dict[str, Any]] = {
@@ -234,9 +277,8 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         "max_iter": [Interval(Integral, 1, None, closed="left")],
     }
 
-    _STATE = {
+    _STATE: ClassVar[dict[str, Any]] = {
         "schema_": "json",
-        "config_": "json",
         "offset_": (-1,),
         "gain_": (-1,),
         "noise_cov_": (-1, -1),
@@ -265,24 +307,30 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
     def _require_fitted(self) -> None:
         require_fitted(self, "offset_")
 
-    def _state_dict(self):
-        cfg = self.config_
-        self.__dict__["config_"] = cfg.model_dump(mode="json")
-        try:
-            return super()._state_dict()
-        finally:
-            self.__dict__["config_"] = cfg
-
     def _restore(self) -> None:
         self._restore_schema()
-        if isinstance(self.config_, dict):
-            try:
-                self.config_ = ScenarioConfig.model_validate(self.config_)
-            except ValueError as exc:
-                raise DataError(f"the saved model's scenario config is invalid: {exc}") from None
         self.glucose_mean_ = float(self.glucose_mean_)
         self.glucose_var_ = float(self.glucose_var_)
-        self.forward_ = ForwardModel(self.config_, self.forward_model)
+        self.forward_ = self._build_forward()
+
+    # ------------------------------------------------------------------ what it reads
+
+    def _assume(self, X) -> None:
+        """Take what the forward model needs besides the measured columns from the
+        training data ``X`` (fitted attributes); called once in ``fit``."""
+        raise NotImplementedError
+
+    def _build_forward(self):
+        """The forward model (``log_ratio(glucose_mgdl, theta)``) from the fitted state."""
+        raise NotImplementedError
+
+    def _prior_start(self, phys: np.ndarray) -> np.ndarray:
+        """(n, len(NUISANCES)) physical start of the prior means from the physiology."""
+        raise NotImplementedError
+
+    def _var_floor(self) -> float:
+        """Variance added to the residual covariance's diagonal. [-]"""
+        return _VAR_FLOOR
 
     def _design(self, phys: np.ndarray) -> np.ndarray:
         """(n, 1 + m): a constant and the standardised physiology."""
@@ -297,7 +345,7 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         """(mean, sd), each (n, 1 + len(NUISANCES)): glucose first (its reference value
         and any sd where given), then the nuisances."""
         n = len(phys)
-        nuis = prior_start(self.config_, self.schema_, phys)
+        nuis = self._prior_start(phys)
         nuis += self._design(phys) @ self.prior_coef_.T
         g = np.full(n, self.glucose_mean_) if glucose is None else glucose
         mean = np.column_stack([g, nuis])
@@ -315,9 +363,8 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         Parameters
         ----------
         X : Dataset or pandas.DataFrame
-            Readings of a device with ADC (and reference) codes and physiology; a
-            Dataset's config gives the optics (a frame is read with the ``paper``
-            preset's, which must have the same LEDs).
+            Readings of a device with ADC (and reference) codes and physiology (what
+            else is read: the subclass's ``privileged`` declaration).
         y : array_like, optional
             Reference glucose; ``glucose_mgdl`` when omitted. [mg/dL]
         groups : array_like, optional
@@ -328,44 +375,55 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         self
         """
         self._validate_params()
-        self.schema_, Xa, y, _ = fit_input(self, X, y, groups)
+        self.schema_, Xa, y, groups = fit_input(self, X, y, groups)
         if self.schema_.is_plain:
             raise DataError(
-                "physics-inversion needs a device's ADC columns (adc_<nm>), not a plain array"
+                f"{self.registry_name} needs a device's ADC columns (adc_<nm>), not a plain "
+                "array"
             )
-        self.config_ = _scenario(X, self.schema_)
-        self.forward_ = ForwardModel(self.config_, self.forward_model)
+        self._assume(X)
         obs, phys = self._observed(Xa)
         self.x_mean_ = phys.mean(axis=0)
         sc = phys.std(axis=0)
         self.x_scale_ = np.where(sc > 0, sc, 1.0)
         self.glucose_mean_ = float(y.mean())
         self.glucose_var_ = float(max(y.var(ddof=1), 1.0))
+        self.forward_ = self._build_forward()
         self.prior_coef_ = np.zeros((len(NUISANCES), 1 + phys.shape[1]))
         self.prior_sd_ = np.array([START_SD[n] for n in NUISANCES])
         mean, _ = self._prior(phys, y)
-        self._calibrate(obs, self.forward_.log_ratio(y, mean[:, 1:]))
+        self._calibrate(obs, self.forward_.log_ratio(y, mean[:, 1:]), y)
         free = np.array([False] + [True] * len(NUISANCES))
         for _ in range(int(self.n_em)):
             self._em_round(obs, phys, y, free)
         self._restore_schema()
+        self._after_fit(X, y, groups)
         return self
 
-    def _calibrate(self, obs: np.ndarray, model: np.ndarray, edf: float = 0.0) -> None:
-        """Per channel, least squares obs = a + b model; S from what remains, divided
-        by the share of the n k residual degrees of freedom the modes left free (``edf``
-        parameters fitted in all; Hastie et al. 2009, Eq. 7.5)."""
+    def _after_fit(self, X, y: np.ndarray, groups) -> None:
+        """What a subclass learns once the EM has run (nothing here)."""
+
+    def _calibrate(self, obs: np.ndarray, model: np.ndarray, y: np.ndarray,
+                   edf: float = 0.0) -> None:
+        """Per channel, least squares obs = a + b model (``y``, the rows' reference
+        glucose, is not needed here); then S (:meth:`_set_noise`)."""
         mc = model - model.mean(axis=0)
         var = (mc**2).mean(axis=0)
         cross = (mc * (obs - obs.mean(axis=0))).mean(axis=0)
         b = np.where(var > 0, cross / np.where(var > 0, var, 1.0), 1.0)
         a = obs.mean(axis=0) - b * model.mean(axis=0)
-        resid = obs - a - b * model
-        k = obs.shape[1]
-        cov = np.atleast_2d(np.cov(resid, rowvar=False)) if len(obs) > 1 else np.zeros((k, k))
         self.offset_, self.gain_ = a, b
-        dof = obs.size / max(obs.size - edf - 2 * k, 0.1 * obs.size)
-        self.noise_cov_ = dof * cov + _VAR_FLOOR * np.eye(k)
+        self._set_noise(obs - a - b * model, edf, 2)
+
+    def _set_noise(self, resid: np.ndarray, edf: float, per_channel: int) -> None:
+        """S from the residuals, divided by the share of the n k residual degrees of
+        freedom left free by the modes (``edf`` parameters fitted in all) and the
+        calibration (``per_channel`` coefficients per channel; Hastie et al. 2009,
+        Eq. 7.5), plus :meth:`_var_floor` on the diagonal."""
+        k = resid.shape[1]
+        cov = np.atleast_2d(np.cov(resid, rowvar=False)) if len(resid) > 1 else np.zeros((k, k))
+        dof = resid.size / max(resid.size - edf - per_channel * k, 0.1 * resid.size)
+        self.noise_cov_ = dof * cov + self._var_floor() * np.eye(k)
 
     def _em_round(self, obs, phys, y, free) -> None:
         """One empirical-Bayes round at the known glucose: modes, then priors and
@@ -379,7 +437,7 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         post, edf = posterior_variance(
             self.forward_, obs, calib, root_w, mean, sd, theta, free=free
         )
-        start = prior_start(self.config_, self.schema_, phys)
+        start = self._prior_start(phys)
         D = self._design(phys)
         target = theta[:, 1:] - start
         pen = _PRIOR_RIDGE * np.eye(D.shape[1])
@@ -395,7 +453,7 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         # the data leave little to explain
         log_sd = np.log(self.prior_sd_) + _OVERRELAX * (0.5 * np.log(var) - np.log(self.prior_sd_))
         self.prior_sd_ = np.clip(np.exp(log_sd), _SD_FLOOR * start_sd, start_sd)
-        self._calibrate(obs, m, float(edf.sum()))
+        self._calibrate(obs, m, y, float(edf.sum()))
 
     # ------------------------------------------------------------------ predict
 
@@ -575,3 +633,72 @@ class PhysicsInversion(ValidatedParamsMixin, SchemaJsonMixin, RegressorMixin, Ba
         tags = super().__sklearn_tags__()
         tags.non_deterministic = False
         return tags
+
+
+@register("physics-inversion")
+class PhysicsInversion(ForwardModelInversion):
+    """Forward-model inversion with the generating scenario's own model: a reference.
+
+    :class:`ForwardModelInversion` over the simulator's forward model
+    (:class:`~nirglucose.models._inversion_solver.ForwardModel`) as the data's scenario
+    (``Dataset.config``) defines it: the LED bands, geometry and chromophore tables,
+    glucose's optical signal at the scenario's ``glucose.signal_gain``, and the
+    simulator's relations as the prior means' start (:func:`prior_start`). A reference
+    of what inverting the generator's own model gives, never a deployable estimator: a
+    file without a scenario is refused (:func:`require_scenario`); a device's file is
+    fitted by ``device-inversion``
+    (:class:`~nirglucose.models.device_inversion.DeviceInversion`).
+
+    Parameters
+    ----------
+    forward_model : {'beer-lambert', 'diffusion', 'rte-lut'}
+        The forward model assumed (need not be the one that made the data).
+    prior_scale : float
+        Multiplies every nuisance's learned prior width at prediction. [-]
+    n_em : int
+        Empirical-Bayes rounds in ``fit``. [-]
+    max_iter : int
+        Levenberg-Marquardt iterations at most per solve. [-]
+
+    Attributes
+    ----------
+    config_ : ScenarioConfig
+        The scenario whose optics are assumed (with the attributes of
+        :class:`ForwardModelInversion`).
+
+    Examples
+    --------
+    >>> import nirglucose as ng
+    >>> ds = ng.simulate("paper", 20, 3, seed=0)
+    >>> PhysicsInversion().fit(ds).predict(ds).shape
+    (60,)
+    """
+
+    privileged: ClassVar[str | None] = PRIVILEGED_SCENARIO
+
+    _STATE: ClassVar[dict[str, Any]] = {**ForwardModelInversion._STATE, "config_": "json"}
+
+    def _assume(self, X) -> None:
+        self.config_ = require_scenario(X, self.schema_, self.registry_name)
+
+    def _build_forward(self) -> ForwardModel:
+        return ForwardModel(self.config_, self.forward_model)
+
+    def _prior_start(self, phys: np.ndarray) -> np.ndarray:
+        return prior_start(self.config_, self.schema_, phys)
+
+    def _state_dict(self):
+        cfg = self.config_
+        self.__dict__["config_"] = cfg.model_dump(mode="json")
+        try:
+            return super()._state_dict()
+        finally:
+            self.__dict__["config_"] = cfg
+
+    def _restore(self) -> None:
+        if isinstance(self.config_, dict):
+            try:
+                self.config_ = ScenarioConfig.model_validate(self.config_)
+            except ValueError as exc:
+                raise DataError(f"the saved model's scenario config is invalid: {exc}") from None
+        super()._restore()

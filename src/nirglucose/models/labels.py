@@ -37,6 +37,7 @@ MODEL_LABELS: dict[str, str] = {
     "gp": "Gaussian process (ARD)",
     "gbr": "Gradient boosting",
     "physics-inversion": "Physics inversion (forward model)",
+    "device-inversion": "Device inversion (published tables)",
     "ebl+gp": "EBL + residual GP",
     "physics-inversion+gp": "Physics inversion + residual GP",
     "original-pinn-fm": "Original PINN, forward-model physics",

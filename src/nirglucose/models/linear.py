@@ -185,6 +185,8 @@ class EnhancedBeerLambert(_LinearBase):
     ((60,), 57)
     """
 
+    privileged: ClassVar[str | None] = None
+
     _parameter_constraints: ClassVar[dict[str, Any]] = {
         "alphas": [
             None,
@@ -406,6 +408,8 @@ class PLSBaseline(_LinearBase):
     >>> m.predict(ds).shape, m.n_parameters
     ((60,), 17)
     """
+
+    privileged: ClassVar[str | None] = None
 
     _parameter_constraints: ClassVar[dict[str, Any]] = {
         "n_components": [None, Interval(Integral, 1, None, closed="left")],

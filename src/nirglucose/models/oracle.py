@@ -176,6 +176,10 @@ class Oracle(ValidatedParamsMixin, JsonModelMixin, RegressorMixin, BaseEstimator
     True
     """
 
+    privileged: ClassVar[str | None] = (
+        "true nuisances (true_* columns) and the generating scenario (Dataset.config)"
+    )
+
     _parameter_constraints: ClassVar[dict[str, Any]] = {
         "prior": ["boolean"],
         "max_iter": [Interval(Integral, 1, None, closed="left")],

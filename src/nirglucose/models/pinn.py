@@ -89,10 +89,9 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from ..config import ScenarioConfig, resolve_config
+from ..config import ScenarioConfig
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM
-from ..dataset import Dataset
-from ..exceptions import ConfigError
+from ..exceptions import DataError
 from ..optics import forward, tissue
 from ..optics.diffusion import farrell_reflectance
 from ..optics.forward import FORWARD_MODELS
@@ -101,7 +100,9 @@ from ._base import predict_input
 from ._inversion_solver import NUISANCES
 from ._params import Integral, Interval, ParameterError, Real, StrOptions
 from ._torch_base import TorchRegressor
+from .device_inversion import DEFAULT_LED_FWHM_NM, device_scenario
 from .forward_term import BeerLambertForwardTerm, StateForwardTerm
+from .inversion import PRIVILEGED_SCENARIO
 from .networks import OptimizedPINNNet, OriginalPINNNet, RTEPINNNet
 from .physics_losses import (
     beer_lambert_loss,
@@ -135,28 +136,23 @@ PHYSICS_FORMS = ("study", "absolute", "relative", "forward")
 RTE_PHYSICS_FORMS = ("study", "forward")
 
 
-def _scenario(source: Any, wavelengths_nm: Any = None) -> tuple[ScenarioConfig | None, str]:
-    """The data's scenario, or the ``paper`` preset at the data's LEDs for data without one.
+def _device_optics(wavelengths_nm: Any) -> tuple[ScenarioConfig | None, str]:
+    """The optics a study PINN's physics term assumes: the device's LEDs (from its
+    columns, :data:`~nirglucose.models.device_inversion.DEFAULT_LED_FWHM_NM` wide) over
+    the published tables and glucose at its published magnitude
+    (:func:`~nirglucose.models.device_inversion.device_scenario`). No dataset's
+    scenario and no preset is read, so the study PINNs fit a device file and a simulated
+    Dataset alike (they are deployable; the ``-fm`` variants' forward term is not).
 
-    ``(None, why)`` when the paper preset cannot describe those LEDs (outside the optics
-    tables): the physics term is then switched off.
+    ``(None, why)`` when the LEDs lie outside the optics tables: the physics term is
+    then switched off.
     """
-    if isinstance(source, Dataset) and source.config is not None:
-        return source.config, "dataset"
-    base = resolve_config("paper")
-    wl = tuple(float(w) for w in (wavelengths_nm or base.leds.wavelengths_nm))
-    if wl == tuple(base.leds.wavelengths_nm):
-        return base, "paper preset (the data carries no scenario)"
-    led = {
-        "fwhm_nm": float(np.mean(base.leds.fwhm_nm)),
-        "power_mw": float(np.mean(base.leds.power_mw)),
-        "responsivity_a_per_w": float(np.mean(base.leds.responsivity_a_per_w)),
-    }
-    overrides = {"leds": [{"wavelength_nm": w, **led} for w in wl]}
+    wl = [float(w) for w in wavelengths_nm]
     try:
-        return resolve_config("paper", overrides), "paper preset at the data's LEDs"
-    except ConfigError as exc:
+        cfg = device_scenario(wl, [DEFAULT_LED_FWHM_NM] * len(wl))
+    except DataError as exc:
         return None, f"none: {exc}"
+    return cfg, "the device's LEDs over the published tables (glucose at gain 1)"
 
 
 def _with_physics(est: Any, total: torch.Tensor, physics: torch.Tensor) -> torch.Tensor:
@@ -184,6 +180,7 @@ _FORWARD_MODEL = [None, StrOptions(set(FORWARD_MODELS))]
 class _BeerLambertPINN(BeerLambertForwardTerm, TorchRegressor):
     """Shared physics of the Original and Optimized PINNs (not registered)."""
 
+    privileged: ClassVar[str | None] = None
     own_params: ClassVar[dict[str, Any]] = {
         "lambda_phys": 0.01,
         "physics_form": "study",
@@ -206,15 +203,17 @@ class _BeerLambertPINN(BeerLambertForwardTerm, TorchRegressor):
     def _physics_constants(self, cfg: ScenarioConfig, origin: str) -> dict:
         peak = self.absorptivity_per_cm_per_mm
         gain = self.signal_gain
+        schema = self.__dict__.get("schema_")
+        enabled = cfg is not None and (schema is None or not schema.is_plain)
+        if cfg is None:  # LEDs outside the tables: the constants of the study's device
+            cfg = _device_optics(DEFAULT_LED_WAVELENGTHS_NM)[0]
         peak = cfg.glucose.absorptivity_per_cm_per_mm if peak is None else float(peak)
         gain = cfg.glucose.signal_gain if gain is None else float(gain)
-        schema = self.__dict__.get("schema_")
-        enabled = schema is None or not schema.is_plain
         # The physics takes its wavelengths from the data (a plain array has none: off).
         wl = DEFAULT_LED_WAVELENGTHS_NM if schema is None else schema.wavelengths_nm
         k = len(wl) if enabled else schema.n_channels
         eps = glucose_absorptivity_per_cm_per_mgdl(wl, peak, gain) if enabled else np.zeros(k)
-        if not enabled:
+        if schema is not None and schema.is_plain:
             origin = "none: a plain array has no wavelengths (physics term off)"
         return {
             "enabled": enabled,
@@ -230,7 +229,9 @@ class _BeerLambertPINN(BeerLambertForwardTerm, TorchRegressor):
         }
 
     def _fit_physics(self, source: Any, absorbance: np.ndarray, y: np.ndarray) -> dict:
-        cfg, origin = _scenario(source)  # glucose constants only: any LEDs
+        schema = self.schema_
+        wl = DEFAULT_LED_WAVELENGTHS_NM if schema.is_plain else schema.wavelengths_nm
+        cfg, origin = _device_optics(wl)
         phys = self._physics_constants(cfg, origin)
         if self.physics_form == "relative":
             phys["absorbance_ref"] = absorbance.mean(axis=0).tolist()
@@ -318,8 +319,9 @@ class OriginalPINN(_BeerLambertPINN):
         LEDs the scenario does not describe. Prediction is the same for every form.
     absorptivity_per_cm_per_mm, signal_gain : float or None
         Glucose peak absorption [1/(cm mM)] and signal gain [-] for
-        :math:`\varepsilon`; None takes them from the training Dataset's scenario (the
-        ``paper`` preset when the data carries none).
+        :math:`\varepsilon`; None takes the published values (the package's glucose
+        table, gain 1): never the training data's scenario, whose gain a device file
+        does not have.
     forward_model : {None, 'beer-lambert', 'diffusion', 'rte-lut'}
         The forward model of the 'forward' form; None takes the training Dataset's
         (``optics.model``; 'beer-lambert' for data without a scenario). Unused by the
@@ -428,7 +430,7 @@ _FORWARD_NOTES = """
 #: What the ``-fm`` variants know beyond the measured data (their ``privileged``): the
 #: forward term is a :class:`~nirglucose.models.inversion.PhysicsInversion` of the
 #: training Dataset's scenario, i.e. the simulator's own forward model.
-FORWARD_MODEL_KNOWLEDGE = "the generating scenario and the simulator's forward model"
+FORWARD_MODEL_KNOWLEDGE = PRIVILEGED_SCENARIO
 
 #: The ``-fm`` variants' changed defaults: the Beer-Lambert networks', the RTE ones'.
 _FM_DEFAULTS = {"physics_form": "forward", "lambda_phys": 0.1}
@@ -486,6 +488,7 @@ def nominal_optics(cfg: ScenarioConfig) -> tuple[np.ndarray, np.ndarray]:
 class _RTEPINNBase(StateForwardTerm, TorchRegressor):
     """Shared physics of the RTE-inspired PINNs (not registered)."""
 
+    privileged: ClassVar[str | None] = None
     own_params: ClassVar[dict[str, Any]] = {
         "lambda_phys": 0.1,
         "stability_weight": 0.1,
@@ -523,8 +526,8 @@ class _RTEPINNBase(StateForwardTerm, TorchRegressor):
             mua0, musp0 = (v[idx] for v in nominal_optics(cfg))
         else:
             # No optics for these channels (a plain array, or LEDs outside the tables):
-            # the heads start at the paper device's mean nominal skin, the term is off.
-            cfg = resolve_config("paper")
+            # the heads start at the study device's mean nominal skin, the term is off.
+            cfg = _device_optics(DEFAULT_LED_WAVELENGTHS_NM)[0]
             idx = list(range(n_channels or len(wavelengths_nm)))
             mua_p, musp_p = nominal_optics(cfg)
             mua0 = np.full(len(idx), float(mua_p.mean()))
@@ -560,18 +563,15 @@ class _RTEPINNBase(StateForwardTerm, TorchRegressor):
         if schema.is_plain:
             why = "none: a plain array has no wavelengths (physics term off)"
             return self._physics_from(None, why, absorbance, (), schema.n_channels)
-        cfg, origin = _scenario(source, schema.wavelengths_nm)
-        if cfg is not None and tuple(cfg.leds.wavelengths_nm) != schema.wavelengths_nm:
-            cfg, origin = _scenario(None, schema.wavelengths_nm)
+        cfg, origin = _device_optics(schema.wavelengths_nm)
         phys = self._physics_from(cfg, origin, absorbance, schema.wavelengths_nm)
         if self.physics_form == "forward":  # replaces the reflectance tie
             phys.update({"form": "forward", **self._fit_forward(source, y)})
         return phys
 
     def _default_physics(self) -> dict:
-        return self._physics_from(
-            resolve_config("paper"), "paper preset", None, DEFAULT_LED_WAVELENGTHS_NM
-        )
+        cfg, origin = _device_optics(DEFAULT_LED_WAVELENGTHS_NM)
+        return self._physics_from(cfg, origin, None, DEFAULT_LED_WAVELENGTHS_NM)
 
     def _prepare_physics_tensors(self) -> None:
         p = self.physics_

@@ -127,6 +127,8 @@ class MeanReference(_ReferenceBase):
     (True, 1)
     """
 
+    privileged: ClassVar[str | None] = None
+
     _STATE = {"schema_": "json", "mean_": None}
     _FITTED = "mean_"
 
@@ -215,6 +217,8 @@ class GPReference(_ReferenceBase):
     >>> GPReference(random_state=0).fit(ds).predict(ds).shape
     (30,)
     """
+
+    privileged: ClassVar[str | None] = None
 
     _parameter_constraints: ClassVar[dict[str, Any]] = {
         "max_fit_rows": _POSITIVE_INT,
@@ -388,6 +392,8 @@ class GBRReference(_ReferenceBase):
     >>> GBRReference(n_estimators=20, random_state=0).fit(ds).predict(ds).shape
     (30,)
     """
+
+    privileged: ClassVar[str | None] = None
 
     _parameter_constraints: ClassVar[dict[str, Any]] = {
         "n_estimators": _POSITIVE_INT,

@@ -32,6 +32,7 @@ __all__ = [
     "MODELS",
     "is_network",
     "is_pinn",
+    "privileged_knowledge",
     # variants (issue 42), the block at the end of this module
     "Variant",
     "register_variant",
@@ -46,6 +47,7 @@ MODELS = {
     "pls": "nirglucose.models.linear",
     "oracle": "nirglucose.models.oracle",
     "physics-inversion": "nirglucose.models.inversion",
+    "device-inversion": "nirglucose.models.device_inversion",
     "ebl+gp": "nirglucose.models.hybrid",
     "physics-inversion+gp": "nirglucose.models.hybrid",
     "original-pinn": "nirglucose.models.pinn",
@@ -123,6 +125,44 @@ def is_pinn(name: str) -> bool:
     """Whether ``name`` is a physics-informed network: a network with a physics weight
     ``lambda_phys`` (0 switches its physics term off, e.g. for the ablation)."""
     return is_network(name) and "lambda_phys" in inspect.signature(get_model_class(name)).parameters
+
+
+def privileged_knowledge(model: Any) -> str | None:
+    """What an estimator knows beyond the measured columns, or None (deployable).
+
+    Each registered estimator declares it as its class attribute ``privileged``: None
+    for one that reads only the measured columns, the device's declared parts and
+    published tables (a deployable estimator), else a short phrase -- the oracle's
+    true nuisances, the generating scenario and the simulator's own forward model.
+    Privileged estimators are references, like the bound, never "best model".
+
+    Parameters
+    ----------
+    model : str, type or estimator
+        A registered name, an estimator class, or an estimator (fitted or not). A
+        user's own estimator that declares nothing is taken as deployable (None).
+
+    Returns
+    -------
+    str or None
+
+    Raises
+    ------
+    ConfigError
+        An unknown name.
+
+    Examples
+    --------
+    >>> privileged_knowledge("ebl") is None
+    True
+    >>> privileged_knowledge("oracle")
+    'true nuisances (true_* columns) and the generating scenario (Dataset.config)'
+    """
+    cls = get_model_class(model) if isinstance(model, str) else model
+    if not isinstance(cls, type):
+        cls = type(cls)
+    value = getattr(cls, "privileged", None)
+    return value if isinstance(value, str) and value.strip() else None
 
 
 def describe_model(model: Any) -> str:

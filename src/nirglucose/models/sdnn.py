@@ -18,6 +18,8 @@ References
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from ._torch_base import TorchRegressor
 from .networks import SDNNNet
 from .registry import register
@@ -46,6 +48,8 @@ class SDNN(TorchRegressor):
     match the reference study's 3,713 parameters, not theirs. The loss is the base
     class's MSE (no ``get_loss`` override).
     """
+
+    privileged: ClassVar[str | None] = None
 
     def build_module(self) -> SDNNNet:
         """:class:`~nirglucose.models.networks.SDNNNet`."""

@@ -140,11 +140,11 @@ def search_space(name: str) -> dict[str, tuple]:
     :data:`LAMBDA_PHYS_GRID`. EBL tunes its ridge penalty (one value per
     configuration, so its own inner CV is bypassed), PLS its number of components,
     gradient boosting (``gbr``) its stages, shrinkage, tree depth and row
-    fraction, the forward-model estimator (``physics-inversion``) its prior widths and
-    empirical-Bayes rounds, the hybrids their backbone's knob and the residual GP's
-    out-of-fold folds (``cv``). The new families' grids have :data:`N_CONFIGS` points.
-    The Gaussian process (``gp``) has none: its kernel's hyper-parameters are fitted
-    by marginal likelihood inside each ``fit``.
+    fraction, the forward-model estimators (``physics-inversion``, ``device-inversion``)
+    their prior widths and empirical-Bayes rounds, the hybrids their backbone's knob and
+    the residual GP's out-of-fold folds (``cv``). The new families' grids have
+    :data:`N_CONFIGS` points. The Gaussian process (``gp``) has none: its kernel's
+    hyper-parameters are fitted by marginal likelihood inside each ``fit``.
 
     Raises
     ------
@@ -163,12 +163,13 @@ def search_space(name: str) -> dict[str, tuple]:
         return {"n_components": tuple(range(1, N_CONFIGS + 1))}
     if name == "gbr":
         return dict(_GBR_SPACE)
-    if name == "physics-inversion":
+    if name in ("physics-inversion", "device-inversion"):
         return dict(_INVERSION_SPACE)
     if name in _HYBRID_SPACE:
         return dict(_HYBRID_SPACE[name])
     why = f" ({_NO_GRID[name]})" if name in _NO_GRID else ""
-    tuned = "ebl, pls, gbr, physics-inversion, ebl+gp, physics-inversion+gp, every network"
+    tuned = ("ebl, pls, gbr, physics-inversion, device-inversion, ebl+gp, "
+             "physics-inversion+gp, every network")
     raise ConfigError(f"no tuning search space for model {name!r}{why}; tuned: {tuned}")
 
 

@@ -81,6 +81,8 @@ MODEL_COLORS: dict[str, str] = {
     "mean": "#BBBBBB",
     # the forward-model estimator and the hybrids: three more of Tol's muted colours
     "physics-inversion": "#332288",
+    # the deployable inversion: magenta of Tol's "vibrant" scheme (same reference)
+    "device-inversion": "#EE3377",
     "ebl+gp": "#44AA99",
     "physics-inversion+gp": "#CC6677",
     # the PINNs with the forward-model physics term: the rest of Tol's muted set
@@ -104,6 +106,7 @@ MODEL_MARKERS: dict[str, str] = {
     "gbr": "p",
     "mean": "d",  # a filled marker: a line marker vanishes into a horizontal error bar
     "physics-inversion": "8",
+    "device-inversion": "<",
     "ebl+gp": "H",
     "physics-inversion+gp": ">",
     # a forward-model PINN: its study twin's marker (the colour tells them apart)
