@@ -3,7 +3,7 @@
 Protocol: ``nirglucose.simulate(preset, 80, 3, seed)`` for ``paper``, ``wearable`` and
 ``physical``; :func:`nirglucose.evaluation.run_benchmark` with subject-grouped 5-fold
 CV, one repeat, its subject-level bootstrap 95 % CIs, every model with its tuned
-parameters where ``tuned_params.json`` holds them (``device-inversion`` is not tuned
+parameters where the package holds them (tools/tune.py) (``device-inversion`` is not tuned
 yet: its defaults). Models: no skill (``mean``), EBL, ``device-inversion``
 (deployable: the device's parts and published tables, glucose's response learned),
 ``physics-inversion`` and the oracle (privileged references: the generating scenario,
@@ -52,7 +52,7 @@ def main() -> None:
     a = ap.parse_args()
     t0 = time.time()
     out: dict = {"protocol": "grouped 5-fold CV x 1 repeat, 80 x 3 per seed, tuned where "
-                             "tuned_params.json holds the model",
+                             "the package holds tuned parameters",
                  "seeds": list(range(a.seeds)),
                  "privileged": {n: privileged_knowledge(n) for n in MODELS}}
     for preset in a.presets.split(","):

@@ -13,7 +13,7 @@ from pathlib import Path
 from nirglucose.models.registry import MODELS
 
 _MAKEFILE = Path(__file__).resolve().parents[1] / "Makefile"
-#: Registered models ``make run`` leaves out, and why (the README says the same).
+#: Registered models ``make run`` leaves out, and why (the Makefile says the same).
 LEFT_OUT = {
     "ebl+gp": "a GP on EBL's out-of-fold residual: several fits per task",
     "physics-inversion+gp": "a GP on the inversion's out-of-fold residual: 4 inversions a task",
