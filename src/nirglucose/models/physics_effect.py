@@ -33,11 +33,12 @@ its gradients over the rows coherently, while the data term's partly cancel, and
 decoupled weight decay the data gradient never vanishes; so the parameter-space ratio
 (0.006-0.5 for that term at :math:`\lambda = 1`) overstates what the term does, which
 is to shift the predictions to where the data term's restoring force balances it:
-:math:`4\times10^{-4}` SD, 0.026 mg/dL on ``paper``
-(``studies/records/pinn_physics_gradient.json``). A first-order estimate, and a
-good one: at :math:`\lambda = 1000` the predicted mean shift is 26 mg/dL and the fitted
-Original PINN's held-out predictions rise by 27-33 mg/dL (``paper``, 40 x 3, seeds
-0-2 of ``random_state``).
+:math:`4\times10^{-5}` SD, 0.0023 mg/dL on ``paper`` with the published glucose
+constants the study PINNs use (``studies/records/pinn_physics_gradient.json``; 0.026
+mg/dL when the term read the data's ×11 gain). A first-order estimate, and a good one:
+with the ×11 gain, at :math:`\lambda = 1000` the predicted mean shift was 26 mg/dL and
+the fitted Original PINN's held-out predictions rose by 27-33 mg/dL (``paper``, 40 x 3,
+seeds 0-2 of ``random_state``).
 
 This module needs neither torch nor a fitted model: the report calls it on
 ``histories.json``.
