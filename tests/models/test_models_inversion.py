@@ -161,3 +161,16 @@ def test_inversion_hybrid_reports_its_backbones_state(paper):
                                   back.drop(columns="glucose_mgdl"))
     np.testing.assert_allclose(state["glucose_mgdl"], m.predict(test))
     assert not np.allclose(state["glucose_mgdl"], back["glucose_mgdl"])  # the GP corrects
+
+
+def test_the_variance_floor_follows_the_declared_adc_bits():
+    # the data's declared bits (the scenario's, which averaging raises) set the floor
+    from nirglucose.models._inversion_solver import residual_var_floor
+
+    ov = {"hardware.adc_bits": 16, "device.monitor_photodiode": True}
+    train = ng.simulate("physical", 20, 3, seed=1, overrides=ov)
+    est = PhysicsInversion(n_em=2).fit(train)
+    assert est.schema_.adc_bits == 16
+    assert est._var_floor() == residual_var_floor(16) == 2e-8 / 256
+    twelve = PhysicsInversion(n_em=2).fit(ng.simulate("physical", 20, 3, seed=1))
+    assert twelve._var_floor() == 2e-8  # 12-bit results stay byte-identical

@@ -65,6 +65,7 @@ from ._inversion_solver import (
     map_estimate,
     model_jacobian,
     posterior_variance,
+    residual_var_floor,
 )
 from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from .registry import register
@@ -106,9 +107,6 @@ START_SD = {
 _SD_FLOOR = 1e-3
 #: Ridge penalty of the prior-mean correction, on standardised physiology. [-]
 _PRIOR_RIDGE = 1.0
-#: Variance floor added to the residual covariance's diagonal (a 12-bit code's
-#: quantisation at mid-scale, (1/2048)^2 / 12, as the oracle). [-]
-_VAR_FLOOR = 2e-8
 _LN10 = np.log(10.0)
 #: Over-relaxation of the widths' EM update in log space (1: plain EM). [-]
 _OVERRELAX = 2.0
@@ -329,8 +327,10 @@ class ForwardModelInversion(
         raise NotImplementedError
 
     def _var_floor(self) -> float:
-        """Variance added to the residual covariance's diagonal. [-]"""
-        return _VAR_FLOOR
+        """Variance added to the residual covariance's diagonal: the quantisation floor
+        of the data's declared ADC bits (:func:`~nirglucose.models._inversion_solver.
+        residual_var_floor`; 2e-8 at 12 bits). [-]"""
+        return residual_var_floor(self.schema_.adc_bits)
 
     def _design(self, phys: np.ndarray) -> np.ndarray:
         """(n, 1 + m): a constant and the standardised physiology."""
