@@ -108,7 +108,7 @@ def main() -> None:
         "study_device": result.meta["study_device"],
         "confirmation": conf[["design", "model", "rmse_mgdl", "rmse_ci_low", "rmse_ci_high",
                               "bound_total_rmse_mgdl", "bound_oracle_bound_rmse_mgdl",
-                              "bound_state_at_estimator_floor_rmse_mgdl"]].to_dict(
+                              "bound_state_rmse_mgdl"]].to_dict(
             orient="records") if len(conf) else [],
         "figures": figures,
     }

@@ -47,7 +47,11 @@ StudyOption = Annotated[
     typer.Option(help=f"Built-in study: {_STUDY_NAMES}, wear (calibration schedule x days of "
                  "wear x preset: --vary wear_days=1,3,7, --preset paper,wearable; each task a "
                  "worn run of --subjects subjects, a reading every 15 min; --jobs and "
-                 "--scheduler as for the other studies)."),
+                 "--scheduler as for the other studies), requirements (what a device would "
+                 "need at published magnitudes: the least design per detector, one answer "
+                 "line each, its named designs confirmed on --subjects x --per-subject "
+                 "(default 60 x 3); --preset default physical, --vary "
+                 "detector=study,BPW34,G17190-010K, --models the confirming models)."),
 ]
 SweepPresetOption = Annotated[
     str | None,
@@ -82,6 +86,7 @@ SweepCalibrationOption = Annotated[
 @_tidy_out
 @runs_workers
 def sweep(
+    ctx: typer.Context,
     out: OutDirOption,
     vary: VaryOption = None,
     study: StudyOption = None,
@@ -109,6 +114,11 @@ def sweep(
 
         return wear_sweep(out, vary, preset, seeds or 1, seed, models, subjects, folds,
                           resamples, set_, jobs=_jobs(jobs), scheduler=scheduler)
+    if study == "requirements":
+        from .requirements_command import requirements_sweep
+
+        return requirements_sweep(ctx, out, vary, preset, seed, models, subjects, per_subject,
+                                  folds, resamples, _jobs(jobs), figures)
     if seeds is None:
         seeds = 1 if study == "data-size" else 5
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
