@@ -80,7 +80,8 @@ def test_report_renders_the_answer_first_then_figures_and_limits(ran):
 
 @pytest.mark.parametrize("args, match", [
     (["--seeds", "2"], "--seeds"),
-    (["--set", "noise_scale=2"], "--set"),
+    (["--set", "noise.no_such=2"], "--set"),
+    (["--repeats", "2"], "--repeats"),
     (["--calibration", "1"], "--calibration"),
     (["--vary", "noise_scale=1,2"], "varies only the detector"),
     (["--vary", "detector=NOPE"], "NOPE"),

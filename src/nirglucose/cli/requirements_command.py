@@ -4,8 +4,9 @@ Runs :func:`~nirglucose.evaluation.sweep.requirements.requirements_study` (the l
 design per detector at published magnitudes, confirmed by simulation), writes its
 tables, ``requirements.json`` and figures into ``--out`` and prints one answer line per
 detector. The sweep's options that describe a grid of scenarios (``--seeds``,
-``--repeats``, ``--protocol``, ``--scheduler``, ``--calibration``, ``--set``) do not
-apply and are refused when given.
+``--repeats``, ``--protocol``, ``--scheduler``, ``--calibration``) do not apply and are
+refused when given; ``--set KEY=VALUE`` overrides the preset for every design (e.g.
+``--set noise.water_temperature.enabled=true``: water absorbing at the skin temperature).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from ._common import (
     _check_seed,
     _check_size,
     _model_names,
+    _parse_sets,
     _say,
     _warnings_as_lines,
 )
@@ -30,7 +32,7 @@ __all__ = ["REQUIREMENTS_STUDY", "requirements_sweep"]
 #: The ``--study`` name.
 REQUIREMENTS_STUDY = "requirements"
 #: Sweep options with no meaning here (parameter names), refused when given.
-_NOT_TAKEN = ("seeds", "repeats", "protocol", "scheduler", "calibration", "set_")
+_NOT_TAKEN = ("seeds", "repeats", "protocol", "scheduler", "calibration")
 #: The name of the study's own photodiode with its four LEDs in ``--vary detector=``.
 _STUDY_DETECTOR = "study"
 
@@ -69,7 +71,7 @@ def _detectors(vary: list[str] | None) -> list[str | None] | None:
 def requirements_sweep(ctx: typer.Context, out: Path, vary: list[str] | None,
                        preset: str | None, seed: int, models: str | None, subjects: int,
                        per_subject: int, folds: int, resamples: int, jobs: int,
-                       figures: bool) -> None:
+                       figures: bool, set_: list[str] | None = None) -> None:
     """``sweep --study requirements`` (module docstring).
 
     ``--subjects`` and ``--per-subject`` size each confirming simulation; left out, the
@@ -101,8 +103,19 @@ def requirements_sweep(ctx: typer.Context, out: Path, vary: list[str] | None,
         for m in names:
             if m not in available_models():
                 raise UserError(unknown_name("model", m, available_models()))
+    overrides = _parse_sets(set_)
+    if overrides:
+        from ..config import resolve_config
+        from ..exceptions import ConfigError
+
+        try:
+            resolve_config(preset or "physical", overrides)
+        except ConfigError as exc:
+            raise UserError(f"--set: {exc}") from None
     _check_out_dir(out)
-    opts = {} if detectors is None else {"detectors": detectors}
+    opts: dict = {} if detectors is None else {"detectors": detectors}
+    if overrides:
+        opts["overrides"] = overrides
     if names is not None:
         opts["confirm_models"] = names
     _say(f"requirements: searching each detector's least design in {preset or 'physical'}, "

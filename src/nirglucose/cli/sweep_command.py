@@ -51,7 +51,8 @@ StudyOption = Annotated[
                  "need at published magnitudes: the least design per detector, one answer "
                  "line each, its named designs confirmed on --subjects x --per-subject "
                  "(default 60 x 3); --preset default physical, --vary "
-                 "detector=study,BPW34,G17190-010K, --models the confirming models)."),
+                 "detector=study,BPW34,G17190-010K, --models the confirming models, --set "
+                 "for every design)."),
 ]
 SweepPresetOption = Annotated[
     str | None,
@@ -118,7 +119,7 @@ def sweep(
         from .requirements_command import requirements_sweep
 
         return requirements_sweep(ctx, out, vary, preset, seed, models, subjects, per_subject,
-                                  folds, resamples, _jobs(jobs), figures)
+                                  folds, resamples, _jobs(jobs), figures, set_)
     if seeds is None:
         seeds = 1 if study == "data-size" else 5
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),

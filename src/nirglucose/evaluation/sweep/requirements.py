@@ -212,7 +212,8 @@ def _confirmed_text(conf: pd.DataFrame, design: str) -> str:
 
 
 def _answer(row: pd.Series, meta: dict[str, Any], conf: pd.DataFrame) -> str:
-    regime = f"[{meta['preset']}, glucose signal gain {meta['glucose_signal_gain']:g}]"
+    extra = "".join(f", {k}={v}" for k, v in sorted(meta.get("overrides", {}).items()))
+    regime = f"[{meta['preset']}, glucose signal gain {meta['glucose_signal_gain']:g}{extra}]"
     target = f"{meta['target_rmse_mgdl']:g} mg/dL RMSE and MARD {meta['target_mard_pct']:g} %"
     caps = [c.replace("_", " ") for c in str(row["capabilities"]).split(",") if c]
     design = (f"{row['n_leds']} LEDs ({row['leds_nm']} nm), "
@@ -294,13 +295,13 @@ def _detector_part(ev: DesignEvaluator, relax_order) -> dict[str, Any]:
     return {"row": row, "gains": gains, "curve": curve, "trace": steps, "design": named}
 
 
-def _check_overrides() -> dict[str, Any]:
-    return {key: on for key, on, _ in DEVICE_CAPABILITIES.values()}
+def _check_overrides(ev: DesignEvaluator) -> dict[str, Any]:
+    return {**ev.base_overrides, **{key: on for key, on, _ in DEVICE_CAPABILITIES.values()}}
 
 
 def _check_row(ev: DesignEvaluator) -> dict[str, Any]:
     """Errors of the reference check (:data:`_CHECK`), as :class:`Evaluation` fields."""
-    ov = _check_overrides()
+    ov = _check_overrides(ev)
     terms = design_terms(ev.preset, overrides=ov, n_states=ev.n_states)
     state = state_bound(terms)
     return {"state_rmse_mgdl": state, "lag_rmse_mgdl": 0.0, "total_rmse_mgdl": state,
@@ -344,6 +345,7 @@ def requirements_study(
     confirm_models: Sequence[str] = CONFIRM_MODELS,
     confirm_folds: int = 5,
     confirm_resamples: int = 500,
+    overrides: dict[str, Any] | None = None,
     seed: int = 0,
     jobs: int = 1,
 ) -> RequirementsResult:
@@ -376,6 +378,11 @@ def requirements_study(
     confirm_folds, confirm_resamples : int
         Folds of the confirmation's subject-grouped cross-validation, and its
         cluster-bootstrap resamples per 95 % interval. [-]
+    overrides : dict, optional
+        Dotted overrides on the preset that every design keeps, e.g.
+        ``{"noise.water_temperature.enabled": True}`` (water absorbing at the skin
+        temperature, a published confounder the preset leaves off); recorded in
+        ``meta["overrides"]`` and in each answer line's regime.
     seed : int
         Seed of the confirming simulations and benchmarks.
     jobs : int
@@ -396,13 +403,17 @@ def requirements_study(
                     ("confirm_per_subject", confirm_per_subject),
                     ("confirm_folds", confirm_folds), ("confirm_resamples", confirm_resamples)):
         check_positive_int(name, v)
-    base = resolve_config(preset)
+    overrides = dict(overrides or {})
+    try:
+        base = resolve_config(preset, overrides)
+    except ConfigError as exc:
+        raise ConfigError(f"the study's overrides: {exc}") from None
     with warnings.catch_warnings():
         # the lipid table ends at 1,598 nm: recorded once in meta["notes"]
         warnings.filterwarnings("ignore", message="lipid absorption above")
         result, timings = _run(preset, detectors, base, dict(
             target_rmse_mgdl=target_rmse_mgdl, target_mard_pct=target_mard_pct,
-            n_states=n_states), wavelengths_nm, relax_order, confirm, dict(
+            n_states=n_states, overrides=overrides), wavelengths_nm, relax_order, confirm, dict(
             n_subjects=confirm_subjects, per_subject=confirm_per_subject, seed=seed,
             models=tuple(confirm_models), n_splits=confirm_folds, n_boot=confirm_resamples,
             jobs=jobs))
@@ -411,7 +422,7 @@ def requirements_study(
                              relax_order, n_states, confirm, confirm_subjects,
                              confirm_per_subject, confirm_models, seed, timings))
     result.meta.update(confirm_folds=int(confirm_folds),
-                       confirm_resamples=int(confirm_resamples))
+                       confirm_resamples=int(confirm_resamples), overrides=overrides)
     return result
 
 
@@ -419,12 +430,14 @@ def _run(preset, detectors, base, ev_opts, wavelengths_nm, relax_order, confirm,
     """The study's computation (see :func:`requirements_study`)."""
     timings: dict[str, float] = {}
     t = time.perf_counter()
-    study_ev = DesignEvaluator(preset, candidate_records(preset, None), **ev_opts)
+    ov = ev_opts["overrides"]
+    study_ev = DesignEvaluator(preset, candidate_records(preset, None, overrides=ov), **ev_opts)
     study_design = study_ev.study()
     curve = averaging_rows(study_ev, study_design, "study's device")
     parts, candidates = [], {}
     for det in detectors:
-        ev = DesignEvaluator(preset, candidate_records(preset, det, wavelengths_nm), **ev_opts)
+        ev = DesignEvaluator(preset, candidate_records(preset, det, wavelengths_nm, ov),
+                             **ev_opts)
         parts.append((ev, _detector_part(ev, relax_order)))
         candidates[_label(det)[0]] = [{**r, "source": s} for r, s in
                            zip(ev.candidates.records, ev.candidates.sources, strict=True)]
@@ -434,7 +447,7 @@ def _run(preset, detectors, base, ev_opts, wavelengths_nm, relax_order, confirm,
     named = [("study's device", study_ev.overrides(study_design), _bounds(study_ev, study_design))]
     named += [(p["row"]["design"], ev.overrides(p["design"]), _bounds(ev, p["design"]))
               for ev, p in parts]
-    named.append((_CHECK, _check_overrides(), _check_row(study_ev)))
+    named.append((_CHECK, _check_overrides(study_ev), _check_row(study_ev)))
     t = time.perf_counter()
     conf = _confirmations(preset, named, conf_opts) if confirm else pd.DataFrame(
         columns=["design", "model", "rmse_mgdl", "rmse_ci_low", "rmse_ci_high", "mard_pct"])
