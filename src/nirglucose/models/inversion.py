@@ -353,7 +353,19 @@ class ForwardModelInversion(
         return mean, np.broadcast_to(sd, mean.shape).copy()
 
     def _root_w(self) -> np.ndarray:
-        return np.linalg.cholesky(np.linalg.inv(self.noise_cov_)).T
+        """R with R^T R = S^-1 (S the residual covariance): the whitening of the misfit.
+
+        The Cholesky factor of S^-1 where it exists in floating point; where S is so
+        ill-conditioned that it does not (residuals far above the quantisation floor
+        along some directions and at it along others: a floor of many ADC bits), S's
+        eigen-decomposition gives the same R^T R, its eigenvalues held at the floor.
+        """
+        try:
+            return np.linalg.cholesky(np.linalg.inv(self.noise_cov_)).T
+        except np.linalg.LinAlgError:
+            lam, vec = np.linalg.eigh(self.noise_cov_)
+            lam = np.maximum(lam, self._var_floor())
+            return (vec / np.sqrt(lam)).T
 
     # ------------------------------------------------------------------ fit
 

@@ -20,6 +20,7 @@ import pandas as pd
 from ..dataset import atomic_write
 from ..evaluation.sweep.requirements import REQUIREMENTS_FILES, RequirementsResult
 from ..exceptions import DataError
+from ..models.registry import available_models, privileged_knowledge
 
 __all__ = ["is_requirements_dir", "save_requirements_figures", "build_requirements_report",
            "REQUIREMENTS_FIGURES"]
@@ -82,8 +83,6 @@ def _table(frame: pd.DataFrame) -> str:
 
 
 def _confirmation_table(result: RequirementsResult) -> str:
-    from ..models.registry import available_models, privileged_knowledge
-
     conf = result.confirmation
     if conf.empty:
         return "<p>Not simulated (the study ran without its confirmation).</p>"
