@@ -47,12 +47,15 @@ def _figures(result: RequirementsResult) -> dict:
 
     meta = result.meta
     regime = f"{meta['preset']} (glucose signal gain {meta['glucose_signal_gain']:g})"
+    extra = ", ".join(f"{k}={v}" for k, v in sorted(meta.get("overrides", {}).items()))
+    if extra:  # the regime's own overrides, on a second line
+        regime += f"\n{extra}"
     return {
         "requirements_averaging": plot_averaging_curve(
             result.averaging_curve, target_rmse_mgdl=meta["target_rmse_mgdl"],
-            title=f"{regime}: error vs averaging window"),
+            title=f"error vs averaging window, {regime}"),
         "requirements_designs": plot_minimal_designs(
-            result.minimal_designs, title=f"least designs, {meta['preset']}"),
+            result.minimal_designs, title=f"least designs, {regime}"),
     }
 
 

@@ -486,6 +486,9 @@ def _meta(preset, base, detectors, target_rmse, target_mard, relax_order, n_stat
             "(LSB^2/12; the averaging emulation raises the bits) to their noise covariance "
             "(evaluation/sweep/confirmation.py); they are privileged references, not "
             "device estimators",
+            "the confirmation emulates N readings averaged with floor(log4 N) more ADC bits, "
+            "so a simulated design's quantisation falls by at most N: it is noisier than the "
+            "design the bound describes (docs/user_guide/requirements.md, Limits)",
             "lipid absorption is held at its 1,598 nm value above it (optics tables): candidates "
             "above 1,600 nm underestimate the 1,720 nm fat band",
         ],
