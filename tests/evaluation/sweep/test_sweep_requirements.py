@@ -185,3 +185,10 @@ def test_the_studys_overrides_reach_every_design_the_bound_and_the_answer(ev):
     assert res.meta["overrides"] == on
     with pytest.raises(ConfigError, match="overrides"):
         requirements_study(detectors=("BPW34",), confirm=False, overrides={"noise.nope": 1})
+
+
+def test_run_sweep_names_the_requirements_studys_own_entry_point():
+    from nirglucose.evaluation.sweep.run import study_scenarios
+
+    with pytest.raises(ConfigError, match="requirements_study"):
+        study_scenarios("requirements")
