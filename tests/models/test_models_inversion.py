@@ -161,3 +161,33 @@ def test_inversion_hybrid_reports_its_backbones_state(paper):
                                   back.drop(columns="glucose_mgdl"))
     np.testing.assert_allclose(state["glucose_mgdl"], m.predict(test))
     assert not np.allclose(state["glucose_mgdl"], back["glucose_mgdl"])  # the GP corrects
+
+
+def test_the_variance_floor_follows_the_declared_adc_bits():
+    # the data's declared bits (the scenario's, which averaging raises) set the floor
+    from nirglucose.models._inversion_solver import residual_var_floor
+
+    ov = {"hardware.adc_bits": 16, "device.monitor_photodiode": True}
+    train = ng.simulate("physical", 20, 3, seed=1, overrides=ov)
+    est = PhysicsInversion(n_em=2).fit(train)
+    assert est.schema_.adc_bits == 16
+    assert est._var_floor() == residual_var_floor(16) == 2e-8 / 256
+    twelve = PhysicsInversion(n_em=2).fit(ng.simulate("physical", 20, 3, seed=1))
+    assert twelve._var_floor() == 2e-8  # 12-bit results stay byte-identical
+
+
+def test_an_ill_conditioned_residual_covariance_still_whitens():
+    # residuals of about 1e-4 in two directions of four (the modes absorb the rest) and
+    # a 24-bit quantisation floor (2e-8 / 4^12) in the others: the inverse's Cholesky
+    # factor fails in floating point, the eigen-decomposition does not
+    from nirglucose.models._inversion_solver import residual_var_floor
+
+    est = PhysicsInversion(n_em=2).fit(ng.simulate("physical", 20, 3, seed=1))
+    floor = residual_var_floor(24)
+    a = np.random.default_rng(0).standard_normal((4, 2)) * 1e-2
+    est.noise_cov_ = a @ a.T + floor * np.eye(4)
+    est._var_floor = lambda: floor
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.cholesky(np.linalg.inv(est.noise_cov_))
+    r = est._root_w()
+    np.testing.assert_allclose(r @ est.noise_cov_ @ r.T, np.eye(4), atol=1e-4)  # cond ~1e11

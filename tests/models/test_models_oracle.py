@@ -110,3 +110,24 @@ def test_save_load(paper, tmp_path):
     back = load_model(path)
     assert isinstance(back, Oracle)
     np.testing.assert_array_equal(back.predict(test), o.predict(test))
+
+
+def test_the_variance_floor_follows_the_datas_adc_bits(monkeypatch):
+    # a quiet design (monitor photodiode, 16-bit ADC) at published magnitudes: the
+    # residual noise is far below a 12-bit code's quantisation (2e-8 in ln units), and
+    # a floor fixed at 12 bits would drown it; the floor of 16 bits is 2e-8 / 4^4
+    import nirglucose.models.oracle as oracle_module
+    from nirglucose.models._inversion_solver import VAR_FLOOR_12BIT, residual_var_floor
+
+    assert residual_var_floor(12) == VAR_FLOOR_12BIT == 2e-8  # 12-bit results unchanged
+    assert residual_var_floor(16) == 2e-8 / 256 and residual_var_floor(10) == 2e-8 * 16
+    ov = {"hardware.adc_bits": 16, "device.monitor_photodiode": True}
+    train = ng.simulate("physical", 30, 3, seed=1, overrides=ov)
+    test = ng.simulate("physical", 15, 3, seed=2, overrides=ov)
+    y = test.frame["glucose_mgdl"].to_numpy()
+    o = Oracle().fit(train)
+    assert np.all(np.diag(o.noise_cov_) < 1e-9)  # the residual, not the 12-bit floor
+    quiet = _rmse(o.predict(test), y)
+    monkeypatch.setattr(oracle_module, "residual_var_floor", lambda bits: VAR_FLOOR_12BIT)
+    fixed = _rmse(Oracle().fit(train).predict(test), y)
+    assert quiet < 0.8 * fixed  # measured: 0.54 against 0.83 mg/dL

@@ -13,7 +13,9 @@ from ._common import UserError, _check_out_file, _say
 
 @app.command()
 def report(
-    results: Annotated[Path, typer.Argument(help="Results directory of `nirglucose benchmark`.")],
+    results: Annotated[Path, typer.Argument(
+        help="Results directory of `nirglucose benchmark` (or of `wear-benchmark`, `twin`, "
+        "`sweep --study requirements`).")],
     out: Annotated[
         Path | None, typer.Option(help="HTML file to write (default: RESULTS/report.html).")
     ] = None,
@@ -34,7 +36,11 @@ def report(
     if figures is not None and figures.exists() and not figures.is_dir():
         raise UserError(f"--figures {str(figures)!r} is a file; give a directory for the "
                         "PNG and SVG figures")
+    from ..report.requirements import is_requirements_dir
     from ..report.twin import build_twin_report, is_twin_dir
+
+    if results.is_dir() and is_requirements_dir(results):  # sweep --study requirements
+        return _requirements_page(results, out, figures, sweep)
 
     if results.is_dir() and is_twin_dir(results) and not sweep:  # a device's twin
         if out is not None:
@@ -60,6 +66,21 @@ def report(
             raise UserError(f"--sweep {str(d)!r} holds no sweep.csv; run `nirglucose sweep` first")
     path = build_report(results, out if out is not None else results / "report.html",
                         figures_dir=figures, sweep_dirs=sweep or [])
+    _say(f"wrote {path}", err=False)
+
+
+def _requirements_page(results: Path, out: Path | None, figures: Path | None,
+                       sweep: list[Path] | None) -> None:
+    """The page of a ``sweep --study requirements`` directory."""
+    from ..report.requirements import build_requirements_report
+
+    if sweep:
+        raise UserError("--sweep adds to a benchmark report, not to the requirements "
+                        "study's page")
+    if out is not None:
+        _check_out_file(out)
+    path = build_requirements_report(
+        results, out if out is not None else results / "report.html", figures_dir=figures)
     _say(f"wrote {path}", err=False)
 
 

@@ -33,7 +33,8 @@ import pandas as pd
 from ..exceptions import DataError
 from .columns import CODE_COLUMN_RE, DEFAULT_ADC_BITS
 
-__all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits"]
+__all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits",
+           "quantisation_variance_ln"]
 
 #: Codes at or below this fit a 10-bit ADC and every larger one: the resolution is
 #: ambiguous and must be declared. [ADC code]
@@ -45,6 +46,41 @@ def check_adc_bits(bits: Any) -> int:
     if isinstance(bits, bool) or not isinstance(bits, int | np.integer) or not 1 <= bits <= 32:
         raise DataError(f"adc_bits must be an integer from 1 to 32, got {bits!r}")
     return int(bits)
+
+
+def quantisation_variance_ln(adc_bits: Any) -> float:
+    """Variance of a mid-scale code's quantisation error in ln(code): LSB^2 / 12.
+
+    A uniform quantiser of step q adds an error uniform on [-q/2, q/2], of variance
+    q^2 / 12 [1]_. At mid-scale (code 2^(bits-1)) one step is 1 / 2^(bits-1) of the
+    code, so in ln(code) the variance is (1 / 2^(bits-1))^2 / 12; each extra bit --
+    or each fourfold of readings averaged with noise that dithers them -- quarters it.
+
+    Parameters
+    ----------
+    adc_bits : int
+        ADC resolution (:func:`check_adc_bits`). [bit]
+
+    Returns
+    -------
+    float
+        The variance. [-] (ln units squared)
+
+    References
+    ----------
+    .. [1] W. R. Bennett, "Spectra of quantized signals", Bell Syst. Tech. J. 27,
+       446-472 (1948); B. Widrow, I. Kollár, "Quantization Noise", Cambridge University
+       Press (2008), ch. 4.
+
+    Examples
+    --------
+    >>> f"{quantisation_variance_ln(12):.4g}"
+    '1.987e-08'
+    >>> quantisation_variance_ln(12) / quantisation_variance_ln(14)
+    16.0
+    """
+    step = 0.5 ** (check_adc_bits(adc_bits) - 1)  # [1]: q at mid-scale, in ln(code)
+    return float(step * step / 12.0)
 
 
 def _max_code(frame: pd.DataFrame) -> float:

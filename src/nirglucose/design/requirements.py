@@ -172,7 +172,8 @@ def _pool(wavelengths_nm: Sequence[float]) -> tuple[list[dict[str, float]], list
 
 
 def candidate_records(preset: str = REQUIREMENTS_PRESET, detector: str | None = None,
-                      wavelengths_nm: Sequence[float] = GENERIC_WAVELENGTHS_NM) -> Candidates:
+                      wavelengths_nm: Sequence[float] = GENERIC_WAVELENGTHS_NM,
+                      overrides: dict[str, Any] | None = None) -> Candidates:
     """The LEDs a detector's designs choose from, at their drive power.
 
     Parameters
@@ -184,6 +185,8 @@ def candidate_records(preset: str = REQUIREMENTS_PRESET, detector: str | None = 
     wavelengths_nm : sequence of float
         Generic candidate centres besides the study's LEDs and :data:`SWIR_LED_RECORDS`.
         [nm]
+    overrides : dict, optional
+        Dotted overrides on the preset (the regime the study runs in).
 
     Returns
     -------
@@ -201,11 +204,12 @@ def candidate_records(preset: str = REQUIREMENTS_PRESET, detector: str | None = 
         caps = max_led_power_mw([r["wavelength_nm"] for r in recs])
         return Candidates(None, recs, ["study"] * len(recs),
                           np.maximum(caps, [r["power_mw"] for r in recs]), tuple(range(len(recs))))
+    base_ov = dict(overrides or {})
     peak = float(np.max(responsivity_curve(detector_part(detector))[1]))
     recs, srcs, caps = [], [], []
     for r, s, c in zip(*_pool(wavelengths_nm), strict=True):
         try:
-            cfg = resolve_config(preset, {"leds": [r], "detector": detector})
+            cfg = resolve_config(preset, {**base_ov, "leds": [r], "detector": detector})
         except ConfigError:
             continue  # blind: the band lies beyond the detector's table
         if cfg.leds.responsivity_a_per_w[0] >= MIN_RELATIVE_RESPONSIVITY * peak:
@@ -216,7 +220,8 @@ def candidate_records(preset: str = REQUIREMENTS_PRESET, detector: str | None = 
         raise ConfigError(f"detector {detector} sees none of the candidate LEDs")
     order = np.argsort([r["wavelength_nm"] for r in recs], kind="stable")
     recs, srcs, caps = ([x[i] for i in order] for x in (recs, srcs, caps))
-    rule = drive_powers_mw(preset, recs, detector, max_power_mw=float(max(caps)))
+    rule = drive_powers_mw(preset, recs, detector, max_power_mw=float(max(caps)),
+                           overrides=base_ov or None)
     powers = np.minimum(rule, caps)
     recs = [{**r, "power_mw": float(p)} for r, p in zip(recs, powers, strict=True)]
     limit = max_led_power_mw([r["wavelength_nm"] for r in recs])
@@ -260,22 +265,28 @@ class DesignEvaluator:
         Pilot states averaged by the bounds. [-]
     target_rmse_mgdl, target_mard_pct : float
         What a feasible design reaches. [mg/dL], [%]
+    overrides : dict, optional
+        Dotted overrides on the preset that every design keeps (the regime, e.g.
+        ``{"noise.water_temperature.enabled": True}``); a design's levers override them.
     """
 
     def __init__(self, preset: str, candidates: Candidates, *, n_states: int = 256,
                  target_rmse_mgdl: float = TARGET_RMSE_MGDL,
-                 target_mard_pct: float = TARGET_MARD_PCT):
+                 target_mard_pct: float = TARGET_MARD_PCT,
+                 overrides: dict[str, Any] | None = None):
         for name, v in (("target_rmse_mgdl", target_rmse_mgdl),
                         ("target_mard_pct", target_mard_pct)):
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ConfigError(f"{name} must be a positive number, got {v!r}")
         self.preset = preset
-        self.base = resolve_config(preset)
+        self.base_overrides: dict[str, Any] = dict(overrides or {})
+        self.base = resolve_config(preset, self.base_overrides)
         self.candidates = candidates
         self.n_states = check_positive_int("n_states", n_states)
         self.target_rmse_mgdl = float(target_rmse_mgdl)
         self.target_mard_pct = float(target_mard_pct)
-        g = simulate(preset, PILOT_SUBJECTS, PILOT_PER_SUBJECT, PILOT_SEED).frame["glucose_mgdl"]
+        g = simulate(preset, PILOT_SUBJECTS, PILOT_PER_SUBJECT, PILOT_SEED,
+                     overrides=self.base_overrides).frame["glucose_mgdl"]
         #: mean(1 / g) of the pilot population, for MARD. [dL/mg]
         self.mean_inverse_glucose = float(np.mean(1.0 / g.to_numpy(float)))
         self._terms: dict[tuple, DesignTerms] = {}
@@ -287,8 +298,10 @@ class DesignEvaluator:
         return replace(design, leds=tuple(range(len(self.candidates.records))))
 
     def overrides(self, design: Design) -> dict[str, Any]:
-        """The design's dotted overrides of the preset (one reading)."""
-        out = design.overrides(self.base, self.candidates.records, self.candidates.caps_mw)
+        """The design's dotted overrides of the preset (one reading), the evaluator's own
+        overrides included."""
+        out = {**self.base_overrides,
+               **design.overrides(self.base, self.candidates.records, self.candidates.caps_mw)}
         if self.candidates.detector is not None:
             out["detector"] = self.candidates.detector
         return out

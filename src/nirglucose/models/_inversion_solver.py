@@ -26,12 +26,40 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dataset.adc import quantisation_variance_ln
 from ..simulation.forward_model import NUISANCES, PHYSICAL_BOUNDS, ForwardModel
 
 __all__ = [
     "NUISANCES", "PHYSICAL_BOUNDS", "ForwardModel", "map_estimate", "posterior_variance",
-    "model_jacobian",
+    "model_jacobian", "VAR_FLOOR_12BIT", "residual_var_floor",
 ]
+
+#: The residual-variance floor at 12 bits of the privileged estimators (the oracle and
+#: physics-inversion): a 12-bit code's quantisation at mid-scale, (1/2048)^2 / 12 =
+#: 1.99e-8 (:func:`~nirglucose.dataset.adc.quantisation_variance_ln`), as first set,
+#: rounded to 2e-8 -- kept so that every 12-bit result stays byte-identical. [-]
+VAR_FLOOR_12BIT = 2e-8
+
+
+def residual_var_floor(adc_bits: int) -> float:
+    """The privileged estimators' residual-variance floor at ``adc_bits``. [-]
+
+    :data:`VAR_FLOOR_12BIT` scaled as the quantisation variance LSB^2 / 12 scales
+    (:func:`~nirglucose.dataset.adc.quantisation_variance_ln`, Bennett 1948): a quarter
+    per bit above 12, four times per bit below. The bits are the data's declared ones,
+    which the averaging emulation raises by log4 of the readings averaged
+    (:func:`~nirglucose.design.averaging.averaging_overrides`), so an estimator can use
+    the resolution a quieter design has. The ratio of two powers of two is exact: at
+    12 bits the floor is 2e-8 to the last bit.
+
+    Examples
+    --------
+    >>> residual_var_floor(12)
+    2e-08
+    >>> residual_var_floor(14)
+    1.25e-09
+    """
+    return VAR_FLOOR_12BIT * (quantisation_variance_ln(adc_bits) / quantisation_variance_ln(12))
 
 #: Forward-difference step of the Jacobian, in prior standard deviations. [-]
 _STEP_SD = 1e-4

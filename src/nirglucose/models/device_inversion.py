@@ -85,6 +85,7 @@ from sklearn.model_selection import GroupKFold
 
 from ..config import ScenarioConfig
 from ..dataset import Dataset
+from ..dataset.adc import quantisation_variance_ln
 from ..exceptions import DataError
 from ._inversion_solver import NUISANCES, ForwardModel
 from ._params import Integral, Interval, IntervalArray, Real
@@ -416,7 +417,7 @@ glucose_mean_, glucose_var_
     def _var_floor(self) -> float:
         """A code's quantisation variance at mid-scale of the device's ADC, in
         ln(code): (1 / 2^(bits - 1))^2 / 12. [-]"""
-        return float((0.5 ** (self.schema_.adc_bits - 1)) ** 2 / 12.0)
+        return quantisation_variance_ln(self.schema_.adc_bits)
 
     def _calibrate(self, obs: np.ndarray, model: np.ndarray, y: np.ndarray,
                    edf: float = 0.0) -> None:

@@ -65,6 +65,7 @@ from ._inversion_solver import (
     map_estimate,
     model_jacobian,
     posterior_variance,
+    residual_var_floor,
 )
 from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from .registry import register
@@ -106,9 +107,6 @@ START_SD = {
 _SD_FLOOR = 1e-3
 #: Ridge penalty of the prior-mean correction, on standardised physiology. [-]
 _PRIOR_RIDGE = 1.0
-#: Variance floor added to the residual covariance's diagonal (a 12-bit code's
-#: quantisation at mid-scale, (1/2048)^2 / 12, as the oracle). [-]
-_VAR_FLOOR = 2e-8
 _LN10 = np.log(10.0)
 #: Over-relaxation of the widths' EM update in log space (1: plain EM). [-]
 _OVERRELAX = 2.0
@@ -329,8 +327,10 @@ class ForwardModelInversion(
         raise NotImplementedError
 
     def _var_floor(self) -> float:
-        """Variance added to the residual covariance's diagonal. [-]"""
-        return _VAR_FLOOR
+        """Variance added to the residual covariance's diagonal: the quantisation floor
+        of the data's declared ADC bits (:func:`~nirglucose.models._inversion_solver.
+        residual_var_floor`; 2e-8 at 12 bits). [-]"""
+        return residual_var_floor(self.schema_.adc_bits)
 
     def _design(self, phys: np.ndarray) -> np.ndarray:
         """(n, 1 + m): a constant and the standardised physiology."""
@@ -353,7 +353,19 @@ class ForwardModelInversion(
         return mean, np.broadcast_to(sd, mean.shape).copy()
 
     def _root_w(self) -> np.ndarray:
-        return np.linalg.cholesky(np.linalg.inv(self.noise_cov_)).T
+        """R with R^T R = S^-1 (S the residual covariance): the whitening of the misfit.
+
+        The Cholesky factor of S^-1 where it exists in floating point; where S is so
+        ill-conditioned that it does not (residuals far above the quantisation floor
+        along some directions and at it along others: a floor of many ADC bits), S's
+        eigen-decomposition gives the same R^T R, its eigenvalues held at the floor.
+        """
+        try:
+            return np.linalg.cholesky(np.linalg.inv(self.noise_cov_)).T
+        except np.linalg.LinAlgError:
+            lam, vec = np.linalg.eigh(self.noise_cov_)
+            lam = np.maximum(lam, self._var_floor())
+            return (vec / np.sqrt(lam)).T
 
     # ------------------------------------------------------------------ fit
 

@@ -50,6 +50,7 @@ from ..dataset.schema import DeviceSchema, check_fit_size, check_reference_gluco
 from ..exceptions import DataError
 from ..fitted import require_fitted
 from ..simulation.simulator import detected_fraction_given_glucose, scenario_tables
+from ._inversion_solver import residual_var_floor
 from ._json_io import JsonModelMixin
 from ._params import Integral, Interval, Real, ValidatedParamsMixin
 from .registry import register
@@ -70,9 +71,6 @@ ORACLE_TRUE_COLUMNS = (
 GLUCOSE_SEARCH_RANGE_MGDL = (1.0, 1500.0)
 #: Forward-difference step of the Jacobian. [mg/dL]
 _STEP_MGDL = 0.5
-#: Variance floor added to the residual covariance's diagonal (a 12-bit code's
-#: quantisation at mid-scale, (1/2048)^2 / 12). [-]
-_VAR_FLOOR = 2e-8
 
 
 def _config_and_frame(X, fitted: ScenarioConfig | None) -> tuple[ScenarioConfig, pd.DataFrame]:
@@ -252,7 +250,9 @@ class Oracle(ValidatedParamsMixin, JsonModelMixin, RegressorMixin, BaseEstimator
         n_led = resid.shape[1]
         self.offset_ = resid.mean(axis=0)
         cov = np.cov(resid, rowvar=False) if len(y) > 1 else np.zeros((n_led, n_led))
-        self.noise_cov_ = np.atleast_2d(cov) + _VAR_FLOOR * np.eye(n_led)
+        # floor: the quantisation of the scenario's ADC (averaging raises its bits)
+        floor = residual_var_floor(int(cfg.hardware.adc_bits))
+        self.noise_cov_ = np.atleast_2d(cov) + floor * np.eye(n_led)
         self.prior_mean_ = float(y.mean())
         self.prior_var_ = float(max(y.var(ddof=1) if len(y) > 1 else 0.0, 1.0))
         self.config_ = cfg

@@ -166,3 +166,29 @@ def test_the_studys_own_device_line_names_the_tissue_knowledge_it_needs():
     assert row["detector"] == "study" and row["n_leds"] <= 4
     if row["reached"]:  # four LEDs cannot infer eight nuisances: it must be told some
         assert "exact (no instrument)" in line or "no published instrument" in line
+
+
+def test_the_studys_overrides_reach_every_design_the_bound_and_the_answer(ev):
+    # water absorbing at the skin temperature (off in `physical`): one more nuisance in
+    # every design's bound, and the regime named in the answer line
+    on = {"noise.water_temperature.enabled": True}
+    c = candidate_records("physical", "BPW34", SMALL_NM, overrides=on)
+    ev_on = DesignEvaluator("physical", c, n_states=48, overrides=on, **TARGET)
+    d = ev_on.study()
+    assert ev_on.overrides(d)["noise.water_temperature.enabled"] is True
+    assert ev_on.terms(d).jacobian.shape[-1] == ev.terms(d).jacobian.shape[-1] + 1
+    res = requirements_study(detectors=("BPW34",), wavelengths_nm=(800.0, 1000.0), n_states=32,
+                             confirm=False, overrides=on, **TARGET)
+    (line,) = res.answer_lines()
+    assert line.startswith("[physical, glucose signal gain 1, "
+                           "noise.water_temperature.enabled=True] Si (BPW34): ")
+    assert res.meta["overrides"] == on
+    with pytest.raises(ConfigError, match="overrides"):
+        requirements_study(detectors=("BPW34",), confirm=False, overrides={"noise.nope": 1})
+
+
+def test_run_sweep_names_the_requirements_studys_own_entry_point():
+    from nirglucose.evaluation.sweep.run import study_scenarios
+
+    with pytest.raises(ConfigError, match="requirements_study"):
+        study_scenarios("requirements")

@@ -49,7 +49,8 @@ from ...design.requirements import (
 )
 from ...design.search import SEARCH_DETECTORS
 from ...design.state_bound import state_bound
-from ...exceptions import ConfigError, check_positive_int
+from ...exceptions import ConfigError, DataError, check_positive_int
+from ...models.registry import available_models, privileged_knowledge
 from .confirmation import CONFIRM_MODELS, confirm_design
 
 __all__ = ["REQUIREMENTS_FILES", "RequirementsResult", "requirements_study"]
@@ -59,8 +60,8 @@ REQUIREMENTS_FILES = ("minimal_designs.csv", "averaging_curve.csv", "lever_gains
                       "confirmation.csv", "search_trace.csv", "levers.csv",
                       "requirements.json")
 #: The reference check of the confirmation: the preset ``paper``'s five capabilities
-#: (exact physiology) at published magnitudes, the 12-bit design where the privileged
-#: estimators' noise floor does not bind (the issue's table's row).
+#: (exact physiology) at published magnitudes, 12 bits and one reading (the issue's
+#: table's row).
 _CHECK = "check: paper's five capabilities, exact physiology"
 #: Name of the study's own photodiode with its four LEDs (``detectors`` entry None).
 STUDY = "study"
@@ -105,6 +106,30 @@ class RequirementsResult:
         return [_answer(row, self.meta, self.confirmation)
                 for _, row in self.minimal_designs.iterrows()]
 
+    @classmethod
+    def from_dir(cls, path: str | Path) -> RequirementsResult:
+        """Read back what :meth:`to_dir` wrote (the answer lines are recomputed from the
+        tables and meta, and equal the saved ones).
+
+        Raises
+        ------
+        DataError
+            A file of :data:`REQUIREMENTS_FILES` is missing or unreadable.
+        """
+        d = Path(path)
+        missing = [f for f in REQUIREMENTS_FILES if not (d / f).is_file()]
+        if missing:
+            raise DataError(f"{str(d)!r} is not a requirements study's output: missing "
+                            f"{', '.join(missing)} (run `nirglucose sweep --study "
+                            "requirements --out DIR`)")
+        try:
+            doc = json.loads((d / "requirements.json").read_text(encoding="utf-8"))
+            frames = {f[:-4]: _read_csv(d / f) for f in REQUIREMENTS_FILES if f.endswith(".csv")}
+            return cls(**frames, meta=dict(doc["meta"]))
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise DataError(f"{str(d)!r}: cannot read the requirements study's files "
+                            f"({exc}); run the study again") from None
+
     def to_dir(self, path: str | Path) -> Path:
         """Write every table and ``requirements.json`` (answer lines and meta) atomically
         into ``path`` (created if missing)."""
@@ -121,6 +146,19 @@ class RequirementsResult:
         atomic_write(out / "requirements.json", lambda tmp: Path(tmp).write_text(
             json.dumps(doc, indent=2, sort_keys=True, default=_jsonable)))
         return out
+
+
+def _read_csv(path: Path) -> pd.DataFrame:
+    """A table of :meth:`RequirementsResult.to_dir`; text columns stay text (an empty
+    one, e.g. no capability, is '' as written, not NaN)."""
+    try:
+        frame = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    except pd.errors.EmptyDataError:
+        return pd.DataFrame()
+    for col in ("capabilities", "leds_nm", "led_sources"):
+        if col in frame:
+            frame[col] = frame[col].fillna("").astype(str)
+    return frame
 
 
 def _jsonable(x: Any) -> Any:
@@ -160,13 +198,13 @@ def _confirmed_text(conf: pd.DataFrame, design: str) -> str:
     out = []
     for model, bound, what in (
             ("oracle", "bound_oracle_bound_rmse_mgdl", "oracle-conditioned bound"),
-            ("physics-inversion", "bound_state_at_estimator_floor_rmse_mgdl",
-             "per-state bound at its 12-bit noise floor")):
+            ("physics-inversion", "bound_total_rmse_mgdl", "per-state bound")):
         r = c[c["model"] == model]
         if not r.empty:
             r = r.iloc[0]
-            out.append(f"{model} {_ci(r)} ({what} {r[bound]:.2g})")
-    dep = c[~c["model"].isin(["oracle", "physics-inversion"])]
+            out.append(f"{model} (privileged reference) {_ci(r)} ({what} {r[bound]:.2g})")
+    dep = c[[privileged_knowledge(m) is None if m in available_models() else True
+             for m in c["model"]]]
     if not dep.empty:
         r = dep.loc[dep["rmse_mgdl"].idxmin()]
         out.append(f"best deployable ({r.model}) {_ci(r)}")
@@ -174,7 +212,8 @@ def _confirmed_text(conf: pd.DataFrame, design: str) -> str:
 
 
 def _answer(row: pd.Series, meta: dict[str, Any], conf: pd.DataFrame) -> str:
-    regime = f"[{meta['preset']}, glucose signal gain {meta['glucose_signal_gain']:g}]"
+    extra = "".join(f", {k}={v}" for k, v in sorted(meta.get("overrides", {}).items()))
+    regime = f"[{meta['preset']}, glucose signal gain {meta['glucose_signal_gain']:g}{extra}]"
     target = f"{meta['target_rmse_mgdl']:g} mg/dL RMSE and MARD {meta['target_mard_pct']:g} %"
     caps = [c.replace("_", " ") for c in str(row["capabilities"]).split(",") if c]
     design = (f"{row['n_leds']} LEDs ({row['leds_nm']} nm), "
@@ -256,13 +295,13 @@ def _detector_part(ev: DesignEvaluator, relax_order) -> dict[str, Any]:
     return {"row": row, "gains": gains, "curve": curve, "trace": steps, "design": named}
 
 
-def _check_overrides() -> dict[str, Any]:
-    return {key: on for key, on, _ in DEVICE_CAPABILITIES.values()}
+def _check_overrides(ev: DesignEvaluator) -> dict[str, Any]:
+    return {**ev.base_overrides, **{key: on for key, on, _ in DEVICE_CAPABILITIES.values()}}
 
 
 def _check_row(ev: DesignEvaluator) -> dict[str, Any]:
     """Errors of the reference check (:data:`_CHECK`), as :class:`Evaluation` fields."""
-    ov = _check_overrides()
+    ov = _check_overrides(ev)
     terms = design_terms(ev.preset, overrides=ov, n_states=ev.n_states)
     state = state_bound(terms)
     return {"state_rmse_mgdl": state, "lag_rmse_mgdl": 0.0, "total_rmse_mgdl": state,
@@ -270,14 +309,12 @@ def _check_row(ev: DesignEvaluator) -> dict[str, Any]:
             "vt_device_rmse_mgdl": design_bound(ev.preset, overrides=ov,
                                                 n_states=ev.n_states).rmse_mgdl,
             "oracle_bound_rmse_mgdl": terms.bound(condition="oracle").rmse_mgdl,
-            "n_readings": 1, "window_s": 0.0, "state_at_estimator_floor_rmse_mgdl": state}
+            "n_readings": 1, "window_s": 0.0}
 
 
 def _bounds(ev: DesignEvaluator, d: Design) -> dict[str, Any]:
-    """A named design's errors, and its per-state bound at the privileged estimators'
-    noise floor (12 bits, one reading: :mod:`~nirglucose.evaluation.sweep.confirmation`)."""
-    floor = ev.evaluate(d.with_level("adc_bits", 0), window_s=0.0).state_rmse_mgdl
-    return {**vars(ev.evaluate(d)), "state_at_estimator_floor_rmse_mgdl": floor}
+    """A named design's errors (:class:`~nirglucose.design.requirements.Evaluation`)."""
+    return dict(vars(ev.evaluate(d)))
 
 
 def _confirmations(preset: str, named: list[tuple[str, dict, dict]], opts: dict
@@ -306,6 +343,9 @@ def requirements_study(
     confirm_subjects: int = 60,
     confirm_per_subject: int = 3,
     confirm_models: Sequence[str] = CONFIRM_MODELS,
+    confirm_folds: int = 5,
+    confirm_resamples: int = 500,
+    overrides: dict[str, Any] | None = None,
     seed: int = 0,
     jobs: int = 1,
 ) -> RequirementsResult:
@@ -335,6 +375,14 @@ def requirements_study(
         Size of each confirming simulation. [-]
     confirm_models : sequence of str
         Models scored on each confirmed design.
+    confirm_folds, confirm_resamples : int
+        Folds of the confirmation's subject-grouped cross-validation, and its
+        cluster-bootstrap resamples per 95 % interval. [-]
+    overrides : dict, optional
+        Dotted overrides on the preset that every design keeps, e.g.
+        ``{"noise.water_temperature.enabled": True}`` (water absorbing at the skin
+        temperature, a published confounder the preset leaves off); recorded in
+        ``meta["overrides"]`` and in each answer line's regime.
     seed : int
         Seed of the confirming simulations and benchmarks.
     jobs : int
@@ -351,20 +399,30 @@ def requirements_study(
     for det in detectors:
         if det is not None:
             detector_part(det)
-    check_positive_int("confirm_subjects", confirm_subjects)
-    base = resolve_config(preset)
+    for name, v in (("confirm_subjects", confirm_subjects),
+                    ("confirm_per_subject", confirm_per_subject),
+                    ("confirm_folds", confirm_folds), ("confirm_resamples", confirm_resamples)):
+        check_positive_int(name, v)
+    overrides = dict(overrides or {})
+    try:
+        base = resolve_config(preset, overrides)
+    except ConfigError as exc:
+        raise ConfigError(f"the study's overrides: {exc}") from None
     with warnings.catch_warnings():
         # the lipid table ends at 1,598 nm: recorded once in meta["notes"]
         warnings.filterwarnings("ignore", message="lipid absorption above")
         result, timings = _run(preset, detectors, base, dict(
             target_rmse_mgdl=target_rmse_mgdl, target_mard_pct=target_mard_pct,
-            n_states=n_states), wavelengths_nm, relax_order, confirm, dict(
+            n_states=n_states, overrides=overrides), wavelengths_nm, relax_order, confirm, dict(
             n_subjects=confirm_subjects, per_subject=confirm_per_subject, seed=seed,
-            models=tuple(confirm_models), jobs=jobs))
+            models=tuple(confirm_models), n_splits=confirm_folds, n_boot=confirm_resamples,
+            jobs=jobs))
     timings["total_s"] = time.perf_counter() - t0
     result.meta.update(_meta(preset, base, detectors, target_rmse_mgdl, target_mard_pct,
                              relax_order, n_states, confirm, confirm_subjects,
                              confirm_per_subject, confirm_models, seed, timings))
+    result.meta.update(confirm_folds=int(confirm_folds),
+                       confirm_resamples=int(confirm_resamples), overrides=overrides)
     return result
 
 
@@ -372,12 +430,14 @@ def _run(preset, detectors, base, ev_opts, wavelengths_nm, relax_order, confirm,
     """The study's computation (see :func:`requirements_study`)."""
     timings: dict[str, float] = {}
     t = time.perf_counter()
-    study_ev = DesignEvaluator(preset, candidate_records(preset, None), **ev_opts)
+    ov = ev_opts["overrides"]
+    study_ev = DesignEvaluator(preset, candidate_records(preset, None, overrides=ov), **ev_opts)
     study_design = study_ev.study()
     curve = averaging_rows(study_ev, study_design, "study's device")
     parts, candidates = [], {}
     for det in detectors:
-        ev = DesignEvaluator(preset, candidate_records(preset, det, wavelengths_nm), **ev_opts)
+        ev = DesignEvaluator(preset, candidate_records(preset, det, wavelengths_nm, ov),
+                             **ev_opts)
         parts.append((ev, _detector_part(ev, relax_order)))
         candidates[_label(det)[0]] = [{**r, "source": s} for r, s in
                            zip(ev.candidates.records, ev.candidates.sources, strict=True)]
@@ -387,7 +447,7 @@ def _run(preset, detectors, base, ev_opts, wavelengths_nm, relax_order, confirm,
     named = [("study's device", study_ev.overrides(study_design), _bounds(study_ev, study_design))]
     named += [(p["row"]["design"], ev.overrides(p["design"]), _bounds(ev, p["design"]))
               for ev, p in parts]
-    named.append((_CHECK, _check_overrides(), _check_row(study_ev)))
+    named.append((_CHECK, _check_overrides(study_ev), _check_row(study_ev)))
     t = time.perf_counter()
     conf = _confirmations(preset, named, conf_opts) if confirm else pd.DataFrame(
         columns=["design", "model", "rmse_mgdl", "rmse_ci_low", "rmse_ci_high", "mard_pct"])
@@ -422,9 +482,13 @@ def _meta(preset, base, detectors, target_rmse, target_mard, relax_order, n_stat
             "the van Trees device bound is reported beside it but credits designs with "
             "information their states do not have",
             "the bounds assume the device's forward model is exact: no model error",
-            "the oracle and physics-inversion add a 12-bit quantisation floor (2e-8) to their "
-            "noise covariance, so on designs quieter than a 12-bit code they stay above the "
-            "bounds (design/confirmation.py)",
+            "the oracle and physics-inversion add the quantisation of the data's ADC bits "
+            "(LSB^2/12; the averaging emulation raises the bits) to their noise covariance "
+            "(evaluation/sweep/confirmation.py); they are privileged references, not "
+            "device estimators",
+            "the confirmation emulates N readings averaged with floor(log4 N) more ADC bits, "
+            "so a simulated design's quantisation falls by at most N: it is noisier than the "
+            "design the bound describes (docs/user_guide/requirements.md, Limits)",
             "lipid absorption is held at its 1,598 nm value above it (optics tables): candidates "
             "above 1,600 nm underestimate the 1,720 nm fat band",
         ],

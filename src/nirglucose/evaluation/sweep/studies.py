@@ -327,6 +327,10 @@ def study_scenarios(
     >>> [s.name for s in study_scenarios("ablation")][:3]
     ['all-on', 'all-off', 'off:led_thermal_drift']
     """
+    if study == "requirements":
+        raise ConfigError("the requirements study is a search, not a grid of scenarios: call "
+                          "nirglucose.evaluation.sweep.requirements.requirements_study (command "
+                          "line: nirglucose sweep --study requirements)")
     if study not in STUDIES:
         raise ConfigError(unknown_name("study", study, STUDIES))
     if study in STUDY_GRIDS:
@@ -549,6 +553,10 @@ def resolve_scenarios(
     preset = "paper" if preset is None else preset
     if study is None:
         return grid_scenarios(vary or {}, preset=preset, base_overrides=base), preset
+    if study == "requirements":
+        raise ConfigError("the requirements study is a search, not a grid of scenarios: call "
+                          "nirglucose.evaluation.sweep.requirements.requirements_study (command "
+                          "line: nirglucose sweep --study requirements)")
     if study not in STUDIES:
         raise ConfigError(unknown_name("study", study, STUDIES))
     key = STUDY_GRIDS.get(study, (None,))[0]

@@ -29,6 +29,8 @@ NOISE_LAYER: Final[dict[str, str]] = {
     "ambient_light": "environment",
     "humidity_coupling": "environment",
     "pulsation": "physiology",
+    # water absorbs at the skin temperature (Röttgers et al. 2014): the tissue's own state
+    "water_temperature": "physiology",
     "contact_pressure": "contact",
     "led_thermal_drift": "hardware",
     "led_ageing": "hardware",
