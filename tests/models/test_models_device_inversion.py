@@ -12,6 +12,7 @@ import nirglucose as ng
 from nirglucose.config import resolve_config
 from nirglucose.config.parts import LED_PARTS
 from nirglucose.dataset import load_dataset
+from nirglucose.dataset.schema import DeviceSchema
 from nirglucose.exceptions import ConfigError, DataError
 from nirglucose.models import load_model, make_model
 from nirglucose.models._inversion_solver import NUISANCES, ForwardModel
@@ -26,7 +27,6 @@ from nirglucose.models.device_inversion import (
 )
 from nirglucose.models.inversion import PhysicsInversion, prior_start
 from nirglucose.models.registry import privileged_knowledge
-from nirglucose.dataset.schema import DeviceSchema
 
 FAST = {"n_em": 3}
 

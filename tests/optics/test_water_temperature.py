@@ -13,8 +13,8 @@ from nirglucose.exceptions import ConfigError
 from nirglucose.optics import absorption, tissue
 from nirglucose.optics.kernels.band_kernel import band_detected_fraction
 from nirglucose.simulation.simulator import (
-    scenario_tables,
     detected_fraction_given_glucose,
+    scenario_tables,
     water_temperature_delta_c,
 )
 
