@@ -39,7 +39,8 @@ import pandas as pd
 from ...config.presets import DEVICE_CAPABILITIES
 from ...dataset.small_data import significance_withheld
 from ...metrics.resampling import compare_models
-from ...models.labels import LAMBDA_ROW, ablation_base, label
+from ...models.labels import LAMBDA_ROW, ablation_base, knows, label, row_privilege
+from ...models.physics_effect import physics_verdict
 from ..reference import STUDY_ORDER, STUDY_TABLE
 from .drop_one import drop_one_findings
 from .finding import Finding, Value
@@ -55,6 +56,10 @@ __all__ = [
     "distance_table",
     "no_skill_comparisons",
     "physics_verdicts",
+    "privilege",
+    "display_name",
+    "term_verdicts",
+    "physics_answer",
     "study_claims",
     "preset_separation",
     "subject_floor",
@@ -93,6 +98,8 @@ class RunData:
         ``comparisons.csv``, ``ablation.csv``.
     drop_one : pandas.DataFrame or None
         ``drop_one.csv`` (the drop-one-LED refits).
+    histories : mapping or None
+        ``histories.json``.
     """
 
     preset: str
@@ -103,6 +110,11 @@ class RunData:
     ablation: pd.DataFrame | None = None
     no_skill: pd.DataFrame | None = field(default=None, repr=False)
     drop_one: pd.DataFrame | None = None
+    #: ``histories.json`` (model -> per-epoch rows), for the physics terms' verdicts.
+    histories: Mapping[str, Any] | None = field(default=None, repr=False)
+    #: The competitors against the best deployable one (computed when the run's own
+    #: ``vs_best`` family was ranked with a privileged row as the best).
+    vs_best: pd.DataFrame | None = field(default=None, repr=False)
 
     @property
     def m(self) -> pd.DataFrame:
@@ -115,8 +127,48 @@ class RunData:
                      (f"{self.preset}/metrics.json:{model}:{column}",), **kw)
 
 
-def _is_competitor(model: str) -> bool:
-    return model not in (ORACLE, NO_SKILL) and ablation_base(model) is None
+def privilege(run: RunData | None, model: str) -> str | None:
+    """What ``model`` knows beyond the measured columns on this run (None: deployable).
+
+    The ``privileged`` column of ``metrics.json`` where the run wrote one, else the
+    registry's declaration (:func:`~nirglucose.models.labels.row_privilege`); the
+    oracle is always privileged.
+    """
+    if run is not None and "privileged" in run.metrics.columns:
+        m = run.m
+        if model in m.index:
+            v = m.at[model, "privileged"]
+            if isinstance(v, str) and v.strip():
+                return v
+            if model != ORACLE and row_privilege(model) is None:
+                return None
+    got = row_privilege(model)
+    if got is None and model == ORACLE:
+        return "true nuisances (true_* columns)"
+    return got
+
+
+def _is_competitor(model: str, run: RunData | None = None) -> bool:
+    """A deployable estimator's own row: not a reference, not an ablation, not privileged."""
+    return (model not in (ORACLE, NO_SKILL) and ablation_base(model) is None
+            and privilege(run, model) is None)
+
+
+def _is_reference(model: str, run: RunData | None = None) -> bool:
+    """A privileged estimator's own row (the oracle included): a reference, never best."""
+    return ablation_base(model) is None and model != NO_SKILL and privilege(run, model) is not None
+
+
+def display_name(run: RunData, model: str) -> str:
+    """A model's label as the findings write it: ``physics off`` where its tuned λ is 0,
+    ``reference (knows …)`` where it is privileged."""
+    name = label(model)
+    if _lambda(run, model) == 0.0 and ablation_base(model) is None:
+        name += " (physics off: tuned λ = 0)"
+    priv = privilege(run, model)
+    if priv is not None and ablation_base(model) is None:
+        name += f" (reference, {knows(priv)})"
+    return name
 
 
 def _ref_anchor(preset: str) -> str:
@@ -130,9 +182,10 @@ def best_and_tied(run: RunData) -> tuple[str | None, list[str], list[str], list[
     """The best model of a run and the competitors tied with it.
 
     From the ``vs_best`` family of ``comparisons.csv``: the reference model is the best
-    (lowest RMSE, the oracle excluded); a competitor is *tied* when its Holm-adjusted
-    bootstrap p is not below alpha. Reference rows (oracle, no skill) and ablation rows
-    are not competitors.
+    deployable one (lowest RMSE; the oracle and every privileged row excluded, see
+    :func:`privilege`); a competitor is *tied* when its Holm-adjusted bootstrap p is not
+    below alpha. Reference rows (oracle, no skill, privileged estimators) and ablation
+    rows are not competitors.
 
     Returns
     -------
@@ -145,18 +198,50 @@ def best_and_tied(run: RunData) -> tuple[str | None, list[str], list[str], list[
         Tied competitors whose 95 % CI of the difference excludes 0 before the Holm
         adjustment.
     """
-    c = run.comparisons
-    if c is None or not len(c) or "family" not in c or not (c["family"] == "vs_best").any():
+    vb = _vs_best(run)
+    if vb is None:
         return None, [], [], []
-    vb = c[c["family"] == "vs_best"]
     best = str(vb["reference_model"].iloc[0])
-    vb = vb[vb["model"].astype(str).map(_is_competitor)].sort_values("rmse_diff_mgdl")
+    vb = vb[vb["model"].astype(str).map(lambda m: _is_competitor(m, run))]
+    vb = vb.sort_values("rmse_diff_mgdl")
     sig = vb["significant"].astype(str).str.lower().isin(("true", "1"))
     tied = [str(m) for m in vb.loc[~sig, "model"]]
     worse = [str(m) for m in vb.loc[sig, "model"]]
     excl = (vb["ci_low"] > 0) | (vb["ci_high"] < 0)
     unadjusted = [str(m) for m in vb.loc[~sig & excl, "model"]]
     return best, tied, worse, unadjusted
+
+
+def _vs_best(run: RunData, *, n_boot: int = 2000, seed: int = 0) -> pd.DataFrame | None:
+    """The ``vs_best`` comparisons against the best *deployable* model.
+
+    The run's own family when its reference is deployable; when a privileged row was
+    ranked best (results written before the benchmark excluded them), the competitors
+    are compared here with the best deployable one, as the benchmark does
+    (:func:`~nirglucose.metrics.resampling.compare_models`, Holm over the pairs).
+    """
+    if run.vs_best is not None:
+        return run.vs_best if len(run.vs_best) else None
+    c = run.comparisons
+    if c is None or not len(c) or "family" not in c or not (c["family"] == "vs_best").any():
+        return None
+    vb = c[c["family"] == "vs_best"]
+    if _is_competitor(str(vb["reference_model"].iloc[0]), run):
+        run.vs_best = vb
+        return vb
+    comp = [str(m) for m in run.m.index if _is_competitor(str(m), run)]
+    p = run.predictions
+    comp = [m for m in comp if m in set(p["model"].astype(str))]
+    if len(comp) < 2:
+        run.vs_best = pd.DataFrame()
+        return None
+    best = min(comp, key=lambda m: float(run.m.at[m, "rmse_mgdl"]))
+    col = "scored_mgdl" if "scored_mgdl" in p.columns else "predicted_mgdl"
+    got = compare_models(p[p["model"].isin(comp)], pairs=[(m, best) for m in comp if m != best],
+                         pred_col=col, n_boot=n_boot, seed=seed)
+    got.insert(0, "family", "vs_best")
+    run.vs_best = got
+    return got
 
 
 def _best_finding(run: RunData) -> Finding | None:
@@ -166,14 +251,15 @@ def _best_finding(run: RunData) -> Finding | None:
     p = run.preset
     vals = [run.metric(best, "rmse_mgdl"), run.metric(best, "rmse_ci_low"),
             run.metric(best, "rmse_ci_high")]
-    text = f"On {p}, the lowest RMSE is {label(best)}'s, {{}} mg/dL [95 % CI {{}}, {{}}]; "
+    text = (f"On {p}, the best deployable estimator (it reads only the measured columns) is "
+            f"{display_name(run, best)}, {{}} mg/dL [95 % CI {{}}, {{}}]; ")
     if tied:
         vals.append(Value(len(tied), 0, (f"{p}/comparisons.csv:vs_best:significant=False",),
                           op="count"))
         names = []
         for t in tied:
             vals.append(run.metric(t, "rmse_mgdl"))
-            names.append(f"{label(t)} {{}}")
+            names.append(f"{display_name(run, t)} {{}}")
         text += ("{} " + ("competitor is" if len(tied) == 1 else "competitors are")
                  + " not distinguishable from it (paired cluster bootstrap "
                  "over subjects, Holm-adjusted p ≥ 0.05): " + ", ".join(names) + " mg/dL")
@@ -186,9 +272,23 @@ def _best_finding(run: RunData) -> Finding | None:
     else:
         vals.append(Value(len(worse), 0, (f"{p}/comparisons.csv:vs_best:significant=True",),
                           op="count"))
-        text += ("every other competitor ({}) is significantly worse (paired cluster "
-                 "bootstrap over subjects, Holm-adjusted).")
+        text += ("every other deployable competitor ({}) is significantly worse (paired "
+                 "cluster bootstrap over subjects, Holm-adjusted).")
     return Finding("best", p, text, tuple(vals), ANCHOR_HEADLINE)
+
+
+def _reference_finding(run: RunData) -> Finding | None:
+    """The privileged rows of a run, worded as references: what each knows, its RMSE."""
+    refs = [str(x) for x in run.m.index if _is_reference(str(x), run)]
+    if not refs:
+        return None
+    refs.sort(key=lambda m: (m != ORACLE, float(run.m.at[m, "rmse_mgdl"])))
+    vals = tuple(run.metric(m, "rmse_mgdl") for m in refs)
+    names = "; ".join(f"{label(m)} {{}} mg/dL ({knows(privilege(run, m) or '')})"
+                      for m in refs)
+    return Finding("best", run.preset, (
+        f"References on {run.preset}, not competitors: they read what no device measures, "
+        f"so none of them is ranked or called best: {names}."), vals, ANCHOR_HEADLINE)
 
 
 # --------------------------------------------------------------------------- distances
@@ -202,7 +302,7 @@ def no_skill_comparisons(run: RunData, *, n_boot: int = 2000, seed: int = 0,
     ``(model, "mean")`` on the run's scored predictions (empty without a no-skill row).
     """
     p = run.predictions
-    models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m)]
+    models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m, run)]
     if significance_withheld(int(p["subject_id"].nunique())):  # small-data policy
         return pd.DataFrame()
     if NO_SKILL not in set(p["model"]) or not models:
@@ -218,8 +318,9 @@ def distance_table(runs: Sequence[RunData]) -> pd.DataFrame:
 
     Columns: ``preset``, ``model``, ``rmse`` (Value), ``below_no_skill`` (no-skill RMSE
     minus the model's, Value), ``share_removed`` (``1 - RMSE / RMSE_no-skill``, Value),
-    ``vs_oracle`` (``rmse_vs_oracle`` of ``metrics.json``, Value) and ``beats_no_skill``
-    (True, False, or None when not tested).
+    ``vs_oracle`` (``rmse_vs_oracle`` of ``metrics.json``, Value), ``beats_no_skill``
+    (True, False, or None when not tested) and ``privileged`` (None for a deployable
+    competitor; what a privileged reference knows, its rows after the competitors').
     """
     rows = []
     for run in runs:
@@ -227,11 +328,14 @@ def distance_table(runs: Sequence[RunData]) -> pd.DataFrame:
         ns = run.no_skill if run.no_skill is not None else pd.DataFrame()
         sig = ({str(r["model"]): bool(r["significant"]) and r["rmse_diff_mgdl"] < 0
                 for _, r in ns.iterrows()} if len(ns) else {})
-        for model in [x for x in m.index if _is_competitor(str(x))]:
+        rows_of = ([x for x in m.index if _is_competitor(str(x), run)]
+                   + [x for x in m.index if _is_reference(str(x), run) and x != ORACLE])
+        for model in rows_of:
             rmse = run.metric(model, "rmse_mgdl")
             row: dict[str, Any] = {"preset": run.preset, "model": model, "rmse": rmse,
                                    "below_no_skill": None, "share_removed": None,
-                                   "vs_oracle": None, "beats_no_skill": sig.get(model)}
+                                   "vs_oracle": None, "beats_no_skill": sig.get(model),
+                                   "privileged": privilege(run, str(model))}
             if NO_SKILL in m.index:
                 ref = float(m.at[NO_SKILL, "rmse_mgdl"])
                 src = (f"{run.preset}/metrics.json:{NO_SKILL}:rmse_mgdl", rmse.sources[0])
@@ -246,13 +350,16 @@ def distance_table(runs: Sequence[RunData]) -> pd.DataFrame:
 
 def _distance_findings(run: RunData, table: pd.DataFrame) -> list[Finding]:
     t = table[table["preset"] == run.preset]
+    if len(t) and "privileged" in t.columns:
+        t = t[t["privileged"].isna()]
     if not len(t) or NO_SKILL not in run.m.index:
         return []
     p = run.preset
     share = [v for v in t["share_removed"] if v is not None]
     lo, hi = min(share, key=lambda v: v.value), max(share, key=lambda v: v.value)
     vals = [run.metric(NO_SKILL, "rmse_mgdl"), lo, hi]
-    text = (f"On {p}, no skill (the training mean) scores {{}} mg/dL; the competitors remove "
+    text = (f"On {p}, no skill (the training mean) scores {{}} mg/dL; the deployable "
+            f"competitors remove "
             f"between {{}} % ({label(_model_of(t, lo))}) and {{}} % "
             f"({label(_model_of(t, hi))}) of that error")
     beats = [b for b in t["beats_no_skill"] if b is not None]
@@ -262,8 +369,8 @@ def _distance_findings(run: RunData, table: pd.DataFrame) -> list[Finding]:
         vals.append(Value(len(beats), 0, (f"{p}/predictions.parquet:paired vs mean",),
                           op="count"))
         text += ", and {} of {} are significantly better than it (paired cluster bootstrap, Holm)"
-    if ORACLE in run.m.index:
-        vo = [v for v in t["vs_oracle"] if v is not None]
+    vo = [v for v in t["vs_oracle"] if v is not None]
+    if ORACLE in run.m.index and vo:
         vals += [run.metric(ORACLE, "rmse_mgdl", 2), min(vo, key=lambda v: v.value),
                  max(vo, key=lambda v: v.value)]
         text += ("; the oracle (true nuisances, a bound) reaches {} mg/dL, and the competitors "
@@ -320,11 +427,63 @@ def _truthy(v: Any) -> bool:
     return str(v).strip().lower() in ("true", "1", "1.0")
 
 
+#: The study's Beer–Lambert PINNs (their physics term: the residual A − εcl).
+_BEER_LAMBERT_PINNS: Final = ("original-pinn", "optimized-pinn")
+
+
+def term_verdicts(run: RunData) -> list[dict[str, Any]]:
+    """Each PINN's physics term, measured during training: does it move the fit?
+
+    :func:`~nirglucose.models.physics_effect.physics_verdict` of each model's row of
+    ``histories.json`` (its timed fit), ablation rows left out. One dict per PINN with
+    gradient probes: ``model``, ``verdict`` (``active``, ``inert``, ``off``),
+    ``reason``, ``constant`` (its training physics loss changed by less than 0.1 %)
+    and ``pull_sd`` (median displacement of the predictions, training SD).
+    """
+    out = []
+    for model, hist in (run.histories or {}).items():
+        if ablation_base(str(model)) is not None or hist is None or not len(hist):
+            continue
+        v = physics_verdict(hist)
+        if v["verdict"] == "unmeasured":
+            continue
+        out.append({"model": str(model), "verdict": v["verdict"], "reason": v["reason"],
+                    "constant": bool(v.get("physics_constant")),
+                    "pull_sd": v.get("median_pull_sd")})
+    return out
+
+
+def _term_sentence(run: RunData, v: Mapping[str, Any]) -> str:
+    """One PINN's physics term in words (no numbers: the reason carries them)."""
+    m, name = v["model"], label(v["model"])
+    if v["verdict"] == "off":
+        return f"{name}: physics off ({v['reason']})"
+    if v["verdict"] == "inert":
+        what = ("the study's Beer–Lambert term" if m in _BEER_LAMBERT_PINNS
+                else "its physics term")
+        how = "is constant during training" if v["constant"] else "does not move the fit"
+        return (f"{name}: {what} {how}, so its ablation cannot show an effect "
+                f"({v['reason']})")
+    return f"{name}: its physics term is active ({v['reason']})"
+
+
+def _term_findings(run: RunData) -> list[Finding]:
+    terms = term_verdicts(run)
+    if not terms:
+        return []
+    p = run.preset
+    text = (f"The physics terms on {p}, measured during training (gradient probes of the "
+            "timed fit, histories.json): " + "; ".join(_term_sentence(run, v) for v in terms)
+            + ".")
+    return [Finding("physics", p, text.replace("{", "{{").replace("}", "}}"), (),
+                    f"ablation-{p}")]
+
+
 def _physics_findings(run: RunData) -> list[Finding]:
     p = run.preset
     verdicts = physics_verdicts(run)
     if not verdicts:
-        return []
+        return _term_findings(run)
     off = [v for v in verdicts if not v["tested"]]
     anchor = f"ablation-{p}"
     tested = [v for v in verdicts if v["tested"]]
@@ -373,7 +532,7 @@ def _physics_findings(run: RunData) -> list[Finding]:
             + (" (the unadjusted CI excludes 0; the Holm adjustment over the PINNs does not "
                "confirm it)" if unadj else "") + "."),
             tuple(x for x in vals if x is not None), anchor))
-    return out
+    return out + _term_findings(run)
 
 
 # --------------------------------------------------------------------------- the study
@@ -421,7 +580,8 @@ def _claims_findings(run: RunData) -> list[Finding]:
         rev = cl["reversed_sig"]
         if rev:
             text += "; significantly reversed here: " + ", ".join(
-                f"the study's {label(b)} better than {label(w)}" for b, w in rev)
+                f"the study's {display_name(run, b)} better than {display_name(run, w)}"
+                for b, w in rev)
         ebl_rows = cl["pairs"][cl["pairs"]["reference_model"] == "ebl"]
         if len(ebl_rows):
             n_sig = int((ebl_rows["significant"].map(_truthy)
@@ -517,7 +677,7 @@ def subject_floor(runs: Sequence[RunData]) -> Finding | None:
         p = r.predictions
         if "subject_id" not in p.columns or not len(p):
             continue
-        keep = p[p["model"].astype(str).map(_is_competitor)]
+        keep = p[p["model"].astype(str).map(lambda m, r=r: _is_competitor(m, r))]
         per_model = keep.groupby("model")["subject_id"].nunique()
         snaps = (keep.groupby("model")["measurement_id"].nunique()
                  if "measurement_id" in keep.columns else None)
@@ -569,7 +729,7 @@ def _range_finding(run: RunData) -> Finding | None:
     src = f"{p}/predictions.parquet:reference_mgdl"
     vals = [Value(g["min"], 0, (f"{src}:min",)), Value(g["max"], 0, (f"{src}:max",))]
     text = f"On {p}, reference glucose spans {{}}–{{}} mg/dL"
-    comp = [m for m in run.m.index if _is_competitor(str(m))]
+    comp = [m for m in run.m.index if _is_competitor(str(m), run)]
     if g["n_hypo"] == 0:
         text += "; no reading is below 70 mg/dL, so"
         if "clarke_ab_pct" in run.m.columns and comp:
@@ -602,8 +762,9 @@ def headline_table(runs: Sequence[RunData]) -> tuple[pd.DataFrame, dict[str, dic
     -------
     table : pandas.DataFrame
         ``preset``, ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high`` and
-        ``status`` (``"best"``, ``"tied"`` with the best, ``"worse"`` or ``""`` when the
-        run has no comparisons).
+        ``status`` (``"best"`` deployable, ``"tied"`` with it, ``"worse"``, ``""`` when
+        the run has no comparisons, or ``"reference"`` for a privileged estimator other
+        than the oracle, which is drawn as a line).
     references : dict
         Preset -> ``{"mean": no-skill RMSE, "oracle": oracle RMSE}`` (those present).
     """
@@ -612,11 +773,14 @@ def headline_table(runs: Sequence[RunData]) -> tuple[pd.DataFrame, dict[str, dic
         best, tied, worse, _ = best_and_tied(run)
         status = {best: "best", **dict.fromkeys(tied, "tied"), **dict.fromkeys(worse, "worse")}
         m = run.m
-        for model in [x for x in m.index if _is_competitor(str(x))]:
+        shown = ([x for x in m.index if _is_competitor(str(x), run)]
+                 + [x for x in m.index if _is_reference(str(x), run) and x != ORACLE])
+        for model in shown:
             rows.append({"preset": run.preset, "model": str(model),
                          **{c: float(m.at[model, c]) if c in m.columns else float("nan")
                             for c in ("rmse_mgdl", "rmse_ci_low", "rmse_ci_high")},
-                         "status": status.get(str(model), "")})
+                         "status": ("reference" if _is_reference(str(model), run)
+                                    else status.get(str(model), ""))})
         refs[run.preset] = {r: float(m.at[r, "rmse_mgdl"]) for r in (NO_SKILL, ORACLE)
                             if r in m.index}
     return pd.DataFrame(rows), refs
@@ -648,7 +812,8 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
             run.no_skill = no_skill_comparisons(run, n_boot=n_boot, seed=seed)
     dist = distance_table(runs)
     out: list[Finding] = []
-    for step in (_best_finding, lambda r: _distance_findings(r, dist), _physics_findings,
+    for step in (_best_finding, _reference_finding, lambda r: _distance_findings(r, dist),
+                 lambda r: physics_answer(r, n_boot=n_boot, seed=seed), _physics_findings,
                  _claims_findings):
         for run in runs:
             got = step(run)
@@ -666,3 +831,87 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
     if floor is not None:
         out.append(floor)
     return out, dist
+
+
+# --------------------------------------------------------------------------- the answer
+
+
+#: The deployable forward-model estimator, and the data-driven rows it is held against
+#: in the answer to "does physics help?" (deployable estimators only).
+_FORWARD_DEPLOYABLE: Final = "device-inversion"
+_DATA_DRIVEN: Final = ("ebl", "gp")
+
+
+def _forward_evidence(run: RunData, *, n_boot: int, seed: int) -> pd.DataFrame:
+    """``device-inversion`` against EBL and the GP on the run's predictions (Holm)."""
+    p = run.predictions
+    have = set(p["model"].astype(str)) if len(p) else set()
+    pairs = [(_FORWARD_DEPLOYABLE, r) for r in _DATA_DRIVEN
+             if _FORWARD_DEPLOYABLE in have and r in have]
+    if not pairs or significance_withheld(int(p["subject_id"].nunique())):
+        return pd.DataFrame()
+    col = "scored_mgdl" if "scored_mgdl" in p.columns else "predicted_mgdl"
+    keep = p[p["model"].isin({m for pair in pairs for m in pair})]
+    return compare_models(keep, pairs=pairs, pred_col=col, n_boot=n_boot, seed=seed)
+
+
+def physics_answer(run: RunData, *, n_boot: int = 2000, seed: int = 0) -> Finding:
+    """One line: does physics help on this preset? With its evidence, deployable only.
+
+    The evidence: each tested physics ablation (a PINN against itself without its
+    physics term; a term that is inert during training, :func:`term_verdicts`, is said
+    to be unable to show an effect), and the deployable forward-model estimator
+    (``device-inversion``) against EBL and the GP, paired cluster bootstrap over
+    subjects, Holm-adjusted. Privileged estimators are never evidence. The answer is
+    ``yes`` when some evidence favours physics significantly and none goes against it,
+    ``no`` when some goes against and none favours, ``mixed`` when both, and
+    ``no evidence`` when no difference is significant (the CIs include 0).
+    """
+    p = run.preset
+    terms = {v["model"]: v for v in term_verdicts(run)}
+    items: list[str] = []
+    vals: list[Value] = []
+    pro = con = 0
+    for v in physics_verdicts(run):
+        if not v["tested"]:
+            continue
+        r, m = v["row"], v["model"]
+        base = ablation_base(m) or m
+        src = f"{p}/ablation.csv:{m}"
+        vals += [Value(float(r["rmse_diff_mgdl"]), 1, (f"{src}:rmse_diff_mgdl",), sign=True),
+                 Value(float(r["ci_low"]), 1, (f"{src}:ci_low",), sign=True),
+                 Value(float(r["ci_high"]), 1, (f"{src}:ci_high",), sign=True)]
+        inert = terms.get(base, {}).get("verdict") == "inert"
+        items.append(f"{label(m)} with − without its physics term {{}} mg/dL [{{}}, {{}}]"
+                     + (" (the term is inert during training: this cannot show an effect)"
+                        if inert else f", {v['verdict']}"))
+        if not inert and v["verdict"] == "physics helps":
+            pro += 1
+        elif not inert and v["verdict"] == "physics hurts":
+            con += 1
+    fwd = _forward_evidence(run, n_boot=n_boot, seed=seed)
+    for _, r in fwd.iterrows():
+        src = f"{p}/predictions.parquet:paired {r['model']} vs {r['reference_model']}"
+        vals += [Value(float(r["rmse_diff_mgdl"]), 1, (src,), op="paired", sign=True),
+                 Value(float(r["ci_low"]), 1, (src,), op="paired", sign=True),
+                 Value(float(r["ci_high"]), 1, (src,), op="paired", sign=True)]
+        sig = bool(r["significant"])
+        better = float(r["rmse_diff_mgdl"]) < 0
+        items.append(f"{label(str(r['model']))} − {label(str(r['reference_model']))} "
+                     "{} mg/dL [{}, {}]" + (", no significant difference" if not sig else
+                                            ", the forward model better" if better else
+                                            ", the forward model worse"))
+        pro += sig and better
+        con += sig and not better
+    answer = ("yes" if pro and not con else "no" if con and not pro else "mixed" if pro
+              else "no evidence")
+    if not items:
+        text = (f"Does physics help on {p}? Not asked: no tested physics ablation and no "
+                "deployable forward model beside EBL or the GP in this run.")
+    else:
+        text = (f"Does physics help on {p}? {answer.capitalize()} — deployable estimators "
+                "only (Δ RMSE, 95 % CI, paired cluster bootstrap over subjects, "
+                "Holm-adjusted): " + "; ".join(items) + ".")
+    anchor = (f"ablation-{p}" if run.ablation is not None and len(run.ablation)
+              else ANCHOR_HEADLINE)
+    return Finding("answer", p, text, tuple(vals), anchor)
