@@ -155,3 +155,116 @@ def test_inert_beer_lambert_term_is_said_to_be_unable_to_show_an_effect():
             "cannot show an effect") in text
     assert "RTE-inspired PINN: its physics term is active" in text
     assert "Original PINN: physics off" in text
+
+
+def test_physics_depth_puts_a_physics_off_pinn_on_no_physics():
+    from nirglucose.report.figures.inputs import physics_depth_table
+
+    metrics = pd.DataFrame({"model": ["original-pinn", "rte-pinn", "physics-inversion", "ebl"],
+                            "rmse_mgdl": [20.0, 22.0, 3.0, 14.0],
+                            "n_parameters": [1e5, 2e5, 30, 60]})
+    t, _ = physics_depth_table(metrics, list(metrics["model"]),
+                               lambdas={"original-pinn": 0.0, "rte-pinn": 0.1})
+    t = t.set_index("model")
+    assert t.at["original-pinn", "physics_depth"] == 0.0
+    assert "physics off" in t.at["original-pinn", "label"]
+    assert t.at["rte-pinn", "physics_depth"] > 0 and "off" not in t.at["rte-pinn", "label"]
+    assert "physics-inversion" not in t.index  # privileged: a reference line, not a bubble
+
+
+def test_labels_sit_nearest_their_own_markers():
+    from matplotlib.figure import Figure
+    from matplotlib.text import Annotation
+
+    from nirglucose.plots.labels import label_points, place_labels
+
+    fig = Figure(figsize=(4, 3))
+    ax = fig.add_subplot()
+    x = np.array([1.0, 1.05, 1.1, 2.0, 2.02, 3.0])
+    y = np.array([10.0, 10.4, 9.8, 20.0, 20.3, 15.0])
+    ax.scatter(x, y)
+    ax.set_xlim(0.5, 3.5)
+    ax.set_ylim(5, 25)
+    label_points(ax, x, y, [f"model {k}" for k in range(len(x))])
+    place_labels(fig)
+    renderer = fig.canvas.get_renderer()
+    pts = ax.transData.transform(np.c_[x, y])
+    for ann in (t for t in ax.texts if isinstance(t, Annotation)):
+        k = int(ann.get_text().split()[-1])
+        bb = ann.get_window_extent(renderer)
+        if ann.arrow_patch is not None:  # a leader line says whose it is
+            continue
+        gaps = [np.hypot(max(bb.x0 - px, 0, px - bb.x1), max(bb.y0 - py, 0, py - bb.y1))
+                for px, py in pts]
+        assert int(np.argmin(gaps)) == k or gaps[k] == min(gaps), ann.get_text()
+
+
+# --------------------------------------------------------------------------- the page
+
+
+def _page(report) -> str:
+    return report.read_text(encoding="utf-8")
+
+
+def test_first_screen_is_title_limits_answer_then_contents(preset_report, preset_results):
+    page = _page(preset_report)
+    i_title, i_limits = page.index("<h1>"), page.index('<section id="limits">')
+    i_answer, i_nav = page.index('id="answer"'), page.index("<nav>")
+    assert i_title < i_limits < i_answer < i_nav < page.index('<section id="findings">')
+    box = page[i_limits:i_nav]
+    assert "paper: the study&#x27;s what-if (×11)" in box
+    assert "wearable: a basic wearable (×12.5)" in box
+    assert "exact — the models see the true physiology" in box  # paper
+    assert "measured — with the instruments" in box  # wearable
+    assert "Physics inversion (forward model) (knows the generating scenario" in box
+    for preset in ("paper", "wearable"):
+        preds = pd.read_parquet(preset_results / preset / "predictions.parquet")
+        part = box[box.index(f'id="limits-{preset}"'):]
+        part = part[:part.index("</div>")]
+        assert f"{preds['subject_id'].nunique()} (" in part  # subjects behind the claims
+        if preds["reference_mgdl"].min() >= 70:
+            assert "no hypoglycaemia" in part
+        assert "best deployable" in part and "oracle" in part and "no skill" in part
+        assert "best deployable Physics inversion" not in part
+        assert f"Does physics help on {preset}?" in box
+    assert "Does physics help?" in box
+
+
+def test_no_privileged_row_is_called_best_on_the_page(preset_report):
+    page = _page(preset_report)
+    for bad in ("best deployable estimator (it reads only the measured columns) is Physics",
+                "best model is Physics", "lowest RMSE is Physics",
+                "best deployable Physics inversion"):
+        assert bad not in page
+    dist = page[page.index('id="distance-table"'):]
+    dist = dist[:dist.index("</table>")]
+    assert "References, not competitors" in dist
+    assert "Physics inversion (forward model) — reference (knows" in dist
+
+
+def test_figures_sit_beside_their_text_once_each(preset_report):
+    import re
+
+    page = _page(preset_report)
+    imgs = re.findall(r'<img src="data:image/png;base64,([^"]+)"', page)
+    assert len(imgs) == len(set(imgs)), "a figure is on the page twice"
+    pos = {k: page.index(f'id="fig-{k}"') for k in (
+        "forest", "wavelengths", "training", "data", "architecture_wearable",
+        "forest_wearable")}
+    assert pos["wavelengths"] < page.index('id="table"')  # beside the LED findings
+    assert page.index('id="table"') < pos["forest"] < page.index('id="significance"')
+    assert page.index('id="significance"') < pos["training"] < page.index('id="run"')
+    assert page.index('id="run"') < pos["data"]
+    assert "Run information" not in page
+    assert "details.json, pre { display: none" in page  # no JSON in print
+
+
+def test_headline_marks_physics_off_and_privileged_apart(preset_results):
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.findings import run_data
+
+    runs = [run_data(load_results(preset_results / p)) for p in ("paper", "wearable")]
+    table, _ = headline_table(runs)
+    lab = dict(zip(table["model"], table["label"], strict=False))
+    assert lab["original-pinn"] == "Original PINN (physics off on paper)"
+    assert set(table.loc[table["model"] == "physics-inversion", "status"]) == {"reference"}

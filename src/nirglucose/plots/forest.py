@@ -111,6 +111,7 @@ def plot_preset_forest(
     title: str | None = None,
     xmax: float | None = None,
     ax: Axes | None = None,
+    labels: Mapping[str, str] | None = None,
 ) -> Axes:
     """One preset's panel of the headline figure.
 
@@ -129,6 +130,8 @@ def plot_preset_forest(
         Upper x limit. [mg/dL]
     ax : matplotlib.axes.Axes, optional
         Axes to draw on.
+    labels : mapping of str to str, optional
+        Row labels (default: each model's label), e.g. marking a PINN's physics off.
 
     Returns
     -------
@@ -170,7 +173,8 @@ def plot_preset_forest(
                     xytext=(2, 2), textcoords="offset points", fontsize=7.5, color=col,
                     ha="left" if ref == "oracle" else "right", va="bottom")
     ax.set_yticks([y[m] for m in order])
-    ax.set_yticklabels([model_label(m) + (" (reference)" if m in refs else "") for m in order])
+    ax.set_yticklabels([(labels or {}).get(m, model_label(m))
+                        + (" (reference)" if m in refs else "") for m in order])
     ax.set_ylim(-0.7, len(order) - 0.3)
     ax.set_xlim(0.0, xmax)
     ax.grid(axis="x", color=GREY, alpha=0.25, lw=0.6)
@@ -213,7 +217,9 @@ def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, f
             part = table[table["preset"] == p]
             refs = dict(references.get(p, {}))
             xmax = 1.08 * max([*part["rmse_ci_high"].dropna(), *refs.values(), 1.0])
-            plot_preset_forest(part, refs, order, title=f"preset: {p}", xmax=xmax, ax=ax)
+            plot_preset_forest(part, refs, order, title=f"preset: {p}", xmax=xmax, ax=ax,
+                               labels=(dict(zip(table["model"], table["label"], strict=True))
+                                       if "label" in table else None))
         handles = [Line2D([], [], ls="none", marker="o", ms=8, mfc="#444444", mec="black",
                           label=HEADLINE_STATUS["best"] + " (its CI shaded)"),
                    Line2D([], [], ls="none", marker="o", ms=6.5, mfc="#444444", mec="black",

@@ -5,7 +5,8 @@ settles the figure's layout, then places each label greedily at the nearest free
 around its point: candidate offsets on rings of growing radius, the first whose
 window extent (matplotlib's ``Text.get_window_extent``) clears the labels already
 placed, the Axes' other texts and horizontal/vertical reference lines, every marker of
-the Axes and the Axes' edges. A label set away from its point
+the Axes and the Axes' edges, and that is no nearer another point than its own (else a
+reader takes it for that point's label). A label set away from its point
 gets a thin leader line. The layout is frozen afterwards so the places stay valid.
 """
 
@@ -76,6 +77,18 @@ def _overlap(a: Bbox, b: Bbox) -> float:
     return w * h if w > 0 and h > 0 else 0.0
 
 
+def _gap(a: Bbox, x: float, y: float) -> float:
+    """Distance from the point (x, y) to the box ``a`` (0 inside it). [px]"""
+    return float(np.hypot(max(a.x0 - x, 0.0, x - a.x1), max(a.y0 - y, 0.0, y - a.y1)))
+
+
+def _misattributed(bb: Bbox, k: int, pts: np.ndarray) -> bool:
+    """Whether the label box ``bb`` of point ``k`` sits nearer another point than its own
+    (a reader would read it as that point's label)."""
+    own = _gap(bb, *pts[k])
+    return any(_gap(bb, *pts[j]) < own for j in range(len(pts)) if j != k)
+
+
 def _outside(a: Bbox, frame: Bbox) -> float:
     inner = _overlap(a, frame)
     return a.width * a.height - inner
@@ -133,7 +146,10 @@ def place_labels(fig: Figure) -> None:
                     bb = ann.get_window_extent(renderer).expanded(1.0, 1.0).padded(PAD_PX)
                     cost = (sum(_overlap(bb, o) for o in placed)
                             + sum(_overlap(bb, m) for m in markers)
-                            + 4.0 * _outside(bb, frame))
+                            + 4.0 * _outside(bb, frame)
+                            # nearer another marker than its own: read as that one's
+                            + (2.0 * bb.width * bb.height
+                               if _misattributed(bb, k, pts) else 0.0))
                     if cost < best_cost - 1e-9:
                         best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
                     if cost == 0.0:

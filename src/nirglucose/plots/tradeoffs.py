@@ -59,7 +59,7 @@ def _reference_lines(ax: Axes, references: Mapping[str, float] | None
     for name, v in (references or {}).items():
         if v is None or not np.isfinite(v):
             continue
-        ax.axhline(v, color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0, zorder=1)
+        ax.axhline(v, color=GREY, ls=_REF_STYLE.get(name, "-."), lw=1.0, zorder=1)
         ax.annotate(f"{model_label(name)}: {v:.1f}", (1.0, v), xycoords=("axes fraction", "data"),
                     xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
                     fontsize=7, color=GREY)
@@ -279,8 +279,9 @@ def _draw_bubbles(ax: Axes, t: pd.DataFrame, pmax: float, front: np.ndarray) -> 
             ax.scatter([x[k]], [row["rmse_mgdl"]], s=max(1.6 * areas[k], 110.0),
                        facecolors="none", edgecolors="black", linewidths=1.5, zorder=4)
     label_points(ax, x, t["rmse_mgdl"].to_numpy(float),
-                 [f"{model_label(m)}\n{int(p):,} params"
-                  for m, p in zip(t["model"], t["n_parameters"], strict=True)],
+                 [f"{lab}\n{int(p):,} params"
+                  for lab, p in zip(t["label"] if "label" in t else map(model_label, t["model"]),
+                                    t["n_parameters"], strict=True)],
                  marker_radius_pt=np.sqrt(np.where(front, np.maximum(1.6 * areas, 110.0),
                                                    areas)) / 2.0)
 
@@ -296,7 +297,7 @@ def _bubble_legend(ax: Axes, pmax: float, any_front: bool, references: Sequence[
                               mew=1.5))
         labels.append("Pareto-optimal\n(parameters vs RMSE)")
     for name in references:
-        handles.append(Line2D([], [], color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0))
+        handles.append(Line2D([], [], color=GREY, ls=_REF_STYLE.get(name, "-."), lw=1.0))
         labels.append(f"{model_label(name)}\n(reference, not a competitor)")
     biggest = float(np.sqrt(bubble_area([max(refs)], pmax)[0]))
     ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,

@@ -764,7 +764,8 @@ def headline_table(runs: Sequence[RunData]) -> tuple[pd.DataFrame, dict[str, dic
         ``preset``, ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high`` and
         ``status`` (``"best"`` deployable, ``"tied"`` with it, ``"worse"``, ``""`` when
         the run has no comparisons, or ``"reference"`` for a privileged estimator other
-        than the oracle, which is drawn as a line).
+        than the oracle, which is drawn as a line); ``label``, which says ``physics
+        off on <presets>`` for a PINN tuned to λ = 0 there.
     references : dict
         Preset -> ``{"mean": no-skill RMSE, "oracle": oracle RMSE}`` (those present).
     """
@@ -783,7 +784,13 @@ def headline_table(runs: Sequence[RunData]) -> tuple[pd.DataFrame, dict[str, dic
                                     else status.get(str(model), ""))})
         refs[run.preset] = {r: float(m.at[r, "rmse_mgdl"]) for r in (NO_SKILL, ORACLE)
                             if r in m.index}
-    return pd.DataFrame(rows), refs
+    table = pd.DataFrame(rows)
+    if len(table):  # a PINN trained without its physics term says so, with the presets
+        off = {str(x): [r.preset for r in runs if _lambda(r, str(x)) == 0.0]
+               for x in table["model"]}
+        table["label"] = [label(x) + (f" (physics off on {', '.join(off[x])})" if off[x] else "")
+                          for x in table["model"]]
+    return table, refs
 
 
 def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int = 0

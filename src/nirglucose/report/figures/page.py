@@ -74,7 +74,11 @@ class Page:
 
     def add(self, key: str, title: str, caption: str, build: Callable[[], Any] | None,
             note: str | None = None) -> None:
-        """Number the next figure; draw it (``build``) if it is wanted."""
+        """Number the next figure; draw it (``build``) if it is wanted.
+
+        A figure whose PNG is byte for byte one already on the page is not added a
+        second time: the first one's caption says it stands for both.
+        """
         from ...plots.style import figure_bytes, save_figure
 
         self.count += 1
@@ -92,6 +96,14 @@ class Page:
                 out.note = f"Figure {number} could not be drawn: {exc}"
         if fig is not None:
             out.png = figure_bytes(fig, "png")
+            twin = next((r for r in self.rendered if r.png and r.png == out.png), None)
+            if twin is not None:  # the same picture (e.g. a preset's identical environment)
+                twin.caption += (f" The same figure for {title.split(' on ', 1)[-1]}"
+                                 if " on " in title else f" The same figure as {title}") \
+                    + " (identical pixels: drawn once)."
+                self.count -= 1
+                fig.clear()
+                return
             if self.out_dir is not None:
                 out.files = save_figure(fig, self.out_dir / f"fig{number}_{key}", self.formats)
             else:
