@@ -118,12 +118,15 @@ def row_privilege(row: str) -> str | None:
 
 
 def knows(privileged: str) -> str:
-    """A privileged declaration as the report words it: ``"knows …"``, parentheses out.
+    """A privileged declaration as the report words it: ``"knows the …"``, parentheses out.
 
     >>> knows("the generating scenario and the simulator's forward model (Dataset.config)")
     "knows the generating scenario and the simulator's forward model"
+    >>> knows("true nuisances (true_* columns) and the generating scenario")
+    'knows the true nuisances and the generating scenario'
     """
-    return "knows " + re.sub(r"\s*\([^)]*\)", "", privileged).strip()
+    text = re.sub(r"\s*\([^)]*\)", "", privileged).strip()
+    return "knows " + (text if text.startswith("the ") else "the " + text)
 
 
 #: A reST cross-reference in parentheses to a private name, `` (:class:`_Hybrid`)``:
