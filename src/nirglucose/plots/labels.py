@@ -147,9 +147,11 @@ def place_labels(fig: Figure) -> None:
                     cost = (sum(_overlap(bb, o) for o in placed)
                             + sum(_overlap(bb, m) for m in markers)
                             + 4.0 * _outside(bb, frame)
-                            # nearer another marker than its own: read as that one's
-                            + (2.0 * bb.width * bb.height
-                               if _misattributed(bb, k, pts) else 0.0))
+                            # nearer another marker than its own, with no leader line
+                            # to say whose it is: read as that one's
+                            + (0.5 * bb.width * bb.height
+                               if ring <= LEADER_FROM_PT and _misattributed(bb, k, pts)
+                               else 0.0))
                     if cost < best_cost - 1e-9:
                         best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
                     if cost == 0.0:
