@@ -152,10 +152,10 @@ def test_figures_written_as_png_and_svg(minimal_results, tmp_path):
     figs = render_figures(load_results(minimal_results), tmp_path / "figs",
                           include=["forest", "training"])
     assert [f.key for f in figs] == ["forest", "training"]  # page order
-    assert figs[0].files == []  # not drawn: no histories.json
-    stem = f"fig{figs[1].number}_forest"
-    assert [p.name for p in figs[1].files] == [f"{stem}.png", f"{stem}.svg"]
-    assert all(p.stat().st_size > 0 for p in figs[1].files)
+    assert figs[1].files == []  # not drawn: no histories.json
+    stem = f"fig{figs[0].number}_forest"
+    assert [p.name for p in figs[0].files] == [f"{stem}.png", f"{stem}.svg"]
+    assert all(p.stat().st_size > 0 for p in figs[0].files)
 
 
 def test_no_networks_says_so(tmp_path):

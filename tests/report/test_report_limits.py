@@ -6,6 +6,8 @@ session's two-preset report (``preset_report``)."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -268,3 +270,50 @@ def test_headline_marks_physics_off_and_privileged_apart(preset_results):
     lab = dict(zip(table["model"], table["label"], strict=False))
     assert lab["original-pinn"] == "Original PINN (physics off on paper)"
     assert set(table.loc[table["model"] == "physics-inversion", "status"]) == {"reference"}
+
+
+def test_every_figure_of_a_preset_marks_its_physics_off_pinn(preset_results):
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.figures.page import Page
+
+    paper = Page(results=load_results(preset_results / "paper"), out_dir=None, formats=(),
+                 wanted=set(), compare=None)
+    wear = Page(results=load_results(preset_results / "wearable"), out_dir=None, formats=(),
+                wanted=set(), compare=None)
+    assert paper.label_overrides["original-pinn"] == "Original PINN (physics off)"
+    assert "original-pinn" not in wear.label_overrides  # λ = 0.01 there
+    assert paper.label_overrides["physics-inversion"].endswith("(reference)")
+
+
+def test_three_presets_physical_with_fewer_models(tmp_path, preset_results):
+    """The physical preset (×1, published magnitudes) with a smaller model set: its box
+    says so and names the models that ran, its best deployable, oracle and no skill."""
+    import shutil
+
+    from report_fixtures import write_synthetic_results
+
+    import nirglucose as ng
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.findings import computed_findings
+    from nirglucose.report.limits import limits_section
+
+    root = tmp_path / "res"
+    shutil.copytree(preset_results / "paper", root / "paper")
+    d = write_synthetic_results(root / "physical", models=("ebl", "oracle", "mean",
+                                                           "device-inversion"),
+                                n_subjects=12, repeats=1, seed=2, with_optional=False)
+    meta = json.loads((d / "metrics.json").read_text())["meta"]
+    meta.update(preset="physical",
+                config=json.loads(ng.simulate("physical", 2, 1, 0).config.to_json()))
+    (d / "meta.json").write_text(json.dumps(meta))
+    runs = [load_results(root / p) for p in ("paper", "physical")]
+    data, findings, _ = computed_findings(runs, n_boot=200)
+    html = limits_section(runs, data, findings)
+    box = html[html.index('id="limits-physical"'):]
+    box = box[:box.index("</div>")]
+    assert "physical: published magnitudes" in box
+    assert "×1 the published magnitudes (the published ones)" in box
+    assert "Models that ran (4)" in box and "Device inversion" in box
+    assert "best deployable" in box and "oracle" in box and "no skill" in box
+    assert "Physics inversion" not in box  # it did not run there
+    assert "Does physics help on physical?" in html

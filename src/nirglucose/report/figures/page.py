@@ -68,6 +68,19 @@ class Page:
         return (f"every out-of-fold prediction of all {n_rep} repeats pooled, so the zone "
                 f"shares equal the table's" if n_rep > 1 else "every out-of-fold prediction")
 
+    @property
+    def label_overrides(self) -> dict[str, str]:
+        """Figure labels of this run's PINNs tuned to λ = 0 (``physics off``) and of its
+        privileged rows (``reference``), for every figure of the run."""
+        from ...models.labels import label, row_privilege
+
+        params = self.results.meta.get("model_params") or {}
+        out = {str(m): f"{label(str(m))} (physics off)" for m, p in params.items()
+               if isinstance(p, dict) and p.get("lambda_phys") == 0 and "/" not in str(m)}
+        out.update({m: f"{label(m)} (reference)" for m in self.models
+                    if m != "oracle" and "/" not in m and row_privilege(m) is not None})
+        return out
+
     def wants(self, *keys: str) -> bool:
         """Whether any of ``keys`` is to be drawn."""
         return self.wanted is None or bool(self.wanted & set(keys))
@@ -79,7 +92,7 @@ class Page:
         A figure whose PNG is byte for byte one already on the page is not added a
         second time: the first one's caption says it stands for both.
         """
-        from ...plots.style import figure_bytes, save_figure
+        from ...plots.style import figure_bytes, model_labels, save_figure
 
         self.count += 1
         number = str(self.count)
@@ -90,7 +103,8 @@ class Page:
         fig = None
         if build is not None:
             try:
-                fig = build()
+                with model_labels(self.label_overrides):
+                    fig = build()
             except (ValueError, KeyError, TypeError, IndexError) as exc:
                 logger.exception("figure %s could not be drawn", number)
                 out.note = f"Figure {number} could not be drawn: {exc}"
