@@ -313,7 +313,7 @@ def test_three_presets_physical_with_fewer_models(tmp_path, preset_results):
     box = box[:box.index("</div>")]
     assert "physical: published magnitudes" in box
     assert "×1 the published magnitudes (the published ones)" in box
-    assert "Models that ran (4)" in box and "Device inversion" in box
+    assert "Models that ran</b> (4)" in box and "Device inversion" in box
     assert "best deployable" in box and "oracle" in box and "no skill" in box
     assert "Physics inversion" not in box  # it did not run there
     assert "Does physics help on physical?" in html

@@ -108,6 +108,35 @@ def _fixed_obstacles(ax: Axes, renderer) -> list[Bbox]:
     return boxes
 
 
+def _best_spot(ann, p: dict, k: int, pts: np.ndarray, markers: list[Bbox],
+               placed: list[Bbox], frame: Bbox, renderer) -> tuple:
+    """The first free spot of label ``ann`` of point ``k`` on the rings, nearest first, else
+    the least bad: ``(dx, dy, ha, va, ring)`` in points."""
+    best, best_cost = None, np.inf
+    for ring in RING_RADII_PT:
+        radius = p["r"] + ring
+        for ang in RING_ANGLES_DEG:
+            dx, dy = np.cos(np.radians(ang)), np.sin(np.radians(ang))
+            ha = "left" if dx > 0.3 else "right" if dx < -0.3 else "center"
+            va = "bottom" if dy > 0.3 else "top" if dy < -0.3 else "center"
+            ann.set_position((radius * dx, radius * dy))
+            ann.set_ha(ha)
+            ann.set_va(va)
+            bb = ann.get_window_extent(renderer).expanded(1.0, 1.0).padded(PAD_PX)
+            cost = (sum(_overlap(bb, o) for o in placed)
+                    + sum(_overlap(bb, m) for m in markers)
+                    + 4.0 * _outside(bb, frame)
+                    # nearer another marker than its own, with no leader line to say
+                    # whose it is: read as that one's
+                    + (0.5 * bb.width * bb.height
+                       if ring <= LEADER_FROM_PT and _misattributed(bb, k, pts) else 0.0))
+            if cost < best_cost - 1e-9:
+                best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
+            if cost == 0.0:
+                return best
+    return best
+
+
 def place_labels(fig: Figure) -> None:
     """Place every recorded label of ``fig`` (see the module docstring); freeze the layout."""
     axes = [ax for ax in fig.axes if getattr(ax, _PENDING, None)]
@@ -133,31 +162,7 @@ def place_labels(fig: Figure) -> None:
             ann = ax.annotate(p["text"], (p["x"], p["y"]), xytext=(0, 0),
                               textcoords="offset points", fontsize=p["fontsize"],
                               color=p["color"], zorder=5, annotation_clip=False)
-            best, best_cost = None, np.inf
-            for ring in RING_RADII_PT:
-                radius = p["r"] + ring
-                for ang in RING_ANGLES_DEG:
-                    dx, dy = np.cos(np.radians(ang)), np.sin(np.radians(ang))
-                    ha = "left" if dx > 0.3 else "right" if dx < -0.3 else "center"
-                    va = "bottom" if dy > 0.3 else "top" if dy < -0.3 else "center"
-                    ann.set_position((radius * dx, radius * dy))
-                    ann.set_ha(ha)
-                    ann.set_va(va)
-                    bb = ann.get_window_extent(renderer).expanded(1.0, 1.0).padded(PAD_PX)
-                    cost = (sum(_overlap(bb, o) for o in placed)
-                            + sum(_overlap(bb, m) for m in markers)
-                            + 4.0 * _outside(bb, frame)
-                            # nearer another marker than its own, with no leader line
-                            # to say whose it is: read as that one's
-                            + (0.5 * bb.width * bb.height
-                               if ring <= LEADER_FROM_PT and _misattributed(bb, k, pts)
-                               else 0.0))
-                    if cost < best_cost - 1e-9:
-                        best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
-                    if cost == 0.0:
-                        break
-                if best_cost == 0.0:
-                    break
+            best = _best_spot(ann, p, k, pts, markers, placed, frame, renderer)
             assert best is not None
             ann.set_position(best[:2])
             ann.set_ha(best[2])

@@ -30,7 +30,6 @@ Sources
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any, Final
 
 import numpy as np
@@ -39,12 +38,22 @@ import pandas as pd
 from ...config.presets import DEVICE_CAPABILITIES
 from ...dataset.small_data import significance_withheld
 from ...metrics.resampling import compare_models
-from ...models.labels import LAMBDA_ROW, ablation_base, knows, label, row_privilege
-from ...models.physics_effect import physics_verdict
+from ...models.labels import LAMBDA_ROW, knows, label
 from ..reference import STUDY_ORDER, STUDY_TABLE
+from .answer import physics_answer, physics_verdicts, term_findings, term_verdicts
 from .drop_one import drop_one_findings
 from .finding import Finding, Value
 from .result import ORACLE
+from .rundata import (
+    NO_SKILL,
+    RunData,
+    display_name,
+    privilege,
+    truthy,
+)
+from .rundata import is_competitor as _is_competitor
+from .rundata import is_reference as _is_reference
+from .rundata import tuned_lambda as _lambda
 
 __all__ = [
     "HYPO_MGDL",
@@ -68,8 +77,6 @@ __all__ = [
     "headline_table",
 ]
 
-#: Registry name of the no-skill reference (the training mean).
-NO_SKILL: Final = "mean"
 #: Hypoglycaemia threshold (ISO 15197:2013; ADA level 1). [mg/dL]
 HYPO_MGDL: Final = 70.0
 
@@ -79,96 +86,6 @@ ANCHOR_HEADLINE: Final = "fig-headline"
 ANCHOR_LEDS: Final = "fig-wavelengths"
 ANCHOR_DISTANCE: Final = "distance-table"
 
-
-@dataclass
-class RunData:
-    """What the findings read from one preset's results directory.
-
-    Attributes
-    ----------
-    preset : str
-        The preset's name (also the results sub-directory).
-    metrics : pandas.DataFrame
-        ``metrics.json`` rows.
-    meta : dict
-        ``meta.json``.
-    predictions : pandas.DataFrame
-        ``predictions.parquet``.
-    comparisons, ablation : pandas.DataFrame or None
-        ``comparisons.csv``, ``ablation.csv``.
-    drop_one : pandas.DataFrame or None
-        ``drop_one.csv`` (the drop-one-LED refits).
-    histories : mapping or None
-        ``histories.json``.
-    """
-
-    preset: str
-    metrics: pd.DataFrame
-    meta: dict[str, Any]
-    predictions: pd.DataFrame
-    comparisons: pd.DataFrame | None = None
-    ablation: pd.DataFrame | None = None
-    no_skill: pd.DataFrame | None = field(default=None, repr=False)
-    drop_one: pd.DataFrame | None = None
-    #: ``histories.json`` (model -> per-epoch rows), for the physics terms' verdicts.
-    histories: Mapping[str, Any] | None = field(default=None, repr=False)
-    #: The competitors against the best deployable one (computed when the run's own
-    #: ``vs_best`` family was ranked with a privileged row as the best).
-    vs_best: pd.DataFrame | None = field(default=None, repr=False)
-
-    @property
-    def m(self) -> pd.DataFrame:
-        """Metrics indexed by model."""
-        return self.metrics.drop_duplicates("model").set_index("model")
-
-    def metric(self, model: str, column: str, digits: int = 1, **kw: Any) -> Value:
-        """A value of ``metrics.json`` with its source."""
-        return Value(float(self.m.at[model, column]), digits,
-                     (f"{self.preset}/metrics.json:{model}:{column}",), **kw)
-
-
-def privilege(run: RunData | None, model: str) -> str | None:
-    """What ``model`` knows beyond the measured columns on this run (None: deployable).
-
-    The ``privileged`` column of ``metrics.json`` where the run wrote one, else the
-    registry's declaration (:func:`~nirglucose.models.labels.row_privilege`); the
-    oracle is always privileged.
-    """
-    if run is not None and "privileged" in run.metrics.columns:
-        m = run.m
-        if model in m.index:
-            v = m.at[model, "privileged"]
-            if isinstance(v, str) and v.strip():
-                return v
-            if model != ORACLE and row_privilege(model) is None:
-                return None
-    got = row_privilege(model)
-    if got is None and model == ORACLE:
-        return "true nuisances (true_* columns)"
-    return got
-
-
-def _is_competitor(model: str, run: RunData | None = None) -> bool:
-    """A deployable estimator's own row: not a reference, not an ablation, not privileged."""
-    return (model not in (ORACLE, NO_SKILL) and ablation_base(model) is None
-            and privilege(run, model) is None)
-
-
-def _is_reference(model: str, run: RunData | None = None) -> bool:
-    """A privileged estimator's own row (the oracle included): a reference, never best."""
-    return ablation_base(model) is None and model != NO_SKILL and privilege(run, model) is not None
-
-
-def display_name(run: RunData, model: str) -> str:
-    """A model's label as the findings write it: ``physics off`` where its tuned λ is 0,
-    ``reference (knows …)`` where it is privileged."""
-    name = label(model)
-    if _lambda(run, model) == 0.0 and ablation_base(model) is None:
-        name += " (physics off: tuned λ = 0)"
-    priv = privilege(run, model)
-    if priv is not None and ablation_base(model) is None:
-        name += f" (reference, {knows(priv)})"
-    return name
 
 
 def _ref_anchor(preset: str) -> str:
@@ -385,105 +302,12 @@ def _model_of(t: pd.DataFrame, v: Value) -> str:
 # --------------------------------------------------------------------------- physics
 
 
-def _lambda(run: RunData, pinn: str) -> float | None:
-    v = (run.meta.get("model_params") or {}).get(pinn, {}).get("lambda_phys")
-    return None if v is None else float(v)
-
-
-def physics_verdicts(run: RunData) -> list[dict[str, Any]]:
-    """Per ablated PINN: its tuned physics weight and whether physics was tested.
-
-    One dict per row of ``ablation.csv``: ``model``, ``lambda`` (the tuned
-    ``lambda_phys`` of ``meta.json``, None when not recorded), ``tested`` (False when
-    tuning set λ = 0, or the two fits are identical: no question was asked), and
-    ``verdict``: ``"physics off by tuning — not tested"``, ``"identical fits — not
-    tested"``, ``"physics helps"``, ``"physics hurts"`` or ``"no significant
-    difference"``.
-    """
-    a = run.ablation
-    if a is None or not len(a):
-        return []
-    out = []
-    for _, r in a.iterrows():
-        model = str(r["model"])
-        lam = _lambda(run, model)
-        identical = (float(r["rmse_diff_mgdl"]) == 0.0 and float(r["ci_low"]) == 0.0
-                     and float(r["ci_high"]) == 0.0)
-        if lam == 0.0:
-            verdict, tested = "physics off by tuning — not tested", False
-        elif identical:
-            verdict, tested = "identical fits — not tested", False
-        elif _truthy(r["significant"]):
-            verdict = "physics helps" if float(r["rmse_diff_mgdl"]) < 0 else "physics hurts"
-            tested = True
-        else:
-            verdict, tested = "no significant difference", True
-        out.append({"model": model, "lambda": lam, "tested": tested, "verdict": verdict,
-                    "row": r})
-    return out
-
-
-def _truthy(v: Any) -> bool:
-    return str(v).strip().lower() in ("true", "1", "1.0")
-
-
-#: The study's Beer–Lambert PINNs (their physics term: the residual A − εcl).
-_BEER_LAMBERT_PINNS: Final = ("original-pinn", "optimized-pinn")
-
-
-def term_verdicts(run: RunData) -> list[dict[str, Any]]:
-    """Each PINN's physics term, measured during training: does it move the fit?
-
-    :func:`~nirglucose.models.physics_effect.physics_verdict` of each model's row of
-    ``histories.json`` (its timed fit), ablation rows left out. One dict per PINN with
-    gradient probes: ``model``, ``verdict`` (``active``, ``inert``, ``off``),
-    ``reason``, ``constant`` (its training physics loss changed by less than 0.1 %)
-    and ``pull_sd`` (median displacement of the predictions, training SD).
-    """
-    out = []
-    for model, hist in (run.histories or {}).items():
-        if ablation_base(str(model)) is not None or hist is None or not len(hist):
-            continue
-        v = physics_verdict(hist)
-        if v["verdict"] == "unmeasured":
-            continue
-        out.append({"model": str(model), "verdict": v["verdict"], "reason": v["reason"],
-                    "constant": bool(v.get("physics_constant")),
-                    "pull_sd": v.get("median_pull_sd")})
-    return out
-
-
-def _term_sentence(run: RunData, v: Mapping[str, Any]) -> str:
-    """One PINN's physics term in words (no numbers: the reason carries them)."""
-    m, name = v["model"], label(v["model"])
-    if v["verdict"] == "off":
-        return f"{name}: physics off ({v['reason']})"
-    if v["verdict"] == "inert":
-        what = ("the study's Beer–Lambert term" if m in _BEER_LAMBERT_PINNS
-                else "its physics term")
-        how = "is constant during training" if v["constant"] else "does not move the fit"
-        return (f"{name}: {what} {how}, so its ablation cannot show an effect "
-                f"({v['reason']})")
-    return f"{name}: its physics term is active ({v['reason']})"
-
-
-def _term_findings(run: RunData) -> list[Finding]:
-    terms = term_verdicts(run)
-    if not terms:
-        return []
-    p = run.preset
-    text = (f"The physics terms on {p}, measured during training (gradient probes of the "
-            "timed fit, histories.json): " + "; ".join(_term_sentence(run, v) for v in terms)
-            + ".")
-    return [Finding("physics", p, text.replace("{", "{{").replace("}", "}}"), (),
-                    f"ablation-{p}")]
-
 
 def _physics_findings(run: RunData) -> list[Finding]:
     p = run.preset
     verdicts = physics_verdicts(run)
     if not verdicts:
-        return _term_findings(run)
+        return term_findings(run)
     off = [v for v in verdicts if not v["tested"]]
     anchor = f"ablation-{p}"
     tested = [v for v in verdicts if v["tested"]]
@@ -532,7 +356,7 @@ def _physics_findings(run: RunData) -> list[Finding]:
             + (" (the unadjusted CI excludes 0; the Holm adjustment over the PINNs does not "
                "confirm it)" if unadj else "") + "."),
             tuple(x for x in vals if x is not None), anchor))
-    return out + _term_findings(run)
+    return out + term_findings(run)
 
 
 # --------------------------------------------------------------------------- the study
@@ -550,8 +374,8 @@ def study_claims(run: RunData) -> dict[str, Any]:
     c = run.comparisons
     so = (c[c["family"] == "study_order"] if c is not None and len(c) and "family" in c
           else pd.DataFrame())
-    holds = so["study_holds"].map(_truthy) if len(so) else pd.Series(dtype=bool)
-    sig = so["significant"].map(_truthy) if len(so) else pd.Series(dtype=bool)
+    holds = so["study_holds"].map(truthy) if len(so) else pd.Series(dtype=bool)
+    sig = so["significant"].map(truthy) if len(so) else pd.Series(dtype=bool)
     study = {str(r["model"]): float(r["rmse_mgdl"]) for r in STUDY_TABLE}
     m = run.m
     models = [s for s in STUDY_ORDER if s in m.index]
@@ -584,8 +408,8 @@ def _claims_findings(run: RunData) -> list[Finding]:
                 for b, w in rev)
         ebl_rows = cl["pairs"][cl["pairs"]["reference_model"] == "ebl"]
         if len(ebl_rows):
-            n_sig = int((ebl_rows["significant"].map(_truthy)
-                         & ebl_rows["study_holds"].map(_truthy)).sum())
+            n_sig = int((ebl_rows["significant"].map(truthy)
+                         & ebl_rows["study_holds"].map(truthy)).sum())
             vals += [Value(n_sig, 0, (f"{src}:ebl&study_holds&significant",), op="count"),
                      Value(len(ebl_rows), 0, (f"{src}:ebl:rows",), op="count")]
             text += ("; the study's headline, Enhanced Beer–Lambert better than every network, "
@@ -838,90 +662,3 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
     if floor is not None:
         out.append(floor)
     return out, dist
-
-
-# --------------------------------------------------------------------------- the answer
-
-
-#: The deployable forward-model estimator, and the data-driven rows it is held against
-#: in the answer to "does physics help?" (deployable estimators only).
-_FORWARD_DEPLOYABLE: Final = "device-inversion"
-_DATA_DRIVEN: Final = ("ebl", "gp")
-
-
-def _forward_evidence(run: RunData, *, n_boot: int, seed: int) -> pd.DataFrame:
-    """``device-inversion`` against EBL and the GP on the run's predictions (Holm)."""
-    p = run.predictions
-    have = set(p["model"].astype(str)) if len(p) else set()
-    pairs = [(_FORWARD_DEPLOYABLE, r) for r in _DATA_DRIVEN
-             if _FORWARD_DEPLOYABLE in have and r in have]
-    if not pairs or significance_withheld(int(p["subject_id"].nunique())):
-        return pd.DataFrame()
-    col = "scored_mgdl" if "scored_mgdl" in p.columns else "predicted_mgdl"
-    keep = p[p["model"].isin({m for pair in pairs for m in pair})]
-    return compare_models(keep, pairs=pairs, pred_col=col, n_boot=n_boot, seed=seed)
-
-
-def physics_answer(run: RunData, *, n_boot: int = 2000, seed: int = 0) -> Finding:
-    """One line: does physics help on this preset? With its evidence, deployable only.
-
-    The evidence: each tested physics ablation (a PINN against itself without its
-    physics term; a term that is inert during training, :func:`term_verdicts`, is said
-    to be unable to show an effect), and the deployable forward-model estimator
-    (``device-inversion``) against EBL and the GP, paired cluster bootstrap over
-    subjects, Holm-adjusted. Privileged estimators are never evidence. The answer is
-    ``yes`` when some evidence favours physics significantly and none goes against it,
-    ``no`` when some goes against and none favours, ``mixed`` when both, and
-    ``no evidence`` when no difference is significant (the CIs include 0).
-    """
-    p = run.preset
-    terms = {v["model"]: v for v in term_verdicts(run)}
-    items: list[str] = []
-    vals: list[Value] = []
-    pro = con = 0
-    for v in physics_verdicts(run):
-        base = ablation_base(v["model"]) or v["model"]
-        if privilege(run, base) is not None:  # a -fm PINN reads the generator: no evidence
-            continue
-        if not v["tested"]:
-            items.append(f"{label(v['model'])}: {v['verdict']}")
-            continue
-        r, m = v["row"], v["model"]
-        src = f"{p}/ablation.csv:{m}"
-        vals += [Value(float(r["rmse_diff_mgdl"]), 1, (f"{src}:rmse_diff_mgdl",), sign=True),
-                 Value(float(r["ci_low"]), 1, (f"{src}:ci_low",), sign=True),
-                 Value(float(r["ci_high"]), 1, (f"{src}:ci_high",), sign=True)]
-        inert = terms.get(base, {}).get("verdict") == "inert"
-        items.append(f"{label(m)} with − without its physics term {{}} mg/dL [{{}}, {{}}]"
-                     + (" (the term is inert during training: this cannot show an effect)"
-                        if inert else f", {v['verdict']}"))
-        if not inert and v["verdict"] == "physics helps":
-            pro += 1
-        elif not inert and v["verdict"] == "physics hurts":
-            con += 1
-    fwd = _forward_evidence(run, n_boot=n_boot, seed=seed)
-    for _, r in fwd.iterrows():
-        src = f"{p}/predictions.parquet:paired {r['model']} vs {r['reference_model']}"
-        vals += [Value(float(r["rmse_diff_mgdl"]), 1, (src,), op="paired", sign=True),
-                 Value(float(r["ci_low"]), 1, (src,), op="paired", sign=True),
-                 Value(float(r["ci_high"]), 1, (src,), op="paired", sign=True)]
-        sig = bool(r["significant"])
-        better = float(r["rmse_diff_mgdl"]) < 0
-        items.append(f"{label(str(r['model']))} − {label(str(r['reference_model']))} "
-                     "{} mg/dL [{}, {}]" + (", no significant difference" if not sig else
-                                            ", the forward model better" if better else
-                                            ", the forward model worse"))
-        pro += sig and better
-        con += sig and not better
-    answer = ("yes" if pro and not con else "no" if con and not pro else "mixed" if pro
-              else "no evidence")
-    if not items:
-        text = (f"Does physics help on {p}? Not asked: no tested physics ablation and no "
-                "deployable forward model beside EBL or the GP in this run.")
-    else:
-        text = (f"Does physics help on {p}? {answer.capitalize()} — deployable estimators "
-                "only (Δ RMSE, 95 % CI, paired cluster bootstrap over subjects, "
-                "Holm-adjusted): " + "; ".join(items) + ".")
-    anchor = (f"ablation-{p}" if run.ablation is not None and len(run.ablation)
-              else ANCHOR_HEADLINE)
-    return Finding("answer", p, text, tuple(vals), anchor)

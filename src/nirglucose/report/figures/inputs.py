@@ -18,6 +18,8 @@ import pandas as pd
 from ...evaluation.reference import STUDY_TABLE
 from ...formatting import format_number
 from ...metrics import bland_altman, clarke_zones, parkes_zones, zone_percentages
+from ...models.labels import label as model_name
+from ...models.labels import row_privilege
 
 __all__ = [
     "PHYSICS_DEPTH", "REFERENCE_ROWS", "PHYSICS_DEPTH_LABELS", "RADAR_AXES",
@@ -403,8 +405,6 @@ def competitors(models: Iterable[str]) -> list[str]:
     """Models that compete: neither a reference row (:data:`REFERENCE_ROWS`), nor a
     privileged estimator (it reads the generating scenario: a reference, like the
     oracle; :func:`~nirglucose.models.labels.row_privilege`), nor an ablation."""
-    from ...models.labels import row_privilege
-
     return [m for m in models if m not in REFERENCE_ROWS and not is_ablation_row(m)
             and row_privilege(str(m)) is None]
 
@@ -412,8 +412,6 @@ def competitors(models: Iterable[str]) -> list[str]:
 def reference_values(metrics: pd.DataFrame, models: Sequence[str]) -> dict[str, float]:
     """RMSE of the reference rows present (oracle bound, no-skill mean) and of the
     privileged estimators, drawn like the oracle. [mg/dL]"""
-    from ...models.labels import row_privilege
-
     refs = [m for m in REFERENCE_ROWS if m in models]
     refs += [m for m in models if m not in refs and not is_ablation_row(m)
              and row_privilege(str(m)) is not None]
@@ -432,14 +430,14 @@ def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str], *,
     sits at depth 0 (no physics) and its ``label`` says ``physics off``. Privileged
     rows are not competitors (:func:`competitors`): they are drawn as reference lines.
     """
-    from ...models.labels import label
 
     models = competitors(models)
     known = [m for m in models if m in PHYSICS_DEPTH]
     off = {m for m in known if (lambdas or {}).get(m) == 0.0}
     t = pd.DataFrame({
         "model": known,
-        "label": [label(m) + (" (physics off: λ = 0)" if m in off else "") for m in known],
+        "label": [model_name(m) + (" (physics off: λ = 0)" if m in off else "")
+                  for m in known],
         "physics_depth": [0.0 if m in off else PHYSICS_DEPTH[m] for m in known],
         "rmse_mgdl": _metric(metrics, known, "rmse_mgdl"),
         "n_parameters": _metric(metrics, known, "n_parameters"),

@@ -12,6 +12,7 @@ from typing import Any
 
 import pandas as pd
 
+from ...models.labels import label, row_privilege
 from .inputs import is_ablation_row
 from .results import RenderedFigure, Results
 
@@ -72,8 +73,6 @@ class Page:
     def label_overrides(self) -> dict[str, str]:
         """Figure labels of this run's PINNs tuned to λ = 0 (``physics off``) and of its
         privileged rows (``reference``), for every figure of the run."""
-        from ...models.labels import label, row_privilege
-
         params = self.results.meta.get("model_params") or {}
         out = {str(m): f"{label(str(m))} (physics off)" for m, p in params.items()
                if isinstance(p, dict) and p.get("lambda_phys") == 0 and "/" not in str(m)}

@@ -17,6 +17,7 @@ import pandas as pd
 
 from ...exceptions import DataError
 from ...formatting import format_number
+from ...models.labels import label
 from ...models.registry import is_pinn
 from ...models.tuning import lambda_curve
 from .descriptive import (
@@ -293,8 +294,6 @@ def _reference_text(refs: Mapping[str, float]) -> str:
     """Caption sentence naming the reference rows drawn as horizontal lines."""
     if not refs:
         return ""
-    from ...models.labels import label
-
     names = [("oracle (a bound, not a competitor)" if r == "oracle" else
               "training mean (no skill)" if r == "mean" else
               f"{label(r)} (a privileged reference: it reads the generating scenario; "
