@@ -317,3 +317,26 @@ def test_three_presets_physical_with_fewer_models(tmp_path, preset_results):
     assert "best deployable" in box and "oracle" in box and "no skill" in box
     assert "Physics inversion" not in box  # it did not run there
     assert "Does physics help on physical?" in html
+
+
+def test_an_identical_figure_is_drawn_once(preset_results):
+    """Two presets with the same environment draw the same picture: it is shown once,
+    its caption says so, and the numbering does not skip."""
+    from matplotlib.figure import Figure
+
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.figures.page import Page
+
+    def same():
+        fig = Figure(figsize=(2, 2))
+        fig.add_subplot().plot([0, 1], [0, 1])
+        return fig
+
+    page = Page(results=load_results(preset_results / "paper"), out_dir=None, formats=(),
+                wanted=None, compare=None)
+    page.add("environment", "Environment on paper", "Ambient conditions.", same)
+    page.add("environment_wearable", "Environment on wearable", "Ambient conditions.", same)
+    page.add("physiology", "Physiology", "Physiology.", lambda: Figure(figsize=(3, 2)))
+    assert [f.key for f in page.rendered] == ["environment", "physiology"]
+    assert [f.number for f in page.rendered] == ["1", "2"]
+    assert "The same figure for wearable" in page.rendered[0].caption

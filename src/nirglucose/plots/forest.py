@@ -31,7 +31,7 @@ HEADLINE_STATUS = {
     "best": "best deployable (lowest RMSE)",
     "tied": "not distinguishable from the best (paired, Holm)",
     "worse": "significantly worse than the best",
-    "reference": "privileged reference (knows the generator; not ranked)",
+    "reference": "privileged reference, black and hollow (knows the generator; not ranked)",
 }
 
 
@@ -155,9 +155,12 @@ def plot_preset_forest(
         lo, hi, v = r["rmse_ci_low"], r["rmse_ci_high"], r["rmse_mgdl"]
         err = ([[max(v - lo, 0.0)], [max(hi - v, 0.0)]]
                if np.isfinite(lo) and np.isfinite(hi) else None)
-        if m in refs:
-            ax.errorbar([v], [y[m]], xerr=err, fmt="D", ms=6, color=GREY, ecolor=GREY,
-                        mfc="white", mec=GREY, mew=1.3, elinewidth=1.2, capsize=3, zorder=3)
+        if m in refs:  # drawn like the oracle: black, hollow, its CI dotted
+            bars = ax.errorbar([v], [y[m]], xerr=err, fmt=model_marker(m), ms=7,
+                               color="black", ecolor="black", mfc="white", mec="black",
+                               mew=1.2, elinewidth=1.0, capsize=3, zorder=3)
+            for line in bars[2]:
+                line.set_linestyle(":")
             continue
         c = model_color(m)
         open_ = r.get("status", "") == "worse"
@@ -226,8 +229,8 @@ def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, f
                           label=HEADLINE_STATUS["tied"]),
                    Line2D([], [], ls="none", marker="o", ms=6.5, mfc="white", mec="#444444",
                           mew=1.3, label=HEADLINE_STATUS["worse"]),
-                   Line2D([], [], ls="none", marker="D", ms=6, mfc="white", mec=GREY,
-                          mew=1.3, label=HEADLINE_STATUS["reference"]),
+                   Line2D([], [], ls=":", marker="8", ms=7, mfc="white", mec="black",
+                          color="black", mew=1.2, label=HEADLINE_STATUS["reference"]),
                    Line2D([], [], ls="--", color=GREY, label="no skill (training mean)"),
                    Line2D([], [], ls=":", color="black", label="oracle (true nuisances, a bound)")]
         if not (table["status"].isin(("best", "tied", "worse"))).any():  # no comparisons

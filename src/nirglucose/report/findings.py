@@ -133,11 +133,11 @@ def _headline_html(runs: Sequence[RunData]) -> str:
             "preset's RMSE, one colour and marker per model as in every figure). Filled: "
             "the best deployable model (its CI shaded) and those not distinguishable from "
             "it (paired cluster bootstrap over subjects, Holm-adjusted); open: "
-            "significantly worse. Below the grey rule, grey hollow diamonds: privileged "
-            "references (they read the generating scenario), drawn apart and never "
-            "ranked. Dashed: no skill (the training mean); dotted: the oracle, which "
-            "inverts the forward model with the true nuisances (a bound, not a "
-            "competitor)."
+            "significantly worse. Below the grey rule, black hollow markers with dotted CIs: "
+            "privileged references (they read the generating scenario), drawn apart like "
+            "the oracle and never ranked. Dashed: no skill (the training mean); dotted: "
+            "the oracle, which inverts the forward model with the true nuisances (a bound, "
+            "not a competitor)."
             "</figcaption></figure>")
 
 

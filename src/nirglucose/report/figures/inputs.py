@@ -49,6 +49,7 @@ PHYSICS_DEPTH: Final[dict[str, float]] = {
     "rte-pinn-fm": 4.5,
     "selective-rte-pinn-fm": 4.5,
     "physics-inversion": 5,
+    "device-inversion": 5,  # inverts a forward model of the declared parts and tables
     "physics-inversion+gp": 5,
     "oracle": 5,
 }
