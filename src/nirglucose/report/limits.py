@@ -38,29 +38,35 @@ if TYPE_CHECKING:
 
 __all__ = ["REGIMES", "regime", "limits_facts", "limits_section"]
 
-#: Glucose-signal gain -> how the report names the regime
+#: Preset -> (its glucose-signal gain, how the report names the regime)
 #: (:mod:`nirglucose.config.presets`: the gains and how each was calibrated).
-REGIMES: Final[dict[float, str]] = {
-    PAPER_SIGNAL_GAIN: "the study's what-if (×11)",
-    WEARABLE_SIGNAL_GAIN: "a basic wearable (×12.5)",
-    1.0: "published magnitudes",
+REGIMES: Final[dict[str, tuple[float, str]]] = {
+    "paper": (PAPER_SIGNAL_GAIN, "the study's what-if (×11)"),
+    "wearable": (WEARABLE_SIGNAL_GAIN, "a basic wearable (×12.5)"),
+    "physical": (1.0, "published magnitudes"),
 }
 
 
-def regime(gain: float | None) -> str:
-    """The regime a glucose-signal gain stands for, in the report's words.
+def regime(gain: float | None, preset: str | None = None) -> str:
+    """The regime a preset's glucose-signal gain stands for, in the report's words.
+
+    A named preset at its own gain takes its regime's name (:data:`REGIMES`); a gain of
+    1 is the published magnitudes whatever the preset; any other gain is said as a
+    factor.
 
     Examples
     --------
-    >>> regime(11.0), regime(1.0)
+    >>> regime(11.0, "paper"), regime(1.0, "lab")
     ("the study's what-if (×11)", 'published magnitudes')
-    >>> regime(3.0)
-    '×3 the published glucose signal'
+    >>> regime(12.5, "lab")
+    '×12.5 the published glucose signal'
     """
     if gain is None:
         return "glucose signal gain not recorded"
-    if float(gain) in REGIMES:
-        return REGIMES[float(gain)]
+    if preset in REGIMES and float(gain) == REGIMES[preset][0]:
+        return REGIMES[preset][1]
+    if float(gain) == 1.0:
+        return "published magnitudes"
     return f"×{format_number(gain, style='general')} the published glucose signal"
 
 
@@ -105,7 +111,7 @@ def limits_facts(res: Results, run: RunData) -> dict[str, Any]:
     return {
         "preset": run.preset,
         "gain": None if gain is None else float(gain),
-        "regime": regime(None if gain is None else float(gain)),
+        "regime": regime(None if gain is None else float(gain), run.preset),
         "physiology": _config_value(res, "device.physiology"),
         "privileged": {label(x): knows(k) for x in rows
                        if x != NO_SKILL and (k := privilege(run, x)) is not None},
