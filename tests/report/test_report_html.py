@@ -16,12 +16,13 @@ from nirglucose.exceptions import DataError
 from nirglucose.report import build_report, load_results
 
 #: Every figure of the report: anchor key -> printed number.
+#: Numbered in page order: each figure beside the text that cites it (issue 39).
 FIGURES = {
-    "data": "1", "environment": "2", "physiology": "3", "pipeline": "4",
-    "architecture": "5", "features": "6", "scatter": "7", "bland_altman": "8",
-    "residuals": "9", "fold_spread": "10", "training": "11", "physics_weight": "12",
-    "radar": "13", "physics_depth": "14", "efficiency": "15", "performance": "16",
-    "wavelengths": "17", "forest": "18",
+    "wavelengths": "1", "forest": "2", "performance": "3", "scatter": "4",
+    "bland_altman": "5", "residuals": "6", "fold_spread": "7", "training": "8",
+    "physics_weight": "9", "architecture": "10", "radar": "11", "physics_depth": "12",
+    "efficiency": "13", "data": "14", "environment": "15", "physiology": "16",
+    "pipeline": "17", "features": "18",
 }
 
 
@@ -150,11 +151,11 @@ def test_figures_written_as_png_and_svg(minimal_results, tmp_path):
 
     figs = render_figures(load_results(minimal_results), tmp_path / "figs",
                           include=["forest", "training"])
-    assert [f.key for f in figs] == ["training", "forest"]
-    assert figs[0].files == []  # not drawn: no histories.json
-    stem = f"fig{figs[1].number}_forest"
-    assert [p.name for p in figs[1].files] == [f"{stem}.png", f"{stem}.svg"]
-    assert all(p.stat().st_size > 0 for p in figs[1].files)
+    assert [f.key for f in figs] == ["forest", "training"]  # page order
+    assert figs[1].files == []  # not drawn: no histories.json
+    stem = f"fig{figs[0].number}_forest"
+    assert [p.name for p in figs[0].files] == [f"{stem}.png", f"{stem}.svg"]
+    assert all(p.stat().st_size > 0 for p in figs[0].files)
 
 
 def test_no_networks_says_so(tmp_path):

@@ -82,7 +82,8 @@ def test_build_report_includes_sweep_sections(synthetic_results, grid_dir, tmp_p
     out = build_report(synthetic_results, tmp_path / "r.html", sweep_dirs=[grid_dir])
     page = out.read_text()
     assert page.count('<section id="sweep">') == 1
-    assert page.index('id="figures"') < page.index('<section id="sweep">')
+    # after the provenance and its figures (each figure sits beside its text, issue 39)
+    assert page.index('id="figs-data"') < page.index('<section id="sweep">')
 
 
 def test_cli_report_rejects_a_missing_sweep_dir(synthetic_results, tmp_path, capsys):

@@ -18,10 +18,11 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from .registry import describe_model
+from ..exceptions import ConfigError
+from .registry import describe_model, privileged_knowledge
 
 __all__ = ["MODEL_LABELS", "NO_PHYSICS", "LAMBDA_ROW", "label", "ablation_base",
-           "lambda_row", "plain_text", "describe"]
+           "lambda_row", "plain_text", "describe", "row_privilege", "knows"]
 
 #: Display names of the registered models (the study's own names for its six).
 MODEL_LABELS: dict[str, str] = {
@@ -90,6 +91,42 @@ def label(model: str) -> str:
     if model.endswith(NO_PHYSICS):
         return f"{MODEL_LABELS.get(base, base)} (no physics)"
     return f"{MODEL_LABELS.get(base, base)} (λ = {model.split(LAMBDA_ROW)[1]})"
+
+
+def row_privilege(row: str) -> str | None:
+    """What a benchmark row's estimator knows beyond the measured columns (None: deployable).
+
+    :func:`~nirglucose.models.registry.privileged_knowledge` of the registered model;
+    a ``/lambda=`` row is its PINN's, a ``/no-physics`` row has no physics term and so
+    reads nothing more than the measured columns (None); a name the registry does not
+    know (a user's own estimator, a reference row written by an older run) is taken as
+    deployable, as :func:`~nirglucose.models.registry.privileged_knowledge` takes an
+    estimator that declares nothing.
+
+    >>> row_privilege("ebl") is None, row_privilege("original-pinn-fm/no-physics") is None
+    (True, True)
+    >>> row_privilege("physics-inversion").startswith("the generating scenario")
+    True
+    """
+    if row.endswith(NO_PHYSICS):
+        return None
+    base = ablation_base(row) or row
+    try:
+        return privileged_knowledge(base)
+    except ConfigError:
+        return None
+
+
+def knows(privileged: str) -> str:
+    """A privileged declaration as the report words it: ``"knows the …"``, parentheses out.
+
+    >>> knows("the generating scenario and the simulator's forward model (Dataset.config)")
+    "knows the generating scenario and the simulator's forward model"
+    >>> knows("true nuisances (true_* columns) and the generating scenario")
+    'knows the true nuisances and the generating scenario'
+    """
+    text = re.sub(r"\s*\([^)]*\)", "", privileged).strip()
+    return "knows " + (text if text.startswith("the ") else "the " + text)
 
 
 #: A reST cross-reference in parentheses to a private name, `` (:class:`_Hybrid`)``:

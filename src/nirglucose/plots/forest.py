@@ -28,9 +28,10 @@ __all__ = ["plot_rmse_forest", "plot_preset_forest", "figure_headline", "HEADLIN
 
 #: Marker fill of the headline figure by status against the preset's best model.
 HEADLINE_STATUS = {
-    "best": "best (lowest RMSE)",
+    "best": "best deployable (lowest RMSE)",
     "tied": "not distinguishable from the best (paired, Holm)",
     "worse": "significantly worse than the best",
+    "reference": "privileged reference, black and hollow (knows the generator; not ranked)",
 }
 
 
@@ -110,6 +111,7 @@ def plot_preset_forest(
     title: str | None = None,
     xmax: float | None = None,
     ax: Axes | None = None,
+    labels: Mapping[str, str] | None = None,
 ) -> Axes:
     """One preset's panel of the headline figure.
 
@@ -128,6 +130,8 @@ def plot_preset_forest(
         Upper x limit. [mg/dL]
     ax : matplotlib.axes.Axes, optional
         Axes to draw on.
+    labels : mapping of str to str, optional
+        Row labels (default: each model's label), e.g. marking a PINN's physics off.
 
     Returns
     -------
@@ -142,11 +146,22 @@ def plot_preset_forest(
         b = t.loc[best[0]]
         ax.axvspan(b["rmse_ci_low"], b["rmse_ci_high"], color=model_color(best[0]),
                    alpha=0.12, lw=0, zorder=0)
+    refs = [m for m in order if m in t.index and t.at[m, "status"] == "reference"] \
+        if "status" in t else []
+    if refs:  # the privileged references apart, under a grey rule
+        ax.axhline(max(y[m] for m in refs) + 0.5, color=GREY, lw=0.8, zorder=1)
     for m in [m for m in order if m in t.index]:
         r = t.loc[m]
         lo, hi, v = r["rmse_ci_low"], r["rmse_ci_high"], r["rmse_mgdl"]
         err = ([[max(v - lo, 0.0)], [max(hi - v, 0.0)]]
                if np.isfinite(lo) and np.isfinite(hi) else None)
+        if m in refs:  # drawn like the oracle: black, hollow, its CI dotted
+            bars = ax.errorbar([v], [y[m]], xerr=err, fmt=model_marker(m), ms=7,
+                               color="black", ecolor="black", mfc="white", mec="black",
+                               mew=1.2, elinewidth=1.0, capsize=3, zorder=3)
+            for line in bars[2]:
+                line.set_linestyle(":")
+            continue
         c = model_color(m)
         open_ = r.get("status", "") == "worse"
         ax.errorbar([v], [y[m]], xerr=err, fmt=model_marker(m), ms=8 if r.get("status") ==
@@ -161,7 +176,8 @@ def plot_preset_forest(
                     xytext=(2, 2), textcoords="offset points", fontsize=7.5, color=col,
                     ha="left" if ref == "oracle" else "right", va="bottom")
     ax.set_yticks([y[m] for m in order])
-    ax.set_yticklabels([model_label(m) for m in order])
+    ax.set_yticklabels([(labels or {}).get(m, model_label(m))
+                        + (" (reference)" if m in refs else "") for m in order])
     ax.set_ylim(-0.7, len(order) - 0.3)
     ax.set_xlim(0.0, xmax)
     ax.grid(axis="x", color=GREY, alpha=0.25, lw=0.6)
@@ -193,6 +209,9 @@ def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, f
     presets = list(dict.fromkeys(table["preset"]))
     first = table[table["preset"] == presets[0]].sort_values("rmse_mgdl")
     order = list(dict.fromkeys([*first["model"], *table["model"]]))
+    is_ref = set(table.loc[table["status"] == "reference", "model"]) if "status" in table \
+        else set()
+    order = [m for m in order if m not in is_ref] + [m for m in order if m in is_ref]
     with plot_style():
         fig = Figure(figsize=(4.6 * len(presets) + 1.6, 0.36 * len(order) + 1.9),
                      layout="constrained")
@@ -201,17 +220,23 @@ def figure_headline(table: pd.DataFrame, references: Mapping[str, Mapping[str, f
             part = table[table["preset"] == p]
             refs = dict(references.get(p, {}))
             xmax = 1.08 * max([*part["rmse_ci_high"].dropna(), *refs.values(), 1.0])
-            plot_preset_forest(part, refs, order, title=f"preset: {p}", xmax=xmax, ax=ax)
+            plot_preset_forest(part, refs, order, title=f"preset: {p}", xmax=xmax, ax=ax,
+                               labels=(dict(zip(table["model"], table["label"], strict=True))
+                                       if "label" in table else None))
         handles = [Line2D([], [], ls="none", marker="o", ms=8, mfc="#444444", mec="black",
                           label=HEADLINE_STATUS["best"] + " (its CI shaded)"),
                    Line2D([], [], ls="none", marker="o", ms=6.5, mfc="#444444", mec="black",
                           label=HEADLINE_STATUS["tied"]),
                    Line2D([], [], ls="none", marker="o", ms=6.5, mfc="white", mec="#444444",
                           mew=1.3, label=HEADLINE_STATUS["worse"]),
+                   Line2D([], [], ls=":", marker="8", ms=7, mfc="white", mec="black",
+                          color="black", mew=1.2, label=HEADLINE_STATUS["reference"]),
                    Line2D([], [], ls="--", color=GREY, label="no skill (training mean)"),
                    Line2D([], [], ls=":", color="black", label="oracle (true nuisances, a bound)")]
-        if not (table["status"] != "").any():  # no comparisons: no status to show
+        if not (table["status"].isin(("best", "tied", "worse"))).any():  # no comparisons
             handles = handles[3:]
+        if not is_ref:
+            handles = [h for h in handles if h.get_label() != HEADLINE_STATUS["reference"]]
         fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=7.5,
                    frameon=False)
     return fig

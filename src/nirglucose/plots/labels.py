@@ -5,7 +5,8 @@ settles the figure's layout, then places each label greedily at the nearest free
 around its point: candidate offsets on rings of growing radius, the first whose
 window extent (matplotlib's ``Text.get_window_extent``) clears the labels already
 placed, the Axes' other texts and horizontal/vertical reference lines, every marker of
-the Axes and the Axes' edges. A label set away from its point
+the Axes and the Axes' edges, and that is no nearer another point than its own (else a
+reader takes it for that point's label). A label set away from its point
 gets a thin leader line. The layout is frozen afterwards so the places stay valid.
 """
 
@@ -76,6 +77,18 @@ def _overlap(a: Bbox, b: Bbox) -> float:
     return w * h if w > 0 and h > 0 else 0.0
 
 
+def _gap(a: Bbox, x: float, y: float) -> float:
+    """Distance from the point (x, y) to the box ``a`` (0 inside it). [px]"""
+    return float(np.hypot(max(a.x0 - x, 0.0, x - a.x1), max(a.y0 - y, 0.0, y - a.y1)))
+
+
+def _misattributed(bb: Bbox, k: int, pts: np.ndarray) -> bool:
+    """Whether the label box ``bb`` of point ``k`` sits nearer another point than its own
+    (a reader would read it as that point's label)."""
+    own = _gap(bb, *pts[k])
+    return any(_gap(bb, *pts[j]) < own for j in range(len(pts)) if j != k)
+
+
 def _outside(a: Bbox, frame: Bbox) -> float:
     inner = _overlap(a, frame)
     return a.width * a.height - inner
@@ -93,6 +106,35 @@ def _fixed_obstacles(ax: Axes, renderer) -> list[Bbox]:
         if line.get_visible() and len(x) >= 2 and (np.ptp(x) == 0 or np.ptp(y) == 0):
             boxes.append(line.get_window_extent(renderer).padded(PAD_PX))
     return boxes
+
+
+def _best_spot(ann, p: dict, k: int, pts: np.ndarray, markers: list[Bbox],
+               placed: list[Bbox], frame: Bbox, renderer) -> tuple:
+    """The first free spot of label ``ann`` of point ``k`` on the rings, nearest first, else
+    the least bad: ``(dx, dy, ha, va, ring)`` in points."""
+    best, best_cost = None, np.inf
+    for ring in RING_RADII_PT:
+        radius = p["r"] + ring
+        for ang in RING_ANGLES_DEG:
+            dx, dy = np.cos(np.radians(ang)), np.sin(np.radians(ang))
+            ha = "left" if dx > 0.3 else "right" if dx < -0.3 else "center"
+            va = "bottom" if dy > 0.3 else "top" if dy < -0.3 else "center"
+            ann.set_position((radius * dx, radius * dy))
+            ann.set_ha(ha)
+            ann.set_va(va)
+            bb = ann.get_window_extent(renderer).expanded(1.0, 1.0).padded(PAD_PX)
+            cost = (sum(_overlap(bb, o) for o in placed)
+                    + sum(_overlap(bb, m) for m in markers)
+                    + 4.0 * _outside(bb, frame)
+                    # nearer another marker than its own, with no leader line to say
+                    # whose it is: read as that one's
+                    + (0.5 * bb.width * bb.height
+                       if ring <= LEADER_FROM_PT and _misattributed(bb, k, pts) else 0.0))
+            if cost < best_cost - 1e-9:
+                best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
+            if cost == 0.0:
+                return best
+    return best
 
 
 def place_labels(fig: Figure) -> None:
@@ -120,26 +162,7 @@ def place_labels(fig: Figure) -> None:
             ann = ax.annotate(p["text"], (p["x"], p["y"]), xytext=(0, 0),
                               textcoords="offset points", fontsize=p["fontsize"],
                               color=p["color"], zorder=5, annotation_clip=False)
-            best, best_cost = None, np.inf
-            for ring in RING_RADII_PT:
-                radius = p["r"] + ring
-                for ang in RING_ANGLES_DEG:
-                    dx, dy = np.cos(np.radians(ang)), np.sin(np.radians(ang))
-                    ha = "left" if dx > 0.3 else "right" if dx < -0.3 else "center"
-                    va = "bottom" if dy > 0.3 else "top" if dy < -0.3 else "center"
-                    ann.set_position((radius * dx, radius * dy))
-                    ann.set_ha(ha)
-                    ann.set_va(va)
-                    bb = ann.get_window_extent(renderer).expanded(1.0, 1.0).padded(PAD_PX)
-                    cost = (sum(_overlap(bb, o) for o in placed)
-                            + sum(_overlap(bb, m) for m in markers)
-                            + 4.0 * _outside(bb, frame))
-                    if cost < best_cost - 1e-9:
-                        best, best_cost = (radius * dx, radius * dy, ha, va, ring), cost
-                    if cost == 0.0:
-                        break
-                if best_cost == 0.0:
-                    break
+            best = _best_spot(ann, p, k, pts, markers, placed, frame, renderer)
             assert best is not None
             ann.set_position(best[:2])
             ann.set_ha(best[2])

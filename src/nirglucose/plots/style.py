@@ -14,8 +14,9 @@ References
 from __future__ import annotations
 
 import io
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import wraps
 from pathlib import Path
 
@@ -38,6 +39,7 @@ __all__ = [
     "model_color",
     "model_colors",
     "model_label",
+    "model_labels",
     "model_marker",
     "plot_style",
     "styled",
@@ -205,15 +207,42 @@ def model_marker(model: str) -> str:
     return MODEL_MARKERS.get(model, "o")
 
 
+#: Labels that replace :func:`nirglucose.models.labels.label` inside :func:`model_labels`.
+_LABEL_OVERRIDES: ContextVar[Mapping[str, str] | None] = ContextVar("model_label_overrides",
+                                                                      default=None)
+
+
+@contextmanager
+def model_labels(overrides: Mapping[str, str]) -> Iterator[None]:
+    """Context in which :func:`model_label` gives ``overrides[model]`` where it has one
+    (the report marks a PINN trained with its physics weight at 0 ``physics off`` in
+    every figure of its preset).
+
+    Examples
+    --------
+    >>> with model_labels({"ebl": "EBL (physics off)"}):
+    ...     model_label("ebl")
+    'EBL (physics off)'
+    >>> model_label("ebl")
+    'Enhanced Beer–Lambert'
+    """
+    token = _LABEL_OVERRIDES.set({**(_LABEL_OVERRIDES.get() or {}), **overrides})
+    try:
+        yield
+    finally:
+        _LABEL_OVERRIDES.reset(token)
+
+
 def model_label(model: str) -> str:
-    """Display name of a model in a figure: :func:`nirglucose.models.labels.label`.
+    """Display name of a model in a figure: :func:`nirglucose.models.labels.label`, or
+    its override inside :func:`model_labels`.
 
     Examples
     --------
     >>> model_label("ebl")
     'Enhanced Beer–Lambert'
     """
-    return label(model)
+    return (_LABEL_OVERRIDES.get() or {}).get(str(model)) or label(model)
 
 
 @contextmanager

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from numpy.typing import ArrayLike
 
+from ..models.labels import label
 from .labels import label_points, place_labels
 from .style import (
     GREY,
@@ -56,14 +57,18 @@ def _reference_lines(ax: Axes, references: Mapping[str, float] | None
                      ) -> list[tuple[str, float]]:
     """Horizontal lines for reference rows (a bound or no skill), labelled at the right."""
     out = []
-    for name, v in (references or {}).items():
-        if v is None or not np.isfinite(v):
-            continue
-        ax.axhline(v, color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0, zorder=1)
-        ax.annotate(f"{model_label(name)}: {v:.1f}", (1.0, v), xycoords=("axes fraction", "data"),
-                    xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
-                    fontsize=7, color=GREY)
-        out.append((name, float(v)))
+    shown = sorted(((n, float(v)) for n, v in (references or {}).items()
+                    if v is not None and np.isfinite(v)), key=lambda nv: nv[1])
+    for k, (name, v) in enumerate(shown):
+        ax.axhline(v, color=GREY, ls=_REF_STYLE.get(name, "-."), lw=1.0, zorder=1)
+        # neighbours in value alternate between the right and the left end of the line,
+        # so that two close references do not print over each other
+        right = k % 2 == 0
+        ax.annotate(f"{label(name)}: {v:.1f}", (1.0 if right else 0.0, v),
+                    xycoords=("axes fraction", "data"), xytext=(-2 if right else 2, 2),
+                    textcoords="offset points", ha="right" if right else "left",
+                    va="bottom", fontsize=7, color=GREY)
+        out.append((name, v))
     return out
 
 
@@ -279,8 +284,9 @@ def _draw_bubbles(ax: Axes, t: pd.DataFrame, pmax: float, front: np.ndarray) -> 
             ax.scatter([x[k]], [row["rmse_mgdl"]], s=max(1.6 * areas[k], 110.0),
                        facecolors="none", edgecolors="black", linewidths=1.5, zorder=4)
     label_points(ax, x, t["rmse_mgdl"].to_numpy(float),
-                 [f"{model_label(m)}\n{int(p):,} params"
-                  for m, p in zip(t["model"], t["n_parameters"], strict=True)],
+                 [f"{lab}\n{int(p):,} params"
+                  for lab, p in zip(t["label"] if "label" in t else map(model_label, t["model"]),
+                                    t["n_parameters"], strict=True)],
                  marker_radius_pt=np.sqrt(np.where(front, np.maximum(1.6 * areas, 110.0),
                                                    areas)) / 2.0)
 
@@ -296,8 +302,8 @@ def _bubble_legend(ax: Axes, pmax: float, any_front: bool, references: Sequence[
                               mew=1.5))
         labels.append("Pareto-optimal\n(parameters vs RMSE)")
     for name in references:
-        handles.append(Line2D([], [], color=GREY, ls=_REF_STYLE.get(name, "--"), lw=1.0))
-        labels.append(f"{model_label(name)}\n(reference, not a competitor)")
+        handles.append(Line2D([], [], color=GREY, ls=_REF_STYLE.get(name, "-."), lw=1.0))
+        labels.append(f"{label(name)}\n(reference, not a competitor)")
     biggest = float(np.sqrt(bubble_area([max(refs)], pmax)[0]))
     ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
               labelspacing=max(1.0, biggest / 14.0), borderpad=0.9,

@@ -15,6 +15,7 @@ import logging
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
 import pandas as pd
 
 from ..evaluation.benchmark.findings import (
@@ -28,13 +29,15 @@ from ..evaluation.benchmark.findings import (
 )
 from ..evaluation.benchmark.subgroups import subgroup_findings
 from ..formatting import format_number
+from ..models.labels import knows
 from .markup import esc as _esc
 from .markup import preset_of
 
 if TYPE_CHECKING:
     from .figures import Results
 
-__all__ = ["preset_of", "run_data", "findings_section", "ANCHOR_NAMES"]
+__all__ = ["preset_of", "run_data", "computed_findings", "findings_section", "finding_html",
+           "ANCHOR_NAMES"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,7 +67,7 @@ def run_data(results: Results) -> RunData:
             ablation = None
     return RunData(preset=preset_of(results), metrics=results.metrics, meta=results.meta,
                    predictions=results.predictions, comparisons=results.comparisons,
-                   ablation=ablation, drop_one=results.drop_one)
+                   ablation=ablation, drop_one=results.drop_one, histories=results.histories)
 
 
 def _value_html(v: Value) -> str:
@@ -92,8 +95,9 @@ def finding_html(f: Finding) -> str:
 
 #: Heading of each topic of the findings, in reading order.
 TOPIC_TITLES = {
-    "best": "Best model", "distance": "Distance from no skill and from the oracle",
-    "physics": "Does physics help?", "leds": "What each LED adds",
+    "best": "Best deployable model, and the references",
+    "distance": "Distance from no skill and from the oracle",
+    "physics": "The physics terms and their ablations", "leds": "What each LED adds",
     "claims": "The study's claims",
     "presets": "What separates the presets", "range": "Glucose range",
     "subgroups": "Subgroups", "subjects": "Sample size",
@@ -124,19 +128,25 @@ def _headline_html(runs: Sequence[RunData]) -> str:
     return (f'<figure id="fig-headline"><div class="zoom"><img '
             f'src="data:image/png;base64,{data}" alt="{_esc(alt)}"></div>'
             '<p class="zoom-hint">Full size: scroll the figure sideways.</p>'
-            "<figcaption><b>Headline figure.</b> Each competitor's RMSE "
+            "<figcaption><b>Headline figure.</b> Each deployable competitor's RMSE "
             "with its 95 % cluster-bootstrap CI on every preset (rows sorted by the first "
             "preset's RMSE, one colour and marker per model as in every figure). Filled: "
-            "the best model (its CI shaded) and those not distinguishable from it (paired "
-            "cluster bootstrap over subjects, Holm-adjusted); open: significantly worse. "
-            "Dashed: no skill (the training mean); dotted: the oracle, which inverts the "
-            "forward model with the true nuisances (a bound, not a competitor)."
+            "the best deployable model (its CI shaded) and those not distinguishable from "
+            "it (paired cluster bootstrap over subjects, Holm-adjusted); open: "
+            "significantly worse. Below the grey rule, black hollow markers with dotted CIs: "
+            "privileged references (they read the generating scenario), drawn apart like "
+            "the oracle and never ranked. Dashed: no skill (the training mean); dotted: "
+            "the oracle, which inverts the forward model with the true nuisances (a bound, "
+            "not a competitor)."
             "</figcaption></figure>")
 
 
 def _alt_of(table: pd.DataFrame, refs: dict, preset: str) -> str:
     """Content-bearing alt text of one panel: best, tied count and the references."""
     part = table[table["preset"] == preset].sort_values("rmse_mgdl")
+    part = part[part["status"] != "reference"]  # privileged: never best nor worst
+    if not len(part):
+        return f"{preset}: no deployable competitor"
     best = part[part["status"] == "best"]
     head = part.iloc[0] if not len(best) else best.iloc[0]
 
@@ -151,6 +161,15 @@ def _alt_of(table: pd.DataFrame, refs: dict, preset: str) -> str:
     return txt
 
 
+def _not_better(beats: object) -> bool:
+    """Whether a ``beats_no_skill`` cell says "tested, not significantly better": False
+    as a Python or NumPy bool (a bool column gives ``numpy.bool_``, never ``False``
+    itself); None or NaN (not tested) is not."""
+    if beats is None or (not isinstance(beats, (bool, np.bool_)) and pd.isna(beats)):
+        return False
+    return not bool(beats)
+
+
 def _distance_html(dist: pd.DataFrame) -> str:
     """Competitors × presets: RMSE, mg/dL below no skill, % of its error removed, × oracle."""
     if not len(dist):
@@ -159,6 +178,10 @@ def _distance_html(dist: pd.DataFrame) -> str:
     models = list(dict.fromkeys(dist.sort_values("rmse", key=lambda s: s.map(
         lambda v: v.value)).loc[lambda d: d["preset"] == presets[0], "model"]))
     models += [m for m in dict.fromkeys(dist["model"]) if m not in models]
+    knows_of = ({str(m): k for m, k in zip(dist["model"], dist["privileged"], strict=True)
+                 if isinstance(k, str)} if "privileged" in dist.columns else {})
+    refs = [m for m in models if m in knows_of]
+    models = [m for m in models if m not in knows_of]
     cols = (("rmse", "RMSE [mg/dL]"), ("below_no_skill", "below no skill [mg/dL]"),
             ("share_removed", "no-skill error removed [%]"), ("vs_oracle", "× oracle [-]"))
     head1 = "<th rowspan=2>Model</th>" + "".join(
@@ -166,17 +189,23 @@ def _distance_html(dist: pd.DataFrame) -> str:
     head2 = "".join(f"<th>{_esc(h)}</th>" for _ in presets for _, h in cols)
 
     rows = []
-    for m in models:
-        cells = [f"<td>{_esc(label(m))}</td>"]
+    for m in [*models, *refs]:
+        if refs and m == refs[0]:
+            rows.append(f'<tr class="ref-head"><td colspan={1 + len(cols) * len(presets)}>'
+                        "References, not competitors (privileged: they read what no device "
+                        "measures)</td></tr>")
+        name = label(m) + (f" — reference ({knows(knows_of[m])})" if m in knows_of else "")
+        cells = [f"<td>{_esc(name)}</td>"]
         for p in presets:
             r = dist[(dist["preset"] == p) & (dist["model"] == m)]
             for c, _ in cols:
                 v = r[c].iloc[0] if len(r) else None
                 txt = _value_html(v) if isinstance(v, Value) else "–"
-                if c == "share_removed" and len(r) and r["beats_no_skill"].iloc[0] is False:
+                if c == "share_removed" and len(r) and _not_better(r["beats_no_skill"].iloc[0]):
                     txt += " (n.s.)"
                 cells.append(f"<td>{txt}</td>")
-        rows.append("<tr>" + "".join(cells) + "</tr>")
+        rows.append(('<tr class="ref">' if m in knows_of else "<tr>") + "".join(cells)
+                    + "</tr>")
     return ("<h3>Distance from no skill and from the oracle</h3>"
             "<p>Share of the no-skill error removed = 1 − RMSE / no-skill RMSE; "
             "(n.s.): not significantly better than no skill (paired cluster bootstrap over "
@@ -185,8 +214,19 @@ def _distance_html(dist: pd.DataFrame) -> str:
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
 
 
+def computed_findings(runs: Sequence[Results], *, n_boot: int = 2000
+                      ) -> tuple[list[RunData], list[Finding], pd.DataFrame]:
+    """Each run's :class:`RunData`, every finding and the distances, computed once
+    (the limits box and the findings section both read them)."""
+    data = [run_data(r) for r in runs]
+    findings, dist = compute_findings(data, n_boot=n_boot)
+    return data, findings, dist
+
+
 def findings_section(runs: Sequence[Results], *, n_boot: int = 2000,
-                     subgroups: Mapping[str, pd.DataFrame] | None = None) -> str:
+                     subgroups: Mapping[str, pd.DataFrame] | None = None,
+                     computed: tuple[list[RunData], list[Finding], pd.DataFrame] | None = None
+                     ) -> str:
     """The findings section: sentences, the headline figure, the distances table.
 
     Parameters
@@ -198,14 +238,19 @@ def findings_section(runs: Sequence[Results], *, n_boot: int = 2000,
     subgroups : mapping of str to pandas.DataFrame, optional
         Each preset's subgroup errors (:func:`nirglucose.report.subgroups.subgroup_tables`):
         a finding per grouping on the best model.
+    computed : tuple, optional
+        :func:`computed_findings` of ``runs`` when the caller has it.
 
     Returns
     -------
     str
-        HTML (``<section id="findings">``), empty when nothing can be said.
+        HTML (``<section id="findings">``), empty when nothing can be said. The
+        one-line answers (topic ``answer``) are the limits box's
+        (:mod:`nirglucose.report.limits`), not repeated here.
     """
-    data = [run_data(r) for r in runs]
-    findings, dist = compute_findings(data, n_boot=n_boot)
+    data, findings, dist = computed if computed is not None else computed_findings(
+        runs, n_boot=n_boot)
+    findings = [f for f in findings if f.topic != "answer"]
     for run in data:
         table = (subgroups or {}).get(run.preset)
         if table is not None:

@@ -23,8 +23,9 @@ from ..dataset import atomic_write
 from ..exceptions import DataError
 from .figures import RenderedFigure, Results, load_results, render_figures
 from .figures.inputs import latency_resolution
-from .findings import findings_section
+from .findings import computed_findings, findings_section
 from .inverse import inverse_section
+from .limits import limits_section
 from .markup import esc as _esc
 from .markup import markdown_to_html, preset_of
 from .params import hyperparameter_section
@@ -35,7 +36,8 @@ from .tables import extra_table as _extra_table
 from .tables import glucose_coverage, hypo_note, main_table, table_title
 from .tables import significance as _significance
 
-__all__ = ["build_report", "render_html", "markdown_to_html", "REPORT_TITLE", "glucose_coverage"]
+__all__ = ["build_report", "render_html", "markdown_to_html", "REPORT_TITLE", "glucose_coverage",
+           "FIGURE_SLOTS", "figure_slot"]
 
 #: Title of the page.
 REPORT_TITLE = "nirglucose benchmark report"
@@ -92,7 +94,19 @@ a.mark { text-decoration: none; margin-left: .1em; }
 td.untested { color: var(--muted); font-style: italic; text-align: center; }
 td.off { color: var(--muted); font-style: italic; }
 details.more { margin: -.4rem 0 1rem; }
+section#limits .limits { display: grid; gap: .6rem;
+  grid-template-columns: repeat(auto-fit, minmax(18rem, 1fr)); }
+section#limits .limit { border: 1px solid var(--line); border-left: 4px solid #E69F00;
+  background: #fffaf0; padding: .3rem .7rem; font-size: 13px; }
+section#limits .limit h3 { margin: .2rem 0; font-size: .98rem; }
+section#limits .limit ul { margin: .2rem 0; padding-left: 1.1rem; }
+section#limits ul.answer li { margin: .25rem 0; }
+tr.ref td { color: var(--muted); font-style: italic; }
+tr.ref-head td { background: #f3f3f3; color: var(--muted); text-align: left; }
+h2.figs { font-size: 1.1rem; }
 @media print {
+  /* raw JSON is for the screen: on paper it is pages of braces */
+  details.json, pre { display: none !important; }
   @page { size: A4; margin: 10mm; }
   body { max-width: none; padding: 0; font-size: 10px; }
   details > * { display: block; }
@@ -102,7 +116,7 @@ details.more { margin: -.4rem 0 1rem; }
   th, td { white-space: normal; padding: .1rem .2rem; }
   figure { break-inside: avoid; }
   figure img { max-width: 100%; }
-  nav ul.figs { columns: 2; }
+  nav ul.figs, nav details.figlist { display: none; }
 }
 """
 
@@ -150,7 +164,7 @@ def _run_info(results: Results) -> str:
     cfg = results.config
     if cfg is not None:
         cfg_json = json.dumps(cfg.model_dump(mode="json"), indent=2, sort_keys=True)
-        out.append(f"<details><summary>Resolved configuration (JSON)</summary>"
+        out.append(f'<details class="json"><summary>Resolved configuration (JSON)</summary>'
                    f'<pre id="config">{_esc(cfg_json)}</pre></details>')
     else:
         out.append('<p class="note">' + (
@@ -159,7 +173,7 @@ def _run_info(results: Results) -> str:
             "The resolved configuration is not recorded in these results.") + "</p>")
     rest = {k: v for k, v in meta.items() if k != "config"}
     if rest:
-        out.append(f"<details><summary>All run metadata (JSON)</summary>"
+        out.append(f'<details class="json"><summary>All run metadata (JSON)</summary>'
                    f"<pre>{_esc(json.dumps(rest, indent=2, sort_keys=True, default=str))}"
                    f"</pre></details>")
     return "\n".join(out)
@@ -178,35 +192,83 @@ def _figure_html(f: RenderedFigure) -> str:
             f"<figcaption>{cap}</figcaption></figure>")
 
 
+#: Where each figure sits: beside the text that cites it. Slot -> (heading, figure keys
+#: without their preset suffix). Figures are numbered in this order
+#: (:mod:`nirglucose.report.figures.sections`).
+FIGURE_SLOTS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "leds": ("Figures: what each LED adds", ("wavelengths",)),
+    "accuracy": ("Figures: accuracy and agreement", (
+        "forest", "performance", "scatter", "bland_altman", "residuals", "fold_spread")),
+    "physics": ("Figures: the networks and their physics terms", (
+        "training", "physics_weight", "architecture")),
+    "tradeoffs": ("Figures: accuracy against physics depth and cost", (
+        "radar", "physics_depth", "efficiency")),
+    "data": ("Figures: the data and how it was made", (
+        "data", "environment", "physiology", "pipeline", "features")),
+}
+
+
+def figure_slot(key: str) -> str:
+    """The slot of a figure key (``"other"`` when none claims it).
+
+    >>> figure_slot("forest_wearable"), figure_slot("physics_depth"), figure_slot("x")
+    ('accuracy', 'tradeoffs', 'other')
+    """
+    for slot, (_, keys) in FIGURE_SLOTS.items():
+        if any(key == k or key.startswith(k + "_") for k in keys):
+            return slot
+    return "other"
+
+
+def _slot_html(slot: str, figures: Sequence[RenderedFigure]) -> str:
+    """One slot's heading and figures ("" when it has none)."""
+    figs = [f for f in figures if figure_slot(f.key) == slot]
+    if not figs:
+        return ""
+    title = FIGURE_SLOTS[slot][0] if slot in FIGURE_SLOTS else "Figures: other"
+    return (f'<h2 class="figs" id="figs-{slot}">{_esc(title)}</h2>\n'
+            + "\n".join(_figure_html(f) for f in figs))
+
+
 #: Contents entries of optional sections: (element id, title).
-_OPTIONAL_CONTENTS = (("findings", "Findings"), ("fig-headline", "Headline figure"),
-                      ("distance-table", "Distance from no skill and the oracle"))
+_OPTIONAL_CONTENTS = (("limits", "What these results rest on"), ("answer", "Does physics help?"),
+                      ("findings", "Findings"), ("fig-headline", "Headline figure"),
+                      ("distance-table", "Distance from no skill and the oracle"),
+                      ("figs-leds", "Figures: what each LED adds"))
 _MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metrics by preset"),
                     ("separation", "What separates the presets"),
-                    ("ablations", "Physics ablation"), ("subgroups", "Subgroups"),
-                    ("hyperparameters", "Hyper-parameters"))
+                    ("ablations", "Physics ablation"),
+                    ("figs-physics", "Figures: the networks and their physics terms"),
+                    ("figs-tradeoffs", "Figures: accuracy against physics depth and cost"),
+                    ("subgroups", "Subgroups"), ("hyperparameters", "Hyper-parameters"))
 
 
 def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Sequence[str],
               extra: Sequence[str], table: str = "Reproduced table") -> str:
-    """The contents list: every section present on the page, and every figure."""
+    """The contents list: every section present on the page, and (folded) every figure."""
     def have(sections: Sequence[str], anchor: str) -> bool:
         return any(f'id="{anchor}"' in x for x in sections)
 
     items = [(a, t) for a, t in _OPTIONAL_CONTENTS if have(top, a)]
-    items += [("table", table), ("further", "Further metrics"),
-              ("significance", "Significance")]
+    items += [("table", table), ("further", "Further metrics")]
+    if have(top, "figs-accuracy"):
+        items.append(("figs-accuracy", "Figures: accuracy and agreement"))
+    items.append(("significance", "Significance"))
     items += [(a, t) for a, t in _MIDDLE_CONTENTS if have(middle, a)]
     if not have(middle, "ablations"):  # one preset: its own ablation heading
         items += [(m.group(1), "Physics ablation") for x in middle
                   for m in re.finditer(r'<h3 id="(ablation-[^"]+)"', x)]
-    items += [("run", "Configuration and provenance"), ("figures", "Figures")]
+    items += [("run", "Configuration and provenance")]
+    items += [(a, t) for a, t in (("figs-data", "Figures: the data and how it was made"),
+                                  ("figs-other", "Figures: other")) if have(extra, a)]
     items += [(m.group(1), html.unescape(m.group(2))) for x in extra
               for m in re.finditer(r'<h2 id="([^"]+)">([^<]+)</h2>', x)]
     toc = "".join(f'<li><a href="#{_esc(a)}">{_esc(t)}</a></li>' for a, t in items)
     toc_figs = "".join(f'<li><a href="#fig-{_esc(f.key)}">Figure {_esc(f.number)}: '
                        f"{_esc(f.title)}</a></li>" for f in figures)
-    return f'<nav><b>Contents</b><ol>{toc}</ol><ul class="figs">{toc_figs}</ul></nav>'
+    figs = (f'<details class="figlist"><summary>All {len(figures)} figures</summary>'
+            f'<ul class="figs">{toc_figs}</ul></details>') if figures else ""
+    return f'<nav><b>Contents</b><ol>{toc}</ol>{figs}</nav>'
 
 
 def _latency_note(results: Results, peers: Sequence[Results] = ()) -> str:
@@ -218,7 +280,7 @@ def _latency_note(results: Results, peers: Sequence[Results] = ()) -> str:
 def render_html(results: Results, figures: Sequence[RenderedFigure], *,
                 title: str = REPORT_TITLE, extra_sections: Sequence[str] = (),
                 middle_sections: Sequence[str] = (), top_sections: Sequence[str] = (),
-                peers: Sequence[Results] = ()) -> str:
+                peers: Sequence[Results] = (), limits: str = "") -> str:
     """The report page as a string (no I/O).
 
     Parameters
@@ -235,6 +297,9 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
     peers : sequence of Results
         The other presets' runs of the same benchmark (their timings measure the noise
         of the latencies).
+    limits : str
+        The limits box and the one-line answers (:mod:`~nirglucose.report.limits`):
+        the first screen, above the contents.
 
     Returns
     -------
@@ -251,13 +316,21 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         f"generated {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}",
     ) if p)
     notes = "".join(f'<p class="note">{_esc(n)}</p>' for n in results.notes)
+    # each figure beside the text that cites it (FIGURE_SLOTS)
+    top = [*top_sections, _slot_html("leds", figures)]
+    accuracy = _slot_html("accuracy", figures)
+    middle = list(middle_sections)
+    physics = [_slot_html("physics", figures), _slot_html("tradeoffs", figures)]
+    middle[1:1] = physics  # after the ablation (or the presets compared), before the rest
+    tail = [_slot_html("data", figures), _slot_html("other", figures)]
     sections = [
         f"<h1>{_esc(title)}</h1>",
         f'<p class="sub">{_esc(sub)}</p>',
+        limits,
         notes,
-        _contents(figures, top_sections, middle_sections, extra_sections,
+        _contents(figures, [limits, *top, accuracy], middle, [*tail, *extra_sections],
                   table_title(results)),
-        *top_sections,
+        *top,
         f'<h2 id="table">{table_title(results)}</h2>',
         ("<p>This run's metrics with 95 % confidence intervals on your data. The study's "
          "Table 1 is left out: it was measured on other data.</p>" if results.user_data else
@@ -268,13 +341,13 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         _latency_note(results, peers),
         '<h3 id="further">Further metrics</h3>',
         _extra_table(results),
+        accuracy,
         '<h2 id="significance">Significance</h2>',
         _significance(results),
-        *middle_sections,
+        *middle,
         '<h2 id="run">Configuration and provenance</h2>',
         _run_info(results),
-        '<h2 id="figures">Figures</h2>',
-        *(_figure_html(f) for f in figures),
+        *tail,
         *extra_sections,
     ]
     body = "\n".join(s for s in sections if s)
@@ -343,9 +416,14 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     middle.append(subgroups_section(runs, groups))
     middle.append(hyperparameter_section(runs))
     middle.append(inverse_section(runs))
-    top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
+    top, limits = [], ""
+    if not results.user_data:
+        computed = computed_findings(runs)
+        top = [findings_section(runs, subgroups=groups, computed=computed)]
+        limits = limits_section(runs, computed[0], computed[1])
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
-                       middle_sections=middle, top_sections=top, peers=runs[1:])
+                       middle_sections=middle, top_sections=top, peers=runs[1:],
+                       limits=limits)
     path = atomic_write(out_path, lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
     path.chmod(0o644)  # the temporary file was private; a report is for reading
     return path

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from ..formatting import format_number
-from ..models.labels import label
+from ..models.labels import label, row_privilege
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -111,10 +111,18 @@ def markdown_to_html(text: str, *, skip_tables: bool = False, skip_h1: bool = Fa
 
 def model_label(model: str, metrics_row: pd.Series | None = None) -> str:
     """The model's label: the run's own (``metrics.csv``'s ``label``), else
-    :func:`nirglucose.models.labels.label`."""
-    if metrics_row is not None and isinstance(metrics_row.get("label"), str):
-        return metrics_row["label"]
-    return label(model)
+    :func:`nirglucose.models.labels.label`; a privileged row (it reads the generating
+    scenario or the true nuisances, :func:`~nirglucose.models.labels.row_privilege`)
+    says it is a reference.
+
+    >>> model_label("physics-inversion")
+    'Physics inversion (forward model) — reference'
+    """
+    name = (metrics_row["label"] if metrics_row is not None
+            and isinstance(metrics_row.get("label"), str) else label(model))
+    if model != "oracle" and row_privilege(str(model)) is not None:
+        name += " — reference"
+    return name
 
 
 def user_data_md(md: str) -> str:

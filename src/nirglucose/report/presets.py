@@ -21,6 +21,7 @@ from ..evaluation.benchmark.findings import RunData, physics_verdicts
 from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
 from ..formatting import as_number, format_number
+from ..models.labels import row_privilege
 from .markup import esc as _esc
 from .markup import model_label as _model_label
 from .tables import extra_table, hypo_note, main_table, significance
@@ -279,7 +280,9 @@ def _separation(
                 f"</code> and <code>{_esc(n)}</code>.</li>"
             )
     for n, (meta, met) in zip(names, loaded, strict=True):
-        ranked = met.drop(index=[m for m in met.index if m == "oracle"], errors="ignore")
+        # the best deployable row: the oracle, no skill, privileged rows and ablations out
+        ranked = met.drop(index=[m for m in met.index if m in ("oracle", "mean") or "/" in m
+                                 or row_privilege(str(m)) is not None], errors="ignore")
         if ranked.empty:
             continue
         best = ranked["rmse_mgdl"].astype(float).idxmin()
@@ -291,7 +294,8 @@ def _separation(
         oracle = meta.get("oracle_rmse_mgdl")
         bound = f"; oracle bound {_num(oracle)} mg/dL" if oracle is not None else ""
         items.append(
-            f"<li>Results on <code>{_esc(n)}</code>: lowest RMSE {_esc(label.get(best, best))} "
+            f"<li>Results on <code>{_esc(n)}</code>: best deployable (lowest RMSE) "
+            f"{_esc(label.get(best, best))} "
             f"at {_num(met.loc[best, 'rmse_mgdl'])} mg/dL{mean}{bound} (which models are "
             'not distinguishable from it: <a href="#findings">Findings</a>).</li>'
         )

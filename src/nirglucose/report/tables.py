@@ -11,6 +11,7 @@ import pandas as pd
 
 from ..evaluation.reference import STUDY_TABLE
 from ..formatting import format_number
+from ..models.labels import knows, row_privilege
 from .markup import esc as _esc
 from .markup import markdown_to_html, preset_of, strip_ablation, user_data_md
 from .markup import model_label as _model_label
@@ -197,12 +198,21 @@ def extra_table(results: Results) -> str:
 
 def significance(results: Results) -> str:
     parts = []
+    c = results.comparisons
+    if c is not None and len(c) and "family" in c and (c["family"] == "vs_best").any():
+        ref = str(c.loc[c["family"] == "vs_best", "reference_model"].iloc[0])
+        if row_privilege(ref) is not None or ref == "oracle":
+            parts.append(
+                '<p class="note">These results were written before the benchmark set '
+                f"privileged rows apart: they rank {_esc(_model_label(ref))}, which "
+                f"{_esc(knows(row_privilege(ref) or 'the true nuisances'))}, as the best. It is "
+                "a reference, not a competitor; the findings above name the best deployable "
+                "model. Rerun the benchmark for statements that set it apart.</p>")
     if results.table_md:
         md = strip_ablation(results.table_md)
         if results.user_data:
             md = user_data_md(md)
         parts.append(markdown_to_html(md, skip_tables=True, skip_h1=True))
-    c = results.comparisons
     if c is not None and len(c):
         if not results.table_md:
             lines = []

@@ -20,7 +20,7 @@ from ...calibration.conformal import LEVELS, coverage_summary, out_of_fold_inter
 from ...dataset.small_data import significance_withheld
 from ...metrics import summary
 from ...metrics.resampling import cluster_bootstrap_metrics, compare_models
-from ...models.labels import label
+from ...models.labels import label, row_privilege
 from ..reference import STUDY_ORDER
 from .result import (
     ABLATION_COLUMNS,
@@ -231,6 +231,7 @@ def _metric_row(
         **{k: v for k, v in ci.items() if "_ci_" in k},
         "model": name,
         "label": label(name),
+        "privileged": row_privilege(name),
         "n_parameters": int(first["n_parameters"]),
         "latency_single_ms": t.get("latency_single_ms", np.nan),
         "latency_single_p90_ms": t.get("latency_single_p90_ms", np.nan),
@@ -329,8 +330,12 @@ def _study_orderings(comparisons: pd.DataFrame) -> dict[str, Any]:
 
 
 def _comparisons(preds, names, *, n_boot, alpha, seed, study: bool = True) -> pd.DataFrame:
-    """Every model against the best; with ``study``, the study's orderings (simulated
-    data only: on a user's device the study's claims were measured elsewhere)."""
+    """Every model against the best deployable one; with ``study``, the study's orderings
+    (simulated data only: on a user's device the study's claims were measured elsewhere).
+
+    The best is chosen among the rows that read only the measured columns: the oracle
+    and every other privileged row (:func:`~nirglucose.models.labels.row_privilege`) are
+    references, compared with the best but never it."""
     frames = []
     if len(names) > 1:
         vs_best = compare_models(
@@ -339,7 +344,7 @@ def _comparisons(preds, names, *, n_boot, alpha, seed, study: bool = True) -> pd
             n_boot=n_boot,
             seed=seed,
             alpha=alpha,
-            exclude_from_best=(ORACLE,),
+            exclude_from_best=(ORACLE, *(n for n in names if row_privilege(n) is not None)),
         )
         vs_best.insert(0, "family", "vs_best")
         vs_best["study_holds"] = None

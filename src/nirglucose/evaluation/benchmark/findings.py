@@ -30,7 +30,6 @@ Sources
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any, Final
 
 import numpy as np
@@ -39,11 +38,22 @@ import pandas as pd
 from ...config.presets import DEVICE_CAPABILITIES
 from ...dataset.small_data import significance_withheld
 from ...metrics.resampling import compare_models
-from ...models.labels import LAMBDA_ROW, ablation_base, label
+from ...models.labels import LAMBDA_ROW, knows, label
 from ..reference import STUDY_ORDER, STUDY_TABLE
+from .answer import physics_answer, physics_verdicts, term_findings, term_verdicts
 from .drop_one import drop_one_findings
 from .finding import Finding, Value
 from .result import ORACLE
+from .rundata import (
+    NO_SKILL,
+    RunData,
+    display_name,
+    privilege,
+    truthy,
+)
+from .rundata import is_competitor as _is_competitor
+from .rundata import is_reference as _is_reference
+from .rundata import tuned_lambda as _lambda
 
 __all__ = [
     "HYPO_MGDL",
@@ -55,6 +65,10 @@ __all__ = [
     "distance_table",
     "no_skill_comparisons",
     "physics_verdicts",
+    "privilege",
+    "display_name",
+    "term_verdicts",
+    "physics_answer",
     "study_claims",
     "preset_separation",
     "subject_floor",
@@ -63,8 +77,6 @@ __all__ = [
     "headline_table",
 ]
 
-#: Registry name of the no-skill reference (the training mean).
-NO_SKILL: Final = "mean"
 #: Hypoglycaemia threshold (ISO 15197:2013; ADA level 1). [mg/dL]
 HYPO_MGDL: Final = 70.0
 
@@ -74,49 +86,6 @@ ANCHOR_HEADLINE: Final = "fig-headline"
 ANCHOR_LEDS: Final = "fig-wavelengths"
 ANCHOR_DISTANCE: Final = "distance-table"
 
-
-@dataclass
-class RunData:
-    """What the findings read from one preset's results directory.
-
-    Attributes
-    ----------
-    preset : str
-        The preset's name (also the results sub-directory).
-    metrics : pandas.DataFrame
-        ``metrics.json`` rows.
-    meta : dict
-        ``meta.json``.
-    predictions : pandas.DataFrame
-        ``predictions.parquet``.
-    comparisons, ablation : pandas.DataFrame or None
-        ``comparisons.csv``, ``ablation.csv``.
-    drop_one : pandas.DataFrame or None
-        ``drop_one.csv`` (the drop-one-LED refits).
-    """
-
-    preset: str
-    metrics: pd.DataFrame
-    meta: dict[str, Any]
-    predictions: pd.DataFrame
-    comparisons: pd.DataFrame | None = None
-    ablation: pd.DataFrame | None = None
-    no_skill: pd.DataFrame | None = field(default=None, repr=False)
-    drop_one: pd.DataFrame | None = None
-
-    @property
-    def m(self) -> pd.DataFrame:
-        """Metrics indexed by model."""
-        return self.metrics.drop_duplicates("model").set_index("model")
-
-    def metric(self, model: str, column: str, digits: int = 1, **kw: Any) -> Value:
-        """A value of ``metrics.json`` with its source."""
-        return Value(float(self.m.at[model, column]), digits,
-                     (f"{self.preset}/metrics.json:{model}:{column}",), **kw)
-
-
-def _is_competitor(model: str) -> bool:
-    return model not in (ORACLE, NO_SKILL) and ablation_base(model) is None
 
 
 def _ref_anchor(preset: str) -> str:
@@ -130,9 +99,10 @@ def best_and_tied(run: RunData) -> tuple[str | None, list[str], list[str], list[
     """The best model of a run and the competitors tied with it.
 
     From the ``vs_best`` family of ``comparisons.csv``: the reference model is the best
-    (lowest RMSE, the oracle excluded); a competitor is *tied* when its Holm-adjusted
-    bootstrap p is not below alpha. Reference rows (oracle, no skill) and ablation rows
-    are not competitors.
+    deployable one (lowest RMSE; the oracle and every privileged row excluded, see
+    :func:`privilege`); a competitor is *tied* when its Holm-adjusted bootstrap p is not
+    below alpha. Reference rows (oracle, no skill, privileged estimators) and ablation
+    rows are not competitors.
 
     Returns
     -------
@@ -145,18 +115,50 @@ def best_and_tied(run: RunData) -> tuple[str | None, list[str], list[str], list[
         Tied competitors whose 95 % CI of the difference excludes 0 before the Holm
         adjustment.
     """
-    c = run.comparisons
-    if c is None or not len(c) or "family" not in c or not (c["family"] == "vs_best").any():
+    vb = _vs_best(run)
+    if vb is None:
         return None, [], [], []
-    vb = c[c["family"] == "vs_best"]
     best = str(vb["reference_model"].iloc[0])
-    vb = vb[vb["model"].astype(str).map(_is_competitor)].sort_values("rmse_diff_mgdl")
+    vb = vb[vb["model"].astype(str).map(lambda m: _is_competitor(m, run))]
+    vb = vb.sort_values("rmse_diff_mgdl")
     sig = vb["significant"].astype(str).str.lower().isin(("true", "1"))
     tied = [str(m) for m in vb.loc[~sig, "model"]]
     worse = [str(m) for m in vb.loc[sig, "model"]]
     excl = (vb["ci_low"] > 0) | (vb["ci_high"] < 0)
     unadjusted = [str(m) for m in vb.loc[~sig & excl, "model"]]
     return best, tied, worse, unadjusted
+
+
+def _vs_best(run: RunData, *, n_boot: int = 2000, seed: int = 0) -> pd.DataFrame | None:
+    """The ``vs_best`` comparisons against the best *deployable* model.
+
+    The run's own family when its reference is deployable; when a privileged row was
+    ranked best (results written before the benchmark excluded them), the competitors
+    are compared here with the best deployable one, as the benchmark does
+    (:func:`~nirglucose.metrics.resampling.compare_models`, Holm over the pairs).
+    """
+    if run.vs_best is not None:
+        return run.vs_best if len(run.vs_best) else None
+    c = run.comparisons
+    if c is None or not len(c) or "family" not in c or not (c["family"] == "vs_best").any():
+        return None
+    vb = c[c["family"] == "vs_best"]
+    if _is_competitor(str(vb["reference_model"].iloc[0]), run):
+        run.vs_best = vb
+        return vb
+    comp = [str(m) for m in run.m.index if _is_competitor(str(m), run)]
+    p = run.predictions
+    comp = [m for m in comp if m in set(p["model"].astype(str))]
+    if len(comp) < 2:
+        run.vs_best = pd.DataFrame()
+        return None
+    best = min(comp, key=lambda m: float(run.m.at[m, "rmse_mgdl"]))
+    col = "scored_mgdl" if "scored_mgdl" in p.columns else "predicted_mgdl"
+    got = compare_models(p[p["model"].isin(comp)], pairs=[(m, best) for m in comp if m != best],
+                         pred_col=col, n_boot=n_boot, seed=seed)
+    got.insert(0, "family", "vs_best")
+    run.vs_best = got
+    return got
 
 
 def _best_finding(run: RunData) -> Finding | None:
@@ -166,14 +168,15 @@ def _best_finding(run: RunData) -> Finding | None:
     p = run.preset
     vals = [run.metric(best, "rmse_mgdl"), run.metric(best, "rmse_ci_low"),
             run.metric(best, "rmse_ci_high")]
-    text = f"On {p}, the lowest RMSE is {label(best)}'s, {{}} mg/dL [95 % CI {{}}, {{}}]; "
+    text = (f"On {p}, the best deployable estimator (it reads only the measured columns) is "
+            f"{display_name(run, best)}, {{}} mg/dL [95 % CI {{}}, {{}}]; ")
     if tied:
         vals.append(Value(len(tied), 0, (f"{p}/comparisons.csv:vs_best:significant=False",),
                           op="count"))
         names = []
         for t in tied:
             vals.append(run.metric(t, "rmse_mgdl"))
-            names.append(f"{label(t)} {{}}")
+            names.append(f"{display_name(run, t)} {{}}")
         text += ("{} " + ("competitor is" if len(tied) == 1 else "competitors are")
                  + " not distinguishable from it (paired cluster bootstrap "
                  "over subjects, Holm-adjusted p ≥ 0.05): " + ", ".join(names) + " mg/dL")
@@ -186,9 +189,23 @@ def _best_finding(run: RunData) -> Finding | None:
     else:
         vals.append(Value(len(worse), 0, (f"{p}/comparisons.csv:vs_best:significant=True",),
                           op="count"))
-        text += ("every other competitor ({}) is significantly worse (paired cluster "
-                 "bootstrap over subjects, Holm-adjusted).")
+        text += ("every other deployable competitor ({}) is significantly worse (paired "
+                 "cluster bootstrap over subjects, Holm-adjusted).")
     return Finding("best", p, text, tuple(vals), ANCHOR_HEADLINE)
+
+
+def _reference_finding(run: RunData) -> Finding | None:
+    """The privileged rows of a run, worded as references: what each knows, its RMSE."""
+    refs = [str(x) for x in run.m.index if _is_reference(str(x), run)]
+    if not refs:
+        return None
+    refs.sort(key=lambda m: (m != ORACLE, float(run.m.at[m, "rmse_mgdl"])))
+    vals = tuple(run.metric(m, "rmse_mgdl") for m in refs)
+    names = "; ".join(f"{label(m)} {{}} mg/dL ({knows(privilege(run, m) or '')})"
+                      for m in refs)
+    return Finding("best", run.preset, (
+        f"References on {run.preset}, not competitors: they read what no device measures, "
+        f"so none of them is ranked or called best: {names}."), vals, ANCHOR_HEADLINE)
 
 
 # --------------------------------------------------------------------------- distances
@@ -202,7 +219,7 @@ def no_skill_comparisons(run: RunData, *, n_boot: int = 2000, seed: int = 0,
     ``(model, "mean")`` on the run's scored predictions (empty without a no-skill row).
     """
     p = run.predictions
-    models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m)]
+    models = [m for m in dict.fromkeys(p["model"].astype(str)) if _is_competitor(m, run)]
     if significance_withheld(int(p["subject_id"].nunique())):  # small-data policy
         return pd.DataFrame()
     if NO_SKILL not in set(p["model"]) or not models:
@@ -218,8 +235,9 @@ def distance_table(runs: Sequence[RunData]) -> pd.DataFrame:
 
     Columns: ``preset``, ``model``, ``rmse`` (Value), ``below_no_skill`` (no-skill RMSE
     minus the model's, Value), ``share_removed`` (``1 - RMSE / RMSE_no-skill``, Value),
-    ``vs_oracle`` (``rmse_vs_oracle`` of ``metrics.json``, Value) and ``beats_no_skill``
-    (True, False, or None when not tested).
+    ``vs_oracle`` (``rmse_vs_oracle`` of ``metrics.json``, Value), ``beats_no_skill``
+    (True, False, or None when not tested) and ``privileged`` (None for a deployable
+    competitor; what a privileged reference knows, its rows after the competitors').
     """
     rows = []
     for run in runs:
@@ -227,11 +245,14 @@ def distance_table(runs: Sequence[RunData]) -> pd.DataFrame:
         ns = run.no_skill if run.no_skill is not None else pd.DataFrame()
         sig = ({str(r["model"]): bool(r["significant"]) and r["rmse_diff_mgdl"] < 0
                 for _, r in ns.iterrows()} if len(ns) else {})
-        for model in [x for x in m.index if _is_competitor(str(x))]:
+        rows_of = ([x for x in m.index if _is_competitor(str(x), run)]
+                   + [x for x in m.index if _is_reference(str(x), run) and x != ORACLE])
+        for model in rows_of:
             rmse = run.metric(model, "rmse_mgdl")
             row: dict[str, Any] = {"preset": run.preset, "model": model, "rmse": rmse,
                                    "below_no_skill": None, "share_removed": None,
-                                   "vs_oracle": None, "beats_no_skill": sig.get(model)}
+                                   "vs_oracle": None, "beats_no_skill": sig.get(model),
+                                   "privileged": privilege(run, str(model))}
             if NO_SKILL in m.index:
                 ref = float(m.at[NO_SKILL, "rmse_mgdl"])
                 src = (f"{run.preset}/metrics.json:{NO_SKILL}:rmse_mgdl", rmse.sources[0])
@@ -246,13 +267,16 @@ def distance_table(runs: Sequence[RunData]) -> pd.DataFrame:
 
 def _distance_findings(run: RunData, table: pd.DataFrame) -> list[Finding]:
     t = table[table["preset"] == run.preset]
+    if len(t) and "privileged" in t.columns:
+        t = t[t["privileged"].isna()]
     if not len(t) or NO_SKILL not in run.m.index:
         return []
     p = run.preset
     share = [v for v in t["share_removed"] if v is not None]
     lo, hi = min(share, key=lambda v: v.value), max(share, key=lambda v: v.value)
     vals = [run.metric(NO_SKILL, "rmse_mgdl"), lo, hi]
-    text = (f"On {p}, no skill (the training mean) scores {{}} mg/dL; the competitors remove "
+    text = (f"On {p}, no skill (the training mean) scores {{}} mg/dL; the deployable "
+            f"competitors remove "
             f"between {{}} % ({label(_model_of(t, lo))}) and {{}} % "
             f"({label(_model_of(t, hi))}) of that error")
     beats = [b for b in t["beats_no_skill"] if b is not None]
@@ -262,8 +286,8 @@ def _distance_findings(run: RunData, table: pd.DataFrame) -> list[Finding]:
         vals.append(Value(len(beats), 0, (f"{p}/predictions.parquet:paired vs mean",),
                           op="count"))
         text += ", and {} of {} are significantly better than it (paired cluster bootstrap, Holm)"
-    if ORACLE in run.m.index:
-        vo = [v for v in t["vs_oracle"] if v is not None]
+    vo = [v for v in t["vs_oracle"] if v is not None]
+    if ORACLE in run.m.index and vo:
         vals += [run.metric(ORACLE, "rmse_mgdl", 2), min(vo, key=lambda v: v.value),
                  max(vo, key=lambda v: v.value)]
         text += ("; the oracle (true nuisances, a bound) reaches {} mg/dL, and the competitors "
@@ -278,58 +302,17 @@ def _model_of(t: pd.DataFrame, v: Value) -> str:
 # --------------------------------------------------------------------------- physics
 
 
-def _lambda(run: RunData, pinn: str) -> float | None:
-    v = (run.meta.get("model_params") or {}).get(pinn, {}).get("lambda_phys")
-    return None if v is None else float(v)
-
-
-def physics_verdicts(run: RunData) -> list[dict[str, Any]]:
-    """Per ablated PINN: its tuned physics weight and whether physics was tested.
-
-    One dict per row of ``ablation.csv``: ``model``, ``lambda`` (the tuned
-    ``lambda_phys`` of ``meta.json``, None when not recorded), ``tested`` (False when
-    tuning set λ = 0, or the two fits are identical: no question was asked), and
-    ``verdict``: ``"physics off by tuning — not tested"``, ``"identical fits — not
-    tested"``, ``"physics helps"``, ``"physics hurts"`` or ``"no significant
-    difference"``.
-    """
-    a = run.ablation
-    if a is None or not len(a):
-        return []
-    out = []
-    for _, r in a.iterrows():
-        model = str(r["model"])
-        lam = _lambda(run, model)
-        identical = (float(r["rmse_diff_mgdl"]) == 0.0 and float(r["ci_low"]) == 0.0
-                     and float(r["ci_high"]) == 0.0)
-        if lam == 0.0:
-            verdict, tested = "physics off by tuning — not tested", False
-        elif identical:
-            verdict, tested = "identical fits — not tested", False
-        elif _truthy(r["significant"]):
-            verdict = "physics helps" if float(r["rmse_diff_mgdl"]) < 0 else "physics hurts"
-            tested = True
-        else:
-            verdict, tested = "no significant difference", True
-        out.append({"model": model, "lambda": lam, "tested": tested, "verdict": verdict,
-                    "row": r})
-    return out
-
-
-def _truthy(v: Any) -> bool:
-    return str(v).strip().lower() in ("true", "1", "1.0")
-
 
 def _physics_findings(run: RunData) -> list[Finding]:
     p = run.preset
     verdicts = physics_verdicts(run)
     if not verdicts:
-        return []
+        return term_findings(run)
     off = [v for v in verdicts if not v["tested"]]
     anchor = f"ablation-{p}"
     tested = [v for v in verdicts if v["tested"]]
     src = f"{p}/ablation.csv"
-    summary = (f"Does physics help on {p}? Of {{}} ablation pairs (each PINN against "
+    summary = (f"Physics ablations on {p}: of {{}} ablation pairs (each PINN against "
                "itself without physics, at its tuned λ and, where tuning chose 0, at the "
                "best λ > 0), {} tested physics at a weight above 0")
     vals = [Value(len(verdicts), 0, (f"{src}:rows",), op="count"),
@@ -373,7 +356,7 @@ def _physics_findings(run: RunData) -> list[Finding]:
             + (" (the unadjusted CI excludes 0; the Holm adjustment over the PINNs does not "
                "confirm it)" if unadj else "") + "."),
             tuple(x for x in vals if x is not None), anchor))
-    return out
+    return out + term_findings(run)
 
 
 # --------------------------------------------------------------------------- the study
@@ -391,8 +374,8 @@ def study_claims(run: RunData) -> dict[str, Any]:
     c = run.comparisons
     so = (c[c["family"] == "study_order"] if c is not None and len(c) and "family" in c
           else pd.DataFrame())
-    holds = so["study_holds"].map(_truthy) if len(so) else pd.Series(dtype=bool)
-    sig = so["significant"].map(_truthy) if len(so) else pd.Series(dtype=bool)
+    holds = so["study_holds"].map(truthy) if len(so) else pd.Series(dtype=bool)
+    sig = so["significant"].map(truthy) if len(so) else pd.Series(dtype=bool)
     study = {str(r["model"]): float(r["rmse_mgdl"]) for r in STUDY_TABLE}
     m = run.m
     models = [s for s in STUDY_ORDER if s in m.index]
@@ -421,11 +404,12 @@ def _claims_findings(run: RunData) -> list[Finding]:
         rev = cl["reversed_sig"]
         if rev:
             text += "; significantly reversed here: " + ", ".join(
-                f"the study's {label(b)} better than {label(w)}" for b, w in rev)
+                f"the study's {display_name(run, b)} better than {display_name(run, w)}"
+                for b, w in rev)
         ebl_rows = cl["pairs"][cl["pairs"]["reference_model"] == "ebl"]
         if len(ebl_rows):
-            n_sig = int((ebl_rows["significant"].map(_truthy)
-                         & ebl_rows["study_holds"].map(_truthy)).sum())
+            n_sig = int((ebl_rows["significant"].map(truthy)
+                         & ebl_rows["study_holds"].map(truthy)).sum())
             vals += [Value(n_sig, 0, (f"{src}:ebl&study_holds&significant",), op="count"),
                      Value(len(ebl_rows), 0, (f"{src}:ebl:rows",), op="count")]
             text += ("; the study's headline, Enhanced Beer–Lambert better than every network, "
@@ -517,7 +501,7 @@ def subject_floor(runs: Sequence[RunData]) -> Finding | None:
         p = r.predictions
         if "subject_id" not in p.columns or not len(p):
             continue
-        keep = p[p["model"].astype(str).map(_is_competitor)]
+        keep = p[p["model"].astype(str).map(lambda m, r=r: _is_competitor(m, r))]
         per_model = keep.groupby("model")["subject_id"].nunique()
         snaps = (keep.groupby("model")["measurement_id"].nunique()
                  if "measurement_id" in keep.columns else None)
@@ -569,7 +553,7 @@ def _range_finding(run: RunData) -> Finding | None:
     src = f"{p}/predictions.parquet:reference_mgdl"
     vals = [Value(g["min"], 0, (f"{src}:min",)), Value(g["max"], 0, (f"{src}:max",))]
     text = f"On {p}, reference glucose spans {{}}–{{}} mg/dL"
-    comp = [m for m in run.m.index if _is_competitor(str(m))]
+    comp = [m for m in run.m.index if _is_competitor(str(m), run)]
     if g["n_hypo"] == 0:
         text += "; no reading is below 70 mg/dL, so"
         if "clarke_ab_pct" in run.m.columns and comp:
@@ -602,8 +586,10 @@ def headline_table(runs: Sequence[RunData]) -> tuple[pd.DataFrame, dict[str, dic
     -------
     table : pandas.DataFrame
         ``preset``, ``model``, ``rmse_mgdl``, ``rmse_ci_low``, ``rmse_ci_high`` and
-        ``status`` (``"best"``, ``"tied"`` with the best, ``"worse"`` or ``""`` when the
-        run has no comparisons).
+        ``status`` (``"best"`` deployable, ``"tied"`` with it, ``"worse"``, ``""`` when
+        the run has no comparisons, or ``"reference"`` for a privileged estimator other
+        than the oracle, which is drawn as a line); ``label``, which says ``physics
+        off on <presets>`` for a PINN tuned to λ = 0 there.
     references : dict
         Preset -> ``{"mean": no-skill RMSE, "oracle": oracle RMSE}`` (those present).
     """
@@ -612,14 +598,23 @@ def headline_table(runs: Sequence[RunData]) -> tuple[pd.DataFrame, dict[str, dic
         best, tied, worse, _ = best_and_tied(run)
         status = {best: "best", **dict.fromkeys(tied, "tied"), **dict.fromkeys(worse, "worse")}
         m = run.m
-        for model in [x for x in m.index if _is_competitor(str(x))]:
+        shown = ([x for x in m.index if _is_competitor(str(x), run)]
+                 + [x for x in m.index if _is_reference(str(x), run) and x != ORACLE])
+        for model in shown:
             rows.append({"preset": run.preset, "model": str(model),
                          **{c: float(m.at[model, c]) if c in m.columns else float("nan")
                             for c in ("rmse_mgdl", "rmse_ci_low", "rmse_ci_high")},
-                         "status": status.get(str(model), "")})
+                         "status": ("reference" if _is_reference(str(model), run)
+                                    else status.get(str(model), ""))})
         refs[run.preset] = {r: float(m.at[r, "rmse_mgdl"]) for r in (NO_SKILL, ORACLE)
                             if r in m.index}
-    return pd.DataFrame(rows), refs
+    table = pd.DataFrame(rows)
+    if len(table):  # a PINN trained without its physics term says so, with the presets
+        off = {str(x): [r.preset for r in runs if _lambda(r, str(x)) == 0.0]
+               for x in table["model"]}
+        table["label"] = [label(x) + (f" (physics off on {', '.join(off[x])})" if off[x] else "")
+                          for x in table["model"]]
+    return table, refs
 
 
 def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int = 0
@@ -648,7 +643,8 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
             run.no_skill = no_skill_comparisons(run, n_boot=n_boot, seed=seed)
     dist = distance_table(runs)
     out: list[Finding] = []
-    for step in (_best_finding, lambda r: _distance_findings(r, dist), _physics_findings,
+    for step in (_best_finding, _reference_finding, lambda r: _distance_findings(r, dist),
+                 lambda r: physics_answer(r, n_boot=n_boot, seed=seed), _physics_findings,
                  _claims_findings):
         for run in runs:
             got = step(run)

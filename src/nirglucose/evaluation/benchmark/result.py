@@ -20,7 +20,7 @@ import pandas as pd
 from ...calibration.personal import CALIBRATION_COLUMNS
 from ...dataset import Dataset, atomic_write
 from ...metrics.resampling import PAIRED_COLUMNS
-from ...models.labels import LAMBDA_ROW, NO_PHYSICS, ablation_base, lambda_row
+from ...models.labels import LAMBDA_ROW, NO_PHYSICS, ablation_base, lambda_row, row_privilege
 from ..engine.tasks import prepare_out
 from ..reference import STUDY_TABLE
 from .inverse import INVERSE_COLUMNS
@@ -95,6 +95,7 @@ ABLATION_COLUMNS = (
 METRIC_COLUMNS = (
     "model",
     "label",
+    "privileged",
     "rmse_mgdl",
     "rmse_ci_low",
     "rmse_ci_high",
@@ -421,20 +422,25 @@ def _significance_lines(res: BenchmarkResult) -> list[str]:
     vb = c[c["family"] == "vs_best"]
     if len(vb):
         best = vb["reference_model"].iloc[0]
+        ref = vb["model"].map(lambda m: m == ORACLE or row_privilege(str(m)) is not None)
+        refs = vb[ref]
+        vb = vb[~ref]
         worse = vb["significant"] & (vb["rmse_diff_mgdl"] > 0)
         better = vb["significant"] & (vb["rmse_diff_mgdl"] < 0)
 
-        def names(mask):
-            return ", ".join(label[m] for m in vb.loc[mask, "model"]) or "none"
+        def names(rows, mask):
+            return ", ".join(label[m] for m in rows.loc[mask, "model"]) or "none"
 
         out.append(
             f"Significant rankings (paired cluster bootstrap of the RMSE difference over "
-            f"subjects, Holm-adjusted, α = {res.meta['alpha']}): best model is {label[best]}; "
-            f"significantly worse than it: {names(worse)}; "
-            f"not distinguishable from it: {names(~vb['significant'])}"
+            f"subjects, Holm-adjusted, α = {res.meta['alpha']}): best deployable model "
+            f"is {label[best]}; significantly worse than it: {names(vb, worse)}; "
+            f"not distinguishable from it: {names(vb, ~vb['significant'])}"
+            + (f"; significantly better: {names(vb, better)}" if better.any() else "")
             + (
-                f"; significantly better (a bound, not a competitor): {names(better)}."
-                if better.any()
+                "; privileged references, not competitors (they read the generating "
+                f"scenario or the true nuisances): {names(refs, refs['model'].notna())}."
+                if len(refs)
                 else "."
             )
         )

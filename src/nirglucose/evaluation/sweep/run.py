@@ -164,6 +164,7 @@ SWEEP_METRICS = tuple(
     not in (
         "model",
         "label",
+        "privileged",  # text: what the estimator knows beyond the measured columns
         "latency_single_ms",
         "latency_single_p90_ms",
         "throughput_per_s",

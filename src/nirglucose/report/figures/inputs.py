@@ -18,6 +18,8 @@ import pandas as pd
 from ...evaluation.reference import STUDY_TABLE
 from ...formatting import format_number
 from ...metrics import bland_altman, clarke_zones, parkes_zones, zone_percentages
+from ...models.labels import label as model_name
+from ...models.labels import row_privilege
 
 __all__ = [
     "PHYSICS_DEPTH", "REFERENCE_ROWS", "PHYSICS_DEPTH_LABELS", "RADAR_AXES",
@@ -47,6 +49,7 @@ PHYSICS_DEPTH: Final[dict[str, float]] = {
     "rte-pinn-fm": 4.5,
     "selective-rte-pinn-fm": 4.5,
     "physics-inversion": 5,
+    "device-inversion": 5,  # inverts a forward model of the declared parts and tables
     "physics-inversion+gp": 5,
     "oracle": 5,
 }
@@ -400,29 +403,43 @@ def is_ablation_row(model: str) -> bool:
 
 
 def competitors(models: Iterable[str]) -> list[str]:
-    """Models that compete: neither a reference row (:data:`REFERENCE_ROWS`) nor an ablation."""
-    return [m for m in models if m not in REFERENCE_ROWS and not is_ablation_row(m)]
+    """Models that compete: neither a reference row (:data:`REFERENCE_ROWS`), nor a
+    privileged estimator (it reads the generating scenario: a reference, like the
+    oracle; :func:`~nirglucose.models.labels.row_privilege`), nor an ablation."""
+    return [m for m in models if m not in REFERENCE_ROWS and not is_ablation_row(m)
+            and row_privilege(str(m)) is None]
 
 
 def reference_values(metrics: pd.DataFrame, models: Sequence[str]) -> dict[str, float]:
-    """RMSE of the reference rows present (oracle bound, no-skill mean). [mg/dL]"""
+    """RMSE of the reference rows present (oracle bound, no-skill mean) and of the
+    privileged estimators, drawn like the oracle. [mg/dL]"""
     refs = [m for m in REFERENCE_ROWS if m in models]
+    refs += [m for m in models if m not in refs and not is_ablation_row(m)
+             and row_privilege(str(m)) is not None]
     return {m: float(v) for m, v in zip(refs, _metric(metrics, refs, "rmse_mgdl"), strict=True)
             if np.isfinite(v)}
 
 
-def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str]) -> tuple[pd.DataFrame,
-                                                                                list[str]]:
-    """Inputs of figure 9 and the models left out (no known physics depth).
+def physics_depth_table(metrics: pd.DataFrame, models: Sequence[str], *,
+                        lambdas: Mapping[str, float] | None = None
+                        ) -> tuple[pd.DataFrame, list[str]]:
+    """Inputs of the physics-depth figure and the models left out (no known depth).
 
     Reference rows (:data:`REFERENCE_ROWS`) and ablation rows are not competitors and
-    are neither drawn as bubbles nor listed as left out.
+    are neither drawn as bubbles nor listed as left out. A PINN whose tuned physics
+    weight (``lambdas``, from ``meta.json``) is 0 trained without its physics term: it
+    sits at depth 0 (no physics) and its ``label`` says ``physics off``. Privileged
+    rows are not competitors (:func:`competitors`): they are drawn as reference lines.
     """
+
     models = competitors(models)
     known = [m for m in models if m in PHYSICS_DEPTH]
+    off = {m for m in known if (lambdas or {}).get(m) == 0.0}
     t = pd.DataFrame({
         "model": known,
-        "physics_depth": [PHYSICS_DEPTH[m] for m in known],
+        "label": [model_name(m) + (" (physics off: λ = 0)" if m in off else "")
+                  for m in known],
+        "physics_depth": [0.0 if m in off else PHYSICS_DEPTH[m] for m in known],
         "rmse_mgdl": _metric(metrics, known, "rmse_mgdl"),
         "n_parameters": _metric(metrics, known, "n_parameters"),
     })

@@ -12,6 +12,7 @@ from typing import Any
 
 import pandas as pd
 
+from ...models.labels import label, row_privilege
 from .inputs import is_ablation_row
 from .results import RenderedFigure, Results
 
@@ -68,14 +69,29 @@ class Page:
         return (f"every out-of-fold prediction of all {n_rep} repeats pooled, so the zone "
                 f"shares equal the table's" if n_rep > 1 else "every out-of-fold prediction")
 
+    @property
+    def label_overrides(self) -> dict[str, str]:
+        """Figure labels of this run's PINNs tuned to λ = 0 (``physics off``) and of its
+        privileged rows (``reference``), for every figure of the run."""
+        params = self.results.meta.get("model_params") or {}
+        out = {str(m): f"{label(str(m))} (physics off)" for m, p in params.items()
+               if isinstance(p, dict) and p.get("lambda_phys") == 0 and "/" not in str(m)}
+        out.update({m: f"{label(m)} (reference)" for m in self.models
+                    if m != "oracle" and "/" not in m and row_privilege(m) is not None})
+        return out
+
     def wants(self, *keys: str) -> bool:
         """Whether any of ``keys`` is to be drawn."""
         return self.wanted is None or bool(self.wanted & set(keys))
 
     def add(self, key: str, title: str, caption: str, build: Callable[[], Any] | None,
             note: str | None = None) -> None:
-        """Number the next figure; draw it (``build``) if it is wanted."""
-        from ...plots.style import figure_bytes, save_figure
+        """Number the next figure; draw it (``build``) if it is wanted.
+
+        A figure whose PNG is byte for byte one already on the page is not added a
+        second time: the first one's caption says it stands for both.
+        """
+        from ...plots.style import figure_bytes, model_labels, save_figure
 
         self.count += 1
         number = str(self.count)
@@ -86,12 +102,21 @@ class Page:
         fig = None
         if build is not None:
             try:
-                fig = build()
+                with model_labels(self.label_overrides):
+                    fig = build()
             except (ValueError, KeyError, TypeError, IndexError) as exc:
                 logger.exception("figure %s could not be drawn", number)
                 out.note = f"Figure {number} could not be drawn: {exc}"
         if fig is not None:
             out.png = figure_bytes(fig, "png")
+            twin = next((r for r in self.rendered if r.png and r.png == out.png), None)
+            if twin is not None:  # the same picture (e.g. a preset's identical environment)
+                twin.caption += (f" The same figure for {title.split(' on ', 1)[-1]}"
+                                 if " on " in title else f" The same figure as {title}") \
+                    + " (identical pixels: drawn once)."
+                self.count -= 1
+                fig.clear()
+                return
             if self.out_dir is not None:
                 out.files = save_figure(fig, self.out_dir / f"fig{number}_{key}", self.formats)
             else:

@@ -17,6 +17,7 @@ import pandas as pd
 
 from ...exceptions import DataError
 from ...formatting import format_number
+from ...models.labels import label
 from ...models.registry import is_pinn
 from ...models.tuning import lambda_curve
 from .descriptive import (
@@ -34,7 +35,6 @@ from .descriptive import (
 from .diagnostics import section_residuals, section_scatter, section_spread
 from .inputs import (
     PHYSICS_DEPTH_LABELS,
-    REFERENCE_ROWS,
     bland_altman_inputs,
     channel_correlations,
     competitors,
@@ -295,7 +295,9 @@ def _reference_text(refs: Mapping[str, float]) -> str:
     if not refs:
         return ""
     names = [("oracle (a bound, not a competitor)" if r == "oracle" else
-              "training mean (no skill)") for r in refs]
+              "training mean (no skill)" if r == "mean" else
+              f"{label(r)} (a privileged reference: it reads the generating scenario; "
+              "dash-dotted)") for r in refs]
     return (" The " + " and ".join(names)
             + (" are drawn as horizontal reference lines." if len(names) > 1 else
                " is drawn as a horizontal reference line."))
@@ -338,8 +340,9 @@ def _section_radar(page: Page) -> None:
              "call overhead; the multiply-accumulates are the machine-independent cost). No "
              "composite score is given: a mean over these axes weighs accuracy against cost "
              "by the arbitrary 1/6 per decade, and it ranked PLS (25 mg/dL on paper) above "
-             "every PINN. The oracle, a bound, and the training mean, no skill, are "
-             "references rather than competitors and are left out; so are the ablation rows.",
+             "every PINN. The oracle, a bound, the training mean, no skill, and the privileged "
+             "estimators (they read the generating scenario) are references rather than "
+             "competitors and are left out; so are the ablation rows.",
              lambda: tradeoffs.figure_radar_grid(scores) if len(scores) else None,
              note=None if len(scores) else "No model besides the oracle.")
 
@@ -350,7 +353,7 @@ def _section_costs(page: Page) -> None:
     from ...plots.style import plot_style
 
     metrics, models = page.results.metrics, page.models
-    depth, left_out = physics_depth_table(metrics, models)
+    depth, left_out = physics_depth_table(metrics, models, lambdas=_tuned_lambdas(page.results))
     refs = reference_values(metrics, models)
     ref_txt = _reference_text(refs)
     lo_txt = f" ({', '.join(left_out)} left out: no physics depth or metrics)" if left_out else ""
@@ -358,7 +361,11 @@ def _section_costs(page: Page) -> None:
              f"RMSE against how much of the forward model each method uses, from the most "
              f"physics on the left to none on the right, the study's direction (the RMSE axis "
              f"starts at 0), bubble area proportional to the trainable parameter count; a "
-             f"black ring marks the bubbles on the parameters–RMSE Pareto front."
+             f"black ring marks the bubbles on the parameters–RMSE Pareto front. A PINN "
+             f"whose tuned physics weight λ is 0 is marked physics off and drawn at no "
+             f"physics: it trained without its physics term. Privileged estimators (they "
+             f"read the generating scenario) are not competitors: like the oracle they are "
+             f"reference lines."
              f"{ref_txt}{lo_txt}",
              lambda: _figure_one(lambda ax: tradeoffs.plot_physics_depth(
                  depth, depth_labels=PHYSICS_DEPTH_LABELS, references=refs, ax=ax),
@@ -373,12 +380,20 @@ def _section_costs(page: Page) -> None:
              "trainable parameters; multiply-accumulates per prediction, counted from the "
              "fitted model, the same on every machine; and the median single-sample "
              "latency with a grey whisker to its 90th percentile, measured on the machine "
-             "recorded under Run information. No combined index: how size, arithmetic and "
+             "recorded under Configuration and provenance (timing machine). Each label "
+             "sits nearest its own marker. No combined index: how size, arithmetic and "
              f"time weigh against each other depends on the device.{ref_txt}"
              + ("" if timed else " The latencies differ by less than their timing noise (see "
                 "the note under the main table), so they count as equal: the speed panel "
                 "marks only the most accurate model."),
              lambda: tradeoffs.figure_efficiency_landscape(eff, refs))
+
+
+def _tuned_lambdas(res: Results) -> dict[str, float]:
+    """Each model's tuned physics weight ``lambda_phys`` (``meta.json``'s model_params)."""
+    params = res.meta.get("model_params") or {}
+    return {str(m): float(p["lambda_phys"]) for m, p in params.items()
+            if isinstance(p, dict) and p.get("lambda_phys") is not None}
 
 
 def _latency_ok(page: Page) -> bool:
@@ -394,7 +409,7 @@ def _section_performance(page: Page) -> None:
     res = page.results
     by_preset = dict(page.compare) if page.compare else {
         str(res.meta.get("preset") or "this run"): res.metrics}
-    perf_models = [m for m in page.models if not is_ablation_row(m) and m not in REFERENCE_ROWS]
+    perf_models = competitors(page.models)  # privileged rows are references: not here
     perf = performance_table(by_preset, perf_models)
     page.add("performance", "Performance comparison",
              "Error metrics as bars from zero (RMSE with its 95 % CI, MARD) and two "
@@ -456,11 +471,15 @@ def _section_forest(page: Page) -> None:
 
 
 #: The report's figures, section by section in page order (each builder adds its figures).
+#: The order is the page's (:data:`nirglucose.report.html.FIGURE_SLOTS`: each figure
+#: sits beside the text that cites it), so the numbers run down the page.
 _SECTIONS: Final[tuple[Callable[[Page], None], ...]] = (
-    _section_data, _section_pipeline, _section_architecture, _section_features,
-    section_scatter, _section_agreement, section_residuals, section_spread,
-    _section_training, _section_physics_weight, _section_radar, _section_costs,
-    _section_performance, _section_wavelengths, _section_forest,
+    _section_wavelengths,
+    _section_forest, _section_performance, section_scatter, _section_agreement,
+    section_residuals, section_spread,
+    _section_training, _section_physics_weight, _section_architecture,
+    _section_radar, _section_costs,
+    _section_data, _section_pipeline, _section_features,
 )
 
 #: Sections drawn once per preset of a multi-preset run (each preset's figure right
@@ -468,6 +487,7 @@ _SECTIONS: Final[tuple[Callable[[Page], None], ...]] = (
 _PER_PRESET: Final[tuple[Callable[[Page], None], ...]] = (
     _section_data, _section_features, section_scatter, _section_agreement,
     section_residuals, section_spread, _section_radar, _section_costs, _section_wavelengths,
+    _section_architecture, _section_forest,
 )
 
 
