@@ -64,6 +64,13 @@ AdcBitsOption = Annotated[
     typer.Option(help="The ADC resolution [bit]: of the --data device (needed when every "
                  "code fits 10 bits), or of the simulated one (hardware.adc_bits)."),
 ]
+#: --group-by of fit and benchmark --data: the column that groups the subjects.
+GroupByOption = Annotated[
+    str | None,
+    typer.Option(help="Column grouping the subjects (cohort, site, device, visit, diabetes "
+                 "status): each group is scored against its own training mean (default: "
+                 "detected by name, e.g. cohort, site, diabetic)."),
+]
 PerSubjectOption = Annotated[int, typer.Option(help="Measurements per subject.")]
 ProtocolOption = Annotated[str, typer.Option(help="grouped-cv or paper-split.")]
 FoldsOption = Annotated[int, typer.Option(help="Folds of grouped-cv.")]

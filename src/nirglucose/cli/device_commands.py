@@ -11,13 +11,22 @@ from ..dataset.small_data import MIN_INTERVAL_SUBJECTS as _MIN_CALIBRATION_SUBJE
 from ._app import app
 from ._common import (
     GlucoseUnitOption,
+    GroupByOption,
     UserError,
     _check_out_file,
     _check_seed,
     _say,
     _warnings_as_lines,
 )
-from .fit_report import load_device_file, report_cv, say_notes, warn_overparameterised
+from .fit_report import (
+    display_unit,
+    group_column,
+    in_unit,
+    load_device_file,
+    report_cv,
+    say_notes,
+    warn_overparameterised,
+)
 
 
 @app.command("fit")
@@ -52,6 +61,7 @@ def fit_model(
             "dropout, subsampling) and of the draw of calibration subjects."
         ),
     ] = 0,
+    group_by: GroupByOption = None,
 ) -> None:
     """Fit a model on your own measurements (any LEDs, any ADC) and save it.
 
@@ -69,9 +79,11 @@ def fit_model(
     # nothing is tuned for a team's device: networks early-stop on held-out subjects
     estimator = cls(**seeded_params(cls, untuned_params(model), seed))
     ds, schema = _load_device_data(model, data, adc_bits, glucose_unit)
+    group_column(ds.frame, group_by)  # a --group-by not in the file: refused before the fit
+    unit = display_unit(ds, glucose_unit)
     intervals, note = _choose_intervals(ds, intervals, calibration_share)
     if intervals == "split":
-        n_fit, note = _fit_with_intervals(estimator, ds, calibration_share, seed)
+        n_fit, note = _fit_with_intervals(estimator, ds, calibration_share, seed, unit)
     else:
         estimator.fit(ds)
         n_fit = len(ds)
@@ -81,7 +93,7 @@ def fit_model(
     _say(f"fitted {model!r} on {n_fit} measurements ({device}){note}; wrote {out}", err=False)
     warn_overparameterised(estimator, n_fit)
     if schema is not None and cv_folds:
-        report_cv(estimator, ds, schema, cv_folds, glucose_unit)
+        report_cv(estimator, ds, schema, cv_folds, glucose_unit, group_by)
 
 
 def _check_fit_args(out: Path, intervals: str, calibration_share: float, cv_folds: int
@@ -138,7 +150,8 @@ def _choose_intervals(ds, intervals: str, share: float) -> tuple[str, str]:
                     f"{_MIN_CALIBRATION_SUBJECTS} to calibrate)")
 
 
-def _fit_with_intervals(estimator, ds, share: float, seed: int) -> tuple[int, str]:
+def _fit_with_intervals(estimator, ds, share: float, seed: int, unit: str = "mg/dL"
+                        ) -> tuple[int, str]:
     """Fit on the subjects not held out, calibrate on the rest: ``(n fitted, note)``."""
     from ..calibration.conformal import calibration_of, split_conformal
 
@@ -147,7 +160,7 @@ def _fit_with_intervals(estimator, ds, share: float, seed: int) -> tuple[int, st
     cal = calibration_of(split_conformal(estimator, ds, share=share, seed=seed))
     n_fit = len(ds) - cal["n_calibration_readings"]  # the rest of the rows were fitted
     note = (
-        f"; 90 % interval ±{cal['half_width_mgdl']['90']:.1f} mg/dL from "
+        f"; 90 % interval ±{in_unit(cal['half_width_mgdl']['90'], unit)} from "
         f"{cal['n_calibration_subjects']} held-out subjects"
     )
     return n_fit, note

@@ -1,6 +1,8 @@
 """What ``fit`` says about the data it fitted: where the file was read differently, the
 small-data policy, and the model's own subject-grouped cross-validated error beside no
-skill, broken down by group (``cohort``) where the file has one."""
+skill, broken down by group (cohort, site, device, visit, diabetes status:
+:mod:`nirglucose.evaluation.cohorts`) where the file has one, each group against its
+own training mean."""
 
 from __future__ import annotations
 
@@ -9,9 +11,6 @@ from pathlib import Path
 import numpy as np
 
 from ._common import UserError, _say
-
-#: Columns read as a group label for the per-group breakdown (case-folded).
-GROUP_COLUMNS = ("cohort", "group", "site", "study_arm")
 
 
 def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None, *,
@@ -53,6 +52,12 @@ def say_notes(ds) -> None:
         _say(f"note: {note}")
 
 
+def display_unit(ds, declared: str | None) -> str:
+    """The unit glucose is printed in: the one asked for, else the unit the file's
+    reference column was read in (``glucose_mmoll``: mmol/L), else mg/dL."""
+    return declared or ds.metadata.get("glucose_unit") or "mg/dL"
+
+
 def in_unit(value_mgdl: float, unit: str | None) -> str:
     """A glucose value or error printed in the requested unit."""
     from ..dataset.files import glucose_to_unit
@@ -62,18 +67,14 @@ def in_unit(value_mgdl: float, unit: str | None) -> str:
     return f"{v:.2f} {unit}" if unit == "mmol/L" else f"{v:.1f} {unit}"
 
 
-def _group_column(frame) -> str | None:
-    for c in frame.columns:
-        if str(c).strip().casefold() in GROUP_COLUMNS:
-            return c
-    return None
-
-
-def grouped_cv(estimator, ds, folds: int):
-    """Out-of-fold predictions of a clone of ``estimator`` and of no skill (the training
-    mean), folds grouped by subject (by row without ``subject_id``)."""
+def grouped_cv(estimator, ds, folds: int, group_column: str | None = None):
+    """Out-of-fold predictions of a clone of ``estimator``, of no skill (the pooled
+    training mean) and of each row's own-group training mean (``group_column``; the
+    pooled mean without one), folds grouped by subject (by row without ``subject_id``)."""
     from sklearn.base import clone
     from sklearn.model_selection import GroupKFold
+
+    from ..evaluation.cohorts import own_group_baseline
 
     frame = ds.frame
     groups = (frame["subject_id"].to_numpy() if "subject_id" in frame
@@ -81,53 +82,121 @@ def grouped_cv(estimator, ds, folds: int):
     k = min(folds, len(np.unique(groups)))
     y = frame["glucose_mgdl"].to_numpy(float)
     pred, base = np.empty(len(y)), np.empty(len(y))
-    for tr, te in GroupKFold(n_splits=k).split(y, y, groups):
+    splits = list(GroupKFold(n_splits=k).split(y, y, groups))
+    for tr, te in splits:
         model = clone(estimator).fit(ds.rows(tr))
         pred[te] = np.asarray(model.predict(ds.rows(te)), dtype=float)
         base[te] = y[tr].mean()
-    return y, pred, base, k
+    own = (own_group_baseline(y, frame[group_column].to_numpy(), splits)
+           if group_column is not None else base.copy())
+    return y, pred, base, own, k
 
 
 def _rmse(a, b) -> float:
     return float(np.sqrt(np.mean((np.asarray(a) - np.asarray(b)) ** 2)))
 
 
-def report_cv(estimator, ds, schema, folds: int, unit: str | None) -> None:
-    """Print the grouped-CV RMSE beside no skill, and the per-group breakdown."""
+#: Resamples of the subject bootstrap behind "no better than no skill" (seed 0). [-]
+_VERDICT_RESAMPLES = 1000
+
+
+def skill_verdict(model_rmse: float, no_skill_rmse: float, y, pred, base,
+                  subjects=None) -> str | None:
+    """A warning when the model is not better than no skill: above it, or equal within
+    the 95 % interval of the paired MSE difference (a percentile bootstrap over subjects,
+    Cameron, Gelbach & Miller 2008, doi:10.1162/rest.90.3.414; seed 0); None when it is
+    better."""
+    if model_rmse > no_skill_rmse:
+        return ("the grouped-CV error is above no skill: on new people this model does "
+                "worse than predicting the training mean")
+    d = (np.asarray(y) - pred) ** 2 - (np.asarray(y) - base) ** 2
+    ids = np.arange(len(d)) if subjects is None else np.asarray(subjects)
+    _, inv = np.unique(ids, return_inverse=True)
+    sums, counts = np.bincount(inv, weights=d), np.bincount(inv).astype(float)
+    idx = np.random.default_rng(0).integers(0, len(sums), size=(_VERDICT_RESAMPLES, len(sums)))
+    hi = float(np.quantile(sums[idx].sum(axis=1) / counts[idx].sum(axis=1), 0.975))
+    if hi >= 0:
+        return ("the grouped-CV error is no better than no skill (equal within its 95 % "
+                "interval): on new people this model does not beat predicting the "
+                "training mean")
+    return None
+
+
+def report_cv(estimator, ds, schema, folds: int, unit: str | None,
+              group_column_name: str | None = None) -> None:
+    """Print the grouped-CV RMSE beside no skill, and the per-group breakdown: each
+    group against its own training mean, in the file's unit unless ``unit`` is given."""
     from ..dataset.small_data import MIN_CV_SUBJECTS
 
+    unit = display_unit(ds, unit)
     n_sub = ds.frame["subject_id"].nunique() if "subject_id" in ds.frame else len(ds)
     if folds < 2 or n_sub < 2:
         return
-    y, pred, base, k = grouped_cv(estimator, ds, folds)
+    gcol = group_column(ds.frame, group_column_name)
+    y, pred, base, own, k = grouped_cv(estimator, ds, folds, gcol)
     cv_rmse, no_skill = _rmse(y, pred), _rmse(y, base)
     who = (f"{n_sub} subjects" if "subject_id" in ds.frame
            else f"{n_sub} readings (no subject_id: each taken as a subject)")
     _say(f"grouped {k}-fold CV over {who}: RMSE {in_unit(cv_rmse, unit)}; "
          f"no skill (the training mean) {in_unit(no_skill, unit)}", err=False)
-    if cv_rmse > no_skill:
-        _say("warning: the grouped-CV error is above no skill: on new people this model "
-             "does worse than predicting the training mean")
+    verdict = skill_verdict(cv_rmse, no_skill, y, pred, base,
+                            ds.frame["subject_id"].to_numpy() if "subject_id" in ds.frame else None)
+    if verdict:
+        _say(f"warning: {verdict}")
     if n_sub < MIN_CV_SUBJECTS:
         _say(f"warning: a CV estimate from {n_sub} subjects (< {MIN_CV_SUBJECTS}) is "
              "unstable; quote it only with that number")
-    gcol = _group_column(ds.frame)
-    if gcol is None:
-        return
-    adc = ds.frame[f"adc_{schema.labels[0]}"].to_numpy(float)
+    if gcol is not None:
+        report_groups(ds, schema, gcol, y, pred, base, own, unit)
+
+
+def group_column(frame, declared: str | None) -> str | None:
+    """The grouping column (``--group-by``, else detected by name); a declared one not
+    in the file is a UserError."""
+    from ..evaluation.cohorts import detect_group_column
+
+    try:
+        return detect_group_column(frame, declared)
+    except ValueError as exc:
+        raise UserError(f"--group-by: {exc}") from None
+
+
+def report_groups(ds, schema, gcol: str, y, pred, base, own, unit: str) -> None:
+    """Per group: CV RMSE against the group's own training mean (and the pooled one),
+    the correlation on the channel that carries the pooled one, and one line when the
+    pooled skill is mostly between-group offset."""
+    from ..evaluation.cohorts import (
+        carrier_channel,
+        group_skill_table,
+        offset_message,
+        offset_share,
+    )
+
+    frame = ds.frame
+    subjects = frame["subject_id"].to_numpy() if "subject_id" in frame else None
+    table = group_skill_table(y, pred, base, own, frame[gcol].to_numpy(), subjects)
+    chan = carrier_channel(frame, y, [f"adc_{w}" for w in schema.labels])
+    adc = frame[chan].to_numpy(float)
     pooled = float(np.corrcoef(adc, y)[0, 1]) if np.std(adc) and np.std(y) else np.nan
+    labels = frame[gcol].astype(str).to_numpy()
     flipped = []
-    for g, idx in ds.frame.groupby(gcol, sort=True).indices.items():
+    for _, row in table.iterrows():
+        idx = np.flatnonzero(labels == row["group"])
         r = (float(np.corrcoef(adc[idx], y[idx])[0, 1])
              if len(idx) > 2 and np.std(adc[idx]) and np.std(y[idx]) else np.nan)
-        flipped += [str(g)] if np.isfinite(r) and np.sign(r) == -np.sign(pooled) else []
-        _say(f"  {gcol} {g}: {len(idx)} readings, CV RMSE {in_unit(_rmse(y[idx], pred[idx]), unit)}"
-             f", no skill {in_unit(_rmse(y[idx], base[idx]), unit)}, r(adc_{schema.labels[0]}, "
-             f"glucose) {r:+.2f} (pooled {pooled:+.2f})", err=False)
+        flipped += [row["group"]] if np.isfinite(r) and np.sign(r) == -np.sign(pooled) else []
+        _say(f"  {gcol} {row['group']}: {row['n_readings']} readings, CV RMSE "
+             f"{in_unit(row['rmse_mgdl'], unit)}, no skill (this group's own training mean) "
+             f"{in_unit(row['no_skill_own_mgdl'], unit)} (pooled mean "
+             f"{in_unit(row['no_skill_pooled_mgdl'], unit)}), r({chan}, glucose) {r:+.2f} "
+             f"(pooled {pooled:+.2f})", err=False)
+    msg = offset_message(gcol, offset_share(y, pred, base, own), table)
+    if msg:
+        _say(f"warning: {msg}")
     if flipped:
-        _say(f"warning: within {gcol} {', '.join(flipped)} the ADC-glucose correlation has the "
-             "opposite sign of the pooled one: the pooled skill may be a group offset, not "
-             "glucose")
+        _say(f"warning: within {gcol} {', '.join(flipped)} the {chan}-glucose correlation "
+             "has the opposite sign of the pooled one: the pooled skill may be a group "
+             "offset, not glucose")
 
 
 def warn_overparameterised(estimator, n_rows: int) -> None:

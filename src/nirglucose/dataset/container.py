@@ -35,7 +35,13 @@ from .adc import check_adc_bits
 from .columns import (
     led_wavelengths_in,
 )
-from .files import check_frame, check_glucose_unit, read_frame, validate_frame
+from .files import (
+    GLUCOSE_COLUMNS,
+    check_frame,
+    check_glucose_unit,
+    read_frame,
+    validate_frame,
+)
 from .meta import parse_meta
 
 __all__ = [
@@ -338,7 +344,9 @@ def load_dataset(
     (``ADC_940`` is ``adc_940``); the reference glucose may be ``glucose_mgdl`` or
     ``glucose_mmoll`` and is converted to ``glucose_mgdl``; the whole file is validated
     once, with the file's own row numbers. ``metadata["read_notes"]`` lists what was
-    read differently from the schema's spelling (renames, delimiter, unit).
+    read differently from the schema's spelling (renames, delimiter, unit), and
+    ``metadata["glucose_unit"]`` the unit its reference column was read in (what the
+    commands print glucose in unless asked otherwise).
 
     A directory is opened as a partitioned Parquet dataset (the parts its
     ``manifest.json`` lists, else all ``*.parquet`` files in name order) without reading
@@ -378,9 +386,13 @@ def load_dataset(
     if not len(frame):
         raise DataError(f"{str(path)!r} holds no measurements (a header, no rows)")
     meta, config, seed = parse_meta(raw.get(META_KEY), path)  # one-line errors (issue 20)
+    read_unit = glucose_unit or next(
+        (u for c, u in GLUCOSE_COLUMNS.items() if c in frame.columns), None)
     notes += validate_frame(frame, csv=path.suffix == ".csv", glucose_unit=glucose_unit)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     extra.update(source=str(path), read_notes=notes)
+    if read_unit is not None:  # the unit the reference column was read in (issue 43)
+        extra["glucose_unit"] = read_unit
     if adc_bits is not None:
         extra["adc_bits"] = check_adc_bits(adc_bits)
     return Dataset(frame, config=config, seed=seed, metadata=extra)
