@@ -54,3 +54,21 @@ def test_fit_prints_in_the_reference_columns_unit(cli, one_led, tmp_path):
     code, out, err = cli("fit", "--model", "pls", "--data", one_led, "--out",
                          tmp_path / "m.json", "--adc-bits", "10", "--glucose-unit", "mmol/L")
     assert code == 0, err
+
+
+def test_benchmark_and_report_judge_cohorts_against_their_own_mean(cli, two_converters,
+                                                                   tmp_path):
+    from nirglucose.report.cohorts import cohorts_section
+    from nirglucose.report.figures import load_results
+
+    out_dir = tmp_path / "b"
+    code, out, err = cli("benchmark", "--data", two_converters, "--out", out_dir, "--models",
+                         "pls", "--adc-bits", "18", "--repeats", "1", "--resamples", "100",
+                         "--no-ablation", "--no-references", "--jobs", "1")
+    assert code == 0, err
+    assert "no skill is each group's own training mean" in out
+    assert "diabetic no:" in out and "diabetic yes:" in out
+    assert "PLS: the pooled skill is mostly the offset between diabetic groups" in err
+    html = cohorts_section([load_results(out_dir)])
+    assert 'id="cohorts"' in html and "no skill (own mean)" in html
+    assert "mostly the offset between diabetic groups" in html

@@ -17,6 +17,7 @@ from ._common import (
     AdcBitsOption,
     FoldsOption,
     GlucoseUnitOption,
+    GroupByOption,
     JobsOption,
     OutDirOption,
     PerSubjectOption,
@@ -40,7 +41,7 @@ from ._common import (
     refuse_simulation_options,
     runs_workers,
 )
-from .fit_report import say_notes
+from .fit_report import display_unit, group_column, in_unit, report_benchmark_cohorts, say_notes
 
 #: ``--drop-one``: the models refitted without each LED.
 _DropOneOption = Annotated[
@@ -99,11 +100,14 @@ def benchmark(
     set_: SetOption = None,
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,
+    group_by: GroupByOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
 
     Files written keep mg/dL (their column names say so); --glucose-unit sets the unit
-    of the --data file and of the printed table."""
+    of the --data file and of the printed table (default: the unit of its reference
+    column). A --data file with a grouping column (--group-by, else detected) gets each
+    group's error against that group's own training mean."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
@@ -117,10 +121,16 @@ def benchmark(
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
         _check_run_data(ds, calibration, protocol, folds)
+        gcol = group_column(ds.frame, group_by) if p is None else None
+        if gcol is not None:
+            ds.metadata["group_by"] = gcol  # dataset.parquet carries it to the report
         if p is None:
             say_notes(ds)  # after the checks: an error stays one line
-        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation, calibration, glucose_unit, drop_one)
+        unit = display_unit(ds, glucose_unit)
+        res = _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs,
+                             resamples, references, ablation, calibration, unit, drop_one)
+        if gcol is not None:
+            report_benchmark_cohorts(res, ds, gcol, unit)
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
@@ -232,6 +242,7 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
         )
     _print_benchmark(res, ds, out, unit)
+    return res
 
 
 def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
@@ -269,8 +280,9 @@ def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
     for _, r in cal[cal["method"] != "none"].iterrows():
         _say(
             f"calibration ({r['k']} reading{'s' if r['k'] > 1 else ''}): {r['model']} "
-            f"{r['method']}: RMSE {r['rmse_mgdl']:.1f} mg/dL"
-            + (f", gain {r['gain_mgdl']:+.1f} vs {r['baseline']}" if r["baseline"] else ""),
+            f"{r['method']}: RMSE {in_unit(r['rmse_mgdl'], unit)}"
+            + (f", gain {'+' if r['gain_mgdl'] >= 0 else ''}{g(r['gain_mgdl'])} vs "
+               f"{r['baseline']}" if r["baseline"] else ""),
             err=False,
         )
     m = res.meta

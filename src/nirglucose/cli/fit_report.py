@@ -225,3 +225,42 @@ def check_zero_variance(ds, schema) -> None:
         if len(vals) and np.ptp(vals) == 0:
             raise UserError(f"column {col!r} holds one value ({vals[0]:g}) in every row: "
                             "nothing to learn from; check the export of the file")
+
+
+def _competitors(metrics) -> list[str]:
+    """The benchmark's competing rows, best first: no reference row (oracle, no skill),
+    no ablation row, nothing privileged."""
+    from ..models.registry import privileged_knowledge
+
+    def privileged(name: str) -> bool:
+        try:
+            return privileged_knowledge(name) is not None
+        except (KeyError, ValueError, TypeError):
+            return False
+
+    m = metrics.sort_values("rmse_mgdl")
+    return [str(n) for n in m["model"] if n not in ("oracle", "mean") and "/" not in str(n)
+            and not privileged(str(n))]
+
+
+def report_benchmark_cohorts(res, ds, gcol: str, unit: str) -> None:
+    """After ``benchmark --data``: the best competitor's error in each group of ``gcol``
+    against the group's own training mean, and one line when its pooled skill is mostly
+    between-group offset."""
+    from ..evaluation.cohorts import cohort_errors, offset_message
+
+    names = _competitors(res.metrics)
+    if not names or "fold" not in res.predictions.columns:
+        return
+    best = names[0]
+    t = cohort_errors(res.predictions, ds.frame, gcol, [best])
+    label = dict(zip(res.metrics["model"], res.metrics["label"], strict=True)).get(best, best)
+    _say(f"by {gcol} ({label}, the lowest-RMSE competitor; no skill is each group's own "
+         "training mean):", err=False)
+    for _, r in t.iterrows():
+        _say(f"  {gcol} {r['group']}: {r['n_subjects']} subjects, RMSE "
+             f"{in_unit(r['rmse_mgdl'], unit)}, no skill {in_unit(r['no_skill_own_mgdl'], unit)}"
+             f" (pooled mean {in_unit(r['no_skill_pooled_mgdl'], unit)})", err=False)
+    msg = offset_message(gcol, float(t["offset_share"].iloc[0]) if len(t) else float("nan"), t)
+    if msg:
+        _say(f"warning: {label}: {msg}")

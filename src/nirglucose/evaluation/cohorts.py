@@ -41,6 +41,7 @@ __all__ = [
     "group_skill_table",
     "offset_message",
     "carrier_channel",
+    "cohort_errors",
 ]
 
 #: Column names read as a grouping of subjects (case-folded): cohorts, sites, devices,
@@ -183,3 +184,56 @@ def carrier_channel(frame: pd.DataFrame, y: np.ndarray, channels: Sequence[str])
         if np.isfinite(r) and r > best_r:
             best, best_r = c, r
     return best
+
+
+def _subject_group(frame: pd.DataFrame, column: str) -> pd.Series:
+    """Each subject's group (its most frequent value), indexed by subject id."""
+    g = frame[["subject_id", column]].dropna()
+    return g.groupby("subject_id")[column].agg(lambda s: str(s.mode().iloc[0]))
+
+
+def cohort_errors(predictions: pd.DataFrame, frame: pd.DataFrame, column: str,
+                  models: Sequence[str]) -> pd.DataFrame:
+    """Each model's error in each group of ``column`` beside no skill against the pooled
+    training mean and against the group's own training mean, from a benchmark's
+    predictions (``model``, ``subject_id``, ``repeat``, ``fold``, ``reference_mgdl``,
+    ``predicted_mgdl``) and its dataset (``subject_id``, ``glucose_mgdl``, ``column``).
+
+    The training rows of a (repeat, fold) are the dataset's rows whose subjects it does
+    not test. Repeats are pooled (each scores every subject once under grouped CV).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (model, group): ``model``, ``by``, ``group``, ``n_subjects``,
+        ``n_readings``, ``rmse_mgdl``, ``no_skill_pooled_mgdl``, ``no_skill_own_mgdl``,
+        ``beats_own_mean``, and the model's :func:`offset_share` (``offset_share``).
+    """
+    groups = _subject_group(frame, column)
+    sid = frame["subject_id"].to_numpy()
+    y_all = frame["glucose_mgdl"].to_numpy(float)
+    g_all = frame["subject_id"].map(groups).astype(str).to_numpy()
+    p = predictions[predictions["model"].isin(list(models))].copy()
+    p["_group"] = p["subject_id"].map(groups).astype(str)
+    p["_pooled"] = np.nan
+    p["_own"] = np.nan
+    keys = ["repeat", "fold"] if "repeat" in p.columns else ["fold"]
+    for _, part in p.groupby(keys, sort=False):
+        train = ~np.isin(sid, part["subject_id"].unique())
+        pooled = float(y_all[train].mean())
+        p.loc[part.index, "_pooled"] = pooled
+        own = {g: float(y_all[train & (g_all == g)].mean())
+               for g in part["_group"].unique() if (train & (g_all == g)).any()}
+        p.loc[part.index, "_own"] = part["_group"].map(own).fillna(pooled).to_numpy()
+    rows = []
+    for model, pm in p.groupby("model", sort=False):
+        y, pred = pm["reference_mgdl"].to_numpy(float), pm["predicted_mgdl"].to_numpy(float)
+        pooled, own = pm["_pooled"].to_numpy(float), pm["_own"].to_numpy(float)
+        share = offset_share(y, pred, pooled, own)
+        t = group_skill_table(y, pred, pooled, own, pm["_group"].to_numpy(),
+                              pm["subject_id"].to_numpy())
+        rows.append(t.assign(model=model, by=column, offset_share=share))
+    cols = ["model", "by", "group", "n_subjects", "n_readings", "rmse_mgdl",
+            "no_skill_pooled_mgdl", "no_skill_own_mgdl", "beats_own_mean", "offset_share"]
+    return (pd.concat(rows, ignore_index=True)[cols] if rows
+            else pd.DataFrame(columns=cols))

@@ -21,6 +21,7 @@ from typing import Any
 from .._version import __version__
 from ..dataset import atomic_write
 from ..exceptions import DataError
+from .cohorts import cohorts_section
 from .figures import RenderedFigure, Results, load_results, render_figures
 from .figures.inputs import latency_resolution
 from .findings import findings_section
@@ -184,6 +185,7 @@ _OPTIONAL_CONTENTS = (("findings", "Findings"), ("fig-headline", "Headline figur
 _MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metrics by preset"),
                     ("separation", "What separates the presets"),
                     ("ablations", "Physics ablation"), ("subgroups", "Subgroups"),
+                    ("cohorts", "Cohorts against their own mean"),
                     ("hyperparameters", "Hyper-parameters"))
 
 
@@ -341,6 +343,7 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
               [ablation_section(primary, preset=preset_of(results))])
     groups = subgroup_tables(runs)
     middle.append(subgroups_section(runs, groups))
+    middle.append(cohorts_section(runs))
     middle.append(hyperparameter_section(runs))
     middle.append(inverse_section(runs))
     top = [] if results.user_data else [findings_section(runs, subgroups=groups)]
