@@ -120,17 +120,27 @@ def benchmark(
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
-        _check_run_data(ds, calibration, protocol, folds)
-        gcol = group_column(ds.frame, group_by) if p is None else None
-        if gcol is not None:
-            ds.metadata["group_by"] = gcol  # dataset.parquet carries it to the report
-        if p is None:
-            say_notes(ds)  # after the checks: an error stays one line
-        unit = display_unit(ds, glucose_unit)
-        res = _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs,
-                             resamples, references, ablation, calibration, unit, drop_one)
-        if gcol is not None:
-            report_benchmark_cohorts(res, ds, gcol, unit)
+        gcol, unit = _data_groups(ds, p, group_by, calibration, protocol, folds,
+                                  glucose_unit)
+        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
+                       references, ablation, calibration, unit, drop_one, gcol)
+
+
+def _data_groups(ds, preset: str | None, group_by: str | None, calibration: int,
+                 protocol: str, folds: int, glucose_unit: str | None
+                 ) -> tuple[str | None, str]:
+    """``(grouping column, printed unit)`` of one run after its checks: a --data file's
+    grouping column (recorded in its metadata for the report; None for a simulated run)
+    and its read notes printed once it passed them."""
+    _check_run_data(ds, calibration, protocol, folds)
+    unit = display_unit(ds, glucose_unit)
+    if preset is not None:
+        return None, unit
+    gcol = group_column(ds.frame, group_by)
+    if gcol is not None:
+        ds.metadata["group_by"] = gcol  # dataset.parquet carries it to the report
+    say_notes(ds)  # after the checks: an error stays one line
+    return gcol, unit
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
@@ -221,8 +231,10 @@ def _check_run_data(ds, k: int, protocol: str, folds: int) -> None:
 
 
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
-                   references, ablation, calibration=0, unit=None, drop_one=None) -> None:
-    """Run the benchmark of one dataset, then print its table and summary lines."""
+                   references, ablation, calibration=0, unit=None, drop_one=None,
+                   group_column_name=None) -> None:
+    """Run the benchmark of one dataset, then print its table and summary lines (and
+    each group's error against its own training mean, given a grouping column)."""
     from ..evaluation.benchmark.run import run_benchmark
     from ..evaluation.protocol import Protocol
 
@@ -242,7 +254,8 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
         )
     _print_benchmark(res, ds, out, unit)
-    return res
+    if group_column_name is not None:
+        report_benchmark_cohorts(res, ds, group_column_name, unit or "mg/dL")
 
 
 def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
