@@ -14,8 +14,9 @@ from ._app import app, out_console
 from ._common import (
     _PRESET_NAMES,
     DEFAULT_RESAMPLES,
-    AdcBitsOption,
+    ChannelBitsOption,
     FoldsOption,
+    FullScaleOption,
     GlucoseUnitOption,
     GroupByOption,
     JobsOption,
@@ -38,10 +39,18 @@ from ._common import (
     _tidy_out,
     _warnings_as_lines,
     clear_previous_runs,
+    held_warnings,
     refuse_simulation_options,
     runs_workers,
 )
-from .fit_report import display_unit, group_column, in_unit, report_benchmark_cohorts, say_notes
+from .fit_report import (
+    adc_spec,
+    display_unit,
+    group_column,
+    in_unit,
+    report_benchmark_cohorts,
+    say_notes,
+)
 
 #: ``--drop-one``: the models refitted without each LED.
 _DropOneOption = Annotated[
@@ -98,7 +107,8 @@ def benchmark(
     ] = 0,
     drop_one: _DropOneOption = None,
     set_: SetOption = None,
-    adc_bits: AdcBitsOption = None,
+    adc_bits: ChannelBitsOption = None,
+    adc_full_scale: FullScaleOption = None,
     glucose_unit: GlucoseUnitOption = None,
     group_by: GroupByOption = None,
 ) -> None:
@@ -114,16 +124,29 @@ def benchmark(
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
-    if adc_bits is not None and data is None:  # the simulated device's resolution
-        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
+    set_ = _simulated_bits(set_, adc_bits, adc_full_scale, data)
     runs, overrides = _benchmark_runs(preset, data, set_, out)
     for p, run_out in runs:
-        ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
-                             glucose_unit)
-        gcol, unit = _data_groups(ds, p, group_by, calibration, protocol, folds,
-                                  glucose_unit)
+        with held_warnings():  # a refusal of this run is one line
+            ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides,
+                                 (adc_bits, adc_full_scale), glucose_unit)
+            gcol, unit = _data_groups(ds, p, group_by, calibration, protocol, folds,
+                                      glucose_unit)
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
                        references, ablation, calibration, unit, drop_one, gcol)
+
+
+def _simulated_bits(set_, adc_bits, adc_full_scale, data):
+    """``--set`` with the simulated device's ``--adc-bits N`` (one resolution: the
+    simulator has one converter); --data keeps its options for the file."""
+    if data is not None or (adc_bits is None and adc_full_scale is None):
+        return set_
+    bits = adc_spec(adc_bits)
+    if adc_full_scale is not None or isinstance(bits, dict):
+        raise UserError("per-channel converters (--adc-bits adc_940=10,... or "
+                        "--adc-full-scale) describe a --data file; a simulated device has "
+                        "one converter: give --adc-bits N")
+    return [*(set_ or []), f"hardware.adc_bits={bits}"]
 
 
 def _data_groups(ds, preset: str | None, group_by: str | None, calibration: int,
@@ -195,14 +218,15 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
     return runs, overrides
 
 
-def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bits=None,
-                    glucose_unit=None):
+def _benchmark_data(preset, data, subjects, per_subject, seed, overrides,
+                    adc_bits=(None, None), glucose_unit=None):
     """The dataset of one run: the --data file (``preset`` None: read, validated whole
     and its ADC resolution resolved before any split) or a simulated one."""
     if preset is None:
         from .fit_report import load_device_file
 
-        ds, _ = load_device_file(data, glucose_unit, adc_bits, need_glucose=True)
+        ds, _ = load_device_file(data, glucose_unit, adc_bits[0], need_glucose=True,
+                                 adc_full_scale=adc_bits[1])
         if "subject_id" not in ds.frame.columns:
             raise UserError(f"{str(data)!r} has no subject_id column: the benchmark splits "
                             "by subject; add one (one id per person)")

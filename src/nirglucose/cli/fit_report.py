@@ -13,17 +13,55 @@ import numpy as np
 from ._common import UserError, _say
 
 
-def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None, *,
-                     need_glucose: bool):
+def adc_spec(text: str | None, what: str = "--adc-bits"):
+    """``--adc-bits`` / ``--adc-full-scale`` as given: None, an int, or a per-channel
+    mapping (:func:`nirglucose.dataset.adc.parse_channel_spec`)."""
+    from ..dataset.adc import parse_channel_spec
+
+    return None if text is None else parse_channel_spec(text, what)
+
+
+def load_device_file(data: Path, glucose_unit: str | None, adc_bits: str | None, *,
+                     need_glucose: bool, adc_full_scale: str | None = None):
     """The file as a Dataset, its read notes printed, the ADC resolution resolved by
-    the one policy (:mod:`nirglucose.dataset.adc`) and recorded in its metadata."""
+    the one policy (:mod:`nirglucose.dataset.adc`, one converter or one per channel) and
+    recorded in its metadata; a declared channel whose codes never reach a quarter of
+    its full scale is warned about."""
     import warnings
 
     from ..dataset import load_dataset
+    from ..dataset.adc import check_headroom
     from ..dataset.files import check_codes
     from ..dataset.schema import DeviceSchema
 
-    ds = load_dataset(data, glucose_unit=glucose_unit, adc_bits=adc_bits)
+    bits, full = adc_spec(adc_bits), adc_spec(adc_full_scale, "--adc-full-scale")
+    if full is not None and not isinstance(full, dict):
+        raise UserError(f"--adc-full-scale {adc_full_scale!r}: name the channel, e.g. "
+                        "adc_1050=200000")
+    ds = load_dataset(data, glucose_unit=glucose_unit, adc_bits=bits, adc_full_scale=full)
+    _check_reference(ds, data, need_glucose)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        schema = DeviceSchema.infer(ds)
+        check_codes(ds.frame, schema.adc_bits, csv=Path(data).suffix == ".csv",
+                    full_scales=schema.code_full_scales())
+        if bits is not None:  # a declared converter: is it this channel's?
+            check_headroom(ds.frame, tuple(f"adc_{w}" for w in schema.labels),
+                           schema.full_scales,
+                           schema.channel_bits or (schema.adc_bits,) * schema.n_channels)
+    for w in caught:
+        _say(f"warning: {w.message}")
+    # one resolution from here on, recorded (per channel where the device mixes them)
+    ds.metadata["adc_bits"] = (dict(zip([f"adc_{w}" for w in schema.labels],
+                                        schema.channel_bits, strict=True))
+                               if schema.per_channel else schema.adc_bits)
+    if need_glucose:
+        check_zero_variance(ds, schema)
+    return ds, schema
+
+
+def _check_reference(ds, data: Path, need_glucose: bool) -> None:
+    """Refuse a file to fit without reference glucose, or with empty cells in it."""
     if need_glucose and "glucose_mgdl" not in ds.frame.columns:
         cols = ", ".join(repr(str(c)) for c in ds.frame.columns[:12])
         raise UserError(f"{str(data)!r} has no reference glucose: add a 'glucose_mgdl' "
@@ -34,16 +72,6 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: int | None,
         rows = file_rows(ds.frame["glucose_mgdl"].isna().to_numpy(), Path(data).suffix == ".csv")
         raise UserError(f"column 'glucose_mgdl' (the reference glucose) has empty cells at "
                         f"{rows}; every reading fitted needs its meter value")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        schema = DeviceSchema.infer(ds)
-    check_codes(ds.frame, schema.adc_bits, csv=Path(data).suffix == ".csv")
-    for w in caught:
-        _say(f"warning: {w.message}")
-    ds.metadata["adc_bits"] = schema.adc_bits  # one resolution from here on, recorded
-    if need_glucose:
-        check_zero_variance(ds, schema)
-    return ds, schema
 
 
 def say_notes(ds) -> None:

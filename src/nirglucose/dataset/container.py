@@ -31,7 +31,7 @@ import pyarrow.parquet as pq
 from .._version import __version__
 from ..config import ScenarioConfig
 from ..exceptions import DataError
-from .adc import check_adc_bits
+from .adc import check_channel_bits
 from .columns import (
     led_wavelengths_in,
 )
@@ -334,7 +334,8 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
 
 
 def load_dataset(
-    path: str | os.PathLike, *, glucose_unit: str | None = None, adc_bits: int | None = None
+    path: str | os.PathLike, *, glucose_unit: str | None = None, adc_bits: Any = None,
+    adc_full_scale: Any = None,
 ) -> Dataset:
     """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
 
@@ -360,8 +361,13 @@ def load_dataset(
     glucose_unit : {"mg/dL", "mmol/L"}, optional
         Unit of the file's reference glucose (default: the column's, ``glucose_mgdl``
         mg/dL and ``glucose_mmoll`` mmol/L); the dataset holds mg/dL.
-    adc_bits : int, optional
-        The device's ADC resolution, recorded as ``metadata["adc_bits"]``. [bit]
+    adc_bits : int or mapping, optional
+        The device's ADC resolution, recorded as ``metadata["adc_bits"]``: one for every
+        channel, or per channel (``{"adc_940": 10, "adc_1050": 18}``, ``"default"`` for
+        the rest) for a device that mixes converters. [bit]
+    adc_full_scale : mapping, optional
+        Per channel, a full-scale code other than 2^bits - 1, recorded as
+        ``metadata["adc_full_scale"]``. [ADC code]
 
     Raises
     ------
@@ -394,7 +400,9 @@ def load_dataset(
     if read_unit is not None:  # the unit the reference column was read in (issue 43)
         extra["glucose_unit"] = read_unit
     if adc_bits is not None:
-        extra["adc_bits"] = check_adc_bits(adc_bits)
+        extra["adc_bits"] = check_channel_bits(adc_bits)
+    if adc_full_scale:
+        extra["adc_full_scale"] = dict(adc_full_scale)
     return Dataset(frame, config=config, seed=seed, metadata=extra)
 
 

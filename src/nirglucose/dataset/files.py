@@ -28,7 +28,7 @@ Examples
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from csv import reader as csv_reader
 from pathlib import Path
 from typing import Any, Literal
@@ -406,19 +406,25 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
     return notes
 
 
-def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool) -> None:
-    """Refuse ADC and reference codes above the full scale 2^bits - 1, with the file's
+def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool,
+                full_scales: Mapping[str, float] | None = None) -> None:
+    """Refuse ADC and reference codes above the full scale, 2^bits - 1 or a channel's own
+    (``full_scales``: column -> full-scale code, per-channel converters), with the file's
     rows (codes of 0 or below are refused by :func:`validate_frame`)."""
-    full = 2**bits - 1
     for col in [c for c in frame.columns if isinstance(c, str) and CODE_COLUMN_RE.match(c)]:
+        full = float((full_scales or {}).get(col, 2**bits - 1))
         vals = np.asarray(frame[col], dtype=float)
         bad = vals > full
         if bad.any():
             need = int(np.ceil(np.log2(vals.max() + 1)))
+            per = (f"its {need}-bit converter (--adc-bits {col.replace('ref_', '')}={need},..."
+                   "; Python adc_bits={...})" if full_scales else
+                   "the device's resolution (--adc-bits N; Python adc_bits=N)")
             raise DataError(
-                f"column {col!r} has ADC codes above {full} (the {bits}-bit full scale) at "
+                f"column {col!r} has ADC codes above {full:.0f} (the "
+                f"{'channel' if full_scales else f'{bits}-bit'} full scale) at "
                 f"{file_rows(bad, csv)}: codes up to {vals.max():g} need a {need}-bit ADC; "
-                "declare the device's resolution (--adc-bits N; Python adc_bits=N)"
+                f"declare {per}"
             )
 
 
