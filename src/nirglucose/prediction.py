@@ -37,6 +37,7 @@ from .models.registry import model_from
 
 __all__ = [
     "INTERVAL_LEVEL",
+    "TRAINING_ROWS_SHARE",
     "PredictionResult",
     "predict",
     "check_model_codes",
@@ -48,6 +49,11 @@ __all__ = [
 #: Nominal coverage of the interval in the table (``glucose_lower_mgdl`` /
 #: ``glucose_upper_mgdl``): the level a calibrated model file always stores. [-]
 INTERVAL_LEVEL = 0.9
+#: Share of the readings predicted that must match training rows (values and ids) before
+#: ``predict`` says it was given the rows the model was fitted on: one LED's integer
+#: codes and small subject ids repeat across files by chance (a few per cent), a
+#: re-used file or its training part matches far above that. [-]
+TRAINING_ROWS_SHARE = 0.25
 
 
 @dataclass(frozen=True)
@@ -83,9 +89,10 @@ class PredictionResult:
 
     @property
     def training_note(self) -> str | None:
-        """One line when rows the model was fitted on are among those predicted."""
+        """One line when rows the model was fitted on are among those predicted (at
+        least :data:`TRAINING_ROWS_SHARE` of those checked)."""
         matched, checked = self.training_rows
-        if not matched:
+        if not matched or matched < TRAINING_ROWS_SHARE * checked:
             return None
         n = len(self.frame)
         share = (f"all {n}" if matched == checked == n else

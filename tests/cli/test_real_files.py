@@ -72,3 +72,80 @@ def test_benchmark_and_report_judge_cohorts_against_their_own_mean(cli, two_conv
     html = cohorts_section([load_results(out_dir)])
     assert 'id="cohorts"' in html and "no skill (own mean)" in html
     assert "mostly the offset between diabetic groups" in html
+
+
+def test_per_channel_converters_are_declared_stored_and_read(cli, two_converters, tmp_path):
+    import json
+
+    model = tmp_path / "m.json"
+    code, out, err = cli("fit", "--model", "pls", "--data", two_converters, "--out", model,
+                         "--adc-bits", "adc_940=10,adc_1050=18", "--cv-folds", "0")
+    assert code == 0, err
+    assert "adc_940 10 bits, adc_1050 18 bits" in out
+    assert "quarter" not in err
+    schema = json.loads(model.read_text())["state"]["schema_"]
+    assert schema["channel_bits"] == [10, 18]
+    assert schema["channel_full_scale"] == [1023.0, 262143.0]
+    pred = tmp_path / "p.csv"
+    code, out, err = cli("predict", "--model", model, "--data", two_converters, "--out", pred)
+    assert code == 0, err
+    # one converter for both: the 10-bit channel is read at 18 bits, and said so in one line
+    code, out, err = cli("fit", "--model", "pls", "--data", two_converters, "--out", model,
+                         "--adc-bits", "18", "--cv-folds", "0")
+    assert code == 0, err
+    warn = [ln for ln in err.splitlines() if "quarter" in ln]
+    assert len(warn) == 1 and "'adc_940'" in warn[0] and "adc_940=10" in warn[0]
+
+
+@pytest.mark.parametrize(("bits", "contains"), [
+    ("adc_940=10", ("no resolution for adc_1050",)),
+    ("adc_940=10,adc_1050=16", ("'adc_1050'", "above 65535", "adc_1050=18")),
+    ("adc_940=10,adc_850=18", ("adc_850, not a channel",)),
+    ("adc_940=ten", ("'ten' is not a number",)),
+])
+def test_per_channel_mistakes_are_one_line(cli, two_converters, tmp_path, bits, contains):
+    code, _, err = cli("fit", "--model", "pls", "--data", two_converters, "--out",
+                       tmp_path / "m.json", "--adc-bits", bits)
+    assert_one_line_error(code, err, contains=contains)
+
+
+def test_predict_clips_intervals_to_the_meter_and_answers_in_the_models_unit(cli, tmp_path):
+    import pandas as pd
+
+    train = tmp_path / "train.csv"
+    one_led_mmoll_frame(n_subjects=60, seed=5).to_csv(train, index=False)
+    model = tmp_path / "m.json"
+    code, _, err = cli("fit", "--model", "pls", "--data", train, "--out", model,
+                       "--adc-bits", "10", "--cv-folds", "0", "--intervals", "split")
+    assert code == 0, err
+    new = one_led_mmoll_frame(seed=1).drop(columns=["glucose_mmoll"])
+    new.loc[0, "adc_940"] = 300.0  # far below: a negative estimate
+    path = tmp_path / "new.csv"
+    new.to_csv(path, index=False)
+    out_csv = tmp_path / "p.csv"
+    code, out, err = cli("predict", "--model", model, "--data", path, "--out", out_csv)
+    assert code == 0, err
+    t = pd.read_csv(out_csv, keep_default_na=False)
+    assert "predicted_glucose_mmoll" in t.columns  # the training file's unit
+    lo, hi = 20.0 / 18.016, 600.0 / 18.016
+    assert t.loc[0, "flag"] == "LO" and t.loc[0, "predicted_glucose_mmoll"] < lo
+    for col in ("glucose_lower_mmoll", "glucose_upper_mmoll"):
+        v = pd.to_numeric(t[col])
+        assert v.min() >= lo - 1e-9 and v.max() <= hi + 1e-9
+    assert "clipped to the meter's range" in out
+    assert "fitted on" not in err  # new readings
+    # the rows the model was fitted on: said in one note
+    code, out, err = cli("predict", "--model", model, "--data", train, "--out", out_csv)
+    assert code == 0, err
+    note = [ln for ln in err.splitlines() if "rows the model was fitted on" in ln]
+    assert len(note) == 1 and note[0].startswith("note: 96 of the 120 readings")
+
+
+def test_a_refusal_prints_no_warning_about_the_run_that_will_not_happen(cli, tmp_path):
+    import pandas as pd
+
+    path = tmp_path / "one_person.csv"
+    pd.DataFrame({"subject_id": [1] * 6, "glucose_mgdl": [90, 120, 150, 180, 110, 140],
+                  "adc_940": [2100, 2000, 1900, 1800, 2050, 1950]}).to_csv(path, index=False)
+    code, _, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json")
+    assert_one_line_error(code, err, contains=("too few subjects",))

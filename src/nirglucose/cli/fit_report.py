@@ -52,9 +52,7 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: str | None,
     for w in caught:
         _say(f"warning: {w.message}")
     # one resolution from here on, recorded (per channel where the device mixes them)
-    ds.metadata["adc_bits"] = (dict(zip([f"adc_{w}" for w in schema.labels],
-                                        schema.channel_bits, strict=True))
-                               if schema.per_channel else schema.adc_bits)
+    ds.metadata.update(schema.converter_metadata())
     if need_glucose:
         check_zero_variance(ds, schema)
     return ds, schema

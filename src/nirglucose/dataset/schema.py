@@ -316,6 +316,17 @@ class DeviceSchema:
             return self.channel_full_scale
         return (float(self.full_scale),) * self.n_channels
 
+    def converter_metadata(self) -> dict[str, Any]:
+        """The converters as a Dataset's metadata declares them (``adc_bits``: one int, or
+        per channel; ``adc_full_scale`` where a channel's is not 2^bits - 1)."""
+        if not self.per_channel:
+            return {"adc_bits": self.adc_bits}
+        cols = [f"adc_{w}" for w in self.labels]
+        fs = {c: f for c, f, b in zip(cols, self.full_scales, self.channel_bits, strict=True)
+              if f != 2 ** b - 1}
+        return {"adc_bits": dict(zip(cols, self.channel_bits, strict=True)),
+                **({"adc_full_scale": fs} if fs else {})}
+
     def code_full_scales(self) -> dict[str, float]:
         """Each code column (``adc_<nm>``, ``adc_ref_<nm>``) and its full scale (empty for
         a schema whose channels share one converter). [ADC code]"""
