@@ -149,3 +149,11 @@ def test_a_refusal_prints_no_warning_about_the_run_that_will_not_happen(cli, tmp
                   "adc_940": [2100, 2000, 1900, 1800, 2050, 1950]}).to_csv(path, index=False)
     code, _, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json")
     assert_one_line_error(code, err, contains=("too few subjects",))
+
+
+def test_a_study_and_vary_of_its_own_key_are_refused_together(cli, tmp_path):
+    code, _, err = cli("sweep", "--study", "noise-scale", "--vary", "noise_scale=1,2",
+                       "--out", tmp_path / "s", "--seeds", "1", "--subjects", "10")
+    assert_one_line_error(code, err, contains=("--study noise-scale runs its own",
+                                               "give --vary alone"))
+    assert not (tmp_path / "s").exists()
