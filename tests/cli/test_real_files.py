@@ -157,3 +157,45 @@ def test_a_study_and_vary_of_its_own_key_are_refused_together(cli, tmp_path):
     assert_one_line_error(code, err, contains=("--study noise-scale runs its own",
                                                "give --vary alone"))
     assert not (tmp_path / "s").exists()
+
+
+def test_equal_to_no_skill_within_its_interval_is_no_better(cli, tmp_path):
+    import numpy as np
+
+    f = one_led_mmoll_frame(n_subjects=40, seed=7)
+    rng = np.random.default_rng(0)  # a trace of glucose under the noise: RMSE just below
+    f["adc_940"] = np.round(650 + 2.0 * (f["glucose_mmoll"] - 9) + rng.normal(0, 20, len(f)))
+    path = tmp_path / "noise.csv"
+    f.to_csv(path, index=False)
+    code, out, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json",
+                         "--adc-bits", "10")
+    assert code == 0, err
+    assert "no better than no skill (equal within its 95 % interval)" in err
+    assert "above no skill" not in err
+
+
+def test_a_near_miss_physiology_column_gets_the_nearest_name(cli, one_led, tmp_path):
+    import pandas as pd
+
+    f = pd.read_csv(one_led).assign(bmi=24.0, diabetic="no")
+    path = tmp_path / "bmi.csv"
+    f.to_csv(path, index=False)
+    code, out, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json",
+                         "--adc-bits", "10", "--cv-folds", "0")
+    assert code == 0, err
+    hint = [ln for ln in err.splitlines() if "'bmi'" in ln]
+    assert len(hint) == 1 and "'bmi_kgm2'" in hint[0] and "kg/m^2" in hint[0]
+    assert "'diabetic'" not in err  # a grouping column is no near miss
+
+
+def test_an_empty_drop_one_says_why(cli, one_led, tmp_path):
+    import pandas as pd
+
+    out_dir = tmp_path / "b"
+    code, out, err = cli("benchmark", "--data", one_led, "--out", out_dir, "--models", "pls",
+                         "--adc-bits", "10", "--repeats", "1", "--resamples", "100",
+                         "--no-ablation", "--no-references", "--jobs", "1")
+    assert code == 0, err
+    assert pd.read_csv(out_dir / "drop_one.csv").empty
+    assert "drop_one.csv is empty: the device has one LED" in out
+    assert "RMSE mmol/L" in out  # the reference column's unit, undeclared

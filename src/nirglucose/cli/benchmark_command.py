@@ -282,6 +282,13 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
         report_benchmark_cohorts(res, ds, group_column_name, unit or "mg/dL")
 
 
+def _one_led(ds) -> bool:
+    """Whether the dataset's device has a single LED (``adc_<nm>`` column)."""
+    from ..dataset.columns import led_wavelengths_in
+
+    return len(led_wavelengths_in(ds.frame.columns)) == 1
+
+
 def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
     """The metrics table, one line per calibration method, and where the results are."""
     import numpy as np
@@ -323,6 +330,9 @@ def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
             err=False,
         )
     m = res.meta
+    if _one_led(ds) and not len(res.drop_one):
+        _say("note: drop_one.csv is empty: the device has one LED, so there is no LED to "
+             "drop (the drop-one refits need two or more)", err=False)
     if m.get("significance_withheld"):
         _say(f"note: {m['significance_withheld']}", err=False)
     _say(

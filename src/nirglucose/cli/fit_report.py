@@ -126,26 +126,24 @@ def _rmse(a, b) -> float:
 _VERDICT_RESAMPLES = 1000
 
 
-def skill_verdict(model_rmse: float, no_skill_rmse: float, y, pred, base,
-                  subjects=None) -> str | None:
-    """A warning when the model is not better than no skill: above it, or equal within
-    the 95 % interval of the paired MSE difference (a percentile bootstrap over subjects,
-    Cameron, Gelbach & Miller 2008, doi:10.1162/rest.90.3.414; seed 0); None when it is
-    better."""
-    if model_rmse > no_skill_rmse:
-        return ("the grouped-CV error is above no skill: on new people this model does "
-                "worse than predicting the training mean")
+def skill_verdict(y, pred, base, subjects=None) -> str | None:
+    """A warning unless the model beats no skill: "above" it when the 95 % interval of
+    the paired MSE difference (a percentile bootstrap over subjects, Cameron, Gelbach &
+    Miller 2008, doi:10.1162/rest.90.3.414; seed 0) lies above 0, "no better" when it
+    holds 0 (equal within the interval); None when it lies below 0."""
     d = (np.asarray(y) - pred) ** 2 - (np.asarray(y) - base) ** 2
     ids = np.arange(len(d)) if subjects is None else np.asarray(subjects)
     _, inv = np.unique(ids, return_inverse=True)
     sums, counts = np.bincount(inv, weights=d), np.bincount(inv).astype(float)
     idx = np.random.default_rng(0).integers(0, len(sums), size=(_VERDICT_RESAMPLES, len(sums)))
-    hi = float(np.quantile(sums[idx].sum(axis=1) / counts[idx].sum(axis=1), 0.975))
-    if hi >= 0:
-        return ("the grouped-CV error is no better than no skill (equal within its 95 % "
-                "interval): on new people this model does not beat predicting the "
-                "training mean")
-    return None
+    lo, hi = np.quantile(sums[idx].sum(axis=1) / counts[idx].sum(axis=1), [0.025, 0.975])
+    if hi < 0:
+        return None
+    if lo > 0:
+        return ("the grouped-CV error is above no skill: on new people this model does "
+                "worse than predicting the training mean")
+    return ("the grouped-CV error is no better than no skill (equal within its 95 % "
+            "interval): on new people this model does not beat predicting the training mean")
 
 
 def report_cv(estimator, ds, schema, folds: int, unit: str | None,
@@ -165,7 +163,7 @@ def report_cv(estimator, ds, schema, folds: int, unit: str | None,
            else f"{n_sub} readings (no subject_id: each taken as a subject)")
     _say(f"grouped {k}-fold CV over {who}: RMSE {in_unit(cv_rmse, unit)}; "
          f"no skill (the training mean) {in_unit(no_skill, unit)}", err=False)
-    verdict = skill_verdict(cv_rmse, no_skill, y, pred, base,
+    verdict = skill_verdict(y, pred, base,
                             ds.frame["subject_id"].to_numpy() if "subject_id" in ds.frame else None)
     if verdict:
         _say(f"warning: {verdict}")

@@ -40,6 +40,7 @@ from .files import (
     check_frame,
     check_glucose_unit,
     read_frame,
+    unread_column_notes,
     validate_frame,
 )
 from .meta import parse_meta
@@ -395,6 +396,7 @@ def load_dataset(
     read_unit = glucose_unit or next(
         (u for c, u in GLUCOSE_COLUMNS.items() if c in frame.columns), None)
     notes += validate_frame(frame, csv=path.suffix == ".csv", glucose_unit=glucose_unit)
+    notes += unread_column_notes(frame.columns)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     extra.update(source=str(path), read_notes=notes)
     if read_unit is not None:  # the unit the reference column was read in (issue 43)

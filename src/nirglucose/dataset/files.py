@@ -62,6 +62,7 @@ __all__ = [
     "check_codes",
     "file_rows",
     "glucose_to_unit",
+    "unread_column_notes",
 ]
 
 #: Units a reference glucose column may be in.
@@ -460,3 +461,31 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
                             f"{lo:g}-{hi:g} at {file_rows(bad, csv)} "
                             "(docs/user_guide/your_data.md)")
     return _glucose(frame, unit, csv)
+
+
+def unread_column_notes(columns: Iterable[Any]) -> list[str]:
+    """A note for each column no model reads whose name is near a physiological column's
+    (``bmi`` -> ``bmi_kgm2``, ``Heart rate`` -> ``heart_rate_bpm``): the schema reads a
+    column by its exact name and unit, so a near miss is ignored without it.
+
+    Examples
+    --------
+    >>> unread_column_notes(["adc_940", "bmi", "diabetic"])[0][:52]
+    "column 'bmi' is not read: a model reads 'bmi_kgm2' ["
+    """
+    import difflib
+
+    from .columns import COLUMN_UNITS
+
+    out = []
+    for c in columns:
+        if not isinstance(c, str) or c in _KNOWN or CODE_COLUMN_RE.match(c) or c in WEAR_COLUMNS:
+            continue
+        name = canonical_name(c)
+        near = [k for k in KNOWN_PHYSIOLOGY if k.startswith(f"{name}_")] or \
+            difflib.get_close_matches(name, KNOWN_PHYSIOLOGY, n=1, cutoff=0.75)
+        if near:
+            out.append(f"column {c!r} is not read: a model reads {near[0]!r} "
+                       f"[{COLUMN_UNITS.get(near[0], '-')}]; rename it if it holds that "
+                       f"(in that unit)")
+    return out
