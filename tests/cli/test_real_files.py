@@ -199,3 +199,8 @@ def test_an_empty_drop_one_says_why(cli, one_led, tmp_path):
     assert pd.read_csv(out_dir / "drop_one.csv").empty
     assert "drop_one.csv is empty: the device has one LED" in out
     assert "RMSE mmol/L" in out  # the reference column's unit, undeclared
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.tables import main_table
+
+    html = main_table(load_results(out_dir))  # the report's table in the file's unit too
+    assert "RMSE [mmol/L]" in html and "RMSE [mg/dL]" not in html

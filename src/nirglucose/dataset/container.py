@@ -399,8 +399,8 @@ def load_dataset(
     notes += unread_column_notes(frame.columns)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     extra.update(source=str(path), read_notes=notes)
-    if read_unit is not None:  # the unit the reference column was read in (issue 43)
-        extra["glucose_unit"] = read_unit
+    if read_unit is not None:  # the unit the reference was read in (issue 43); a file
+        extra.setdefault("glucose_unit", read_unit)  # saved by nirglucose keeps its own
     if adc_bits is not None:
         extra["adc_bits"] = check_channel_bits(adc_bits)
     if adc_full_scale:
