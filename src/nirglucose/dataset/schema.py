@@ -647,7 +647,7 @@ def schema_for_fit(X: Any, adc_bits: int | None = None) -> DeviceSchema | None:
         Xa = schema.raw(X)
         unit = X.metadata.get("glucose_unit") if isinstance(X, Dataset) else None
         names = tuple(c for c in _ROW_ID_COLUMNS if c in frame.columns)
-        rows, every = _kept_fingerprints(row_fingerprints(Xa, _id_frame(frame, names)))
+        rows, every = _kept_fingerprints(_row_hashes(Xa, _id_frame(frame, names)))
         return replace(schema.with_training_range(Xa), glucose_unit=unit or "mg/dL",
                        train_rows=rows, train_rows_every=every, train_row_ids=names)
     return None
@@ -661,10 +661,22 @@ MAX_TRAIN_FINGERPRINTS = 5000
 _ROW_ID_COLUMNS = ("subject_id", "measurement_id", "time_min")
 
 
+def _row_hashes(Xa: np.ndarray, ids: pd.DataFrame | None = None) -> np.ndarray:
+    """Each row's 64-bit hash (:func:`pandas.util.hash_pandas_object`) of its values and
+    of the identity columns ``ids`` as text."""
+    parts = pd.DataFrame(np.asarray(Xa, dtype=np.float64) + 0.0)  # -0.0 as 0.0
+    if ids is not None and len(ids.columns):
+        parts = pd.concat([parts, ids.astype(str).reset_index(drop=True)], axis=1)
+    return pd.util.hash_pandas_object(parts, index=False).to_numpy(np.uint64)
+
+
+def _hex(h: np.ndarray) -> np.ndarray:
+    return np.array([f"{v:016x}" for v in h.tolist()], dtype="<U16")
+
+
 def row_fingerprints(Xa: np.ndarray, ids: pd.DataFrame | None = None) -> np.ndarray:
-    """Each row's 64-bit hash (:func:`pandas.util.hash_pandas_object`, of the values and
-    of the identity columns ``ids`` as text) as 16 hex digits: equal rows, equal
-    fingerprints.
+    """Each row's 64-bit hash of its values and identity columns ``ids`` (as text), as 16
+    hex digits: equal rows, equal fingerprints.
 
     Examples
     --------
@@ -673,11 +685,7 @@ def row_fingerprints(Xa: np.ndarray, ids: pd.DataFrame | None = None) -> np.ndar
     >>> bool(f[0] == f[2]), bool(f[0] == f[1]), len(f[0])
     (True, False, 16)
     """
-    parts = pd.DataFrame(np.asarray(Xa, dtype=np.float64) + 0.0)  # -0.0 as 0.0
-    if ids is not None and len(ids.columns):
-        parts = pd.concat([parts, ids.astype(str).reset_index(drop=True)], axis=1)
-    h = pd.util.hash_pandas_object(parts, index=False).to_numpy(np.uint64)
-    return np.array([f"{v:016x}" for v in h.tolist()], dtype="<U16")
+    return _hex(_row_hashes(Xa, ids))
 
 
 def _id_frame(frame: pd.DataFrame, names: tuple[str, ...]) -> pd.DataFrame | None:
@@ -687,19 +695,16 @@ def _id_frame(frame: pd.DataFrame, names: tuple[str, ...]) -> pd.DataFrame | Non
     return frame[list(names)]
 
 
-def _kept_fingerprints(fp: np.ndarray) -> tuple[tuple[str, ...], int]:
-    """The sorted unique fingerprints kept in a model file, one in ``every``."""
-    uniq = np.unique(fp)
+def _kept(h: np.ndarray, every: int) -> np.ndarray:
+    """Which row hashes a model file keeps: those whose low 32 bits are 0 mod ``every``."""
+    return (h & np.uint64(0xFFFFFFFF)) % np.uint64(every) == 0
+
+
+def _kept_fingerprints(h: np.ndarray) -> tuple[tuple[str, ...], int]:
+    """The sorted unique fingerprints a model file keeps, one in ``every``."""
+    uniq = np.unique(h)
     every = max(1, int(np.ceil(len(uniq) / MAX_TRAIN_FINGERPRINTS)))
-    return tuple(str(f) for f in uniq[_kept(uniq, every)]), every
-
-
-def _kept(fp: np.ndarray, every: int) -> np.ndarray:
-    """Which fingerprints a model file keeps: those whose low 32 bits are 0 mod
-    ``every``."""
-    low = np.array([int(f[-8:], 16) for f in fp], dtype=np.int64) if len(fp) else \
-        np.zeros(0, dtype=np.int64)
-    return low % every == 0
+    return tuple(str(f) for f in _hex(uniq[_kept(uniq, every)])), every
 
 
 def rows_seen_in_training(schema: DeviceSchema, Xa: np.ndarray,
@@ -710,6 +715,6 @@ def rows_seen_in_training(schema: DeviceSchema, Xa: np.ndarray,
     ids = _id_frame(frame, schema.train_row_ids)
     if not schema.train_rows or ids is None:
         return 0, 0
-    fp = row_fingerprints(Xa, ids)
-    checked = fp[_kept(fp, schema.train_rows_every)]
+    h = _row_hashes(Xa, ids)
+    checked = _hex(h[_kept(h, schema.train_rows_every)])
     return int(np.isin(checked, np.asarray(schema.train_rows)).sum()), int(len(checked))
