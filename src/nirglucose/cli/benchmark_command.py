@@ -64,6 +64,17 @@ _DropOneOption = Annotated[
 ]
 
 
+#: ``--calibration``: personal calibration readings per test subject.
+_CalibrationOption = Annotated[
+    int,
+    typer.Option(
+        help="Personal calibration: each test subject's first K readings (1 or 2) "
+        "calibrate them and only later readings are scored (calibration.csv); 0: none. "
+        "Needs --per-subject > K."
+    ),
+]
+
+
 @app.command()
 @_tidy_out
 @runs_workers
@@ -97,14 +108,7 @@ def benchmark(
     ablation: Annotated[
         bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
     ] = True,
-    calibration: Annotated[
-        int,
-        typer.Option(
-            help="Personal calibration: each test subject's first K readings (1 or 2) "
-            "calibrate them and only later readings are scored (calibration.csv); 0: none. "
-            "Needs --per-subject > K."
-        ),
-    ] = 0,
+    calibration: _CalibrationOption = 0,
     drop_one: _DropOneOption = None,
     set_: SetOption = None,
     adc_bits: ChannelBitsOption = None,
@@ -124,8 +128,8 @@ def benchmark(
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
-    set_ = _simulated_bits(set_, adc_bits, adc_full_scale, data)
-    runs, overrides = _benchmark_runs(preset, data, set_, out)
+    runs, overrides = _benchmark_runs(preset, data,
+                                      _simulated_bits(set_, adc_bits, adc_full_scale, data), out)
     for p, run_out in runs:
         with held_warnings():  # a refusal of this run is one line
             ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides,

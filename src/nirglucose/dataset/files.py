@@ -41,6 +41,7 @@ from ..constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
 from ..exceptions import DataError
 from .columns import (
     CODE_COLUMN_RE,
+    COLUMN_UNITS,
     GLUCOSE_REPORTING_RANGE_MGDL,
     ID_COLUMNS,
     KNOWN_PHYSIOLOGY,
@@ -474,8 +475,6 @@ def unread_column_notes(columns: Iterable[Any]) -> list[str]:
     "column 'bmi' is not read: a model reads 'bmi_kgm2' ["
     """
     import difflib
-
-    from .columns import COLUMN_UNITS
 
     out = []
     for c in columns:
