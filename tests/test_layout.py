@@ -103,7 +103,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 #: runs benchmarks (sweeps, the worn-device study).
 EVALUATION_LAYERS: tuple[tuple[str, ...], ...] = (
     ("", "engine"),
-    ("splits", "protocol", "reference", "estimators"),
+    ("splits", "protocol", "reference", "estimators", "cohorts"),
     ("benchmark",),
     ("sweep", "wear"),
 )

@@ -63,17 +63,22 @@ def test_a_model_file_a_frame_and_a_data_file_give_the_same_table(fitted, tmp_pa
         pd.testing.assert_frame_equal(ng.predict(m, d).frame, want)
 
 
-def test_interval_is_the_stored_half_width_clipped_at_zero(calibrated, fitted):
+def test_interval_is_the_stored_half_width_clipped_to_the_meter(calibrated, fitted):
+    """Both bounds inside the meter's 20-600 mg/dL, the range of the flags (issue 43)."""
     _, new = fitted
     result = ng.predict(calibrated, new)
     p = result.frame["predicted_glucose_mgdl"].to_numpy()
     assert result.has_intervals
-    np.testing.assert_allclose(result.frame["glucose_upper_mgdl"], p + HALF_90)
-    np.testing.assert_allclose(result.frame["glucose_lower_mgdl"], np.maximum(p - HALF_90, 0))
-    low = ng.predict(attach(_Constant([5.0, 100.0]),
+    np.testing.assert_allclose(result.frame["glucose_upper_mgdl"],
+                               np.clip(p + HALF_90, 20.0, 600.0))
+    np.testing.assert_allclose(result.frame["glucose_lower_mgdl"],
+                               np.clip(p - HALF_90, 20.0, 600.0))
+    low = ng.predict(attach(_Constant([5.0, 100.0, 900.0]),
                                 {"method": "split", "half_width_mgdl": {"90": HALF_90}}),
-                     new.rows([0, 1]))
-    assert low.frame["glucose_lower_mgdl"].tolist() == [0.0, 90.0]
+                     new.rows([0, 1, 2]))
+    assert low.frame["glucose_lower_mgdl"].tolist() == [20.0, 90.0, 600.0]
+    assert low.frame["glucose_upper_mgdl"].tolist() == [20.0, 110.0, 600.0]
+    assert low.frame["flag"].tolist() == ["LO", "", "HI"]
 
 
 def test_flags_mark_meter_range_and_keep_the_number(fitted):

@@ -22,7 +22,7 @@ import pandas as pd
 from .calibration.conformal import calibration_of, interval
 from .calibration.personal import apply_offset
 from .dataset import Dataset, load_dataset
-from .dataset.columns import ID_COLUMNS
+from .dataset.columns import GLUCOSE_REPORTING_RANGE_MGDL, ID_COLUMNS
 from .dataset.files import (
     check_codes,
     check_glucose_unit,
@@ -30,13 +30,14 @@ from .dataset.files import (
     glucose_to_unit,
     validate_frame,
 )
-from .dataset.schema import meter_flags
+from .dataset.schema import meter_flags, rows_seen_in_training
 from .exceptions import ConfigError, DataError
 from .models._validate import check_predictions
 from .models.registry import model_from
 
 __all__ = [
     "INTERVAL_LEVEL",
+    "TRAINING_ROWS_SHARE",
     "PredictionResult",
     "predict",
     "check_model_codes",
@@ -48,6 +49,11 @@ __all__ = [
 #: Nominal coverage of the interval in the table (``glucose_lower_mgdl`` /
 #: ``glucose_upper_mgdl``): the level a calibrated model file always stores. [-]
 INTERVAL_LEVEL = 0.9
+#: Share of the readings predicted that must match training rows (values and ids) before
+#: ``predict`` says it was given the rows the model was fitted on: one LED's integer
+#: codes and small subject ids repeat across files by chance (a few per cent), a
+#: re-used file or its training part matches far above that. [-]
+TRAINING_ROWS_SHARE = 0.25
 
 
 @dataclass(frozen=True)
@@ -60,7 +66,8 @@ class PredictionResult:
         One row per reading: ``measurement_id`` / ``subject_id`` (where the data has
         them), ``predicted_glucose_mgdl``, ``glucose_lower_mgdl`` and
         ``glucose_upper_mgdl`` (the 90 % interval, NaN when the model carries no
-        calibration), ``flag`` (``LO`` / ``HI`` / empty), ``outside_training`` (the
+        calibration, both bounds clipped to the meter's range 20-600 mg/dL, the range
+        of the flags), ``flag`` (``LO`` / ``HI`` / empty), ``outside_training`` (the
         inputs outside the fitted range, empty where none) and, with calibration
         readings, ``calibrated`` (bool). In mmol/L the glucose columns end ``_mmoll``.
     has_intervals : bool
@@ -69,12 +76,31 @@ class PredictionResult:
         How the data file was read differently from the schema's spelling.
     glucose_unit : str
         Unit of the glucose columns: ``"mg/dL"`` or ``"mmol/L"``.
+    training_rows : tuple of int
+        ``(matched, checked)``: of the rows the model file's fingerprints can check, how
+        many are rows the model was fitted on (``(0, 0)``: none checked).
     """
 
     frame: pd.DataFrame
     has_intervals: bool
     read_notes: tuple[str, ...] = ()
     glucose_unit: str = "mg/dL"
+    training_rows: tuple[int, int] = (0, 0)
+
+    @property
+    def training_note(self) -> str | None:
+        """One line when rows the model was fitted on are among those predicted (at
+        least :data:`TRAINING_ROWS_SHARE` of those checked)."""
+        matched, checked = self.training_rows
+        if not matched or matched < TRAINING_ROWS_SHARE * checked:
+            return None
+        n = len(self.frame)
+        share = (f"all {n}" if matched == checked == n else
+                 f"{matched} of the {n}" if checked == n else
+                 f"{matched} of {checked} sampled")
+        return (f"{share} readings predicted are rows the model was fitted on (same "
+                "values and ids): their error says nothing about new readings; judge the "
+                "model on readings it has not seen")
 
     @property
     def n_flagged(self) -> int:
@@ -119,14 +145,16 @@ def predict(
     glucose_unit : {"mg/dL", "mmol/L"}, optional
         Unit of the reference glucose in the files read (default: the column's own,
         ``glucose_mgdl`` or ``glucose_mmoll``) and of the glucose columns returned
-        (default mg/dL; with ``"mmol/L"`` they are named ``*_mmoll``).
+        (default: the unit of the reference column the model was fitted on; with
+        ``"mmol/L"`` they are named ``*_mmoll``).
 
     Returns
     -------
     PredictionResult
         ``.frame``: ``predicted_glucose_mgdl``, ``glucose_lower_mgdl`` /
         ``glucose_upper_mgdl`` (the 90 % interval, NaN when the model carries no
-        interval calibration, the lower bound clipped at 0), ``flag`` (``LO`` below 20,
+        interval calibration, both bounds clipped to the meter's 20-600 mg/dL, the
+        range of the flags), ``flag`` (``LO`` below 20,
         ``HI`` above 600 mg/dL; the number is kept), ``outside_training`` (the inputs
         outside the fitted range, e.g. ``adc_940>``) and, with ``calibration``,
         ``calibrated``; the identity columns of the data first.
@@ -167,12 +195,22 @@ def predict(
         name = str(calibration) if isinstance(calibration, str | os.PathLike) else "calibration"
         pred, calibrated = calibrate_by_person(estimator, ds, pred, cal, name, csv=cal_csv)
     table, has_intervals = prediction_table(estimator, ds, pred, calibrated)
+    schema = getattr(estimator, "schema_", None)
+    unit = unit or getattr(schema, "glucose_unit", None) or "mg/dL"
     return PredictionResult(
         frame=in_unit_columns(table, unit),
         has_intervals=has_intervals,
         read_notes=tuple(ds.metadata.get("read_notes", ())),
-        glucose_unit=unit or "mg/dL",
+        glucose_unit=unit,
+        training_rows=_seen_rows(schema, ds),
     )
+
+
+def _seen_rows(schema: Any, ds: Dataset) -> tuple[int, int]:
+    """``(matched, checked)`` training rows among the readings (:class:`PredictionResult`)."""
+    if schema is None or schema.is_plain or not schema.train_rows:
+        return 0, 0
+    return rows_seen_in_training(schema, schema.raw(ds), ds.frame)
 
 
 def _estimator(model: Any) -> tuple[Any, str]:
@@ -209,7 +247,7 @@ def check_model_codes(estimator: Any, ds: Dataset, *, csv: bool = False) -> None
     """
     schema = getattr(estimator, "schema_", None)
     if schema is not None and not schema.is_plain:
-        check_codes(ds.frame, schema.adc_bits, csv=csv)
+        check_codes(ds.frame, schema.adc_bits, csv=csv, full_scales=schema.code_full_scales())
 
 
 def _outside_training(estimator: Any, ds: Dataset) -> list[str]:
@@ -327,7 +365,9 @@ def prediction_table(
 
 def _interval_bounds(estimator: Any, pred: np.ndarray, calibrated: np.ndarray | None):
     """The 90 % interval (NaN without a calibration; the offset-calibrated width on
-    calibrated rows where the model has one), lower bound clipped at 0: ``(lo, up, has)``."""
+    calibrated rows where the model has one), both bounds clipped to the meter's range
+    (:data:`~nirglucose.dataset.GLUCOSE_REPORTING_RANGE_MGDL`, the range of the flags):
+    ``(lo, up, has)``."""
     cal_doc = calibration_of(estimator)
     if cal_doc is None:
         return np.full(len(pred), np.nan), np.full(len(pred), np.nan), False
@@ -335,7 +375,8 @@ def _interval_bounds(estimator: Any, pred: np.ndarray, calibrated: np.ndarray | 
     if calibrated is not None and (cal_doc.get("half_width_offset1_mgdl") or {}).get("90"):
         lo_c, up_c = interval(estimator, pred, INTERVAL_LEVEL, offset_calibrated=True)
         lower, upper = np.where(calibrated, lo_c, lower), np.where(calibrated, up_c, upper)
-    return np.maximum(lower, 0.0), upper, True
+    lo, hi = GLUCOSE_REPORTING_RANGE_MGDL  # the range the flags use
+    return np.clip(lower, lo, hi), np.clip(upper, lo, hi), True
 
 
 def in_unit_columns(table: pd.DataFrame, unit: str | None) -> pd.DataFrame:

@@ -64,6 +64,27 @@ AdcBitsOption = Annotated[
     typer.Option(help="The ADC resolution [bit]: of the --data device (needed when every "
                  "code fits 10 bits), or of the simulated one (hardware.adc_bits)."),
 ]
+#: --group-by of fit and benchmark --data: the column that groups the subjects.
+GroupByOption = Annotated[
+    str | None,
+    typer.Option(help="Column grouping the subjects (cohort, site, device, visit, diabetes "
+                 "status): each group is scored against its own training mean (default: "
+                 "detected by name, e.g. cohort, site, diabetic)."),
+]
+#: --adc-bits of fit and benchmark: one resolution, or one per channel.
+ChannelBitsOption = Annotated[
+    str | None,
+    typer.Option("--adc-bits", help="The ADC resolution [bit]: N for every channel, or per "
+                 "channel for a device that mixes converters (adc_940=10,adc_1050=18; "
+                 "default=N for the rest). Needed when every code fits 10 bits; else 12 is "
+                 "assumed, with a warning. Of a simulated device: N (hardware.adc_bits)."),
+]
+#: --adc-full-scale of fit and benchmark: a channel's full-scale code other than 2^bits-1.
+FullScaleOption = Annotated[
+    str | None,
+    typer.Option(help="Per channel, a full-scale code other than 2^bits - 1 (the I0 of a "
+                 "device without reference codes), e.g. adc_1050=200000."),
+]
 PerSubjectOption = Annotated[int, typer.Option(help="Measurements per subject.")]
 ProtocolOption = Annotated[str, typer.Option(help="grouped-cv or paper-split.")]
 FoldsOption = Annotated[int, typer.Option(help="Folds of grouped-cv.")]
@@ -71,11 +92,41 @@ RepeatsOption = Annotated[int, typer.Option(help="Repeats of grouped-cv.")]
 
 
 # --- printing ------------------------------------------------------------------------------
+#: ``warning:`` lines held while a command's input is checked (None: none held).
+_HELD: list[str] | None = None
+
+
 def _say(text: str, *, err: bool = True) -> None:
-    """Print one plain line (no markup, no highlighting) to stderr or stdout."""
+    """Print one plain line (no markup, no highlighting) to stderr or stdout; a
+    ``warning:`` line inside :func:`held_warnings` waits for the input to pass."""
+    if err and _HELD is not None and text.startswith("warning:"):
+        _HELD.append(text)
+        return
     (console if err else out_console).print(
         text, markup=False, highlight=False, soft_wrap=True
     )
+
+
+@contextmanager
+def held_warnings() -> Iterator[None]:
+    """Hold the ``warning:`` lines of the block: printed (each once) when it ends, dropped
+    when it raises. A refusal is one line: the warnings about a run that will not happen
+    (an assumed ADC resolution, too few subjects) stay unsaid. Nested blocks hold into
+    the outer one."""
+    global _HELD
+    outer = _HELD
+    if outer is not None:  # the outer block decides
+        yield
+        return
+    _HELD = []
+    try:
+        yield
+    except BaseException:
+        _HELD = None
+        raise
+    lines, _HELD = _HELD, None
+    for line in dict.fromkeys(lines):
+        _say(line)
 
 
 @contextmanager
@@ -92,6 +143,18 @@ def _warnings_as_lines(extra: list[str] | None = None) -> Iterator[list[str]]:
     msgs = [str(w.message) for w in caught] + more
     for msg in dict.fromkeys(m.replace("\n", " ") for m in msgs):
         _say(f"warning: {msg}")
+
+
+def holds_warnings(command):
+    """Run ``command`` inside :func:`held_warnings` (``fit``, ``predict``: quick commands
+    whose refusals may come late, at the fit)."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        with held_warnings():
+            return command(*args, **kwargs)
+
+    return wrapper
 
 
 # --- checks --------------------------------------------------------------------------------

@@ -14,9 +14,11 @@ from ._app import app, out_console
 from ._common import (
     _PRESET_NAMES,
     DEFAULT_RESAMPLES,
-    AdcBitsOption,
+    ChannelBitsOption,
     FoldsOption,
+    FullScaleOption,
     GlucoseUnitOption,
+    GroupByOption,
     JobsOption,
     OutDirOption,
     PerSubjectOption,
@@ -37,10 +39,18 @@ from ._common import (
     _tidy_out,
     _warnings_as_lines,
     clear_previous_runs,
+    held_warnings,
     refuse_simulation_options,
     runs_workers,
 )
-from .fit_report import say_notes
+from .fit_report import (
+    adc_spec,
+    display_unit,
+    group_column,
+    in_unit,
+    report_benchmark_cohorts,
+    say_notes,
+)
 
 #: ``--drop-one``: the models refitted without each LED.
 _DropOneOption = Annotated[
@@ -50,6 +60,17 @@ _DropOneOption = Annotated[
         help="Models refitted without each LED (drop_one.csv: RMSE lost per LED, first "
         "repeat): comma-separated names among --models, 'all' or 'none' (default: ebl, pls "
         "and oracle where benchmarked).",
+    ),
+]
+
+
+#: ``--calibration``: personal calibration readings per test subject.
+_CalibrationOption = Annotated[
+    int,
+    typer.Option(
+        help="Personal calibration: each test subject's first K readings (1 or 2) "
+        "calibrate them and only later readings are scored (calibration.csv); 0: none. "
+        "Needs --per-subject > K."
     ),
 ]
 
@@ -87,40 +108,66 @@ def benchmark(
     ablation: Annotated[
         bool, typer.Option(help="Also run each PINN with its physics term off (lambda_phys=0).")
     ] = True,
-    calibration: Annotated[
-        int,
-        typer.Option(
-            help="Personal calibration: each test subject's first K readings (1 or 2) "
-            "calibrate them and only later readings are scored (calibration.csv); 0: none. "
-            "Needs --per-subject > K."
-        ),
-    ] = 0,
+    calibration: _CalibrationOption = 0,
     drop_one: _DropOneOption = None,
     set_: SetOption = None,
-    adc_bits: AdcBitsOption = None,
+    adc_bits: ChannelBitsOption = None,
+    adc_full_scale: FullScaleOption = None,
     glucose_unit: GlucoseUnitOption = None,
+    group_by: GroupByOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
 
     Files written keep mg/dL (their column names say so); --glucose-unit sets the unit
-    of the --data file and of the printed table."""
+    of the --data file and of the printed table (default: the unit of its reference
+    column). A --data file with a grouping column (--group-by, else detected) gets each
+    group's error against that group's own training mean."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
-    if adc_bits is not None and data is None:  # the simulated device's resolution
-        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
-    runs, overrides = _benchmark_runs(preset, data, set_, out)
+    runs, overrides = _benchmark_runs(preset, data,
+                                      _simulated_bits(set_, adc_bits, adc_full_scale, data), out)
     for p, run_out in runs:
-        ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
-                             glucose_unit)
-        _check_run_data(ds, calibration, protocol, folds)
-        if p is None:
-            say_notes(ds)  # after the checks: an error stays one line
+        with held_warnings():  # a refusal of this run is one line
+            ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides,
+                                 (adc_bits, adc_full_scale), glucose_unit)
+            gcol, unit = _data_groups(ds, p, group_by, calibration, protocol, folds,
+                                      glucose_unit)
         _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation, calibration, glucose_unit, drop_one)
+                       references, ablation, calibration, unit, drop_one, gcol)
+
+
+def _simulated_bits(set_, adc_bits, adc_full_scale, data):
+    """``--set`` with the simulated device's ``--adc-bits N`` (one resolution: the
+    simulator has one converter); --data keeps its options for the file."""
+    if data is not None or (adc_bits is None and adc_full_scale is None):
+        return set_
+    bits = adc_spec(adc_bits)
+    if adc_full_scale is not None or isinstance(bits, dict):
+        raise UserError("per-channel converters (--adc-bits adc_940=10,... or "
+                        "--adc-full-scale) describe a --data file; a simulated device has "
+                        "one converter: give --adc-bits N")
+    return [*(set_ or []), f"hardware.adc_bits={bits}"]
+
+
+def _data_groups(ds, preset: str | None, group_by: str | None, calibration: int,
+                 protocol: str, folds: int, glucose_unit: str | None
+                 ) -> tuple[str | None, str]:
+    """``(grouping column, printed unit)`` of one run after its checks: a --data file's
+    grouping column (recorded in its metadata for the report; None for a simulated run)
+    and its read notes printed once it passed them."""
+    _check_run_data(ds, calibration, protocol, folds)
+    unit = display_unit(ds, glucose_unit)
+    if preset is not None:
+        return None, unit
+    gcol = group_column(ds.frame, group_by)
+    if gcol is not None:
+        ds.metadata["group_by"] = gcol  # dataset.parquet carries it to the report
+    say_notes(ds)  # after the checks: an error stays one line
+    return gcol, unit
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
@@ -175,14 +222,15 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
     return runs, overrides
 
 
-def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bits=None,
-                    glucose_unit=None):
+def _benchmark_data(preset, data, subjects, per_subject, seed, overrides,
+                    adc_bits=(None, None), glucose_unit=None):
     """The dataset of one run: the --data file (``preset`` None: read, validated whole
     and its ADC resolution resolved before any split) or a simulated one."""
     if preset is None:
         from .fit_report import load_device_file
 
-        ds, _ = load_device_file(data, glucose_unit, adc_bits, need_glucose=True)
+        ds, _ = load_device_file(data, glucose_unit, adc_bits[0], need_glucose=True,
+                                 adc_full_scale=adc_bits[1])
         if "subject_id" not in ds.frame.columns:
             raise UserError(f"{str(data)!r} has no subject_id column: the benchmark splits "
                             "by subject; add one (one id per person)")
@@ -211,8 +259,10 @@ def _check_run_data(ds, k: int, protocol: str, folds: int) -> None:
 
 
 def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resamples,
-                   references, ablation, calibration=0, unit=None, drop_one=None) -> None:
-    """Run the benchmark of one dataset, then print its table and summary lines."""
+                   references, ablation, calibration=0, unit=None, drop_one=None,
+                   group_column_name=None) -> None:
+    """Run the benchmark of one dataset, then print its table and summary lines (and
+    each group's error against its own training mean, given a grouping column)."""
     from ..evaluation.benchmark.run import run_benchmark
     from ..evaluation.protocol import Protocol
 
@@ -232,6 +282,15 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
         )
     _print_benchmark(res, ds, out, unit)
+    if group_column_name is not None:
+        report_benchmark_cohorts(res, ds, group_column_name, unit or "mg/dL")
+
+
+def _one_led(ds) -> bool:
+    """Whether the dataset's device has a single LED (``adc_<nm>`` column)."""
+    from ..dataset.columns import led_wavelengths_in
+
+    return len(led_wavelengths_in(ds.frame.columns)) == 1
 
 
 def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
@@ -269,11 +328,15 @@ def _print_benchmark(res, ds, out: Path, unit: str | None = None) -> None:
     for _, r in cal[cal["method"] != "none"].iterrows():
         _say(
             f"calibration ({r['k']} reading{'s' if r['k'] > 1 else ''}): {r['model']} "
-            f"{r['method']}: RMSE {r['rmse_mgdl']:.1f} mg/dL"
-            + (f", gain {r['gain_mgdl']:+.1f} vs {r['baseline']}" if r["baseline"] else ""),
+            f"{r['method']}: RMSE {in_unit(r['rmse_mgdl'], unit)}"
+            + (f", gain {'+' if r['gain_mgdl'] >= 0 else ''}{g(r['gain_mgdl'])} vs "
+               f"{r['baseline']}" if r["baseline"] else ""),
             err=False,
         )
     m = res.meta
+    if _one_led(ds) and not len(res.drop_one):
+        _say("note: drop_one.csv is empty: the device has one LED, so there is no LED to "
+             "drop (the drop-one refits need two or more)", err=False)
     if m.get("significance_withheld"):
         _say(f"note: {m['significance_withheld']}", err=False)
     _say(

@@ -15,6 +15,16 @@ every absorbance. It is, in order:
 Every output records the resolution it used (the model file's schema, ``meta.json``,
 the C header).
 
+A device may mix converters (an analog front end at 10 bits beside a digital PPG
+sensor's 18-bit counts): ``adc_bits`` may then be a mapping from channel to bits
+(``{"adc_940": 10, "adc_1050": 18}``; ``--adc-bits adc_940=10,adc_1050=18``), with an
+optional ``"default"`` for the channels not named, and ``adc_full_scale`` a mapping
+from channel to its full-scale code where that is not 2^bits - 1
+(:func:`channel_converters`). A channel's reference codes ``adc_ref_<nm>`` share its
+converter. A declared converter whose codes never reach a quarter of its full scale is
+warned about (:func:`check_headroom`): a 10-bit channel read at 18 bits shifts its
+absorbance by log10(2^8) = 2.4.
+
 Examples
 --------
 >>> import pandas as pd
@@ -25,6 +35,7 @@ Examples
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -33,12 +44,19 @@ import pandas as pd
 from ..exceptions import DataError
 from .columns import CODE_COLUMN_RE, DEFAULT_ADC_BITS
 
-__all__ = ["AMBIGUOUS_BELOW_CODE", "resolve_adc_bits", "check_adc_bits",
-           "quantisation_variance_ln"]
+__all__ = ["AMBIGUOUS_BELOW_CODE", "HEADROOM_FRACTION", "resolve_adc_bits", "check_adc_bits",
+           "check_channel_bits", "parse_channel_spec", "channel_converters",
+           "check_headroom", "quantisation_variance_ln"]
 
 #: Codes at or below this fit a 10-bit ADC and every larger one: the resolution is
 #: ambiguous and must be declared. [ADC code]
 AMBIGUOUS_BELOW_CODE = 2**10 - 1
+
+
+#: A declared converter whose codes never exceed this fraction of its full scale is warned
+#: about: a quarter is 2 bits unused, more than an analog front end's usual design
+#: margin, and what a channel read with another converter's resolution shows. [-]
+HEADROOM_FRACTION = 0.25
 
 
 def check_adc_bits(bits: Any) -> int:
@@ -94,7 +112,8 @@ def _max_code(frame: pd.DataFrame) -> float:
 def resolve_adc_bits(frame: pd.DataFrame, declared: Any = None, metadata_bits: Any = None
                      ) -> tuple[int, str]:
     """``(bits, source)``: the resolution by the policy above and where it came from
-    (``"declared"``, ``"metadata"`` or ``"assumed"``).
+    (``"declared"``, ``"metadata"`` or ``"assumed"``); a declared per-channel mapping is
+    returned as the checked mapping (:func:`check_channel_bits`).
 
     Raises
     ------
@@ -102,9 +121,9 @@ def resolve_adc_bits(frame: pd.DataFrame, declared: Any = None, metadata_bits: A
         An invalid resolution, or none declared while every code fits 10 bits.
     """
     if declared is not None:
-        return check_adc_bits(declared), "declared"
+        return check_channel_bits(declared), "declared"  # type: ignore[return-value]
     if metadata_bits is not None:
-        return check_adc_bits(metadata_bits), "metadata"
+        return check_channel_bits(metadata_bits), "metadata"  # type: ignore[return-value]
     top = _max_code(frame)
     if np.isfinite(top) and top <= AMBIGUOUS_BELOW_CODE:
         raise DataError(
@@ -119,3 +138,123 @@ def resolve_adc_bits(frame: pd.DataFrame, declared: Any = None, metadata_bits: A
             stacklevel=3,
         )
     return DEFAULT_ADC_BITS, "assumed"
+
+
+def _channel_key(key: Any) -> str:
+    """``'adc_940'``, ``'940'`` or ``940`` as ``'adc_940'``; ``'default'`` kept."""
+    text = str(key).strip()
+    if text.casefold() == "default":
+        return "default"
+    if not text.casefold().startswith("adc_"):
+        text = f"adc_{text}"
+    m = CODE_COLUMN_RE.match(text.casefold())
+    if not m or m.group(1):
+        raise DataError(f"per-channel converter key {key!r}: name an LED's column, e.g. "
+                        "adc_940 (its adc_ref_940 shares the converter), or 'default'")
+    return f"adc_{float(m.group(2)):g}"
+
+
+def check_channel_bits(bits: Any) -> int | dict[str, int]:
+    """``bits`` checked: an int from 1 to 32, or a mapping from channel (``adc_940``) to
+    such an int (``'default'`` for the channels not named). DataError otherwise.
+
+    Examples
+    --------
+    >>> check_channel_bits({"adc_940": 10, "1050": 18})
+    {'adc_940': 10, 'adc_1050': 18}
+    """
+    if isinstance(bits, Mapping):
+        if not bits:
+            raise DataError("adc_bits names no channel; give e.g. {'adc_940': 10}")
+        return {_channel_key(k): check_adc_bits(v) for k, v in bits.items()}
+    return check_adc_bits(bits)
+
+
+def parse_channel_spec(text: str, what: str = "--adc-bits") -> int | dict[str, float]:
+    """A command line's ``N`` or ``adc_940=10,adc_1050=18`` (``default=N`` or a bare
+    ``N`` among them for the rest), as an int or a mapping. DataError naming ``what``.
+
+    Examples
+    --------
+    >>> parse_channel_spec("adc_940=10,adc_1050=18")
+    {'adc_940': 10, 'adc_1050': 18}
+    >>> parse_channel_spec("12")
+    12
+    """
+    def number(v: str) -> Any:
+        try:
+            f = float(v)
+        except ValueError:
+            raise DataError(f"{what} {text!r}: {v!r} is not a number; give N or "
+                            "adc_940=10,adc_1050=18") from None
+        return int(f) if f.is_integer() else f
+
+    parts = [p.strip() for p in str(text).split(",") if p.strip()]
+    if not parts:
+        raise DataError(f"{what} {text!r} names nothing; give N or adc_940=10,adc_1050=18")
+    if len(parts) == 1 and "=" not in parts[0]:
+        return number(parts[0])
+    out: dict[str, Any] = {}
+    for p in parts:
+        key, _, val = p.partition("=") if "=" in p else ("default", "", p)
+        key = _channel_key(key)
+        if key in out:
+            raise DataError(f"{what} {text!r} names {key} twice; keep one")
+        out[key] = number(val.strip())
+    return out
+
+
+def channel_converters(labels: tuple[str, ...], bits: int | Mapping[str, int],
+                       full_scale: Mapping[str, Any] | None = None
+                       ) -> tuple[tuple[int, ...], tuple[float, ...]]:
+    """Per LED label (``'940'``), its bits and full-scale code: ``bits`` an int for every
+    channel or a mapping (:func:`check_channel_bits`); ``full_scale`` overrides 2^bits - 1
+    per channel. DataError for a channel the mapping leaves out (without a default), a
+    key naming no channel of the device, or a full scale above 2^bits - 1.
+    """
+    cols = [f"adc_{w}" for w in labels]
+    bits = check_channel_bits(bits)
+    if isinstance(bits, int):
+        per = dict.fromkeys(cols, bits)
+    else:
+        unknown = [k for k in bits if k != "default" and k not in cols]
+        if unknown:
+            raise DataError(f"adc_bits names {', '.join(unknown)}, not a channel of this "
+                            f"device ({', '.join(cols)})")
+        missing = [c for c in cols if c not in bits and "default" not in bits]
+        if missing:
+            raise DataError(f"adc_bits declares no resolution for {', '.join(missing)}; "
+                            "give every channel (adc_940=10,adc_1050=18) or a default "
+                            "(default=12)")
+        per = {c: bits.get(c, bits.get("default")) for c in cols}
+    fs = {c: float(2 ** per[c] - 1) for c in cols}
+    for k, v in (full_scale or {}).items():
+        key = _channel_key(k)
+        if key not in cols:
+            raise DataError(f"adc_full_scale names {key}, not a channel of this device "
+                            f"({', '.join(cols)})")
+        if isinstance(v, bool) or not isinstance(v, int | float | np.number) or not (
+                1 <= float(v) <= fs[key]):
+            raise DataError(f"adc_full_scale of {key} must be a code from 1 to "
+                            f"{fs[key]:.0f} (its {per[key]}-bit converter), got {v!r}")
+        fs[key] = float(v)
+    return tuple(int(per[c]) for c in cols), tuple(fs[c] for c in cols)
+
+
+def check_headroom(frame: pd.DataFrame, columns: tuple[str, ...],
+                   full_scales: tuple[float, ...], bits: tuple[int, ...]) -> None:
+    """One UserWarning per declared channel whose codes never reach
+    :data:`HEADROOM_FRACTION` of its full scale (another converter's resolution?)."""
+    for col, fs, b in zip(columns, full_scales, bits, strict=True):
+        if col not in frame.columns:
+            continue
+        top = float(pd.to_numeric(frame[col], errors="coerce").max())
+        if np.isfinite(top) and top < HEADROOM_FRACTION * fs:
+            need = max(1, int(np.ceil(np.log2(top + 1))))
+            warnings.warn(
+                f"column {col!r}: codes never exceed {top:g}, under a quarter of its declared "
+                f"full scale {fs:.0f} ({b} bits): if its converter has {need} bits, declare "
+                f"it per channel (--adc-bits {col}={need},...; Python adc_bits={{'{col}': "
+                f"{need}, ...}}); read at {b} bits its absorbance is off by "
+                f"{np.log10((fs + 1) / 2 ** need):.1f}",
+                UserWarning, stacklevel=3)

@@ -31,11 +31,18 @@ import pyarrow.parquet as pq
 from .._version import __version__
 from ..config import ScenarioConfig
 from ..exceptions import DataError
-from .adc import check_adc_bits
+from .adc import check_channel_bits
 from .columns import (
     led_wavelengths_in,
 )
-from .files import check_frame, check_glucose_unit, read_frame, validate_frame
+from .files import (
+    GLUCOSE_COLUMNS,
+    check_frame,
+    check_glucose_unit,
+    read_frame,
+    unread_column_notes,
+    validate_frame,
+)
 from .meta import parse_meta
 
 __all__ = [
@@ -328,7 +335,8 @@ def open_partitioned(path: str | os.PathLike) -> PartitionedDataset:
 
 
 def load_dataset(
-    path: str | os.PathLike, *, glucose_unit: str | None = None, adc_bits: int | None = None
+    path: str | os.PathLike, *, glucose_unit: str | None = None, adc_bits: Any = None,
+    adc_full_scale: Any = None,
 ) -> Dataset:
     """Read a dataset written by :meth:`Dataset.save` (or a user's CSV/Parquet file).
 
@@ -338,7 +346,9 @@ def load_dataset(
     (``ADC_940`` is ``adc_940``); the reference glucose may be ``glucose_mgdl`` or
     ``glucose_mmoll`` and is converted to ``glucose_mgdl``; the whole file is validated
     once, with the file's own row numbers. ``metadata["read_notes"]`` lists what was
-    read differently from the schema's spelling (renames, delimiter, unit).
+    read differently from the schema's spelling (renames, delimiter, unit), and
+    ``metadata["glucose_unit"]`` the unit its reference column was read in (what the
+    commands print glucose in unless asked otherwise).
 
     A directory is opened as a partitioned Parquet dataset (the parts its
     ``manifest.json`` lists, else all ``*.parquet`` files in name order) without reading
@@ -352,8 +362,13 @@ def load_dataset(
     glucose_unit : {"mg/dL", "mmol/L"}, optional
         Unit of the file's reference glucose (default: the column's, ``glucose_mgdl``
         mg/dL and ``glucose_mmoll`` mmol/L); the dataset holds mg/dL.
-    adc_bits : int, optional
-        The device's ADC resolution, recorded as ``metadata["adc_bits"]``. [bit]
+    adc_bits : int or mapping, optional
+        The device's ADC resolution, recorded as ``metadata["adc_bits"]``: one for every
+        channel, or per channel (``{"adc_940": 10, "adc_1050": 18}``, ``"default"`` for
+        the rest) for a device that mixes converters. [bit]
+    adc_full_scale : mapping, optional
+        Per channel, a full-scale code other than 2^bits - 1, recorded as
+        ``metadata["adc_full_scale"]``. [ADC code]
 
     Raises
     ------
@@ -378,11 +393,18 @@ def load_dataset(
     if not len(frame):
         raise DataError(f"{str(path)!r} holds no measurements (a header, no rows)")
     meta, config, seed = parse_meta(raw.get(META_KEY), path)  # one-line errors (issue 20)
+    read_unit = glucose_unit or next(
+        (u for c, u in GLUCOSE_COLUMNS.items() if c in frame.columns), None)
     notes += validate_frame(frame, csv=path.suffix == ".csv", glucose_unit=glucose_unit)
+    notes += unread_column_notes(frame.columns)
     extra = {k: v for k, v in meta.items() if k not in ("config", "seed")}
     extra.update(source=str(path), read_notes=notes)
+    if read_unit is not None:  # the unit the reference was read in (issue 43); a file
+        extra.setdefault("glucose_unit", read_unit)  # saved by nirglucose keeps its own
     if adc_bits is not None:
-        extra["adc_bits"] = check_adc_bits(adc_bits)
+        extra["adc_bits"] = check_channel_bits(adc_bits)
+    if adc_full_scale:
+        extra["adc_full_scale"] = dict(adc_full_scale)
     return Dataset(frame, config=config, seed=seed, metadata=extra)
 
 

@@ -28,7 +28,7 @@ Examples
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from csv import reader as csv_reader
 from pathlib import Path
 from typing import Any, Literal
@@ -41,6 +41,7 @@ from ..constants import MGDL_PER_MMOLL_GLUCOSE, PHYSIOLOGICAL_RANGES
 from ..exceptions import DataError
 from .columns import (
     CODE_COLUMN_RE,
+    COLUMN_UNITS,
     GLUCOSE_REPORTING_RANGE_MGDL,
     ID_COLUMNS,
     KNOWN_PHYSIOLOGY,
@@ -62,6 +63,7 @@ __all__ = [
     "check_codes",
     "file_rows",
     "glucose_to_unit",
+    "unread_column_notes",
 ]
 
 #: Units a reference glucose column may be in.
@@ -406,19 +408,25 @@ def _glucose(frame: pd.DataFrame, unit: str | None, csv: bool) -> list[str]:
     return notes
 
 
-def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool) -> None:
-    """Refuse ADC and reference codes above the full scale 2^bits - 1, with the file's
+def check_codes(frame: pd.DataFrame, bits: int, *, csv: bool,
+                full_scales: Mapping[str, float] | None = None) -> None:
+    """Refuse ADC and reference codes above the full scale, 2^bits - 1 or a channel's own
+    (``full_scales``: column -> full-scale code, per-channel converters), with the file's
     rows (codes of 0 or below are refused by :func:`validate_frame`)."""
-    full = 2**bits - 1
     for col in [c for c in frame.columns if isinstance(c, str) and CODE_COLUMN_RE.match(c)]:
+        full = float((full_scales or {}).get(col, 2**bits - 1))
         vals = np.asarray(frame[col], dtype=float)
         bad = vals > full
         if bad.any():
             need = int(np.ceil(np.log2(vals.max() + 1)))
+            per = (f"its {need}-bit converter (--adc-bits {col.replace('ref_', '')}={need},..."
+                   "; Python adc_bits={...})" if full_scales else
+                   "the device's resolution (--adc-bits N; Python adc_bits=N)")
             raise DataError(
-                f"column {col!r} has ADC codes above {full} (the {bits}-bit full scale) at "
+                f"column {col!r} has ADC codes above {full:.0f} (the "
+                f"{'channel' if full_scales else f'{bits}-bit'} full scale) at "
                 f"{file_rows(bad, csv)}: codes up to {vals.max():g} need a {need}-bit ADC; "
-                "declare the device's resolution (--adc-bits N; Python adc_bits=N)"
+                f"declare {per}"
             )
 
 
@@ -454,3 +462,29 @@ def validate_frame(frame: pd.DataFrame, *, csv: bool, glucose_unit: str | None =
                             f"{lo:g}-{hi:g} at {file_rows(bad, csv)} "
                             "(docs/user_guide/your_data.md)")
     return _glucose(frame, unit, csv)
+
+
+def unread_column_notes(columns: Iterable[Any]) -> list[str]:
+    """A note for each column no model reads whose name is near a physiological column's
+    (``bmi`` -> ``bmi_kgm2``, ``Heart rate`` -> ``heart_rate_bpm``): the schema reads a
+    column by its exact name and unit, so a near miss is ignored without it.
+
+    Examples
+    --------
+    >>> unread_column_notes(["adc_940", "bmi", "diabetic"])[0][:52]
+    "column 'bmi' is not read: a model reads 'bmi_kgm2' ["
+    """
+    import difflib
+
+    out = []
+    for c in columns:
+        if not isinstance(c, str) or c in _KNOWN or CODE_COLUMN_RE.match(c) or c in WEAR_COLUMNS:
+            continue
+        name = canonical_name(c)
+        near = [k for k in KNOWN_PHYSIOLOGY if k.startswith(f"{name}_")] or \
+            difflib.get_close_matches(name, KNOWN_PHYSIOLOGY, n=1, cutoff=0.75)
+        if near:
+            out.append(f"column {c!r} is not read: a model reads {near[0]!r} "
+                       f"[{COLUMN_UNITS.get(near[0], '-')}]; rename it if it holds that "
+                       f"(in that unit)")
+    return out

@@ -42,7 +42,7 @@ import pandas as pd
 
 from ..constants import DEFAULT_LED_WAVELENGTHS_NM, PHYSIOLOGICAL_RANGES
 from ..exceptions import DataError, is_finite_number
-from .adc import resolve_adc_bits
+from .adc import channel_converters, check_channel_bits, resolve_adc_bits
 from .columns import (
     DEFAULT_ADC_BITS,
     GLUCOSE_REPORTING_RANGE_MGDL,
@@ -61,6 +61,9 @@ __all__ = [
     "check_reference_glucose",
     "meter_flags",
     "schema_for_fit",
+    "row_fingerprints",
+    "rows_seen_in_training",
+    "MAX_TRAIN_FINGERPRINTS",
 ]
 
 
@@ -103,10 +106,24 @@ class DeviceSchema:
         The known physiological columns the device records, in canonical order.
     n_plain : int
         Width of a plain schema (0 for a device).
+    channel_bits : tuple of int
+        Per LED, its converter's resolution where the device mixes converters (empty:
+        ``adc_bits`` for every channel; :func:`~nirglucose.dataset.adc.channel_converters`).
+        [bit]
+    channel_full_scale : tuple of float
+        Per LED, its full-scale code (empty: 2^bits - 1 of each channel). [ADC code]
     train_min, train_max : tuple of float
         Per raw column, the smallest and largest value the model was fitted on (empty
         before a fit, or for a model file written before they were recorded); values
         outside are extrapolation (:meth:`outside_training`). [column units]
+    glucose_unit : str
+        Unit of the reference glucose column the model was fitted on (``mg/dL`` or
+        ``mmol/L``): what ``predict`` answers in unless asked otherwise.
+    train_rows, train_rows_every, train_row_ids : tuple of str, int, tuple of str
+        Fingerprints of the training rows (:func:`row_fingerprints`, their raw columns
+        and identity columns ``train_row_ids``) of which one in ``train_rows_every`` is
+        kept (at most :data:`MAX_TRAIN_FINGERPRINTS`): how ``predict`` tells that it was
+        given the rows the model was fitted on.
     """
 
     wavelengths_nm: tuple[float, ...] = tuple(DEFAULT_LED_WAVELENGTHS_NM)
@@ -114,9 +131,16 @@ class DeviceSchema:
     adc_bits: int = DEFAULT_ADC_BITS
     physiology: tuple[str, ...] = field(default_factory=lambda: tuple(KNOWN_PHYSIOLOGY[:12]))
     n_plain: int = 0
+    # per-channel converters (issue 43): empty when every channel has adc_bits
+    channel_bits: tuple[int, ...] = ()
+    channel_full_scale: tuple[float, ...] = ()
     # the training range describes a fit, not the device: not part of equality
     train_min: tuple[float, ...] = field(default=(), compare=False)
     train_max: tuple[float, ...] = field(default=(), compare=False)
+    glucose_unit: str = field(default="mg/dL", compare=False)
+    train_rows: tuple[str, ...] = field(default=(), compare=False)
+    train_rows_every: int = field(default=1, compare=False)
+    train_row_ids: tuple[str, ...] = field(default=(), compare=False)
 
     # ------------------------------------------------------------------ construction
 
@@ -126,17 +150,23 @@ class DeviceSchema:
         return cls(wavelengths_nm=(), reference=False, adc_bits=0, physiology=(), n_plain=width)
 
     @classmethod
-    def infer(cls, X: Any, adc_bits: int | None = None) -> DeviceSchema:
+    def infer(cls, X: Any, adc_bits: Any = None, adc_full_scale: Any = None
+              ) -> DeviceSchema:
         """The schema of a Dataset or DataFrame from its column names.
 
         Parameters
         ----------
         X : Dataset or pandas.DataFrame
             A device's measurements.
-        adc_bits : int, optional
-            Declared ADC resolution; else the Dataset's ``metadata["adc_bits"]`` (what
-            ``nirglucose fit --adc-bits`` sets), the scenario's ``hardware.adc_bits``,
-            else the policy of :mod:`~nirglucose.dataset.adc`. [bit]
+        adc_bits : int or mapping, optional
+            Declared ADC resolution, one for every channel or per channel
+            (``{"adc_940": 10, "adc_1050": 18}``); else the Dataset's
+            ``metadata["adc_bits"]`` (what ``nirglucose fit --adc-bits`` sets), the
+            scenario's ``hardware.adc_bits``, else the policy of
+            :mod:`~nirglucose.dataset.adc`. [bit]
+        adc_full_scale : mapping, optional
+            Per channel, a full-scale code other than 2^bits - 1 (else the Dataset's
+            ``metadata["adc_full_scale"]``). [ADC code]
 
         Raises
         ------
@@ -150,13 +180,19 @@ class DeviceSchema:
             meta_bits = X.metadata.get("adc_bits")
             if meta_bits is None and X.config is not None:
                 meta_bits = int(X.config.hardware.adc_bits)
+            if adc_full_scale is None:
+                adc_full_scale = X.metadata.get("adc_full_scale")
         wl = led_wavelengths_in(frame.columns)
         if not wl:
             raise DataError(_no_adc_message(frame.columns))
         bits, _ = resolve_adc_bits(frame, adc_bits, meta_bits)
         reference = has_reference_columns(frame.columns, wl)
         physio = tuple(c for c in KNOWN_PHYSIOLOGY if c in frame.columns)
-        return cls(wl, reference, int(bits), physio, 0)
+        if isinstance(bits, int) and not adc_full_scale:
+            return cls(wl, reference, int(bits), physio, 0)
+        labels = tuple(f"{w:g}" for w in wl)
+        per_bits, per_fs = channel_converters(labels, bits, adc_full_scale)
+        return cls(wl, reference, max(per_bits), physio, 0, per_bits, per_fs)
 
     @classmethod
     def from_json(cls, doc: Any) -> DeviceSchema:
@@ -177,6 +213,7 @@ class DeviceSchema:
             raise DataError(f"model file's schema has adc_bits {bits!r}; expected an integer "
                             "from 1 to 32; the file is corrupt, refit the model")
         s = cls(tuple(float(w) for w in wl), ref, int(bits), tuple(physio), int(n_plain))
+        s = _channels_from_json(s, doc)
         lo, hi = doc.get("train_min") or (), doc.get("train_max") or ()
         try:
             lo, hi = tuple(float(v) for v in lo), tuple(float(v) for v in hi)
@@ -207,6 +244,13 @@ class DeviceSchema:
             "n_plain": self.n_plain,
             **({"train_min": list(self.train_min), "train_max": list(self.train_max)}
                if self.train_min else {}),
+            **({"channel_bits": list(self.channel_bits),
+                "channel_full_scale": list(self.channel_full_scale)}
+               if self.channel_bits else {}),
+            **({"glucose_unit": self.glucose_unit} if self.glucose_unit != "mg/dL" else {}),
+            **({"train_rows": list(self.train_rows), "train_rows_every":
+                self.train_rows_every, "train_row_ids": list(self.train_row_ids)}
+               if self.train_rows else {}),
         }
 
     def with_training_range(self, Xa: np.ndarray) -> DeviceSchema:
@@ -256,8 +300,41 @@ class DeviceSchema:
 
     @property
     def full_scale(self) -> int:
-        """Largest ADC code, 2^bits - 1. [ADC code]"""
+        """Largest ADC code, 2^bits - 1 (of the widest converter where the channels have
+        their own: :attr:`full_scales`). [ADC code]"""
         return 2**self.adc_bits - 1
+
+    @property
+    def per_channel(self) -> bool:
+        """Whether the channels have converters of their own (:attr:`channel_bits`)."""
+        return bool(self.channel_bits)
+
+    @property
+    def full_scales(self) -> tuple[float, ...]:
+        """Per LED, its full-scale code (I0 without reference codes). [ADC code]"""
+        if self.channel_full_scale:
+            return self.channel_full_scale
+        return (float(self.full_scale),) * self.n_channels
+
+    def converter_metadata(self) -> dict[str, Any]:
+        """The converters as a Dataset's metadata declares them (``adc_bits``: one int, or
+        per channel; ``adc_full_scale`` where a channel's is not 2^bits - 1)."""
+        if not self.per_channel:
+            return {"adc_bits": self.adc_bits}
+        cols = [f"adc_{w}" for w in self.labels]
+        fs = {c: f for c, f, b in zip(cols, self.full_scales, self.channel_bits, strict=True)
+              if f != 2 ** b - 1}
+        return {"adc_bits": dict(zip(cols, self.channel_bits, strict=True)),
+                **({"adc_full_scale": fs} if fs else {})}
+
+    def code_full_scales(self) -> dict[str, float]:
+        """Each code column (``adc_<nm>``, ``adc_ref_<nm>``) and its full scale (empty for
+        a schema whose channels share one converter). [ADC code]"""
+        if not self.per_channel:
+            return {}
+        out = {f"adc_{w}": fs for w, fs in zip(self.labels, self.full_scales, strict=True)}
+        return {**out, **{f"adc_ref_{w}": fs for w, fs in zip(self.labels, self.full_scales,
+                                                               strict=True)}}
 
     @property
     def raw_columns(self) -> tuple[str, ...]:
@@ -285,6 +362,13 @@ class DeviceSchema:
         ref = "with" if self.reference else "without"
         physio = (f"physiology [{', '.join(self.physiology)}]" if self.physiology
                   else "no physiological columns")
+        if self.per_channel:
+            conv = ", ".join(f"adc_{w} {b} bits" + (
+                f" (full scale {fs:g})" if fs != 2 ** b - 1 else "")
+                for w, b, fs in zip(self.labels, self.channel_bits, self.full_scales,
+                                    strict=True))
+            return (f"LEDs {', '.join(self.labels)} nm on their own converters ({conv}) "
+                    f"{ref} reference codes, {physio}")
         return (
             f"LEDs {', '.join(self.labels)} nm at {self.adc_bits} bits {ref} reference codes, "
             f"{physio}"
@@ -353,19 +437,22 @@ class DeviceSchema:
         k = self.n_channels * (2 if self.reference else 1)
         cols = self.raw_columns
         codes = Xa[:, :k]
-        bad = (codes < 1) | (codes > self.full_scale)
+        full = np.tile(np.asarray(self.full_scales), 2 if self.reference else 1)
+        bits = np.tile(np.asarray(self.channel_bits or (self.adc_bits,) * self.n_channels),
+                       2 if self.reference else 1)
+        bad = (codes < 1) | (codes > full)
         if bad.any():
             j = int(np.flatnonzero(bad.any(axis=0))[0])
             top = float(codes[:, j].max())
             why = (
                 f"codes up to {top:.0f} need a {int(np.ceil(np.log2(top + 1)))}-bit ADC; "
                 "declare the device's resolution (--adc-bits N; Python adc_bits=N)"
-                if top > self.full_scale
+                if top > full[j]
                 else "a code of 0 or below is a dead or disconnected channel"
             )
             raise DataError(
-                f"column {cols[j]!r} has ADC codes outside 1-{self.full_scale} "
-                f"({self.adc_bits}-bit ADC) at {_first_rows(bad[:, j])}: {why}"
+                f"column {cols[j]!r} has ADC codes outside 1-{full[j]:.0f} "
+                f"({bits[j]}-bit ADC) at {_first_rows(bad[:, j])}: {why}"
             )
         for j, c in enumerate(self.physiology, start=k):
             lo, hi, _ = PHYSIOLOGICAL_RANGES[c]
@@ -389,7 +476,7 @@ class DeviceSchema:
             ref = Xa[:, k : 2 * k]
             start = 2 * k
         else:
-            ref = np.full_like(adc, float(self.full_scale))
+            ref = np.broadcast_to(np.asarray(self.full_scales, dtype=float), adc.shape)
             start = k
         if not (adc > 0).all() or not np.all(np.asarray(ref) > 0):
             raise DataError("ADC and reference codes must be > 0 to form absorbances log10(I0/I)")
@@ -410,6 +497,31 @@ class DeviceSchema:
     def stacked_names(self) -> tuple[str, ...]:
         """Names of :meth:`stacked`'s columns: ``A_<nm>`` per LED, then the physiology."""
         return tuple(f"A_{w}" for w in self.labels) + tuple(self.physiology)
+
+
+def _channels_from_json(s: DeviceSchema, doc: Any) -> DeviceSchema:
+    """``s`` with the optional per-channel converters, training unit and row
+    fingerprints of a model file's schema (absent from files written before issue 43)."""
+    bits, fs = doc.get("channel_bits") or (), doc.get("channel_full_scale") or ()
+    unit = doc.get("glucose_unit", "mg/dL")
+    rows, every = doc.get("train_rows") or (), doc.get("train_rows_every", 1)
+    ids = doc.get("train_row_ids") or ()
+    try:
+        bits = tuple(check_channel_bits(int(b)) for b in bits)
+        fs = tuple(float(v) for v in fs)
+        ok = (len(bits) == len(fs) and (not bits or len(bits) == s.n_channels)
+              and all(1 <= f <= 2 ** b - 1 for b, f in zip(bits, fs, strict=True))
+              and unit in ("mg/dL", "mmol/L") and all(isinstance(r, str) for r in rows)
+              and all(c in _ROW_ID_COLUMNS for c in ids)
+              and is_finite_number(every, integer=True) and every >= 1)
+    except (TypeError, ValueError, DataError):
+        ok = False
+    if not ok:
+        raise DataError("model file has a malformed 'schema' converter, unit or training "
+                        "rows entry; refit the model")
+    return replace(s, channel_bits=bits, channel_full_scale=fs, glucose_unit=unit,
+                   train_rows=tuple(rows), train_rows_every=int(every),
+                   train_row_ids=tuple(ids))
 
 
 def _no_adc_message(columns) -> str:
@@ -532,5 +644,77 @@ def schema_for_fit(X: Any, adc_bits: int | None = None) -> DeviceSchema | None:
     frame = X.frame if isinstance(X, Dataset) else X
     if isinstance(frame, pd.DataFrame) and (isinstance(X, Dataset) or _is_device_frame(frame)):
         schema = DeviceSchema.infer(X, adc_bits)
-        return schema.with_training_range(schema.raw(X))
+        Xa = schema.raw(X)
+        unit = X.metadata.get("glucose_unit") if isinstance(X, Dataset) else None
+        names = tuple(c for c in _ROW_ID_COLUMNS if c in frame.columns)
+        rows, every = _kept_fingerprints(_row_hashes(Xa, _id_frame(frame, names)))
+        return replace(schema.with_training_range(Xa), glucose_unit=unit or "mg/dL",
+                       train_rows=rows, train_rows_every=every, train_row_ids=names)
     return None
+
+
+#: Most training-row fingerprints a model file keeps (16 hex digits each, about 100 kB
+#: of JSON); of a larger training set one row in ``ceil(n / this)`` by fingerprint. [-]
+MAX_TRAIN_FINGERPRINTS = 5000
+#: Columns that identify a reading beside its values, hashed with them where present
+#: (one LED's integer codes alone repeat across people).
+_ROW_ID_COLUMNS = ("subject_id", "measurement_id", "time_min")
+
+
+def _row_hashes(Xa: np.ndarray, ids: pd.DataFrame | None = None) -> np.ndarray:
+    """Each row's 64-bit hash (:func:`pandas.util.hash_pandas_object`) of its values and
+    of the identity columns ``ids`` as text."""
+    parts = pd.DataFrame(np.asarray(Xa, dtype=np.float64) + 0.0)  # -0.0 as 0.0
+    if ids is not None and len(ids.columns):
+        parts = pd.concat([parts, ids.astype(str).reset_index(drop=True)], axis=1)
+    return pd.util.hash_pandas_object(parts, index=False).to_numpy(np.uint64)
+
+
+def _hex(h: np.ndarray) -> np.ndarray:
+    return np.array([f"{v:016x}" for v in h.tolist()], dtype="<U16")
+
+
+def row_fingerprints(Xa: np.ndarray, ids: pd.DataFrame | None = None) -> np.ndarray:
+    """Each row's 64-bit hash of its values and identity columns ``ids`` (as text), as 16
+    hex digits: equal rows, equal fingerprints.
+
+    Examples
+    --------
+    >>> a = np.array([[500.0, 30.0], [600.0, 40.0], [500.0, 30.0]])
+    >>> f = row_fingerprints(a)
+    >>> bool(f[0] == f[2]), bool(f[0] == f[1]), len(f[0])
+    (True, False, 16)
+    """
+    return _hex(_row_hashes(Xa, ids))
+
+
+def _id_frame(frame: pd.DataFrame, names: tuple[str, ...]) -> pd.DataFrame | None:
+    """The identity columns ``names`` of ``frame`` (None when any is missing)."""
+    if not all(c in frame.columns for c in names):
+        return None
+    return frame[list(names)]
+
+
+def _kept(h: np.ndarray, every: int) -> np.ndarray:
+    """Which row hashes a model file keeps: those whose low 32 bits are 0 mod ``every``."""
+    return (h & np.uint64(0xFFFFFFFF)) % np.uint64(every) == 0
+
+
+def _kept_fingerprints(h: np.ndarray) -> tuple[tuple[str, ...], int]:
+    """The sorted unique fingerprints a model file keeps, one in ``every``."""
+    uniq = np.unique(h)
+    every = max(1, int(np.ceil(len(uniq) / MAX_TRAIN_FINGERPRINTS)))
+    return tuple(str(f) for f in _hex(uniq[_kept(uniq, every)])), every
+
+
+def rows_seen_in_training(schema: DeviceSchema, Xa: np.ndarray,
+                          frame: pd.DataFrame) -> tuple[int, int]:
+    """``(matched, checked)``: of the rows (raw columns ``Xa`` of ``frame``) whose
+    fingerprint the model file would keep, how many are training rows (``(0, 0)`` for a
+    model file without them, or a frame without the identity columns it hashed)."""
+    ids = _id_frame(frame, schema.train_row_ids)
+    if not schema.train_rows or ids is None:
+        return 0, 0
+    h = _row_hashes(Xa, ids)
+    checked = _hex(h[_kept(h, schema.train_rows_every)])
+    return int(np.isin(checked, np.asarray(schema.train_rows)).sum()), int(len(checked))

@@ -330,6 +330,10 @@ def _model_arrays(model) -> tuple[str, np.ndarray, np.ndarray, float, str]:
             f"the {name!r} model was fitted on a plain array, which names no device; fit it "
             "on a device's data (adc_<nm> columns) to export C"
         )
+    if schema.per_channel:
+        raise DataError(f"the {name!r} model's device has a converter per channel "
+                        f"({schema.describe()}); the C export takes one ADC resolution "
+                        "for every channel")
     coef = np.asarray(model.coef_, dtype=float)
     if name == "ebl":
         mean, body = np.asarray(model.scaler_mean_, dtype=float), _ebl_body(schema)

@@ -87,15 +87,15 @@ def _torch():
 def _absorbance_and_physiology(torch, schema, raw):
     """Torch twin of :meth:`nirglucose.dataset.schema.DeviceSchema.split` plus the status."""
     k = schema.n_channels
-    full = float(schema.full_scale)
+    full = torch.tensor(schema.full_scales, dtype=raw.dtype)  # per channel (issue 43)
     adc = raw[:, :k]
     if schema.reference:
         ref, start = raw[:, k : 2 * k], 2 * k
-        codes = torch.cat([adc, ref], dim=1)
+        codes, top = torch.cat([adc, ref], dim=1), torch.cat([full, full])
     else:
-        ref, start = torch.full_like(adc, full), k
-        codes = adc
-    bad = ((codes <= 0) | (codes > full)).any(dim=1)
+        ref, start = torch.zeros_like(adc) + full, k
+        codes, top = adc, full
+    bad = ((codes <= 0) | (codes > top)).any(dim=1)
     a = (torch.log(ref) - torch.log(adc)) / math.log(10.0)
     return a, raw[:, start:], bad.to(torch.int32)
 

@@ -21,6 +21,10 @@ __all__ = ["MGDL_PER_MMOLL", "VALID_UNITS"]
 #: Below this median a mg/dL reference reads as mmol/L (as nirglucose.dataset.files). [mg/dL]
 _MMOLL_SUSPECT_MEDIAN_MGDL = 35.0
 
+#: Highest glucose a meter reports (Roche Accu-Chek Guide and Abbott FreeStyle Lite user
+#: manuals: 20-600 mg/dL; as nirglucose.dataset.GLUCOSE_REPORTING_RANGE_MGDL). [mg/dL]
+_METER_MAX_MGDL = 600.0
+
 #: mg/dL per mmol/L of glucose (molar mass 180.16 g/mol / 10 dL/L). [mg/dL per mmol/L]
 MGDL_PER_MMOLL: Final[float] = MGDL_PER_MMOLL_GLUCOSE
 
@@ -141,6 +145,15 @@ def _to_mgdl(
                 "not mg/dL; pass units='mmol/L' or the zones are those of mg/dL values",
                 UserWarning, stacklevel=3)
         return ref, pred
+    top = float(np.max(ref)) if ref.size else 0.0
+    if top * factor > _METER_MAX_MGDL:  # no meter reports it: mg/dL values, surely
+        import warnings
+
+        warnings.warn(
+            f"reference glucose up to {top:g} {units} is above what a meter reports "
+            f"({_METER_MAX_MGDL / factor:.1f} {units} = {_METER_MAX_MGDL:g} mg/dL): it looks "
+            "like mg/dL; pass units='mg/dL' or the zones are those of impossible values",
+            UserWarning, stacklevel=3)
     return ref * factor, pred * factor
 
 

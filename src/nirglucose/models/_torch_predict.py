@@ -101,7 +101,8 @@ class TorchPredictMixin:
         sch = self.schema_
         k = sch.n_channels
         i = np.asarray(adc, dtype=np.float64)
-        r = np.asarray(adc_ref, dtype=np.float64) if sch.reference else float(sch.full_scale)
+        r = (np.asarray(adc_ref, dtype=np.float64) if sch.reference
+             else np.asarray(sch.full_scales, dtype=np.float64))
         p = np.asarray(pmf if pmf is not None else [], dtype=np.float64)
         if i.shape != (k,) or np.shape(r) not in ((k,), ()) or p.shape != (len(sch.physiology),):
             raise DataError(

@@ -417,7 +417,8 @@ glucose_mean_, glucose_var_
     def _var_floor(self) -> float:
         """A code's quantisation variance at mid-scale of the device's ADC, in
         ln(code): (1 / 2^(bits - 1))^2 / 12. [-]"""
-        return quantisation_variance_ln(self.schema_.adc_bits)
+        bits = min(self.schema_.channel_bits or (self.schema_.adc_bits,))  # the coarsest
+        return quantisation_variance_ln(bits)
 
     def _calibrate(self, obs: np.ndarray, model: np.ndarray, y: np.ndarray,
                    edf: float = 0.0) -> None:
@@ -441,7 +442,7 @@ glucose_mean_, glucose_var_
         if n_splits < 2 or len(np.unique(groups)) < n_splits:
             return
         frame = X.frame if isinstance(X, Dataset) else X
-        meta = {"adc_bits": self.schema_.adc_bits}  # the fitted device, declared
+        meta = self.schema_.converter_metadata()  # the fitted device, declared
         oof, train_mean = np.empty(len(y)), np.empty(len(y))
         for tr, te in GroupKFold(n_splits=n_splits).split(y, y, groups):
             part = clone(self).set_params(cv=0).fit(

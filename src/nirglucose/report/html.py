@@ -21,6 +21,7 @@ from typing import Any
 from .._version import __version__
 from ..dataset import atomic_write
 from ..exceptions import DataError
+from .cohorts import cohorts_section
 from .figures import RenderedFigure, Results, load_results, render_figures
 from .figures.inputs import latency_resolution
 from .findings import computed_findings, findings_section
@@ -240,7 +241,9 @@ _MIDDLE_CONTENTS = (("presets", "Presets compared"), ("presets-table", "Key metr
                     ("ablations", "Physics ablation"),
                     ("figs-physics", "Figures: the networks and their physics terms"),
                     ("figs-tradeoffs", "Figures: accuracy against physics depth and cost"),
-                    ("subgroups", "Subgroups"), ("hyperparameters", "Hyper-parameters"))
+                    ("subgroups", "Subgroups"),
+                    ("cohorts", "Cohorts against their own mean"),
+                    ("hyperparameters", "Hyper-parameters"))
 
 
 def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Sequence[str],
@@ -414,6 +417,7 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
               [ablation_section(primary, preset=preset_of(results))])
     groups = subgroup_tables(runs)
     middle.append(subgroups_section(runs, groups))
+    middle.append(cohorts_section(runs))
     middle.append(hyperparameter_section(runs))
     middle.append(inverse_section(runs))
     top, limits = [], ""

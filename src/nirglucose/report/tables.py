@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from ..constants import MGDL_PER_MMOLL_GLUCOSE
 from ..evaluation.reference import STUDY_TABLE
 from ..formatting import format_number
 from ..models.labels import knows, row_privilege
@@ -91,16 +92,25 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
                     + ("<th>study</th>" if with_study and scol else "")
                     for _, stem, scol, _, _ in columns)
     rows = []
+    per_mgdl = _per_mgdl(results)
+    if per_mgdl != 1.0:  # a user's mmol/L file: its glucose columns in mmol/L (issue 43)
+        head1 = head1.replace("[mg/dL]", "[mmol/L]")
     for model in results.models:
         r = m.loc[model]
         s = study.get(model, {})
         cells = [f"<td>{_esc(_model_label(model, r))}</td>"]
         for col, stem, scol, _, digits in columns:
-            ours = _num(r.get(col), digits)
+            f = per_mgdl if col.endswith("_mgdl") else 1.0
+            digits = digits + 1 if f != 1.0 else digits
+
+            def val(v, f=f):
+                return v * f if isinstance(v, int | float) and f != 1.0 else v
+
+            ours = _num(val(r.get(col)), digits)
             if stem and f"{stem}_ci_low" in r.index and f"{stem}_ci_high" in r.index:
                 lo, hi = r.get(f"{stem}_ci_low"), r.get(f"{stem}_ci_high")
                 if _num(lo) != "–":
-                    ours += f" [{_num(lo, digits)}, {_num(hi, digits)}]"
+                    ours += f" [{_num(val(lo), digits)}, {_num(val(hi), digits)}]"
             cells.append(f"<td>{ours}</td>")
             if with_study and scol:
                 cells.append(f'<td class="study">{_num(s.get(scol), digits) if s else "–"}'
@@ -109,6 +119,15 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
     tid = table_id or f"reproduced-table{'-full' if full else ''}-{preset_of(results)}"
     return (f'<div class="scroll"><table id="{_esc(tid)}"><thead><tr>{head1}</tr>'
             f"<tr>{head2}</tr></thead><tbody>{''.join(rows)}</tbody></table></div>")
+
+
+def _per_mgdl(results: Results) -> float:
+    """The factor from mg/dL to the unit of a user's reference column (1 for mg/dL and for
+    every simulated run, which is mg/dL)."""
+    ds = results.dataset
+    if not results.user_data or ds is None or ds.metadata.get("glucose_unit") != "mmol/L":
+        return 1.0
+    return 1.0 / MGDL_PER_MMOLL_GLUCOSE
 
 
 #: Columns of error-grid shares: their header carries the hypoglycaemia caveat's mark.

@@ -692,8 +692,9 @@ def run_sweep(
     vary : mapping of str to sequence, optional
         Dotted config key -> values; several keys make a grid. Exclusive with ``study``.
     study : str, optional
-        A built-in study (:data:`STUDIES`); with ``vary`` naming the study's own key,
-        its values replace the default ones.
+        A built-in study (:data:`STUDIES`); ``vary`` sets only the sizes of
+        ``data-size`` and the scales of ``fleet`` (a one-key study and ``vary`` of its
+        key are refused together: that grid is ``vary`` alone).
     preset : str, optional
         Scenario preset every task starts from (default ``paper``); for the
         ``data-size`` study a comma-separated list (default :data:`DATA_SIZE_PRESETS`).

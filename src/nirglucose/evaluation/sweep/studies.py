@@ -514,8 +514,10 @@ def resolve_scenarios(
     Parameters
     ----------
     vary : mapping, optional
-        ``--vary`` values; with a study only its own key (a one-key study's values,
-        ``n_train_subjects`` of ``data-size``).
+        ``--vary`` values; with a study only the sizes of ``data-size``
+        (``n_train_subjects``) and the scales of ``fleet``; a one-key study
+        (``noise-scale``, ``pmf-noise``) runs its own values and refuses ``--vary`` of
+        its key (that grid is ``--vary`` alone).
     study : str, optional
         A built-in study (:data:`STUDIES`).
     preset : str, optional
@@ -560,12 +562,15 @@ def resolve_scenarios(
     if study not in STUDIES:
         raise ConfigError(unknown_name("study", study, STUDIES))
     key = STUDY_GRIDS.get(study, (None,))[0]
-    if vary and (key is None or set(vary) != {key}):
+    if vary and key is not None and key in vary:  # issue 43: which values would run?
         raise ConfigError(
-            f"--vary cannot be combined with --study {study}"
-            + (f" (except to set its values: --vary {key}=...)" if key else "")
+            f"--study {study} runs its own {key} values "
+            f"({', '.join(f'{v:g}' for v in STUDY_GRIDS[study][1])}); to sweep "
+            f"{key}={','.join(str(v) for v in vary[key])} give --vary alone (no --study)"
         )
+    if vary:
+        raise ConfigError(f"--vary cannot be combined with --study {study}")
     if key is None:
         return study_scenarios(study), preset
-    values = list(vary[key]) if vary else list(STUDY_GRIDS[study][1])
+    values = list(STUDY_GRIDS[study][1])
     return grid_scenarios({key: values}, preset=preset, base_overrides=base), preset

@@ -1,0 +1,206 @@
+"""Issue 43: real files as they come -- cohorts judged against their own mean, units as
+declared, intervals inside the meter's range, per-channel converters, one-line refusals."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from cli_helpers import assert_one_line_error
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from real_files import one_led_mmoll_frame, two_converter_frame  # noqa: E402
+
+
+@pytest.fixture
+def one_led(tmp_path):
+    path = tmp_path / "one_led.csv"
+    one_led_mmoll_frame().to_csv(path, index=False)
+    return path
+
+
+@pytest.fixture
+def two_converters(tmp_path):
+    path = tmp_path / "two.csv"
+    two_converter_frame().to_csv(path, index=False)
+    return path
+
+
+def test_fit_judges_each_cohort_against_its_own_mean(cli, two_converters, tmp_path):
+    code, out, err = cli("fit", "--model", "pls", "--data", two_converters, "--out",
+                         tmp_path / "m.json", "--adc-bits", "18")
+    assert code == 0, err
+    lines = [ln for ln in out.splitlines() if ln.strip().startswith("diabetic ")]
+    assert len(lines) == 2 and all("this group's own training mean" in ln for ln in lines)
+    # the file's channels carry the group only: inside neither group does it beat the mean
+    assert "the pooled skill is mostly the offset between diabetic groups" in err
+    # the correlation is read on the channel that carries the pooled one
+    assert "r(adc_" in lines[0]
+
+
+def test_group_by_names_a_column_of_the_file(cli, two_converters, tmp_path):
+    code, _, err = cli("fit", "--model", "pls", "--data", two_converters, "--out",
+                       tmp_path / "m.json", "--adc-bits", "18", "--group-by", "visit")
+    assert_one_line_error(code, err, contains=("--group-by", "'visit'"))
+
+
+def test_fit_prints_in_the_reference_columns_unit(cli, one_led, tmp_path):
+    code, out, err = cli("fit", "--model", "pls", "--data", one_led, "--out",
+                         tmp_path / "m.json", "--adc-bits", "10")
+    assert code == 0, err
+    cv = next(ln for ln in out.splitlines() if ln.startswith("grouped"))
+    assert "mmol/L" in cv and "mg/dL" not in cv
+    code, out, err = cli("fit", "--model", "pls", "--data", one_led, "--out",
+                         tmp_path / "m.json", "--adc-bits", "10", "--glucose-unit", "mmol/L")
+    assert code == 0, err
+
+
+def test_benchmark_and_report_judge_cohorts_against_their_own_mean(cli, two_converters,
+                                                                   tmp_path):
+    from nirglucose.report.cohorts import cohorts_section
+    from nirglucose.report.figures import load_results
+
+    out_dir = tmp_path / "b"
+    code, out, err = cli("benchmark", "--data", two_converters, "--out", out_dir, "--models",
+                         "pls", "--adc-bits", "18", "--repeats", "1", "--resamples", "100",
+                         "--no-ablation", "--no-references", "--jobs", "1")
+    assert code == 0, err
+    assert "no skill is each group's own training mean" in out
+    assert "diabetic no:" in out and "diabetic yes:" in out
+    assert "PLS: the pooled skill is mostly the offset between diabetic groups" in err
+    html = cohorts_section([load_results(out_dir)])
+    assert 'id="cohorts"' in html and "no skill (own mean)" in html
+    assert "mostly the offset between diabetic groups" in html
+
+
+def test_per_channel_converters_are_declared_stored_and_read(cli, two_converters, tmp_path):
+    import json
+
+    model = tmp_path / "m.json"
+    code, out, err = cli("fit", "--model", "pls", "--data", two_converters, "--out", model,
+                         "--adc-bits", "adc_940=10,adc_1050=18", "--cv-folds", "0")
+    assert code == 0, err
+    assert "adc_940 10 bits, adc_1050 18 bits" in out
+    assert "quarter" not in err
+    schema = json.loads(model.read_text())["state"]["schema_"]
+    assert schema["channel_bits"] == [10, 18]
+    assert schema["channel_full_scale"] == [1023.0, 262143.0]
+    pred = tmp_path / "p.csv"
+    code, out, err = cli("predict", "--model", model, "--data", two_converters, "--out", pred)
+    assert code == 0, err
+    # one converter for both: the 10-bit channel is read at 18 bits, and said so in one line
+    code, out, err = cli("fit", "--model", "pls", "--data", two_converters, "--out", model,
+                         "--adc-bits", "18", "--cv-folds", "0")
+    assert code == 0, err
+    warn = [ln for ln in err.splitlines() if "quarter" in ln]
+    assert len(warn) == 1 and "'adc_940'" in warn[0] and "adc_940=10" in warn[0]
+
+
+@pytest.mark.parametrize(("bits", "contains"), [
+    ("adc_940=10", ("no resolution for adc_1050",)),
+    ("adc_940=10,adc_1050=16", ("'adc_1050'", "above 65535", "adc_1050=18")),
+    ("adc_940=10,adc_850=18", ("adc_850, not a channel",)),
+    ("adc_940=ten", ("'ten' is not a number",)),
+])
+def test_per_channel_mistakes_are_one_line(cli, two_converters, tmp_path, bits, contains):
+    code, _, err = cli("fit", "--model", "pls", "--data", two_converters, "--out",
+                       tmp_path / "m.json", "--adc-bits", bits)
+    assert_one_line_error(code, err, contains=contains)
+
+
+def test_predict_clips_intervals_to_the_meter_and_answers_in_the_models_unit(cli, tmp_path):
+    import pandas as pd
+
+    train = tmp_path / "train.csv"
+    one_led_mmoll_frame(n_subjects=60, seed=5).to_csv(train, index=False)
+    model = tmp_path / "m.json"
+    code, _, err = cli("fit", "--model", "pls", "--data", train, "--out", model,
+                       "--adc-bits", "10", "--cv-folds", "0", "--intervals", "split")
+    assert code == 0, err
+    new = one_led_mmoll_frame(seed=1).drop(columns=["glucose_mmoll"])
+    new.loc[0, "adc_940"] = 300.0  # far below: a negative estimate
+    path = tmp_path / "new.csv"
+    new.to_csv(path, index=False)
+    out_csv = tmp_path / "p.csv"
+    code, out, err = cli("predict", "--model", model, "--data", path, "--out", out_csv)
+    assert code == 0, err
+    t = pd.read_csv(out_csv, keep_default_na=False)
+    assert "predicted_glucose_mmoll" in t.columns  # the training file's unit
+    lo, hi = 20.0 / 18.016, 600.0 / 18.016
+    assert t.loc[0, "flag"] == "LO" and t.loc[0, "predicted_glucose_mmoll"] < lo
+    for col in ("glucose_lower_mmoll", "glucose_upper_mmoll"):
+        v = pd.to_numeric(t[col])
+        assert v.min() >= lo - 1e-9 and v.max() <= hi + 1e-9
+    assert "clipped to the meter's range" in out
+    assert "fitted on" not in err  # new readings
+    # the rows the model was fitted on: said in one note
+    code, out, err = cli("predict", "--model", model, "--data", train, "--out", out_csv)
+    assert code == 0, err
+    note = [ln for ln in err.splitlines() if "rows the model was fitted on" in ln]
+    assert len(note) == 1 and note[0].startswith("note: 96 of the 120 readings")
+
+
+def test_a_refusal_prints_no_warning_about_the_run_that_will_not_happen(cli, tmp_path):
+    import pandas as pd
+
+    path = tmp_path / "one_person.csv"
+    pd.DataFrame({"subject_id": [1] * 6, "glucose_mgdl": [90, 120, 150, 180, 110, 140],
+                  "adc_940": [2100, 2000, 1900, 1800, 2050, 1950]}).to_csv(path, index=False)
+    code, _, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json")
+    assert_one_line_error(code, err, contains=("too few subjects",))
+
+
+def test_a_study_and_vary_of_its_own_key_are_refused_together(cli, tmp_path):
+    code, _, err = cli("sweep", "--study", "noise-scale", "--vary", "noise_scale=1,2",
+                       "--out", tmp_path / "s", "--seeds", "1", "--subjects", "10")
+    assert_one_line_error(code, err, contains=("--study noise-scale runs its own",
+                                               "give --vary alone"))
+    assert not (tmp_path / "s").exists()
+
+
+def test_equal_to_no_skill_within_its_interval_is_no_better(cli, tmp_path):
+    import numpy as np
+
+    f = one_led_mmoll_frame(n_subjects=40, seed=7)
+    rng = np.random.default_rng(0)  # a trace of glucose under the noise: RMSE just below
+    f["adc_940"] = np.round(650 + 2.0 * (f["glucose_mmoll"] - 9) + rng.normal(0, 20, len(f)))
+    path = tmp_path / "noise.csv"
+    f.to_csv(path, index=False)
+    code, out, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json",
+                         "--adc-bits", "10")
+    assert code == 0, err
+    assert "no better than no skill (equal within its 95 % interval)" in err
+    assert "above no skill" not in err
+
+
+def test_a_near_miss_physiology_column_gets_the_nearest_name(cli, one_led, tmp_path):
+    import pandas as pd
+
+    f = pd.read_csv(one_led).assign(bmi=24.0, diabetic="no")
+    path = tmp_path / "bmi.csv"
+    f.to_csv(path, index=False)
+    code, out, err = cli("fit", "--model", "pls", "--data", path, "--out", tmp_path / "m.json",
+                         "--adc-bits", "10", "--cv-folds", "0")
+    assert code == 0, err
+    hint = [ln for ln in err.splitlines() if "'bmi'" in ln]
+    assert len(hint) == 1 and "'bmi_kgm2'" in hint[0] and "kg/m^2" in hint[0]
+    assert "'diabetic'" not in err  # a grouping column is no near miss
+
+
+def test_an_empty_drop_one_says_why(cli, one_led, tmp_path):
+    import pandas as pd
+
+    out_dir = tmp_path / "b"
+    code, out, err = cli("benchmark", "--data", one_led, "--out", out_dir, "--models", "pls",
+                         "--adc-bits", "10", "--repeats", "1", "--resamples", "100",
+                         "--no-ablation", "--no-references", "--jobs", "1")
+    assert code == 0, err
+    assert pd.read_csv(out_dir / "drop_one.csv").empty
+    assert "drop_one.csv is empty: the device has one LED" in out
+    assert "RMSE mmol/L" in out  # the reference column's unit, undeclared
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.tables import main_table
+
+    html = main_table(load_results(out_dir))  # the report's table in the file's unit too
+    assert "RMSE [mmol/L]" in html and "RMSE [mg/dL]" not in html
