@@ -53,6 +53,16 @@ _DropOneOption = Annotated[
     ),
 ]
 
+#: ``--preset-models``: another model set on one preset of several.
+_PresetModelsOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--preset-models",
+        help="PRESET=NAMES: the comma-separated models to benchmark on that preset instead "
+        "of --models (repeatable; PRESET among --preset), e.g. physical=mean,ebl,oracle.",
+    ),
+]
+
 
 @app.command()
 @_tidy_out
@@ -96,6 +106,7 @@ def benchmark(
         ),
     ] = 0,
     drop_one: _DropOneOption = None,
+    preset_models: _PresetModelsOption = None,
     set_: SetOption = None,
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,
@@ -112,6 +123,9 @@ def benchmark(
                                   models, out, glucose_unit)
     if adc_bits is not None and data is None:  # the simulated device's resolution
         set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
+    # checked before _benchmark_runs clears the previous results
+    per_preset = _preset_models(preset_models, None if data is not None else
+                                [p.strip() for p in preset.split(",") if p.strip()])
     runs, overrides = _benchmark_runs(preset, data, set_, out)
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
@@ -119,8 +133,8 @@ def benchmark(
         _check_run_data(ds, calibration, protocol, folds)
         if p is None:
             say_notes(ds)  # after the checks: an error stays one line
-        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation, calibration, glucose_unit, drop_one)
+        _benchmark_one(ds, per_preset.get(p, names), protocol, folds, repeats, seed, run_out,
+                       jobs, resamples, references, ablation, calibration, glucose_unit, drop_one)
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
@@ -141,6 +155,37 @@ def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subje
         get_model_class(name)  # unknown names raise with the valid ones
     _check_out_dir(out)
     return names
+
+
+def _preset_models(given: list[str] | None, presets: list[str] | None
+                   ) -> dict[str | None, list[str]]:
+    """``--preset-models PRESET=NAMES`` (repeatable) as ``{preset: [names]}``, checked:
+    each PRESET is one of the run's presets, given once, and every name is registered."""
+    from ..models.registry import get_model_class
+
+    out: dict[str | None, list[str]] = {}
+    for item in given or []:
+        p, sep, models = item.partition("=")
+        p = p.strip()
+        if not sep or not p:
+            raise UserError(f"--preset-models {item!r}: write PRESET=NAMES, e.g. "
+                            "physical=mean,ebl,oracle")
+        if presets is None:
+            raise UserError("--preset-models chooses models per simulated preset; with "
+                            "--data give --models")
+        if p not in presets:
+            named = ", ".join(presets)
+            raise UserError(f"--preset-models {item!r}: {p!r} is not among the presets "
+                            f"benchmarked ({named}); add it to --preset or drop it here")
+        if p in out:
+            raise UserError(f"--preset-models names {p!r} twice; give its models once")
+        names = [m.strip() for m in models.split(",") if m.strip()]
+        if not names:
+            raise UserError(f"--preset-models {item!r} names no model")
+        for name in names:
+            get_model_class(name)  # unknown names raise with the valid ones
+        out[p] = names
+    return out
 
 
 def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out: Path,
