@@ -157,6 +157,28 @@ def test_figures_written_as_png_and_svg(minimal_results, tmp_path):
     assert all(p.stat().st_size > 0 for p in figs[1].files)
 
 
+def test_figures_drawn_on_two_processes_are_the_same(minimal_results, tmp_path):
+    """Figures drawn by forked processes: the same PNG bytes, notes, files and order."""
+    import sys
+
+    from nirglucose.report.figures import render_figures
+
+    keys = ["forest", "training", "scatter", "bland_altman"]
+    res = load_results(minimal_results)
+    one = render_figures(res, tmp_path / "one", include=keys, formats=("png",))
+    two = render_figures(res, tmp_path / "two", include=keys, formats=("png",), jobs=2)
+    assert [f.key for f in one] == [f.key for f in two]
+    assert sum(bool(f.png) for f in one) >= 2  # something was drawn
+    for a, b in zip(one, two, strict=True):
+        assert (a.number, a.note, a.png) == (b.number, b.note, b.png)
+        assert [p.name for p in a.files] == [p.name for p in b.files]
+        assert [p.read_bytes() for p in a.files] == [p.read_bytes() for p in b.files]
+    if sys.platform.startswith("linux"):  # drawn in children: nothing left pending
+        from nirglucose.report.figures import page as page_mod
+
+        assert page_mod._FORKED == []
+
+
 def test_no_networks_says_so(tmp_path):
     res_dir = write_synthetic_results(tmp_path / "r", models=("ebl",), networks=(),
                                       n_subjects=6, repeats=1)

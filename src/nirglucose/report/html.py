@@ -291,7 +291,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
 
 def build_report(results_dir: str | Path, out_path: str | Path, *,
                  figures_dir: str | Path | None = None,
-                 sweep_dirs: Sequence[str | Path] = ()) -> Path:
+                 sweep_dirs: Sequence[str | Path] = (), jobs: int = 1) -> Path:
     """Build the HTML report of a benchmark results directory.
 
     Parameters
@@ -307,6 +307,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     sweep_dirs : sequence of str or path, optional
         Directories written by ``nirglucose sweep``; each adds a section with its
         degradation curves or ablation effects.
+    jobs : int
+        Processes drawing the figures (:func:`~nirglucose.report.figures.render_figures`);
+        the page is the same for any number. [-]
 
     Returns
     -------
@@ -335,7 +338,8 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     compare = None
     if len(runs) > 1:  # every preset on the performance panel's shared axes
         compare = {str(r.meta.get("preset") or r.directory.name): r.metrics for r in runs}
-    figures = render_figures(results, figures_dir, compare=compare, peers=runs[1:])
+    figures = render_figures(results, figures_dir, compare=compare, peers=runs[1:],
+                             jobs=jobs)
     # several presets: the ablations are shown side by side in the presets section
     middle = ([presets_section(runs)] if len(runs) > 1 else
               [ablation_section(primary, preset=preset_of(results))])

@@ -5,6 +5,8 @@ neither imports the other back)."""
 from __future__ import annotations
 
 import logging
+import multiprocessing
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,7 +17,7 @@ import pandas as pd
 from .inputs import is_ablation_row
 from .results import RenderedFigure, Results
 
-__all__ = ["Page"]
+__all__ = ["Page", "draw_pending"]
 
 logger = logging.getLogger(__package__)  # the package's name, as before the split
 
@@ -42,6 +44,9 @@ class Page:
     #: Added to every key and title (a preset's figures drawn for each preset).
     key_suffix: str = ""
     title_suffix: str = ""
+    #: Figures numbered but not drawn yet, with their drawing functions: every builder
+    #: runs first, then :func:`draw_pending` draws them (on several processes if asked).
+    pending: list[tuple[RenderedFigure, Callable[[], Any]]] = field(default_factory=list)
 
     @property
     def models(self) -> list[str]:
@@ -74,26 +79,70 @@ class Page:
 
     def add(self, key: str, title: str, caption: str, build: Callable[[], Any] | None,
             note: str | None = None) -> None:
-        """Number the next figure; draw it (``build``) if it is wanted."""
-        from ...plots.style import figure_bytes, save_figure
-
+        """Number the next figure; keep ``build`` to draw it (:func:`draw_pending`) if it
+        is wanted."""
         self.count += 1
         number = str(self.count)
         key, title = key + self.key_suffix, title + self.title_suffix
         if not self.wants(key):
             return
         out = RenderedFigure(key=key, number=number, title=title, caption=caption, note=note)
-        fig = None
-        if build is not None:
-            try:
-                fig = build()
-            except (ValueError, KeyError, TypeError, IndexError) as exc:
-                logger.exception("figure %s could not be drawn", number)
-                out.note = f"Figure {number} could not be drawn: {exc}"
-        if fig is not None:
-            out.png = figure_bytes(fig, "png")
-            if self.out_dir is not None:
-                out.files = save_figure(fig, self.out_dir / f"fig{number}_{key}", self.formats)
-            else:
-                fig.clear()
         self.rendered.append(out)
+        if build is not None:
+            self.pending.append((out, build))
+
+
+def _draw(build: Callable[[], Any], number: str, stem: Path | None, formats: Sequence[str]
+          ) -> tuple[bytes, list[Path], str | None]:
+    """Draw one figure: its PNG bytes, the files written under ``stem`` and a note if the
+    drawing failed."""
+    from ...plots.style import figure_bytes, save_figure
+
+    try:
+        fig = build()
+    except (ValueError, KeyError, TypeError, IndexError) as exc:
+        logger.exception("figure %s could not be drawn", number)
+        return b"", [], f"Figure {number} could not be drawn: {exc}"
+    if fig is None:
+        return b"", [], None
+    png = figure_bytes(fig, "png")
+    if stem is not None:
+        return png, save_figure(fig, stem, formats), None
+    fig.clear()
+    return png, [], None
+
+
+#: The figures a forked drawing process reads (set just before the fork, by index).
+_FORKED: list[tuple[Callable[[], Any], str, Path | None, Sequence[str]]] = []
+
+
+def _draw_forked(i: int) -> tuple[bytes, list[Path], str | None]:
+    return _draw(*_FORKED[i])
+
+
+def draw_pending(page: Page, jobs: int = 1) -> None:
+    """Draw every figure :meth:`Page.add` numbered, in page order, into its
+    :class:`RenderedFigure` (PNG bytes, files written, a note if it failed).
+
+    With ``jobs > 1`` on Linux the figures are drawn by ``jobs`` forked processes: the
+    drawing functions are closures over the loaded results, which a fork inherits (they
+    cannot be pickled). Each figure is drawn the same way in either case, so the bytes do
+    not depend on ``jobs``.
+    """
+    items = [(build, out.number,
+              None if page.out_dir is None else page.out_dir / f"fig{out.number}_{out.key}",
+              page.formats) for out, build in page.pending]
+    if jobs > 1 and len(items) > 1 and sys.platform.startswith("linux"):
+        _FORKED[:] = items
+        try:
+            with multiprocessing.get_context("fork").Pool(min(jobs, len(items))) as pool:
+                drawn = pool.map(_draw_forked, range(len(items)), chunksize=1)
+        finally:
+            _FORKED.clear()
+    else:
+        drawn = [_draw(*item) for item in items]
+    for (out, _), (png, files, note) in zip(page.pending, drawn, strict=True):
+        out.png, out.files = png, files
+        if note is not None:
+            out.note = note
+    page.pending.clear()
