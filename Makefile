@@ -44,7 +44,7 @@ install: $(STAMP)
 run: $(STAMP)
 	$(BIN)/nirglucose benchmark --preset $(PRESET) --seed $(SEED) --out $(OUT) --jobs 2 \
 		--repeats $(REPEATS) --models $(MODELS) $(PRESET_MODELS)
-	$(BIN)/nirglucose report $(OUT) --out $(OUT)/report.html
+	$(BIN)/nirglucose report $(OUT) --out $(OUT)/report.html --jobs 2
 	@echo "report: $(abspath $(OUT))/report.html"
 
 # worksteal: an idle worker takes tests from the other's queue, so the last slow file does
