@@ -114,6 +114,9 @@ def test_report_provenance(synthetic_report, synthetic_results):
     assert f"<dt>seed</dt><dd>{res.meta['seed']}</dd>" in text
     assert ng.__version__ in text
     assert 'id="config"' in text and "&quot;noise_scale&quot;" in text
+    # the run line says the protocol with its folds and repeats (make run runs one repeat)
+    sub = re.search(r'<p class="sub">([^<]*)</p>', text).group(1)
+    assert f"protocol {res.meta['protocol']} (5 folds × 2 repeats)" in sub
 
 
 def test_report_is_self_contained(synthetic_report):

@@ -209,6 +209,16 @@ def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Seq
     return f'<nav><b>Contents</b><ol>{toc}</ol><ul class="figs">{toc_figs}</ul></nav>'
 
 
+def _folds_text(meta: dict[str, Any]) -> str:
+    """`` (5 folds × 1 repeat)`` from ``meta.json`` (the run line says a reduced protocol;
+    empty when not recorded)."""
+    folds, repeats = meta.get("n_splits"), meta.get("repeats")
+    if folds is None or repeats is None:
+        return ""
+    return (f" ({folds} fold{'s' if folds != 1 else ''} × {repeats} "
+            f"repeat{'s' if repeats != 1 else ''})")
+
+
 def _latency_note(results: Results, peers: Sequence[Results] = ()) -> str:
     """How far the latencies can be trusted (shown under the main table)."""
     res = latency_resolution(results.metrics, [p.metrics for p in peers])
@@ -246,7 +256,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         f"preset {meta['preset']}" if meta.get("preset") not in (None, "", "None")
         else "your data",
         f"seed {meta['seed']}" if meta.get("seed") is not None else "",
-        f"protocol {meta['protocol']}" if meta.get("protocol") else "",
+        f"protocol {meta['protocol']}{_folds_text(meta)}" if meta.get("protocol") else "",
         f"{len(results.models)} models",
         f"generated {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}",
     ) if p)
