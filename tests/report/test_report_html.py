@@ -182,6 +182,16 @@ def test_figures_drawn_on_two_processes_are_the_same(minimal_results, tmp_path):
         assert page_mod._FORKED == []
 
 
+def test_cli_report_on_two_processes_ends_quietly(minimal_results, tmp_path, capfd):
+    """`report --jobs 2`: the drawing children end without a word (they inherit the
+    CLI's signal handlers: a pool ended by SIGTERM printed a KeyboardInterrupt each)."""
+    out = tmp_path / "report.html"
+    assert main(["report", str(minimal_results), "--out", str(out), "--jobs", "2"]) == 0
+    captured = capfd.readouterr()
+    assert "Traceback" not in captured.err and "KeyboardInterrupt" not in captured.err
+    assert str(out) in captured.out and out.stat().st_size > 0
+
+
 def test_no_networks_says_so(tmp_path):
     res_dir = write_synthetic_results(tmp_path / "r", models=("ebl",), networks=(),
                                       n_subjects=6, repeats=1)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+import signal
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -116,6 +117,13 @@ def _draw(build: Callable[[], Any], number: str, stem: Path | None, formats: Seq
 _FORKED: list[tuple[Callable[[], Any], str, Path | None, Sequence[str]]] = []
 
 
+def _quiet_child() -> None:
+    """A drawing child leaves Ctrl-C to its parent and dies quietly when the pool ends it
+    (the fork inherits the CLI's handlers, which turn both signals into an exception)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _draw_forked(i: int) -> tuple[bytes, list[Path], str | None]:
     return _draw(*_FORKED[i])
 
@@ -135,8 +143,11 @@ def draw_pending(page: Page, jobs: int = 1) -> None:
     if jobs > 1 and len(items) > 1 and sys.platform.startswith("linux"):
         _FORKED[:] = items
         try:
-            with multiprocessing.get_context("fork").Pool(min(jobs, len(items))) as pool:
+            with multiprocessing.get_context("fork").Pool(min(jobs, len(items)),
+                                                          initializer=_quiet_child) as pool:
                 drawn = pool.map(_draw_forked, range(len(items)), chunksize=1)
+                pool.close()  # the children exit when done: no SIGTERM on a normal end
+                pool.join()
         finally:
             _FORKED.clear()
     else:
