@@ -5,8 +5,8 @@ directory, the install step left out and ``OUT`` a scratch directory), so a chan
 the Makefile's presets, models or protocol is what gets timed. Each command runs in a
 subprocess; its CPU time is the user + system time of the process and every worker it
 waited for (``RUSAGE_CHILDREN``), so it holds on a machine shared with others, where the
-wall time does not. Per preset, the benchmark's own wall time (``meta.json``) and the
-summed CPU of its tasks (``.tasks/*.json``) split the benchmark stage.
+wall time does not. Per preset, the benchmark's own wall time and the summed CPU of its
+tasks (``meta.json``: ``wall_time_s``, ``tasks_cpu_s``) split the benchmark stage.
 
 Budget (issue 43): ``make run`` installed in at most 180 s of wall time on 2 idle cores,
 which needs the CPU total at most about 300 s (the two benchmark workers are not busy
@@ -14,7 +14,8 @@ all the time, and the report draws on one core).
 
 Environment: ``NIRGLUCOSE_BENCH_MAKE_VARS`` (extra ``make`` variables, e.g.
 ``"PRESET=paper MODELS=ebl,pls,mean,gp,gbr"`` for a scaled run; default none: the full
-job), ``NIRGLUCOSE_BENCH_DIR`` (the output directory, default a temporary one, deleted
+job), ``NIRGLUCOSE_BENCH_DIR`` (the output directory, created if needed and kept, its
+``results/`` removed first so the run is cold; default a temporary one, deleted
 afterwards).
 
 Prints one JSON object on its last line.
@@ -77,11 +78,9 @@ def _presets(out: Path) -> list[dict]:
     dirs = [d for d in sorted(out.iterdir()) if (d / "meta.json").is_file()]
     for d in dirs or ([out] if (out / "meta.json").is_file() else []):
         meta = json.loads((d / "meta.json").read_text())
-        task_cpu = 0.0
-        for f in (d / ".tasks").glob("*.json"):
-            task_cpu += float(json.loads(f.read_text())["result"].get("task_cpu_s", 0.0))
         rows.append({"preset": meta.get("preset"), "wall_s": round(meta["wall_time_s"], 2),
-                     "task_cpu_s": round(task_cpu, 2), "tasks": meta.get("tasks_total"),
+                     "task_cpu_s": round(float(meta.get("tasks_cpu_s", float("nan"))), 2),
+                     "tasks": meta.get("tasks_total"),
                      "folds": meta.get("n_splits"), "repeats": meta.get("repeats"),
                      "models": list(meta.get("models", []))})
     return rows
@@ -91,7 +90,10 @@ def main() -> dict:
     extra = shlex.split(os.environ.get("NIRGLUCOSE_BENCH_MAKE_VARS", ""))
     scratch = os.environ.get("NIRGLUCOSE_BENCH_DIR")
     base = Path(scratch) if scratch else Path(tempfile.mkdtemp(prefix="make-run-"))
+    base.mkdir(parents=True, exist_ok=True)
     out = base / "results"
+    if out.exists():  # a cold run: no task of a previous one is reused
+        shutil.rmtree(out)
     try:
         commands = _commands(out, extra)
         load0 = os.getloadavg()[0]
