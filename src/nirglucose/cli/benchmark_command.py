@@ -119,14 +119,10 @@ def benchmark(
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
     jobs = _jobs(jobs)
-    names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
-                                  models, out, glucose_unit)
-    if adc_bits is not None and data is None:  # the simulated device's resolution
-        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
-    # checked before _benchmark_runs clears the previous results
-    per_preset = _preset_models(preset_models, None if data is not None else
-                                [p.strip() for p in preset.split(",") if p.strip()])
-    runs, overrides = _benchmark_runs(preset, data, set_, out)
+    names, per_preset = _check_benchmark_args(seed, protocol, calibration, data, subjects,
+                                              per_subject, models, out, glucose_unit, preset,
+                                              preset_models)
+    runs, overrides = _benchmark_runs(preset, data, set_, out, adc_bits=adc_bits)
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
@@ -138,8 +134,10 @@ def benchmark(
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
-                          out, glucose_unit=None) -> list[str] | None:
-    """The checks of ``benchmark`` after the counts, in order; the --models names."""
+                          out, glucose_unit=None, preset="paper", preset_models=None
+                          ) -> tuple[list[str] | None, dict[str | None, list[str]]]:
+    """The checks of ``benchmark`` after the counts, in order (before any previous result
+    is cleared); the --models names and the --preset-models sets by preset."""
     from ..dataset.files import check_glucose_unit
     from ..evaluation.splits import check_protocol
     from ..models.registry import get_model_class
@@ -154,7 +152,8 @@ def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subje
     for name in names or []:
         get_model_class(name)  # unknown names raise with the valid ones
     _check_out_dir(out)
-    return names
+    return names, _preset_models(preset_models, None if data is not None else
+                                 [p.strip() for p in preset.split(",") if p.strip()])
 
 
 def _preset_models(given: list[str] | None, presets: list[str] | None
@@ -189,14 +188,17 @@ def _preset_models(given: list[str] | None, presets: list[str] | None
 
 
 def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out: Path,
-                    stale: tuple[str, ...] | None = None):
+                    stale: tuple[str, ...] | None = None, adc_bits: int | None = None):
     """``([(preset or None for --data, output directory), ...], overrides)``.
 
     Every preset is resolved first, so an unknown one fails before anything runs;
     several presets write ``OUT/<preset>/`` each, and their previous results ``stale``
     (default: the benchmark's, ``STALE_FILES``) are removed first
-    (:func:`~._common.clear_previous_runs`).
+    (:func:`~._common.clear_previous_runs`). ``adc_bits`` (``--adc-bits``) sets the
+    simulated device's resolution (``hardware.adc_bits``); with ``data`` it is the file's.
     """
+    if adc_bits is not None and data is None:  # the simulated device's resolution
+        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
     presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
     if not presets:
         raise UserError(f"--preset {preset!r} names no preset")

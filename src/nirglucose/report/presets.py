@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import pandas as pd
 
+from ..config import PRESETS
 from ..evaluation.benchmark.findings import RunData, physics_verdicts
 from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
@@ -45,8 +46,6 @@ def preset_dirs(results_dir: str | Path) -> list[Path]:
 
     Empty when ``results_dir`` itself holds a run (a one-preset layout).
     """
-    from ..config import PRESETS
-
     d = Path(results_dir)
     if not d.is_dir() or _is_results(d):
         return []
