@@ -223,3 +223,11 @@ def test_preset_models_twice_or_with_data_exit_2(tmp_path, capsys):
             "lab=cli-mean", "--out", str(tmp_path / "o")]
     assert main(argv) == 2
     assert "with --data give --models" in capsys.readouterr().err
+
+
+def test_adc_bits_sets_the_simulated_devices_resolution(tmp_path):
+    out = tmp_path / "r"
+    assert main([*BASE, "--models", "cli-mean", "--no-ablation", "--drop-one", "none",
+                 "--adc-bits", "10", "--out", str(out)]) == 0
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["config"]["hardware"]["adc_bits"] == 10
