@@ -179,3 +179,55 @@ def test_two_presets_bad_arguments_exit_2(tmp_path, capsys):
     data = tmp_path / "d.csv"
     ng.simulate("paper", n_subjects=4, per_subject=2, seed=0).save(data)
     assert main([*BASE, "--preset", "paper,lab", "--data", str(data), "--out", str(out)]) == 2
+
+
+def test_preset_models_runs_another_set_on_one_preset(tmp_path, capsys):
+    out = tmp_path / "results"
+    argv = [*BASE, "--preset", "paper,lab", "--no-ablation", "--drop-one", "none",
+            "--preset-models", "lab=cli-mean", "--out", str(out)]
+    assert main(argv) == 0
+    assert sorted(pd.read_csv(out / "paper" / "metrics.csv")["model"]) == ["cli-mean",
+                                                                           "cli-ridge"]
+    assert list(pd.read_csv(out / "lab" / "metrics.csv")["model"]) == ["cli-mean"]
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        ("lab", "write PRESET=NAMES"),
+        ("field=cli-mean", "'field' is not among the presets benchmarked (paper, lab)"),
+        ("lab=", "names no model"),
+        ("lab=cli-mean,nope", "unknown model 'nope'; valid:"),
+    ],
+)
+def test_preset_models_bad_values_exit_2_before_anything_is_cleared(tmp_path, capsys, given,
+                                                                    message):
+    out = tmp_path / "results"
+    (out / "paper").mkdir(parents=True)
+    (out / "paper" / "metrics.csv").write_text("model\nold\n")
+    argv = [*BASE, "--preset", "paper,lab", "--preset-models", given, "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and message in err and "\n" not in err
+    assert (out / "paper" / "metrics.csv").read_text() == "model\nold\n"  # kept
+
+
+def test_preset_models_twice_or_with_data_exit_2(tmp_path, capsys):
+    argv = [*BASE, "--preset", "paper,lab", "--preset-models", "lab=cli-mean",
+            "--preset-models", "lab=cli-ridge", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    assert "names 'lab' twice" in capsys.readouterr().err
+    data = tmp_path / "d.csv"
+    ng.simulate("paper", n_subjects=4, per_subject=2, seed=0).save(data)
+    argv = ["benchmark", "--data", str(data), "--models", "cli-ridge", "--preset-models",
+            "lab=cli-mean", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    assert "with --data give --models" in capsys.readouterr().err
+
+
+def test_adc_bits_sets_the_simulated_devices_resolution(tmp_path):
+    out = tmp_path / "r"
+    assert main([*BASE, "--models", "cli-mean", "--no-ablation", "--drop-one", "none",
+                 "--adc-bits", "10", "--out", str(out)]) == 0
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["config"]["hardware"]["adc_bits"] == 10

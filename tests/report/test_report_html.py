@@ -115,6 +115,9 @@ def test_report_provenance(synthetic_report, synthetic_results):
     assert f"<dt>seed</dt><dd>{res.meta['seed']}</dd>" in text
     assert ng.__version__ in text
     assert 'id="config"' in text and "&quot;noise_scale&quot;" in text
+    # the run line says the protocol with its folds and repeats (make run runs one repeat)
+    sub = re.search(r'<p class="sub">([^<]*)</p>', text).group(1)
+    assert f"protocol {res.meta['protocol']} (5 folds × 2 repeats)" in sub
 
 
 def test_report_is_self_contained(synthetic_report):
@@ -156,6 +159,38 @@ def test_figures_written_as_png_and_svg(minimal_results, tmp_path):
     stem = f"fig{figs[0].number}_forest"
     assert [p.name for p in figs[0].files] == [f"{stem}.png", f"{stem}.svg"]
     assert all(p.stat().st_size > 0 for p in figs[0].files)
+
+
+def test_figures_drawn_on_two_processes_are_the_same(minimal_results, tmp_path):
+    """Figures drawn by forked processes: the same PNG bytes, notes, files and order."""
+    import sys
+
+    from nirglucose.report.figures import render_figures
+
+    keys = ["forest", "training", "scatter", "bland_altman"]
+    res = load_results(minimal_results)
+    one = render_figures(res, tmp_path / "one", include=keys, formats=("png",))
+    two = render_figures(res, tmp_path / "two", include=keys, formats=("png",), jobs=2)
+    assert [f.key for f in one] == [f.key for f in two]
+    assert sum(bool(f.png) for f in one) >= 2  # something was drawn
+    for a, b in zip(one, two, strict=True):
+        assert (a.number, a.note, a.png) == (b.number, b.note, b.png)
+        assert [p.name for p in a.files] == [p.name for p in b.files]
+        assert [p.read_bytes() for p in a.files] == [p.read_bytes() for p in b.files]
+    if sys.platform.startswith("linux"):  # drawn in children: nothing left pending
+        from nirglucose.report.figures import page as page_mod
+
+        assert page_mod._FORKED == []
+
+
+def test_cli_report_on_two_processes_ends_quietly(minimal_results, tmp_path, capfd):
+    """`report --jobs 2`: the drawing children end without a word (they inherit the
+    CLI's signal handlers: a pool ended by SIGTERM printed a KeyboardInterrupt each)."""
+    out = tmp_path / "report.html"
+    assert main(["report", str(minimal_results), "--out", str(out), "--jobs", "2"]) == 0
+    captured = capfd.readouterr()
+    assert "Traceback" not in captured.err and "KeyboardInterrupt" not in captured.err
+    assert str(out) in captured.out and out.stat().st_size > 0
 
 
 def test_no_networks_says_so(tmp_path):

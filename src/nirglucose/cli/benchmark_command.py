@@ -63,6 +63,16 @@ _DropOneOption = Annotated[
     ),
 ]
 
+#: ``--preset-models``: another model set on one preset of several.
+_PresetModelsOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--preset-models",
+        help="PRESET=NAMES: the comma-separated models to benchmark on that preset instead "
+        "of --models (repeatable; PRESET among --preset), e.g. physical=mean,ebl,oracle.",
+    ),
+]
+
 
 #: ``--calibration``: personal calibration readings per test subject.
 _CalibrationOption = Annotated[
@@ -110,6 +120,7 @@ def benchmark(
     ] = True,
     calibration: _CalibrationOption = 0,
     drop_one: _DropOneOption = None,
+    preset_models: _PresetModelsOption = None,
     set_: SetOption = None,
     adc_bits: ChannelBitsOption = None,
     adc_full_scale: FullScaleOption = None,
@@ -126,8 +137,9 @@ def benchmark(
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
     jobs = _jobs(jobs)
-    names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
-                                  models, out, glucose_unit)
+    names, per_preset = _check_benchmark_args(seed, protocol, calibration, data, subjects,
+                                              per_subject, models, out, glucose_unit, preset,
+                                              preset_models)
     runs, overrides = _benchmark_runs(preset, data,
                                       _simulated_bits(set_, adc_bits, adc_full_scale, data), out)
     for p, run_out in runs:
@@ -136,8 +148,8 @@ def benchmark(
                                  (adc_bits, adc_full_scale), glucose_unit)
             gcol, unit = _data_groups(ds, p, group_by, calibration, protocol, folds,
                                       glucose_unit)
-        _benchmark_one(ds, names, protocol, folds, repeats, seed, run_out, jobs, resamples,
-                       references, ablation, calibration, unit, drop_one, gcol)
+        _benchmark_one(ds, per_preset.get(p, names), protocol, folds, repeats, seed, run_out,
+                       jobs, resamples, references, ablation, calibration, unit, drop_one, gcol)
 
 
 def _simulated_bits(set_, adc_bits, adc_full_scale, data):
@@ -171,8 +183,10 @@ def _data_groups(ds, preset: str | None, group_by: str | None, calibration: int,
 
 
 def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject, models,
-                          out, glucose_unit=None) -> list[str] | None:
-    """The checks of ``benchmark`` after the counts, in order; the --models names."""
+                          out, glucose_unit=None, preset="paper", preset_models=None
+                          ) -> tuple[list[str] | None, dict[str | None, list[str]]]:
+    """The checks of ``benchmark`` after the counts, in order (before any previous result
+    is cleared); the --models names and the --preset-models sets by preset."""
     from ..dataset.files import check_glucose_unit
     from ..evaluation.splits import check_protocol
     from ..models.registry import get_model_class
@@ -187,18 +201,53 @@ def _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subje
     for name in names or []:
         get_model_class(name)  # unknown names raise with the valid ones
     _check_out_dir(out)
-    return names
+    return names, _preset_models(preset_models, None if data is not None else
+                                 [p.strip() for p in preset.split(",") if p.strip()])
+
+
+def _preset_models(given: list[str] | None, presets: list[str] | None
+                   ) -> dict[str | None, list[str]]:
+    """``--preset-models PRESET=NAMES`` (repeatable) as ``{preset: [names]}``, checked:
+    each PRESET is one of the run's presets, given once, and every name is registered."""
+    from ..models.registry import get_model_class
+
+    out: dict[str | None, list[str]] = {}
+    for item in given or []:
+        p, sep, models = item.partition("=")
+        p = p.strip()
+        if not sep or not p:
+            raise UserError(f"--preset-models {item!r}: write PRESET=NAMES, e.g. "
+                            "physical=mean,ebl,oracle")
+        if presets is None:
+            raise UserError("--preset-models chooses models per simulated preset; with "
+                            "--data give --models")
+        if p not in presets:
+            named = ", ".join(presets)
+            raise UserError(f"--preset-models {item!r}: {p!r} is not among the presets "
+                            f"benchmarked ({named}); add it to --preset or drop it here")
+        if p in out:
+            raise UserError(f"--preset-models names {p!r} twice; give its models once")
+        names = [m.strip() for m in models.split(",") if m.strip()]
+        if not names:
+            raise UserError(f"--preset-models {item!r} names no model")
+        for name in names:
+            get_model_class(name)  # unknown names raise with the valid ones
+        out[p] = names
+    return out
 
 
 def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out: Path,
-                    stale: tuple[str, ...] | None = None):
+                    stale: tuple[str, ...] | None = None, adc_bits: int | None = None):
     """``([(preset or None for --data, output directory), ...], overrides)``.
 
     Every preset is resolved first, so an unknown one fails before anything runs;
     several presets write ``OUT/<preset>/`` each, and their previous results ``stale``
     (default: the benchmark's, ``STALE_FILES``) are removed first
-    (:func:`~._common.clear_previous_runs`).
+    (:func:`~._common.clear_previous_runs`). ``adc_bits`` (``--adc-bits``) sets the
+    simulated device's resolution (``hardware.adc_bits``); with ``data`` it is the file's.
     """
+    if adc_bits is not None and data is None:  # the simulated device's resolution
+        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
     presets = list(dict.fromkeys(p.strip() for p in preset.split(",") if p.strip()))
     if not presets:
         raise UserError(f"--preset {preset!r} names no preset")

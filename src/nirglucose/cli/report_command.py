@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ._app import app
-from ._common import UserError, _check_out_file, _say
+from ._common import JobsOption, UserError, _check_out_file, _jobs, _say
 
 
 @app.command()
@@ -26,6 +26,7 @@ def report(
         list[Path] | None,
         typer.Option(help="A `nirglucose sweep` output directory to add (repeatable)."),
     ] = None,
+    jobs: JobsOption = None,
 ) -> None:
     """Write the figures and tables of a benchmark run as one self-contained HTML file."""
     from ..report import build_report
@@ -37,6 +38,7 @@ def report(
         raise UserError(f"--figures {str(figures)!r} is a file; give a directory for the "
                         "PNG and SVG figures")
     from ..report.requirements import is_requirements_dir
+    jobs = _jobs(jobs)  # the benchmark report's figures are drawn on this many processes
     from ..report.twin import build_twin_report, is_twin_dir
 
     if results.is_dir() and is_requirements_dir(results):  # sweep --study requirements
@@ -65,7 +67,7 @@ def report(
         if not (d / "sweep.csv").exists():
             raise UserError(f"--sweep {str(d)!r} holds no sweep.csv; run `nirglucose sweep` first")
     path = build_report(results, out if out is not None else results / "report.html",
-                        figures_dir=figures, sweep_dirs=sweep or [])
+                        figures_dir=figures, sweep_dirs=sweep or [], jobs=jobs)
     _say(f"wrote {path}", err=False)
 
 

@@ -274,6 +274,16 @@ def _contents(figures: Sequence[RenderedFigure], top: Sequence[str], middle: Seq
     return f'<nav><b>Contents</b><ol>{toc}</ol>{figs}</nav>'
 
 
+def _folds_text(meta: dict[str, Any]) -> str:
+    """`` (5 folds × 1 repeat)`` from ``meta.json`` (the run line says a reduced protocol;
+    empty when not recorded)."""
+    folds, repeats = meta.get("n_splits"), meta.get("repeats")
+    if folds is None or repeats is None:
+        return ""
+    return (f" ({folds} fold{'s' if folds != 1 else ''} × {repeats} "
+            f"repeat{'s' if repeats != 1 else ''})")
+
+
 def _latency_note(results: Results, peers: Sequence[Results] = ()) -> str:
     """How far the latencies can be trusted (shown under the main table)."""
     res = latency_resolution(results.metrics, [p.metrics for p in peers])
@@ -314,7 +324,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
         f"preset {meta['preset']}" if meta.get("preset") not in (None, "", "None")
         else "your data",
         f"seed {meta['seed']}" if meta.get("seed") is not None else "",
-        f"protocol {meta['protocol']}" if meta.get("protocol") else "",
+        f"protocol {meta['protocol']}{_folds_text(meta)}" if meta.get("protocol") else "",
         f"{len(results.models)} models",
         f"generated {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}",
     ) if p)
@@ -367,7 +377,7 @@ def render_html(results: Results, figures: Sequence[RenderedFigure], *,
 
 def build_report(results_dir: str | Path, out_path: str | Path, *,
                  figures_dir: str | Path | None = None,
-                 sweep_dirs: Sequence[str | Path] = ()) -> Path:
+                 sweep_dirs: Sequence[str | Path] = (), jobs: int = 1) -> Path:
     """Build the HTML report of a benchmark results directory.
 
     Parameters
@@ -383,6 +393,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     sweep_dirs : sequence of str or path, optional
         Directories written by ``nirglucose sweep``; each adds a section with its
         degradation curves or ablation effects.
+    jobs : int
+        Processes drawing the figures (:func:`~nirglucose.report.figures.render_figures`);
+        the page is the same for any number. [-]
 
     Returns
     -------
@@ -411,7 +424,8 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     compare = None
     if len(runs) > 1:  # every preset on the performance panel's shared axes
         compare = {str(r.meta.get("preset") or r.directory.name): r.metrics for r in runs}
-    figures = render_figures(results, figures_dir, compare=compare, peers=runs[1:])
+    figures = render_figures(results, figures_dir, compare=compare, peers=runs[1:],
+                             jobs=jobs)
     # several presets: the ablations are shown side by side in the presets section
     middle = ([presets_section(runs)] if len(runs) > 1 else
               [ablation_section(primary, preset=preset_of(results))])

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import pandas as pd
 
+from ..config import PRESETS
 from ..evaluation.benchmark.findings import RunData, physics_verdicts
 from ..evaluation.reference import STUDY_TABLE
 from ..exceptions import DataError
@@ -40,15 +41,18 @@ def _is_results(d: Path) -> bool:
 
 
 def preset_dirs(results_dir: str | Path) -> list[Path]:
-    """Sub-directories of ``results_dir`` that hold a benchmark run, primary first.
+    """Sub-directories of ``results_dir`` that hold a benchmark run, primary first, then
+    the built-in presets in their order (``wearable``, ``physical``, ...), then the rest
+    by name.
 
     Empty when ``results_dir`` itself holds a run (a one-preset layout).
     """
     d = Path(results_dir)
     if not d.is_dir() or _is_results(d):
         return []
+    order = {name: i for i, name in enumerate(PRESETS)}
     subs = sorted((s for s in d.iterdir() if s.is_dir() and _is_results(s)), key=lambda s: s.name)
-    return sorted(subs, key=lambda s: s.name != PRIMARY_PRESET)
+    return sorted(subs, key=lambda s: (s.name != PRIMARY_PRESET, order.get(s.name, len(order))))
 
 
 def _num(v: Any, digits: int = 1, sign: bool = False) -> str:

@@ -251,7 +251,9 @@ def band_detected_fraction(
 
     def vec(a, n=None):
         a = np.asarray(a, dtype=np.float64)
-        return np.ascontiguousarray(a if n is None else np.broadcast_to(a, n))
+        if n is not None and a.shape != n:  # broadcast only what needs it (the inversions
+            a = np.broadcast_to(a, n)  # call this ~10^4 times a fit: the call costs)
+        return np.ascontiguousarray(a)
 
     glucose = vec(state.glucose_mm)
     n = glucose.shape[0]

@@ -49,7 +49,7 @@ from .inputs import (
     radar_scores,
     reference_values,
 )
-from .page import Page
+from .page import Page, draw_pending
 from .results import RenderedFigure, Results
 
 __all__ = ["render_figures"]
@@ -521,7 +521,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
                    formats: Sequence[str] = ("png", "svg"), *,
                    include: Iterable[str] | None = None,
                    compare: Mapping[str, pd.DataFrame] | None = None,
-                   peers: Sequence[Results] = ()) -> list[RenderedFigure]:
+                   peers: Sequence[Results] = (), jobs: int = 1) -> list[RenderedFigure]:
     """Build every figure of the report from loaded results.
 
     Parameters
@@ -541,6 +541,9 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
     peers : sequence of Results, optional
         The other presets' runs: the training dynamics are drawn for each, and their
         timings measure the latencies' noise.
+    jobs : int
+        Processes drawing the figures (forked, on Linux; elsewhere one); the figures are
+        the same for any number. [-]
 
     Returns
     -------
@@ -557,6 +560,7 @@ def render_figures(results: Results, figures_dir: str | Path | None = None,
                  wanted=None if include is None else set(include), compare=compare,
                  peers=tuple(peers))
     _run_sections(page)
+    draw_pending(page, jobs)
     return page.rendered
 
 
