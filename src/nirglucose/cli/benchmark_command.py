@@ -24,6 +24,8 @@ from ._common import (
     RepeatsOption,
     ResamplesOption,
     SetOption,
+    TwinModeOption,
+    TwinOption,
     UserError,
     _check_calibration,
     _check_counts,
@@ -39,6 +41,7 @@ from ._common import (
     clear_previous_runs,
     refuse_simulation_options,
     runs_workers,
+    twin_start,
 )
 from .fit_report import say_notes
 
@@ -99,20 +102,24 @@ def benchmark(
     set_: SetOption = None,
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,
+    twin: TwinOption = None,
+    twin_mode: TwinModeOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
 
     Files written keep mg/dL (their column names say so); --glucose-unit sets the unit
-    of the --data file and of the printed table."""
+    of the --data file and of the printed table. --twin simulates a device's twin."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
+    start = twin_start(ctx, twin, twin_mode, seed, set_=set_)
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
     if adc_bits is not None and data is None:  # the simulated device's resolution
         set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
-    runs, overrides = _benchmark_runs(preset, data, set_, out)
+    runs, overrides = (_benchmark_runs(preset, data, set_, out) if start is None
+                       else twin_runs(start, set_, out))
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
@@ -173,6 +180,16 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
         from ..evaluation.benchmark.result import STALE_FILES as stale
     clear_previous_runs(runs, out, stale)
     return runs, overrides
+
+
+def twin_runs(start, set_: list[str] | None, out: Path):
+    """``_benchmark_runs`` of a ``--twin`` run: one run into ``out``, the twin's base
+    preset with its overrides and ``--set`` on top (resolved: a bad value fails here)."""
+    from ..config import resolve_config
+
+    overrides = {**start.overrides, **_parse_sets(set_)}
+    resolve_config(start.preset, overrides)
+    return [(start.preset, out)], overrides
 
 
 def _benchmark_data(preset, data, subjects, per_subject, seed, overrides, adc_bits=None,

@@ -683,6 +683,8 @@ def run_sweep(
     progress: bool = False,
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
     calibration: int = 0,
+    led_fields: Mapping[str, Any] | None = None,
+    twin: str | None = None,
 ) -> SweepResult:
     """Run a grid of scenarios × seeds × models (local processes or a Dask cluster).
 
@@ -732,6 +734,12 @@ def run_sweep(
         Personal calibration readings per test subject (0, 1 or 2) of every
         cross-validated task (:mod:`~nirglucose.calibration.personal`): adds
         :data:`CALIBRATION_METRICS` (shift tasks leave them empty).
+    led_fields : mapping, optional
+        ``wavelengths`` study only: fields every LED it chooses takes (a device's twin's
+        per-LED values, :meth:`nirglucose.twin.Twin.study_start`).
+    twin : str, optional
+        The twin the scenarios start from (``preset`` and ``overrides`` are its), kept
+        in ``sweep_meta.json``.
 
     Returns
     -------
@@ -746,7 +754,7 @@ def run_sweep(
     """
     t_start = time.perf_counter()
     base = dict(overrides or {})
-    scenarios, preset = resolve_scenarios(vary, study, preset, base)
+    scenarios, preset = resolve_scenarios(vary, study, preset, base, led_fields)
     models, objects = _sweep_models(models, study, scenarios, model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
@@ -776,8 +784,11 @@ def run_sweep(
                 n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
                 label_columns=label_columns, backend=backend, n_workers=n_workers,
                 scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects))
+    meta = _sweep_meta(scenarios, cache, len(pending), opts)
+    if twin is not None:  # only then: other sweeps' metadata keep their bytes
+        meta = {**meta, "twin": twin, "twin_led_fields": dict(led_fields or {})}
     result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
-                         meta=_sweep_meta(scenarios, cache, len(pending), opts))
+                         meta=meta)
     if out is not None:
         result.save(out)
     return result

@@ -1,0 +1,89 @@
+"""Benchmark of a device's twin (:func:`nirglucose.fit_twin`): first file, then a second.
+
+A 25-subject device file (one to four LEDs, a 10-bit ADC, 8 readings per person,
+reference glucose, two physiological columns; simulated on the ``physical`` preset with a
+hidden LED and glucose gain 11) is fitted twice in a fresh cache directory:
+
+* ``first``: the device's posterior estimator is trained (``--simulations`` simulated
+  devices, the flow, the recalibration devices), then the file is fitted;
+* ``second``: another file of the same device (another seed) is fitted with the cached
+  estimator: cache load, summaries, posterior sampling, posterior predictive checks, the
+  device bound and the file's CV errors (``timing`` of ``twin.json``).
+
+For each, the wall time and the CPU time of this process and its worker processes
+(``os.times``: on a shared machine the wall time also counts other processes' turns),
+and the second file's stages. Goal (issue 41): first <= 600 s, second <= 30 s on 2 cores.
+
+Prints a JSON object on its last line (times in seconds).
+
+Usage: ``python benchmarks/twin.py [--leds 1] [--simulations 6000] [--jobs 2]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+LED_SETS = {1: (940.0,), 2: (850.0, 940.0), 3: (850.0, 940.0, 1050.0),
+            4: (850.0, 940.0, 1050.0, 1150.0)}
+
+
+def _write(path: Path, wavelengths, seed: int) -> Path:
+    import nirglucose as ng
+
+    leds = [{"wavelength_nm": w, "fwhm_nm": 35.0, "power_mw": 2.2,
+             "responsivity_a_per_w": 0.55, "glucose_gain": 11.0} for w in wavelengths]
+    f = ng.simulate("physical", n_subjects=25, per_subject=8, seed=seed,
+                    overrides={"leds": leds, "hardware.adc_bits": 10}).frame
+    cols = ["subject_id", "glucose_mgdl", *(f"adc_{w:g}" for w in wavelengths), "age_yr",
+            "skin_temp_c"]
+    f[cols].to_csv(path, index=False)
+    return path
+
+
+def _fit(path: Path, settings, jobs: int) -> tuple[dict, object]:
+    import nirglucose as ng
+
+    t0, c0 = time.perf_counter(), os.times()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        twin = ng.fit_twin(path, adc_bits=10, settings=settings, n_jobs=jobs)
+    c1 = os.times()
+    cpu = (c1.user - c0.user) + (c1.system - c0.system) + (
+        c1.children_user - c0.children_user) + (c1.children_system - c0.children_system)
+    return {"wall_s": round(time.perf_counter() - t0, 1), "cpu_s": round(cpu, 1),
+            "cached_estimator": twin.info["timing"]["cached_estimator"],
+            "stages_s": twin.info["timing"].get("stages_s")}, twin
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--leds", type=int, default=1, choices=sorted(LED_SETS))
+    ap.add_argument("--simulations", type=int, default=6000)
+    ap.add_argument("--jobs", type=int, default=2)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        os.environ["NIRGLUCOSE_CACHE"] = str(Path(tmp) / "cache")
+        from nirglucose.twin import InferenceSettings
+
+        settings = InferenceSettings(n_simulations=args.simulations)
+        wl = LED_SETS[args.leds]
+        first, _ = _fit(_write(Path(tmp) / "a.csv", wl, 11), settings, args.jobs)
+        second, twin = _fit(_write(Path(tmp) / "b.csv", wl, 12), settings, args.jobs)
+    print(json.dumps({
+        "benchmark": "twin", "leds": args.leds, "subjects": 25, "per_subject": 8,
+        "simulations": args.simulations, "jobs": args.jobs, "cpus": os.cpu_count(),
+        "load_1min": round(os.getloadavg()[0], 2), "python": platform.python_version(),
+        "first": first, "second": second,
+        "goal_s": {"first": 600, "second": 30},
+    }))
+
+
+if __name__ == "__main__":
+    main()
