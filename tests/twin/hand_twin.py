@@ -21,7 +21,7 @@ HAND_GAIN = 11.0
 def hand_twin(wavelengths_nm=(850.0, 940.0), *, times: bool = False, seed: int = 0) -> Twin:
     """A twin of a 10-bit device with these LEDs, 25 people x 8 readings."""
     device = TwinDevice(tuple(wavelengths_nm), 10, False, False, ("age_yr", "skin_temp_c"),
-                        times, 25, 8)
+                        times, 25, 8, 24.0 if times else 0.0)
     params = fitted_parameters(device)
     rng = np.random.default_rng(seed)
     centre = np.array([p.to_fit(HAND_GAIN) if p.kind == "glucose signal"

@@ -102,8 +102,7 @@ def benchmark(
     set_: SetOption = None,
     adc_bits: AdcBitsOption = None,
     glucose_unit: GlucoseUnitOption = None,
-    twin: TwinOption = None,
-    twin_mode: TwinModeOption = None,
+    twin: TwinOption = None, twin_mode: TwinModeOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
 
@@ -112,14 +111,10 @@ def benchmark(
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
-    start = twin_start(ctx, twin, twin_mode, seed, set_=set_)
     jobs = _jobs(jobs)
     names = _check_benchmark_args(seed, protocol, calibration, data, subjects, per_subject,
                                   models, out, glucose_unit)
-    if adc_bits is not None and data is None:  # the simulated device's resolution
-        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
-    runs, overrides = (_benchmark_runs(preset, data, set_, out) if start is None
-                       else twin_runs(start, set_, out))
+    runs, overrides = runs_of(ctx, preset, data, set_, out, (twin, twin_mode, seed), adc_bits)
     for p, run_out in runs:
         ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides, adc_bits,
                              glucose_unit)
@@ -180,6 +175,19 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
         from ..evaluation.benchmark.result import STALE_FILES as stale
     clear_previous_runs(runs, out, stale)
     return runs, overrides
+
+
+def runs_of(ctx, preset: str, data: Path | None, set_: list[str] | None, out: Path,
+            twin: tuple, adc_bits: int | None = None, stale: tuple[str, ...] | None = None):
+    """The runs of a benchmark command and their overrides: ``_benchmark_runs``, or with
+    ``--twin`` (``twin``: path, mode, seed; :func:`~._common.twin_start`'s checks) one
+    run of the twin; ``adc_bits`` of a simulated device joins ``--set``."""
+    start = twin_start(ctx, *twin, set_=set_)
+    if adc_bits is not None and data is None:  # the simulated device's resolution
+        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
+    if start is None:
+        return _benchmark_runs(preset, data, set_, out, stale)
+    return twin_runs(start, set_, out)
 
 
 def twin_runs(start, set_: list[str] | None, out: Path):

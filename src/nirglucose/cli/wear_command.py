@@ -28,9 +28,8 @@ from ._common import (
     _warnings_as_lines,
     refuse_simulation_options,
     runs_workers,
-    twin_start,
 )
-from .benchmark_command import _benchmark_runs, twin_runs
+from .benchmark_command import runs_of
 
 
 def _schedule_names(schedules: str) -> list[str]:
@@ -78,8 +77,7 @@ def wear_benchmark(
     seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
     resamples: Annotated[int, typer.Option(help="Subject-bootstrap resamples (>= 100).")] = 1000,
     set_: SetOption = None,
-    twin: TwinOption = None,
-    twin_mode: TwinModeOption = None,
+    twin: TwinOption = None, twin_mode: TwinModeOption = None,
 ) -> None:
     """Benchmark a device worn for days: every model on the series, a causal smoother,
     calibration schedules and the CGM standards (wear_*.csv); --twin: a device's twin
@@ -92,7 +90,6 @@ def wear_benchmark(
                   ("--train-readings", train_readings), ("--resamples", resamples))
     _check_seed(seed)
     refuse_simulation_options(ctx, data, ("preset", "subjects", "wear_days", "every_min"))
-    start = twin_start(ctx, twin, twin_mode, seed, set_=set_)
     if resamples < 100:
         raise UserError(f"--resamples {resamples} is too few for a lower confidence bound; "
                         "give at least 100")
@@ -100,8 +97,8 @@ def wear_benchmark(
     sched = _schedule_names(schedules)
     _check_out_dir(out)
     stale = (*WEAR_FILES, "report.html")
-    runs, overrides = (_benchmark_runs(preset, data, set_, out, stale)  # the benchmark's rule
-                       if start is None else twin_runs(start, set_, out))
+    runs, overrides = runs_of(ctx, preset, data, set_, out, (twin, twin_mode, seed),
+                              stale=stale)  # the benchmark's rule
     for p, run_out in runs:
         ds = _worn_data(p, data, subjects, wear_days, every_min, seed, overrides)
         clear_outputs(run_out, stale)  # its input read: a stopped run leaves no stale files

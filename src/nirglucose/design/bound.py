@@ -385,7 +385,9 @@ def noise_covariance(cfg: ScenarioConfig, log_ratio: np.ndarray, board_c) -> tup
         flicker = (np.asarray(cfg.leds.flicker_rels(hw.led_flicker_rel))[None, :]
                    * cfg.noise_factor("led_flicker"))
         var = var + 2.0 * flicker**2 + 2.0 * (a * hw.led_self_heating_sd_c * f_thermal) ** 2
-        b = hw.led_ageing_per_1000h * cfg.noise_factor("led_ageing") / 1000.0
+        # LEDs ageing at their own rates: their mean rate is the shared part
+        b = (float(np.mean(cfg.leds.ageings(hw.led_ageing_per_1000h)))
+             * cfg.noise_factor("led_ageing") / 1000.0)
         lo, hi = hw.hours_since_reference_h
         step_var_c2 = _pilot(_population_key(cfg)).ambient_step_var_c2
         common = a**2 * step_var_c2 + b**2 * (hi - lo) ** 2 / 12

@@ -633,6 +633,9 @@ def _sweep_meta(
         "wall_time_s": time.perf_counter() - opts["t_start"],
         "warnings": list(dict.fromkeys(w for r in results.values() for w in r.get("warnings", []))),
         "summary_method": "mean over seeds with a Student-t 95 % interval of the mean",
+        # a twin's sweep only: the other sweeps' metadata keep their bytes
+        **({"twin": opts["twin"], "twin_led_fields": dict(opts["led_fields"] or {})}
+           if opts.get("twin") is not None else {}),
     }
 
 
@@ -683,8 +686,7 @@ def run_sweep(
     progress: bool = False,
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
     calibration: int = 0,
-    led_fields: Mapping[str, Any] | None = None,
-    twin: str | None = None,
+    led_fields: Mapping[str, Any] | None = None, twin: str | None = None,
 ) -> SweepResult:
     """Run a grid of scenarios × seeds × models (local processes or a Dask cluster).
 
@@ -770,9 +772,8 @@ def run_sweep(
     spec_of = dict(zip(keys, specs, strict=True))
     cache = tasks.TaskCache(out, valid=_valid_result)
     tasks.clear_outputs(out, SWEEP_FILES)
-    pending = cache.lookup(
-        spec_of, _task_tag, None if on_task is None else lambda spec: on_task(spec, True)
-    )
+    pending = cache.lookup(spec_of, _task_tag,
+                           None if on_task is None else lambda spec: on_task(spec, True))
     _execute(cache, pending, spec_of, jobs=jobs, scheduler=scheduler, progress=progress,
              on_task=on_task, objects=objects)
     label_columns = list(dict.fromkeys(k for s in scenarios for k in s.labels))
@@ -783,12 +784,10 @@ def run_sweep(
                 protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
                 n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
                 label_columns=label_columns, backend=backend, n_workers=n_workers,
-                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects))
-    meta = _sweep_meta(scenarios, cache, len(pending), opts)
-    if twin is not None:  # only then: other sweeps' metadata keep their bytes
-        meta = {**meta, "twin": twin, "twin_led_fields": dict(led_fields or {})}
-    result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
-                         meta=meta)
+                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects),
+                twin=twin, led_fields=led_fields)
+    result = SweepResult(frame, summary, _effects(study, frame, summary),
+                         _sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:
         result.save(out)
     return result
