@@ -295,16 +295,15 @@ def _on_command_line(ctx: typer.Context | None, name: str) -> bool:
 
 
 def twin_start(ctx: typer.Context | None, twin: Path | None, twin_mode: str | None,
-               seed: int, *, set_: list[str] | None = None, own_leds: bool = True,
-               refuse: tuple[str, ...] = ()):
+               seed: int, *, set_: list[str] | None = None, own_leds: bool = True):
     """Where a ``--twin`` run starts (:class:`nirglucose.twin.twin.TwinStart`), or None
     without ``--twin``.
 
     One line (exit 2) for what makes no sense with a twin: ``--twin-mode`` without
     ``--twin``; ``--preset`` beside it (the twin replaces it); ``--data`` (nothing is
     simulated); ``--set leds=...`` (the twin's fitted per-LED values belong to its LEDs;
-    ``leds.emitters.<i>.<field>`` changes one of them); the options ``refuse`` names
-    (parameter names) given beside it.
+    ``leds.emitters.<i>.<field>`` changes one of them). ``own_leds``: as
+    :meth:`nirglucose.twin.Twin.study_start`.
     """
     if twin is None:
         if twin_mode is not None:
@@ -315,9 +314,6 @@ def twin_start(ctx: typer.Context | None, twin: Path | None, twin_mode: str | No
     if ctx is not None and ctx.params.get("data") is not None:
         raise UserError("--twin simulates the twin's device and --data reads a file: give "
                         "one of them")
-    for name in refuse:
-        if _on_command_line(ctx, name):
-            raise UserError(f"--{name.replace('_', '-')} does not apply with --twin")
     for text in set_ or []:
         key = text.partition("=")[0].strip()
         if key in _LED_SET_KEYS:
