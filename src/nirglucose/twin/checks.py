@@ -90,10 +90,11 @@ def posterior_predictive(device: TwinDevice, params: list[Parameter], draws: np.
     # the first devices' frames give the code distributions too (simulated once)
     frames = [_frame(device, keys, values[i], int(seeds[i])) for i in range(n_code)]
     nan = np.full(len(summary_names(device)), np.nan)
-    x = np.concatenate([
-        np.stack([nan if f is None else summaries(f, device) for f in frames]),
-        simulate_summaries(device, keys, values[n_code:], seeds[n_code:],
-                           n_jobs if n_devices - n_code >= PPC_MIN_PARALLEL else 1)])
+    x = np.stack([nan if f is None else summaries(f, device) for f in frames])
+    if n_devices > n_code:
+        x = np.concatenate([x, simulate_summaries(
+            device, keys, values[n_code:], seeds[n_code:],
+            n_jobs if n_devices - n_code >= PPC_MIN_PARALLEL else 1)])
     frames = [f for f in frames if f is not None]
     x = x[np.isfinite(x).all(axis=1)]
     lo, mid, hi = np.quantile(x, (PPC_RANGE[0], 0.5, PPC_RANGE[1]), axis=0)
