@@ -117,12 +117,16 @@ class ForwardModel:
         # one pass at glucose.signal_gain where no LED sets its own glucose_gain, else one
         # per distinct gain, each LED's column from its own (as the simulator does)
         gains = np.asarray(cfg.leds.glucose_gains(cfg.glucose.signal_gain))
-        frac = None
-        for gain in sorted(set(gains.tolist())):
+
+        def fraction(gain: float) -> np.ndarray:
             state = tissue.TissueState(np.exp(th[:, 0]), th[:, 1], th[:, 2], th[:, 3],
                                        gain * glucose_mmoll, water_dt)
-            part = _band_detected_fraction(cfg, self.tables, state, th[:, 4], th[:, 5], shift)
-            frac = part if frac is None else np.where(gains[None, :] == gain, part, frac)
+            return _band_detected_fraction(cfg, self.tables, state, th[:, 4], th[:, 5], shift)
+
+        distinct = sorted(set(gains.tolist()))
+        frac = fraction(distinct[0])
+        for gain in distinct[1:]:
+            frac = np.where(gains[None, :] == gain, fraction(gain), frac)
         return np.log(frac / cfg.hardware.reference_transmission) + th[:, 7:8]
 
 
