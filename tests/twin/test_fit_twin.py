@@ -35,7 +35,7 @@ def test_level_and_measurement_error_of_age(twin11):
 
 
 def test_what_the_file_cannot_tell_is_said(twin11):
-    for key in ("measurement.bmi_kgm2", "hardware.led_ageing_per_1000h"):
+    for key in ("measurement.bmi_kgm2", "leds.emitters.0.ageing_per_1000h"):
         e = twin11.entry(key)
         assert not e["identified"] and not e["fitted"] and e["reason"]
     loose = [e["key"] for e in twin11.parameters if e["fitted"] and not e["identified"]]

@@ -43,7 +43,8 @@ def test_entries_carry_the_issue_fields(twin):
         assert e["lower"] <= e["median"] <= e["upper"]
     held = [e for e in twin.parameters if not e["fitted"]]
     # a column the file lacks and drift without times: prior, not identified, a reason
-    assert {e["key"] for e in held} >= {"measurement.bmi_kgm2", "hardware.led_ageing_per_1000h"}
+    assert {e["key"] for e in held} >= {"measurement.bmi_kgm2",
+                                         "leds.emitters.0.ageing_per_1000h"}
     assert all(not e["identified"] and e["reason"] for e in held)
     # prior draws fill the prior: nothing identified
     assert not any(e["identified"] for e in twin.parameters)

@@ -325,7 +325,24 @@ def clear_previous_runs(runs: list[tuple[str | None, Path]], out: Path,
             clear_outputs(run_out, names)
 
 
-# --- the twin (nirglucose twin, simulate --twin) -------------------------------------------
+# --- the twin (nirglucose twin; --twin on simulate and every study) ----------------------
+#: --twin of simulate and of every study.
+TwinOption = Annotated[
+    Path | None,
+    typer.Option(help="A device's twin (twin.json of `nirglucose twin`, or its folder): "
+                 "the run starts from its scenario in place of --preset; --set applies on "
+                 "top."),
+]
+#: --twin-mode (only with --twin).
+TwinModeOption = Annotated[
+    str | None,
+    typer.Option(help="With --twin: map (default), the twin's most probable parameters; "
+                 "posterior, one posterior draw chosen by --seed."),
+]
+#: ``--set`` keys that replace a twin's LED set (its fitted per-LED values belong to it).
+_LED_SET_KEYS = ("leds", "leds.emitters")
+
+
 def check_twin_mode(mode: str) -> str:
     """``--twin-mode`` checked (map or posterior)."""
     from ..twin import TWIN_MODES
@@ -335,16 +352,53 @@ def check_twin_mode(mode: str) -> str:
     return mode
 
 
-def twin_base(preset: str, twin: Path | None, twin_mode: str, seed: int):
-    """The scenario a ``--twin`` command starts from: the twin's (``--twin-mode``), else
-    ``preset``. ``--twin`` replaces ``--preset`` (given both, one line)."""
-    if twin is None:
-        return preset
-    from ..twin import twin_scenario
+def _on_command_line(ctx: typer.Context | None, name: str) -> bool:
+    return ctx is not None and getattr(ctx.get_parameter_source(name), "name",
+                                       None) == "COMMANDLINE"
 
-    if preset != "paper":
+
+def twin_start(ctx: typer.Context | None, twin: Path | None, twin_mode: str | None,
+               seed: int, *, set_: list[str] | None = None, own_leds: bool = True):
+    """Where a ``--twin`` run starts (:class:`nirglucose.twin.twin.TwinStart`), or None
+    without ``--twin``.
+
+    One line (exit 2) for what makes no sense with a twin: ``--twin-mode`` without
+    ``--twin``; ``--preset`` beside it (the twin replaces it); ``--data`` (nothing is
+    simulated); ``--set leds=...`` (the twin's fitted per-LED values belong to its LEDs;
+    ``leds.emitters.<i>.<field>`` changes one of them). ``own_leds``: as
+    :meth:`nirglucose.twin.Twin.study_start`.
+    """
+    if twin is None:
+        if twin_mode is not None:
+            raise UserError("--twin-mode applies to a twin; give --twin TWIN too")
+        return None
+    if _on_command_line(ctx, "preset"):
         raise UserError("--twin replaces --preset: give one of them")
-    return twin_scenario(twin, check_twin_mode(twin_mode), seed)
+    if ctx is not None and ctx.params.get("data") is not None:
+        raise UserError("--twin simulates the twin's device and --data reads a file: give "
+                        "one of them")
+    for text in set_ or []:
+        key = text.partition("=")[0].strip()
+        if key in _LED_SET_KEYS:
+            raise UserError(f"--set {key}=... replaces the twin's LEDs, whose fitted values "
+                            "belong to them: change one with --set leds.emitters.<i>.<field>"
+                            "=..., or ask which LEDs with sweep --study wavelengths --twin")
+    from ..twin import load_twin
+
+    mode = check_twin_mode(twin_mode or "map")
+    return load_twin(twin).study_start(mode, seed, own_leds=own_leds)
+
+
+def twin_base(ctx: typer.Context | None, preset: str, twin: Path | None,
+              twin_mode: str | None, seed: int, set_: list[str] | None = None):
+    """The scenario a ``--twin`` command starts from: the twin's (``--twin-mode``), else
+    ``preset`` (:func:`twin_start`'s checks)."""
+    start = twin_start(ctx, twin, twin_mode, seed, set_=set_)
+    if start is None:
+        return preset
+    from ..config import resolve_config
+
+    return resolve_config(start.preset, start.overrides)
 
 
 # public names of the helpers a newer command shares (the private ones above predate the

@@ -26,6 +26,8 @@ from ._common import (
     RepeatsOption,
     ResamplesOption,
     SetOption,
+    TwinModeOption,
+    TwinOption,
     UserError,
     _check_calibration,
     _check_counts,
@@ -42,6 +44,7 @@ from ._common import (
     held_warnings,
     refuse_simulation_options,
     runs_workers,
+    twin_start,
 )
 from .fit_report import (
     adc_spec,
@@ -126,13 +129,15 @@ def benchmark(
     adc_full_scale: FullScaleOption = None,
     glucose_unit: GlucoseUnitOption = None,
     group_by: GroupByOption = None,
+    twin: TwinOption = None, twin_mode: TwinModeOption = None,
 ) -> None:
     """Fit and score every model on subject-grouped splits; resumable (out/.tasks).
 
     Files written keep mg/dL (their column names say so); --glucose-unit sets the unit
     of the --data file and of the printed table (default: the unit of its reference
     column). A --data file with a grouping column (--group-by, else detected) gets each
-    group's error against that group's own training mean."""
+    group's error against that group's own training mean. --twin simulates a device's
+    twin."""
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
                   ("--repeats", repeats), ("--resamples", resamples))
     refuse_simulation_options(ctx, data, ("preset", "subjects", "per_subject"))
@@ -140,8 +145,9 @@ def benchmark(
     names, per_preset = _check_benchmark_args(seed, protocol, calibration, data, subjects,
                                               per_subject, models, out, glucose_unit, preset,
                                               preset_models)
-    runs, overrides = _benchmark_runs(preset, data,
-                                      _simulated_bits(set_, adc_bits, adc_full_scale, data), out)
+    runs, overrides = runs_of(ctx, preset, data,
+                              _simulated_bits(set_, adc_bits, adc_full_scale, data), out,
+                              (twin, twin_mode, seed))
     for p, run_out in runs:
         with held_warnings():  # a refusal of this run is one line
             ds = _benchmark_data(p, data, subjects, per_subject, seed, overrides,
@@ -269,6 +275,29 @@ def _benchmark_runs(preset: str, data: Path | None, set_: list[str] | None, out:
         from ..evaluation.benchmark.result import STALE_FILES as stale
     clear_previous_runs(runs, out, stale)
     return runs, overrides
+
+
+def runs_of(ctx, preset: str, data: Path | None, set_: list[str] | None, out: Path,
+            twin: tuple, adc_bits: int | None = None, stale: tuple[str, ...] | None = None):
+    """The runs of a benchmark command and their overrides: ``_benchmark_runs``, or with
+    ``--twin`` (``twin``: path, mode, seed; :func:`~._common.twin_start`'s checks) one
+    run of the twin; ``adc_bits`` of a simulated device joins ``--set``."""
+    start = twin_start(ctx, *twin, set_=set_)
+    if adc_bits is not None and data is None:  # the simulated device's resolution
+        set_ = [*(set_ or []), f"hardware.adc_bits={adc_bits}"]
+    if start is None:
+        return _benchmark_runs(preset, data, set_, out, stale)
+    return twin_runs(start, set_, out)
+
+
+def twin_runs(start, set_: list[str] | None, out: Path):
+    """``_benchmark_runs`` of a ``--twin`` run: one run into ``out``, the twin's base
+    preset with its overrides and ``--set`` on top (resolved: a bad value fails here)."""
+    from ..config import resolve_config
+
+    overrides = {**start.overrides, **_parse_sets(set_)}
+    resolve_config(start.preset, overrides)
+    return [(start.preset, out)], overrides
 
 
 def _benchmark_data(preset, data, subjects, per_subject, seed, overrides,

@@ -15,6 +15,8 @@ from ._common import (
     JobsOption,
     PerSubjectOption,
     SetOption,
+    TwinModeOption,
+    TwinOption,
     UserError,
     _check_counts,
     _check_out_dir,
@@ -32,6 +34,7 @@ from ._common import (
 @app.command()
 @runs_workers
 def simulate(
+    ctx: typer.Context,
     out: Annotated[Path, typer.Option(help="Output .parquet, .csv, or a directory (partitioned).")],
     preset: Annotated[
         str, typer.Option(help=f"Scenario preset: {_PRESET_NAMES}.")
@@ -53,16 +56,8 @@ def simulate(
         typer.Option(help="Minutes between the readings of a --wear-days run (default 5); "
                      "must divide a day (1440 min)."),
     ] = None,
-    twin: Annotated[
-        Path | None,
-        typer.Option(help="A device's twin (twin.json of `nirglucose twin`, or its folder): "
-                     "its scenario replaces --preset; --set applies on top."),
-    ] = None,
-    twin_mode: Annotated[
-        str,
-        typer.Option(help="map: the twin's most probable parameters; posterior: one "
-                     "posterior draw, chosen by --seed."),
-    ] = "map",
+    twin: TwinOption = None,
+    twin_mode: TwinModeOption = None,
 ) -> None:
     """Generate a dataset and print a summary of it."""
     from ..config import resolve_config
@@ -71,7 +66,8 @@ def simulate(
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject))
     jobs = _jobs(jobs)
     _check_seed(seed)
-    cfg = resolve_config(twin_base(preset, twin, twin_mode, seed), _parse_sets(set_))
+    cfg = resolve_config(twin_base(ctx, preset, twin, twin_mode, seed, set_),
+                         _parse_sets(set_))
     if wear_days is not None or every_min is not None:
         _simulate_wear(cfg, out, subjects, per_subject, seed, jobs, wear_days, every_min)
         return

@@ -22,6 +22,8 @@ from ._common import (
     RepeatsOption,
     ResamplesOption,
     SetOption,
+    TwinModeOption,
+    TwinOption,
     UserError,
     _check_calibration,
     _check_counts,
@@ -35,6 +37,7 @@ from ._common import (
     _tidy_out,
     _warnings_as_lines,
     runs_workers,
+    twin_start,
 )
 
 #: The sweep's own options (the shared ones are in :mod:`._common`).
@@ -106,18 +109,36 @@ def sweep(
     figures: Annotated[bool, typer.Option(help="Write figures to OUT/figures.")] = True,
     calibration: SweepCalibrationOption = 0,
     set_: SetOption = None,
+    twin: TwinOption = None,
+    twin_mode: TwinModeOption = None,
 ) -> None:
-    """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks)."""
+    """Sweep scenarios x seeds x models (local processes or Dask); resumable (out/.tasks).
+
+    --twin: every scenario starts from a device's twin (the wavelengths study carries
+    the twin's per-LED values to the LEDs it chooses)."""
     from ..evaluation.sweep.run import run_sweep
 
+    if twin is not None and study == "data-size":
+        raise UserError("--study data-size compares presets and --twin is one device: run "
+                        "data-size without --twin, or benchmark --twin at each --subjects")
+    start = twin_start(ctx, twin, twin_mode, seed, set_=None if study == "wear" else set_,
+                       own_leds=study != "wavelengths")
     if study == "wear":
         from .wear_command import wear_sweep
 
         return wear_sweep(out, vary, preset, seeds or 1, seed, models, subjects, folds,
-                          resamples, set_, jobs=_jobs(jobs), scheduler=scheduler)
+                          resamples, set_, jobs=_jobs(jobs), scheduler=scheduler, twin=start)
     if study == "requirements":
+        if start is not None:
+            raise UserError("--study requirements searches designs at the published "
+                            "magnitudes from the study's device; it does not start from a "
+                            "twin yet: run it without --twin (design_bound(twin_scenario(...)) "
+                            "gives a twin's bound in Python)")
         return requirements_sweep(ctx, out, vary, preset, seed, models, subjects, per_subject,
                                   folds, resamples, _jobs(jobs), figures, set_)
+    overrides = _parse_sets(set_)
+    if start is not None:
+        preset, overrides = start.preset, {**start.overrides, **overrides}
     if seeds is None:
         seeds = 1 if study == "data-size" else 5
     _check_counts(("--subjects", subjects), ("--per-subject", per_subject), ("--folds", folds),
@@ -128,10 +149,12 @@ def sweep(
     with _warnings_as_lines() as extra:
         res = run_sweep(grid or None, study=study, preset=preset,
                         seeds=list(range(seed, seed + seeds)), models=names,
-                        overrides=_parse_sets(set_), protocol=protocol, n_splits=folds,
+                        overrides=overrides, protocol=protocol, n_splits=folds,
                         repeats=repeats, n_subjects=subjects, per_subject=per_subject,
                         n_boot=resamples, out=out, jobs=jobs, scheduler=scheduler,
-                        progress=True, calibration=calibration)
+                        progress=True, calibration=calibration,
+                        led_fields=start.led_fields if start is not None else None,
+                        twin=None if twin is None else str(twin))
         if figures:
             from ..report.sweep import save_sweep_figures
 

@@ -16,6 +16,8 @@ from ._common import (
     FoldsOption,
     OutDirOption,
     SetOption,
+    TwinModeOption,
+    TwinOption,
     UserError,
     _check_counts,
     _check_out_dir,
@@ -27,7 +29,7 @@ from ._common import (
     refuse_simulation_options,
     runs_workers,
 )
-from .benchmark_command import _benchmark_runs
+from .benchmark_command import runs_of
 
 
 def _schedule_names(schedules: str) -> list[str]:
@@ -75,9 +77,11 @@ def wear_benchmark(
     seed: Annotated[int, typer.Option(help="Seed of data, splits, models and bootstrap.")] = 0,
     resamples: Annotated[int, typer.Option(help="Subject-bootstrap resamples (>= 100).")] = 1000,
     set_: SetOption = None,
+    twin: TwinOption = None, twin_mode: TwinModeOption = None,
 ) -> None:
     """Benchmark a device worn for days: every model on the series, a causal smoother,
-    calibration schedules and the CGM standards (wear_*.csv)."""
+    calibration schedules and the CGM standards (wear_*.csv); --twin: a device's twin
+    worn."""
     from ..evaluation.engine.tasks import clear_outputs
     from ..evaluation.wear import WEAR_FILES, WEAR_MODELS, run_wear_benchmark
 
@@ -93,7 +97,8 @@ def wear_benchmark(
     sched = _schedule_names(schedules)
     _check_out_dir(out)
     stale = (*WEAR_FILES, "report.html")
-    runs, overrides = _benchmark_runs(preset, data, set_, out, stale)  # the benchmark's rule
+    runs, overrides = runs_of(ctx, preset, data, set_, out, (twin, twin_mode, seed),
+                              stale=stale)  # the benchmark's rule
     for p, run_out in runs:
         ds = _worn_data(p, data, subjects, wear_days, every_min, seed, overrides)
         clear_outputs(run_out, stale)  # its input read: a stopped run leaves no stale files
@@ -143,8 +148,10 @@ def _print(res, name: str, out: Path) -> None:
 
 def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects: int,
                folds: int, resamples: int, set_, jobs: int | None = 1,
-               scheduler: str | None = None) -> None:
-    """``sweep --study wear``: :func:`nirglucose.evaluation.wear.run_wear_sweep`."""
+               scheduler: str | None = None, twin=None) -> None:
+    """``sweep --study wear``: :func:`nirglucose.evaluation.wear.run_wear_sweep`;
+    ``twin`` (a :class:`~nirglucose.twin.twin.TwinStart`): its device in place of the
+    presets, labelled ``twin``."""
     from ..evaluation.wear import WEAR_DAYS, WEAR_PRESETS, WEAR_SWEEP_FILES, run_wear_sweep
 
     _check_counts(("--subjects", subjects), ("--folds", folds), ("--seeds", seeds),
@@ -164,13 +171,18 @@ def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects:
             raise UserError(f"--vary {item!r}: wear_days must be whole days, e.g. 1,3,7") from None
     presets = ([p.strip() for p in preset.split(",") if p.strip()] if preset
                else list(WEAR_PRESETS))
+    extra = {}
+    if twin is not None:
+        presets = [twin.preset]
+        extra = {"overrides": twin.overrides, "label": "twin"}
     _check_out_dir(out)
     n = len(presets) * len(days) * seeds
     done = [0]
 
     def on_task(spec, cached):
         done[0] += 1
-        _say(f"wear: {done[0]}/{n} tasks ({spec['preset']}, {spec['wear_days']} d, seed "
+        _say(f"wear: {done[0]}/{n} tasks ({extra.get('label', spec['preset'])}, "
+             f"{spec['wear_days']} d, seed "
              f"{spec['seed']}{', cached' if cached else ''})")
 
     with _warnings_as_lines():
@@ -178,7 +190,7 @@ def wear_sweep(out: Path, vary, preset, seeds: int, seed: int, models, subjects:
                                  seeds=list(range(seed, seed + seeds)),
                                  models=_model_names(models) or _default_models(),
                                  n_subjects=subjects, folds=folds, n_boot=resamples,
-                                 on_task=on_task, jobs=jobs, scheduler=scheduler)
+                                 on_task=on_task, jobs=jobs, scheduler=scheduler, **extra)
     best = summary[summary["variant"] == "raw"].pivot_table(
         index=["preset", "wear_days", "model"], columns="schedule", values="rmse_mgdl")
     out_console.print(escape(best.round(1).to_string()))

@@ -49,6 +49,14 @@ class DeviceConfig(_Model):
         "fraction) and spo2_pct (the dermal saturation the optics see), with the errors "
         "device.blood_volume_error_rel and device.spo2_error_pct. [-]",
     )
+    reading_times: bool = Field(
+        False,
+        description="The device records when each reading is taken: a time_min column, "
+        "minutes since the subject's start-up reference (hardware.hours_since_reference_h), "
+        "as a worn device's file has one; the LEDs have aged by that time "
+        "(hardware.led_ageing_per_1000h, or an LED's own ageing_per_1000h). A device's twin "
+        "sets it for a file with reading times (nirglucose.twin). [-]",
+    )
     humidity_compensation: bool = Field(
         False,
         description="Firmware divides each reading by the coupling-loss-vs-humidity curve "

@@ -78,6 +78,16 @@ class LED(_Model):
         "hardware.led_flicker_rel (e.g. a channel with its own driver or optical path). "
         "None: hardware.led_flicker_rel. At most 10 %, as led_flicker_rel. [-]",
     )
+    ageing_per_1000h: float | None = Field(
+        None,
+        ge=0,
+        le=1,
+        description="This LED's relative power loss per 1000 h of operation in place of "
+        "hardware.led_ageing_per_1000h (DESIGN.md; P = P0 [1 - b t / 1000 h], "
+        "nirglucose.simulation.hardware.led_power_w): a device's twin fits one per channel "
+        "from a file with reading times. None: hardware.led_ageing_per_1000h. At most 1, "
+        "as led_ageing_per_1000h. [1/(1000 h)]",
+    )
 
 
 #: The study's four LEDs: FWHM typical of IR LEDs, power per channel for mid-scale
@@ -161,6 +171,11 @@ class LEDConfig(_Model):
         """Each LED's glucose gain: its own ``glucose_gain`` or ``signal_gain``. [-]"""
         return tuple(signal_gain if e.glucose_gain is None else e.glucose_gain
                      for e in self.emitters)
+
+    def ageings(self, led_ageing_per_1000h: float) -> tuple[float, ...]:
+        """Each LED's ageing: its own ``ageing_per_1000h`` or the scenario's. [1/(1000 h)]"""
+        return tuple(led_ageing_per_1000h if e.ageing_per_1000h is None
+                     else e.ageing_per_1000h for e in self.emitters)
 
     def flicker_rels(self, led_flicker_rel: float) -> tuple[float, ...]:
         """Each LED's relative flicker SD: its own ``flicker_rel`` or the scenario's. [-]"""

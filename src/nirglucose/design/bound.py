@@ -341,10 +341,11 @@ def noise_covariance(cfg: ScenarioConfig, log_ratio: np.ndarray, board_c) -> tup
     I = R P0 T_ref e^m, codes c = I R_f / V_ref (2^bits - 1); per reading and per
     reference (start-up or monitor, at I_ref = R P0 T_ref) the relative variance
     (2 e (I + I_dark) BW + 4 k T BW / R_J) / I^2 + 1 / (12 c^2) (Horowitz & Hill;
-    Hamamatsu [3]_), the reference's zero where it saturates; without a monitor
-    photodiode 2 flicker^2 and the LED thermal drift a^2 (2 sd_junction^2) per channel,
-    and a^2 E[dT_ambient^2] + b^2 var(dt) / 10^6 common (the coefficients of
-    :func:`nirglucose.simulation.hardware.led_power_w`).
+    Hamamatsu [3]_), plus each channel's own white conversion noise (read_noise_lsb / c)^2
+    on the tissue reading (EMVA 1288), the reference's zero where it saturates; without a
+    monitor photodiode 2 flicker^2 (each LED's own flicker where it has one) and the LED
+    thermal drift a^2 (2 sd_junction^2) per channel, and a^2 E[dT_ambient^2] + b^2 var(dt)
+    / 10^6 common (the coefficients of :func:`nirglucose.simulation.hardware.led_power_w`).
     """
     hw = cfg.hardware
     full = 2**hw.adc_bits - 1
@@ -369,6 +370,10 @@ def noise_covariance(cfg: ScenarioConfig, log_ratio: np.ndarray, board_c) -> tup
         return current_var / i_a**2 + 1.0 / (12.0 * code**2), code
 
     var_sig, code = reading_var(i_sig)
+    # each channel's own white conversion noise (leds.emitters.<i>.read_noise_lsb, EMVA
+    # 1288 temporal dark noise) on the tissue reading, as the simulator adds it
+    read_lsb = cfg.noise_scale * np.asarray([e.read_noise_lsb for e in cfg.leds.emitters])
+    var_sig = var_sig + (read_lsb[None, :] / np.maximum(code, 0.5)) ** 2
     var_ref, code_ref = reading_var(i_ref)
     # a saturated reference reads full scale every time: it adds no noise (and no longer
     # cancels LED drift, a term left out, which can only lower the bound)
@@ -377,9 +382,12 @@ def noise_covariance(cfg: ScenarioConfig, log_ratio: np.ndarray, board_c) -> tup
     if not cfg.device.monitor_photodiode:
         f_thermal = cfg.noise_factor("led_thermal_drift")
         a = hw.led_thermal_coeff_per_c * f_thermal
-        flicker = hw.led_flicker_rel * cfg.noise_factor("led_flicker")
+        flicker = (np.asarray(cfg.leds.flicker_rels(hw.led_flicker_rel))[None, :]
+                   * cfg.noise_factor("led_flicker"))
         var = var + 2.0 * flicker**2 + 2.0 * (a * hw.led_self_heating_sd_c * f_thermal) ** 2
-        b = hw.led_ageing_per_1000h * cfg.noise_factor("led_ageing") / 1000.0
+        # LEDs ageing at their own rates: their mean rate is the shared part
+        b = (float(np.mean(cfg.leds.ageings(hw.led_ageing_per_1000h)))
+             * cfg.noise_factor("led_ageing") / 1000.0)
         lo, hi = hw.hours_since_reference_h
         step_var_c2 = _pilot(_population_key(cfg)).ambient_step_var_c2
         common = a**2 * step_var_c2 + b**2 * (hi - lo) ** 2 / 12

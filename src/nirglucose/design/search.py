@@ -44,7 +44,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -311,6 +311,7 @@ def rank_designs(
     max_power_mw: float | None = None,
     min_relative_responsivity: float = 0.1,
     overrides: dict[str, Any] | None = None,
+    led_fields: Mapping[str, Any] | None = None,
 ) -> pd.DataFrame:
     """Every subset of 1 ... ``k_max`` candidate LEDs per detector, ranked by the bound.
 
@@ -337,6 +338,10 @@ def rank_designs(
         responsivity is excluded. [-]
     overrides : dict, optional
         Further dotted overrides of the preset (not ``leds`` or ``detector``).
+    led_fields : mapping, optional
+        :class:`~nirglucose.config.LED` fields every candidate takes (e.g. a device
+        twin's ``glucose_gain`` and ``read_noise_lsb``); not ``wavelength_nm``,
+        ``fwhm_nm`` or ``power_mw``, which the search sets.
 
     Returns
     -------
@@ -377,7 +382,12 @@ def rank_designs(
     for det in detectors:
         detector_part(det)  # unknown part: ConfigError listing the valid ones
     resolve_config(preset, extra)  # unknown preset / bad overrides
-    leds = candidate_leds(candidates)
+    fields = dict(led_fields or {})
+    for key in ("wavelength_nm", "fwhm_nm", "power_mw"):
+        if key in fields:
+            raise ConfigError(f"rank_designs sets each candidate's {key} itself; drop it from "
+                              "led_fields")
+    leds = [{**c, **fields} for c in candidate_leds(candidates)]
     frames, used = [], {}
     for det in detectors:
         usable = _usable(preset, leds, det, min_relative_responsivity, extra)

@@ -46,7 +46,7 @@ interval where there are two seeds or more, else the task's subject-bootstrap on
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -314,7 +314,7 @@ def run_wear_task(spec: dict) -> dict:
     and the package version that computed them.
     """
     ds = simulate_wear(spec["preset"], spec["n_subjects"], spec["wear_days"],
-                       spec["every_min"], spec["seed"])
+                       spec["every_min"], spec["seed"], overrides=spec.get("overrides"))
     res = run_wear_benchmark(ds, spec["models"], preset=spec["preset"],
                              n_splits=spec["folds"], seed=spec["seed"],
                              schedules=spec["schedules"], n_boot=spec["n_boot"])
@@ -339,6 +339,8 @@ def run_wear_sweep(
     on_task: Callable[[dict, bool], None] | None = None,
     jobs: int | None = 1,
     scheduler: Any = None,
+    overrides: Mapping[str, Any] | None = None,
+    label: str | None = None,
 ) -> pd.DataFrame:
     """Run (or resume) the wear study; returns the summary (module docstring).
 
@@ -362,6 +364,12 @@ def run_wear_sweep(
     scheduler : str or distributed.Client, optional
         Dask scheduler address (``tcp://host:8786``), ``"local"`` (a Dask cluster of
         ``jobs`` processes) or a client: run the pending tasks there.
+    overrides : mapping, optional
+        Scenario overrides of every preset (a device's twin:
+        :meth:`nirglucose.twin.Twin.study_start`).
+    label : str, optional
+        The ``preset`` column's value in the tables in place of the preset's name
+        (``twin``).
 
     Raises
     ------
@@ -369,8 +377,9 @@ def run_wear_sweep(
         Unknown preset or schedule, bad days, bad ``jobs`` / ``scheduler`` or a
         scheduler that does not answer (before any task runs).
     """
+    extra = {} if overrides is None else {"overrides": tasks.canonical(dict(overrides))}
     for p in presets:
-        resolve_config(p)  # unknown presets fail before anything runs
+        resolve_config(p, extra.get("overrides"))  # unknown presets fail before anything runs
     bad = [d for d in wear_days if int(d) != d or d < 1]
     if not wear_days or bad:
         raise ConfigError(f"wear_days {list(wear_days)!r} is invalid; expected whole days >= 1")
@@ -381,7 +390,8 @@ def run_wear_sweep(
     check_scheduler(scheduler)
     specs = _plan(presets, wear_days, seeds, {
         "n_subjects": int(n_subjects), "every_min": int(every_min), "folds": int(folds),
-        "models": list(models), "schedules": list(schedules), "n_boot": int(n_boot)})
+        "models": list(models), "schedules": list(schedules), "n_boot": int(n_boot),
+        **extra})
     cache = tasks.TaskCache(out, valid=lambda spec, res: "rows" in res)
     tasks.clear_outputs(out, WEAR_SWEEP_FILES)
     pending = cache.lookup(specs, _tag, on_cached=(
@@ -397,7 +407,7 @@ def run_wear_sweep(
     finally:
         stream.close()
     frames = [pd.DataFrame(cache.results[key]["rows"]).assign(
-        preset=spec["preset"], wear_days=spec["wear_days"], seed=spec["seed"])
+        preset=label or spec["preset"], wear_days=spec["wear_days"], seed=spec["seed"])
         for key, spec in specs.items()]
     sweep = pd.concat(frames, ignore_index=True)
     summary = _summary(sweep)

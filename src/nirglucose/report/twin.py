@@ -84,6 +84,25 @@ def _gain_lines(twin: Twin) -> list[str]:
     return out
 
 
+def _drift_lines(twin: Twin) -> list[str]:
+    """One sentence per channel: its LED power drift over time, or why it is not known."""
+    out = []
+    for e in twin.parameters:
+        if e["kind"] != "drift":
+            continue
+        where = (f"LED power drift at {_g(e['channel_nm'])} nm" if e["channel_nm"] is not None
+                 else "LED power drift")
+        if not e["fitted"]:
+            size = f"not identified ({e['reason']}); the twin keeps the base value"
+        elif not e["identified"]:
+            size = "not identified by this file's reading times (its posterior fills the prior)"
+        else:
+            size = (f"{_g(100 * e['median'])} % of the power lost per 1000 h (90 %: "
+                    f"{_g(100 * e['lower'])} - {_g(100 * e['upper'])})")
+        out.append(f"{where}: {size}; the base scenario assumes {_g(100 * e['preset'])} %.")
+    return out
+
+
 #: Summary prefix -> (what it is, its value in natural units from the summary's scale).
 _SUMMARY_MEANING = {
     "level": ("mean code [ADC code]", lambda v, fs: 10.0 ** v * fs),
@@ -98,6 +117,8 @@ _SUMMARY_MEANING = {
     "bcorr": ("correlation of people's mean codes [-]", lambda v, fs: v),
     "ref": ("mean reference code [ADC code]", lambda v, fs: 10.0 ** v * fs),
     "ratio": ("within-person SD of log(code / reference) [-]", lambda v, fs: 10.0 ** v),
+    "drift": ("loss of code over time [% of the mean per 1000 h]",
+              lambda v, fs: 100 * 0.001 * np.sinh(v)),
 }
 
 
@@ -168,6 +189,7 @@ def build_twin_report(twin_dir: str | Path, out_path: str | Path, *,
                                                                                     fmt))
     warns = "".join(f"<p class='warn'>warning: {html.escape(w)}</p>" for w in twin.warnings)
     gains = "".join(f"<li>{html.escape(t)}</li>" for t in _gain_lines(twin))
+    drifts = "".join(f"<li>{html.escape(t)}</li>" for t in _drift_lines(twin))
     t = twin.info.get("timing", {})
     method = html.escape(str(twin.info.get("settings", {}).get("method", "")))
     body = (
@@ -180,6 +202,7 @@ def build_twin_report(twin_dir: str | Path, out_path: str | Path, *,
         f"channel's fitted gain). Method: {method}, "
         f"{t.get('n_train')} simulated devices; {t.get('total_s')} s.</p>{warns}"
         f"<h2>Glucose signal</h2><ul>{gains}</ul>"
+        f"<h2>Drift over time</h2><ul>{drifts}</ul>"
         f"<h2>Posterior of each parameter</h2>{_img(figs['posterior'], 'posterior intervals')}"
         f"{_table(_parameter_table(twin))}"
         "<h2>Posterior predictive checks</h2>"

@@ -110,17 +110,23 @@ class ForwardModel:
         th = _clip_physical(theta[:, :k])
         temp_c = (np.clip(theta[:, k], *_TEMPERATURE_BOUNDS) if theta.shape[-1] > k
                   else np.full(len(th), cfg.physiology.skin_temp_c_neutral))
-        state = tissue.TissueState(
-            np.exp(th[:, 0]),
-            th[:, 1],
-            th[:, 2],
-            th[:, 3],
-            cfg.glucose.signal_gain * np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE,
-            water_temperature_delta_c(cfg, temp_c),
-        )
+        glucose_mmoll = np.asarray(glucose_mgdl, float) / MGDL_PER_MMOLL_GLUCOSE
+        water_dt = water_temperature_delta_c(cfg, temp_c)
         n_led = len(cfg.leds.wavelengths_nm)
         shift = np.repeat(th[:, 6:7], n_led, axis=1)
-        frac = _band_detected_fraction(cfg, self.tables, state, th[:, 4], th[:, 5], shift)
+        # one pass at glucose.signal_gain where no LED sets its own glucose_gain, else one
+        # per distinct gain, each LED's column from its own (as the simulator does)
+        gains = np.asarray(cfg.leds.glucose_gains(cfg.glucose.signal_gain))
+
+        def fraction(gain: float) -> np.ndarray:
+            state = tissue.TissueState(np.exp(th[:, 0]), th[:, 1], th[:, 2], th[:, 3],
+                                       gain * glucose_mmoll, water_dt)
+            return _band_detected_fraction(cfg, self.tables, state, th[:, 4], th[:, 5], shift)
+
+        distinct = sorted(set(gains.tolist()))
+        frac = fraction(distinct[0])
+        for gain in distinct[1:]:
+            frac = np.where(gains[None, :] == gain, fraction(gain), frac)
         return np.log(frac / cfg.hardware.reference_transmission) + th[:, 7:8]
 
 

@@ -125,7 +125,7 @@ def led_power_w(
     flicker_rel,
     *,
     thermal_coeff_per_c: float = LED_THERMAL_COEFF_PER_C,
-    ageing_per_1000h: float = LED_AGEING_PER_1000H,
+    ageing_per_1000h=LED_AGEING_PER_1000H,
 ) -> np.ndarray:
     """LED optical power P = P0 [1 - a (T - 25) - b t / 1000 h + n].
 
@@ -141,8 +141,8 @@ def led_power_w(
         Relative flicker draw n (N(0, 0.1 %) in DESIGN.md). [-]
     thermal_coeff_per_c : float
         a. [1/degC]
-    ageing_per_1000h : float
-        b. [1/(1000 h)]
+    ageing_per_1000h : float or array_like
+        b (one per LED where the LEDs age differently). [1/(1000 h)]
 
     Returns
     -------
@@ -416,6 +416,9 @@ def _led_powers(cfg, p0, temps: dict, n_sub: int, streams):
     f_flicker = cfg.noise_factor("led_flicker")
     thermal = hw.led_thermal_coeff_per_c * cfg.noise_factor("led_thermal_drift")
     ageing = hw.led_ageing_per_1000h * cfg.noise_factor("led_ageing")
+    if any(e.ageing_per_1000h is not None for e in cfg.leds.emitters):  # presets: scalar
+        ageing = (np.asarray(cfg.leds.ageings(hw.led_ageing_per_1000h))[None, :]
+                  * cfg.noise_factor("led_ageing"))
     n = len(temps["age_h"])
     rel = hw.led_flicker_rel
     if any(e.flicker_rel is not None for e in cfg.leds.emitters):  # presets: scalar, same bits

@@ -375,6 +375,10 @@ def measure_readings(cfg: ScenarioConfig, tables: ScenarioTables, streams: Rando
         cfg, r.env["true_ambient_temperature_c"], phys["true_skin_temp_c"], r.startup, streams
     )
     temps.update(r.led_ages(streams))
+    ids = r.ids
+    if cfg.device.reading_times and "time_min" not in ids:  # a worn series has its own
+        since_h = temps["age_h"] - temps["age_cal_h"][r.subject_index]
+        ids = {**ids, "time_min": np.round(since_h * 60.0, 1)}
     seen = r.glucose if r.seen is None else r.seen
     shift_nm, fraction = _optics_layer(cfg, tables, seen, phys, probe, temps)
     temps["ambient_a"], temps["ambient_flicker"] = environment.ambient_at_probe(cfg, r.env)
@@ -386,7 +390,7 @@ def measure_readings(cfg: ScenarioConfig, tables: ScenarioTables, streams: Rando
             )
         )
     truth = {**phys, **r.env, **probe, **_hidden(r.glucose, temps), **r.truth}
-    return _columns(cfg, r.ids, r.glucose, hwout, pmf, r.env, truth, fraction, shift_nm)
+    return _columns(cfg, ids, r.glucose, hwout, pmf, r.env, truth, fraction, shift_nm)
 
 
 def _optics_layer(cfg, tables, glucose: dict, phys: dict, probe: dict, temps: dict):

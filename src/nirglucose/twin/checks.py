@@ -16,14 +16,15 @@ import numpy as np
 import pandas as pd
 
 from ..design import design_bound
+from ..exceptions import ConfigError
 from ..models import make_model
 from ..simulation.simulator import simulate_frame
 from .device import TwinDevice
 from .parameters import Parameter
 from .simulate import device_seeds, scenario, simulate_summaries
-from .summaries import summary_names
+from .summaries import summaries, summary_names
 
-__all__ = ["CODE_QUANTILES", "PPC_RANGE", "FILE_MODELS", "posterior_predictive",
+__all__ = ["CODE_QUANTILES", "PPC_RANGE", "PPC_MIN_PARALLEL", "FILE_MODELS", "posterior_predictive",
            "code_quantiles", "file_errors", "twin_bound"]
 
 #: Deployable estimators whose subject-grouped CV error on the file a twin reports
@@ -38,6 +39,12 @@ CODE_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 PPC_RANGE = (0.05, 0.95)
 #: Posterior devices whose codes are pooled for the code distributions. [-]
 _CODE_DEVICES = 10
+#: Fewest posterior predictive devices simulated on worker processes; fewer run in this
+#: process. A device costs about 13 ms of CPU (25 people x 8 readings), starting two
+#: workers seconds (each imports the package): measured on the second file of a device,
+#: 100 devices took 18 s on two fresh workers and 2.8 s in the process (2 loaded cores,
+#: benchmarks/twin.py). [-]
+PPC_MIN_PARALLEL = 1000
 
 
 def code_quantiles(frame: pd.DataFrame, device: TwinDevice) -> dict[str, list[float]]:
@@ -79,7 +86,16 @@ def posterior_predictive(device: TwinDevice, params: list[Parameter], draws: np.
     values = np.column_stack([p.from_fit(pick[:, i]) for i, p in enumerate(params)])
     keys = [p.key for p in params]
     seeds = device_seeds(seed + 7919, n_devices)
-    x = simulate_summaries(device, keys, values, seeds, n_jobs)
+    n_code = min(_CODE_DEVICES, n_devices)
+    # the first devices' frames give the code distributions too (simulated once)
+    frames = [_frame(device, keys, values[i], int(seeds[i])) for i in range(n_code)]
+    nan = np.full(len(summary_names(device)), np.nan)
+    x = np.stack([nan if f is None else summaries(f, device) for f in frames])
+    if n_devices > n_code:
+        x = np.concatenate([x, simulate_summaries(
+            device, keys, values[n_code:], seeds[n_code:],
+            n_jobs if n_devices - n_code >= PPC_MIN_PARALLEL else 1)])
+    frames = [f for f in frames if f is not None]
     x = x[np.isfinite(x).all(axis=1)]
     lo, mid, hi = np.quantile(x, (PPC_RANGE[0], 0.5, PPC_RANGE[1]), axis=0)
     out = {
@@ -88,16 +104,20 @@ def posterior_predictive(device: TwinDevice, params: list[Parameter], draws: np.
         for j, (name, v, a, m, b) in enumerate(zip(summary_names(device), x_obs, lo, mid, hi,
                                                     strict=True))
     }
-    frames = [
-        simulate_frame(scenario(device, dict(zip(keys, values[i], strict=True))),
-                       device.n_subjects, device.per_subject, int(seeds[i]))
-        for i in range(min(_CODE_DEVICES, n_devices))
-    ]
     twin_q = code_quantiles(pd.concat(frames, ignore_index=True), device)
     file_q = code_quantiles(file_frame, device)
     codes = {w: {"file": file_q[w], "twin": twin_q[w]} for w in device.labels}
     return {"summaries": out, "codes": codes, "n_devices": int(len(x)),
             "quantiles": list(CODE_QUANTILES)}
+
+
+def _frame(device: TwinDevice, keys: list[str], row: np.ndarray, seed: int):
+    """One simulated device's frame; None where its values cannot be simulated."""
+    try:
+        cfg = scenario(device, dict(zip(keys, row.tolist(), strict=True)))
+        return simulate_frame(cfg, device.n_subjects, device.per_subject, seed)
+    except ConfigError:
+        return None
 
 
 def file_errors(ds, *, folds: int = _FILE_FOLDS) -> dict[str, float]:

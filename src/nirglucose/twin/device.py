@@ -56,6 +56,9 @@ TIME_COLUMNS = ("time_min",)
 #: spread needs two readings, a between-subject spread several people (the small-data
 #: policy's 10 subjects for a grouped error; 5 here, warned below 10).
 MIN_TWIN_SUBJECTS = 5
+#: Largest within-person SD of reading times a twin simulates: a uniform over the year
+#: that ``hardware.hours_since_reference_h`` allows (8760 h / sqrt(12)). [h]
+MAX_TIME_SD_H = 8760.0 / 12 ** 0.5
 MIN_TWIN_READINGS = 2
 
 
@@ -82,6 +85,10 @@ class TwinDevice:
         People in the file. [-]
     per_subject : int
         Readings per person, the median over people (the simulated design). [-]
+    time_sd_h : float
+        With reading times: the pooled within-person SD of the readings' times (0
+        without). The simulated readings follow each start-up reference by a uniform
+        time with this SD (:func:`base_overrides`). [h]
     """
 
     wavelengths_nm: tuple[float, ...]
@@ -92,6 +99,7 @@ class TwinDevice:
     times: bool
     n_subjects: int
     per_subject: int
+    time_sd_h: float = 0.0
 
     @property
     def full_scale(self) -> int:
@@ -119,13 +127,16 @@ class TwinDevice:
                 _bool(doc["reference"]), _bool(doc["monitor"]),
                 tuple(str(c) for c in doc["physiology"]), _bool(doc["times"]),
                 int(doc["n_subjects"]), int(doc["per_subject"]),
+                float(doc.get("time_sd_h", 0.0)),
             )
         except (KeyError, TypeError, ValueError):
             raise DataError("twin.json has a malformed 'device' entry; fit the twin again "
                             "(nirglucose twin --data FILE --out DIR)") from None
-        if not out.wavelengths_nm or not 1 <= out.adc_bits <= 32 or out.n_subjects < 1:
+        if (not out.wavelengths_nm or not 1 <= out.adc_bits <= 32 or out.n_subjects < 1
+                or not 0 <= out.time_sd_h <= MAX_TIME_SD_H):
             raise DataError("twin.json's 'device' entry is out of range (no LED, adc_bits "
-                            "outside 1-32 or no subject); fit the twin again")
+                            "outside 1-32, no subject or time_sd_h outside 0-"
+                            f"{MAX_TIME_SD_H:g} h); fit the twin again")
         return out
 
     def cache_key(self, settings: dict[str, Any]) -> str:
@@ -170,28 +181,59 @@ def device_of(ds: Dataset, adc_bits: int | None = None) -> TwinDevice:
     if schema.reference:
         refs = frame[[f"adc_ref_{w:g}" for w in schema.wavelengths_nm]]
         monitor = bool((refs.groupby(frame["subject_id"]).nunique() > 1).to_numpy().any())
+    times = next((c for c in TIME_COLUMNS if c in frame.columns), None)
     return TwinDevice(
         wavelengths_nm=tuple(float(w) for w in schema.wavelengths_nm),
         adc_bits=int(schema.adc_bits), reference=bool(schema.reference), monitor=monitor,
         physiology=tuple(schema.physiology),
-        times=any(c in frame.columns for c in TIME_COLUMNS),
+        times=times is not None,
         n_subjects=len(counts), per_subject=per,
+        time_sd_h=0.0 if times is None else _time_sd_h(frame, times),
     )
+
+
+def _time_sd_h(frame: pd.DataFrame, column: str) -> float:
+    """Pooled within-person SD of the reading times (minutes in the file). [h]
+
+    Raises
+    ------
+    DataError
+        A time that is not a finite number, or a spread beyond :data:`MAX_TIME_SD_H`.
+    """
+    t = pd.to_numeric(frame[column], errors="coerce").to_numpy(float)
+    if not np.isfinite(t).all():
+        raise DataError(f"the file's {column} column holds values that are not finite numbers "
+                        "(minutes); fix or drop them")
+    sid, k = subject_codes(frame)
+    n_per = np.bincount(sid, minlength=k)
+    dev = t - (np.bincount(sid, t, k) / n_per)[sid]
+    sd_h = float(np.sqrt(dev @ dev / max(len(t) - k, 1))) / 60.0
+    if sd_h > MAX_TIME_SD_H:
+        raise DataError(f"the file's {column} spread within a person ({sd_h:.0f} h SD) exceeds "
+                        f"{MAX_TIME_SD_H:g} h: a twin simulates readings within a year of a "
+                        "start-up reference (hardware.hours_since_reference_h)")
+    return round(sd_h, 4)
 
 
 def base_overrides(device: TwinDevice) -> dict[str, Any]:
     """Overrides of :data:`BASE_PRESET` that give the device's LEDs (at the assumed width,
     responsivity and :data:`NOMINAL_POWER_MW`), its ADC, its kind of reference and its
-    PPG columns; the physiological vector is measured (with the instruments' errors)."""
+    PPG columns; the physiological vector is measured (with the instruments' errors); with
+    reading times, a ``time_min`` column and readings a uniform time after each start-up
+    reference whose SD is the file's (:attr:`TwinDevice.time_sd_h`)."""
     led = {"fwhm_nm": LED_FWHM_NM, "power_mw": NOMINAL_POWER_MW,
            "responsivity_a_per_w": LED_RESPONSIVITY_A_PER_W}
-    return {
+    out = {
         "leds": [{"wavelength_nm": w, **led} for w in device.wavelengths_nm],
         "hardware.adc_bits": device.adc_bits,
         "device.monitor_photodiode": device.monitor,
         "device.ppg_perfusion_spo2": any(c in device.physiology for c in PPG_COLUMNS),
         "device.physiology": "measured",
     }
+    if device.times:  # readings a uniform time after the reference, the file's spread
+        out["device.reading_times"] = True
+        out["hardware.hours_since_reference_h"] = [0.0, round(12 ** 0.5 * device.time_sd_h, 4)]
+    return out
 
 
 def subject_codes(frame: pd.DataFrame) -> tuple[np.ndarray, int]:

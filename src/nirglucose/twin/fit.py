@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 import warnings
 from dataclasses import asdict
@@ -75,23 +76,28 @@ def fit_twin(data: Any, *, adc_bits: int | None = None, glucose_unit: str | None
     ds = _read(data, adc_bits, glucose_unit)
     device = device_of(ds, adc_bits=adc_bits)
     params, held = fitted_parameters(device), held_parameters(device)
-    est, cached = load_or_train(device, params, settings, cache=cache, n_jobs=n_jobs)
+    stages = _Stages()
+    with stages("estimator"):
+        est, cached = load_or_train(device, params, settings, cache=cache, n_jobs=n_jobs)
     frame = ds.frame
-    x = summaries(frame, device)
+    with stages("summaries"):
+        x = summaries(frame, device)
     names = summary_names(device)
     if not np.isfinite(x).all():
         bad = [n for n, v in zip(names, x, strict=True) if not np.isfinite(v)]
         raise DataError(f"the file's summaries {', '.join(bad)} cannot be computed (a channel "
                         "that never changes within a person?)")
-    z = est.sample(x, n_draws, settings.seed)
-    leakage = est.leakage
-    best = z[int(np.argmax(est.log_prob(z, x)))]
+    with stages("sampling"):
+        z = est.sample(x, n_draws, settings.seed)
+        leakage = est.leakage
+        best = z[int(np.argmax(est.log_prob(z, x)))]
     entries = [parameter_entry(p, z[:, i]) for i, p in enumerate(params)]
     entries += [parameter_entry(p, None) for p in held]
     values = np.column_stack([p.from_fit(z[:, i]) for i, p in enumerate(params)])
     map_values = np.array([p.from_fit(best[i]) for i, p in enumerate(params)], dtype=float)
-    ppc = posterior_predictive(device, params, z, x, frame, n_devices=ppc_devices,
-                               seed=settings.seed, n_jobs=n_jobs)
+    with stages("posterior_predictive"):
+        ppc = posterior_predictive(device, params, z, x, frame, n_devices=ppc_devices,
+                                   seed=settings.seed, n_jobs=n_jobs)
     notes = _warnings(device, entries, est.out_of_reach(x), est.meta["n_train"], leakage)
     for line in notes:
         warnings.warn(line, UserWarning, stacklevel=2)
@@ -107,10 +113,28 @@ def fit_twin(data: Any, *, adc_bits: int | None = None, glucose_unit: str | None
     }
     keep = np.linspace(0, len(values) - 1, min(_STORED_DRAWS, len(values))).astype(int)
     twin = Twin(device, entries, values[keep], map_values, info)
-    twin.info["bound"] = twin_bound(twin.scenario("map"))
-    twin.info["file_errors_mgdl"] = file_errors(ds)
+    with stages("bound"):
+        twin.info["bound"] = twin_bound(twin.scenario("map"))
+    with stages("file_errors"):
+        twin.info["file_errors_mgdl"] = file_errors(ds)
+    twin.info["timing"]["stages_s"] = stages.seconds
     twin.info["timing"]["total_s"] = round(time.perf_counter() - t0, 1)
     return twin
+
+
+class _Stages:
+    """Wall seconds of a fit's named stages (``timing.stages_s`` of ``twin.json``)."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+
+    @contextlib.contextmanager
+    def __call__(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = round(time.perf_counter() - t0, 2)
 
 
 #: Share of the estimator's draws outside the priors above which a fit says so.

@@ -19,6 +19,7 @@ files. Training is seeded and single-threaded: the same settings give the same f
 from __future__ import annotations
 
 import contextlib
+import io
 import json
 import logging
 import time
@@ -301,9 +302,11 @@ def train_posterior(device: TwinDevice, params: list[Parameter],
                         show_progress_bars=False, tracker=_NoTracker())
         inference.append_simulations(torch.tensor(z, dtype=torch.float32),
                                      torch.tensor(x, dtype=torch.float32))
-        net = inference.train(max_num_epochs=settings.max_epochs,
-                              training_batch_size=settings.batch_size,
-                              learning_rate=settings.learning_rate, show_train_summary=False)
+        printed = io.StringIO()  # sbi prints its convergence line: library code never prints
+        with contextlib.redirect_stdout(printed):
+            net = inference.train(max_num_epochs=settings.max_epochs,
+                                  training_batch_size=settings.batch_size,
+                                  learning_rate=settings.learning_rate, show_train_summary=False)
         epochs = int(inference.summary["epochs_trained"][-1])
         val = float(inference.summary["best_validation_loss"][-1])
     net.eval()
@@ -313,8 +316,9 @@ def train_posterior(device: TwinDevice, params: list[Parameter],
             "best_validation_loss": val, "simulate_s": round(sim_s, 1),
             "train_s": round(time.perf_counter() - t0 - sim_s, 1),
             "training_notes": sorted({str(w.message) for w in notes})}
-    for note in meta["training_notes"]:  # sbi's own (epochs, scaling): diagnostics
-        _log.info("twin training: %s", note)
+    for note in [*meta["training_notes"], printed.getvalue().strip()]:  # sbi's diagnostics
+        if note:
+            _log.info("twin training: %s", note)
     est = PosteriorEstimator(net, meta)
     t1 = time.perf_counter()
     est.meta["widening"] = _widening(est, device, params, settings, n_jobs)

@@ -76,7 +76,9 @@ _PLACEMENT_PRIOR = (0.05, 5.0)
 #: The noise-free tissue code of the nominal device is scaled into this share of full
 #: scale by the LED power prior; the reference code likewise by the transmission prior.
 _LEVEL_PRIOR_FS = (0.02, 0.98)
-#: LED ageing drift prior, relative power loss per 1000 h. [1/(1000 h)]
+#: LED ageing drift prior, relative power loss per 1000 h, per channel: a tenth of the
+#: package's 0.1 % per 1000 h (constants.LED_AGEING_PER_1000H, DESIGN.md) to a hundred
+#: times it. [1/(1000 h)]
 _DRIFT_PRIOR = (1e-4, 0.1)
 
 
@@ -188,7 +190,19 @@ def fitted_parameters(device: TwinDevice) -> list[Parameter]:
                              "reference path transmission (reference code level)",
                              "reference level", max(lo, 1e-6), min(hi, 1.0), True, t0, "-"))
     out += [_measurement(c) for c in device.physiology if c in MEASUREMENT_KEYS]
+    if device.times:
+        out += _drift(device)
     return out
+
+
+def _drift(device: TwinDevice, reason: str = "") -> list[Parameter]:
+    """Each LED's power drift over time (``leds.emitters.<i>.ageing_per_1000h``)."""
+    base = _base_value("hardware.led_ageing_per_1000h")
+    return [Parameter(f"leds.emitters.{i}.ageing_per_1000h",
+                      f"LED power drift over time at {label} nm", "drift", *_DRIFT_PRIOR,
+                      True, base, "1/(1000 h)", w, reason=reason)
+            for i, (w, label) in enumerate(zip(device.wavelengths_nm, device.labels,
+                                               strict=True))]
 
 
 def held_parameters(device: TwinDevice) -> list[Parameter]:
@@ -197,13 +211,8 @@ def held_parameters(device: TwinDevice) -> list[Parameter]:
         _measurement(c, reason=f"the file has no {c} column")
         for c in MEASUREMENT_KEYS if c not in device.physiology
     ]
-    why = ("the file has reading times, but fitting drift from them is not implemented yet "
-           "(a worn-device twin)" if device.times else "the file has no reading times "
-           "(time_min)")
-    out.append(Parameter("hardware.led_ageing_per_1000h", "LED power drift over time",
-                         "drift", *_DRIFT_PRIOR, True,
-                         _base_value("hardware.led_ageing_per_1000h"), "1/(1000 h)",
-                         reason=why))
+    if not device.times:
+        out += _drift(device, reason="the file has no reading times (time_min)")
     return out
 
 

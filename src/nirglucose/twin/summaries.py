@@ -22,8 +22,12 @@ for each pair of channels the within-person correlation of their residuals
 the people's means (``bcorr``); with reference codes their level and, for a monitor,
 the within-person SD of log(code / reference); and per physiological column its pooled
 within-person SD (log10; the Fitzpatrick type: the share of readings off a person's
-most frequent type). The glucose column is in mg/dL (:func:`nirglucose.load_dataset`
-converts).
+most frequent type). With reading times (``time_min``), per channel ``drift``: the
+pooled within-person loss of code over time after the glucose slope (minus the slope on
+time, the two fitted together), relative to the mean code, per 1000 h, as
+asinh(loss / 0.001) (0.001: the
+package's LED ageing, 0.1 % per 1000 h). The glucose column is in mg/dL
+(:func:`nirglucose.load_dataset` converts).
 """
 
 from __future__ import annotations
@@ -33,16 +37,20 @@ import itertools
 import numpy as np
 import pandas as pd
 
-from .device import TwinDevice, subject_codes
+from .device import TIME_COLUMNS, TwinDevice, subject_codes
 
 __all__ = ["SUMMARY_VERSION", "summary_names", "summaries", "channel_pairs"]
 
 #: Version of the summaries' definitions, part of a cached estimator's identity: change
 #: it with any change of what a summary computes.
-SUMMARY_VERSION = 2
+SUMMARY_VERSION = 3
 #: Relative slope per 100 mg/dL below which asinh is near linear: about the slope of
 #: glucose at its published magnitude (a few codes in a thousand per 100 mg/dL). [-]
 _SLOPE_SCALE = 0.002
+
+#: Relative drift per 1000 h below which asinh is near linear: the package's LED ageing
+#: (constants.LED_AGEING_PER_1000H). [1/(1000 h)]
+_DRIFT_SCALE = 0.001
 
 #: Floor added to a within-person SD of a physiological column before its log, in
 #: the column's unit: a tenth of the smallest step its instruments report.
@@ -78,6 +86,8 @@ def summary_names(device: TwinDevice) -> list[str]:
         if device.monitor:
             names += [f"ratio_within_{w}" for w in lab]
     names += [f"within_{c}" for c in device.physiology]
+    if device.times:
+        names += [f"drift_{w}" for w in device.labels]
     return names
 
 
@@ -134,6 +144,18 @@ def summaries(frame: pd.DataFrame, device: TwinDevice) -> np.ndarray:
                 out.append(np.log10(_pooled_sd(ratio[:, c], sid, k, n_per, 0) + _REL_FLOOR))
     for col in device.physiology:
         out.append(_pmf_summary(frame[col].to_numpy(float), col, sid, k, n_per))
+    if device.times:
+        hours = frame[TIME_COLUMNS[0]].to_numpy(float) / 60.0
+        t_dev = hours - (np.bincount(sid, hours, k) / n_per)[sid]
+        sgg = float(g_dev @ g_dev)
+        # Frisch-Waugh: time's slope fitted with glucose's = the residuals' slope on time's
+        # part that glucose does not explain
+        t_res = t_dev - (float(t_dev @ g_dev) / sgg if sgg > 0 else 0.0) * g_dev
+        stt = float(t_res @ t_res)
+        for c in range(codes.shape[1]):
+            level = max(float(codes[:, c].mean()), 0.5)
+            slope = float(resid[c] @ t_res) / stt if stt > 0 else 0.0  # codes per hour
+            out.append(float(np.arcsinh(-1000.0 * slope / level / _DRIFT_SCALE)))
     return np.asarray(out, dtype=float)
 
 

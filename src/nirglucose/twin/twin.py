@@ -28,8 +28,8 @@ from ..exceptions import ConfigError, DataError
 from .device import BASE_PRESET, TwinDevice, base_overrides
 from .parameters import IDENTIFIED_WIDTH_RATIO, Parameter
 
-__all__ = ["FORMAT", "TWIN_MODES", "Twin", "load_twin", "twin_scenario", "INTERVAL",
-           "parameter_entry"]
+__all__ = ["FORMAT", "TWIN_MODES", "LED_CARRIED", "Twin", "TwinStart", "load_twin",
+           "twin_scenario", "INTERVAL", "parameter_entry"]
 
 #: ``twin.json``'s format tag and version.
 FORMAT = ("nirglucose-twin", 1)
@@ -38,6 +38,32 @@ FORMAT = ("nirglucose-twin", 1)
 TWIN_MODES = ("map", "posterior")
 #: The reported interval: central 90 %. [-]
 INTERVAL = (0.05, 0.95)
+
+
+#: Per-LED fields a study with LEDs of its own carries from the twin's channels to each
+#: new LED, and how the channels are averaged (:meth:`Twin.study_start`).
+LED_CARRIED = {"glucose_gain": "geometric", "flicker_rel": "geometric",
+               "ageing_per_1000h": "geometric", "read_noise_lsb": "mean"}
+
+
+@dataclass(frozen=True)
+class TwinStart:
+    """Where a study starts from a twin (:meth:`Twin.study_start`).
+
+    Attributes
+    ----------
+    preset : str
+        :data:`~.device.BASE_PRESET`.
+    overrides : dict
+        Scenario overrides of ``preset``.
+    led_fields : dict
+        Fields every LED the study chooses takes (empty when the study keeps the twin's
+        LEDs).
+    """
+
+    preset: str
+    overrides: dict[str, Any]
+    led_fields: dict[str, float]
 
 
 @dataclass
@@ -94,6 +120,42 @@ class Twin:
             row = self.draws[int(rng.integers(0, len(self.draws)))]
         values = {k: float(v) for k, v in zip(self.fitted_keys, row, strict=True)}
         return {**base_overrides(self.device), **values}
+
+    def study_start(self, mode: str = "map", seed: int = 0, *,
+                    own_leds: bool = True) -> TwinStart:
+        """Where a study starts from this twin: :data:`~.device.BASE_PRESET`, its overrides
+        and, for a study that chooses its own LEDs (``own_leds=False``: the wavelengths
+        study), the fields each new LED takes from the twin.
+
+        With ``own_leds`` the overrides are :meth:`overrides` (the twin's LEDs, ADC and
+        fitted values). Without, they keep what does not belong to one LED (ADC,
+        reference, placement noise, between-subject spread, measurement errors) and drop
+        the LED set and the per-LED values; each new LED gets :data:`LED_CARRIED` from the
+        twin's channels: the geometric mean of their glucose gains, flicker and drift, and
+        the mean of their white noise (an assumption: the twin knows these only at its
+        own wavelengths). The LED powers are the study's own (a design choice).
+        """
+        values = self.overrides(mode, seed)
+        if own_leds:
+            return TwinStart(BASE_PRESET, values, {})
+        per_led: dict[str, list[float]] = {}
+        device_wide = {}
+        for key, v in values.items():
+            parts = key.split(".")
+            if key == "leds":
+                continue
+            if len(parts) == 4 and parts[:2] == ["leds", "emitters"]:
+                per_led.setdefault(parts[3], []).append(float(v))
+            else:
+                device_wide[key] = v
+        fields = {}
+        for name, how in LED_CARRIED.items():
+            got = per_led.get(name)
+            if got:
+                arr = np.asarray(got, dtype=float)
+                fields[name] = float(np.exp(np.mean(np.log(arr))) if how == "geometric"
+                                     else np.mean(arr))
+        return TwinStart(BASE_PRESET, device_wide, fields)
 
     def scenario(self, mode: str = "map", seed: int = 0) -> ScenarioConfig:
         """The twin's scenario (:meth:`overrides` on :data:`~.device.BASE_PRESET`)."""

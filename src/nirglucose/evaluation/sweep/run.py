@@ -634,6 +634,9 @@ def _sweep_meta(
         "wall_time_s": time.perf_counter() - opts["t_start"],
         "warnings": list(dict.fromkeys(w for r in results.values() for w in r.get("warnings", []))),
         "summary_method": "mean over seeds with a Student-t 95 % interval of the mean",
+        # a twin's sweep only: the other sweeps' metadata keep their bytes
+        **({"twin": opts["twin"], "twin_led_fields": dict(opts["led_fields"] or {})}
+           if opts.get("twin") is not None else {}),
     }
 
 
@@ -684,6 +687,7 @@ def run_sweep(
     progress: bool = False,
     on_task: Callable[[dict[str, Any], bool], None] | None = None,
     calibration: int = 0,
+    led_fields: Mapping[str, Any] | None = None, twin: str | None = None,
 ) -> SweepResult:
     """Run a grid of scenarios × seeds × models (local processes or a Dask cluster).
 
@@ -734,6 +738,12 @@ def run_sweep(
         Personal calibration readings per test subject (0, 1 or 2) of every
         cross-validated task (:mod:`~nirglucose.calibration.personal`): adds
         :data:`CALIBRATION_METRICS` (shift tasks leave them empty).
+    led_fields : mapping, optional
+        ``wavelengths`` study only: fields every LED it chooses takes (a device's twin's
+        per-LED values, :meth:`nirglucose.twin.Twin.study_start`).
+    twin : str, optional
+        The twin the scenarios start from (``preset`` and ``overrides`` are its), kept
+        in ``sweep_meta.json``.
 
     Returns
     -------
@@ -748,7 +758,7 @@ def run_sweep(
     """
     t_start = time.perf_counter()
     base = dict(overrides or {})
-    scenarios, preset = resolve_scenarios(vary, study, preset, base)
+    scenarios, preset = resolve_scenarios(vary, study, preset, base, led_fields)
     models, objects = _sweep_models(models, study, scenarios, model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
@@ -764,9 +774,8 @@ def run_sweep(
     spec_of = dict(zip(keys, specs, strict=True))
     cache = tasks.TaskCache(out, valid=_valid_result)
     tasks.clear_outputs(out, SWEEP_FILES)
-    pending = cache.lookup(
-        spec_of, _task_tag, None if on_task is None else lambda spec: on_task(spec, True)
-    )
+    pending = cache.lookup(spec_of, _task_tag,
+                           None if on_task is None else lambda spec: on_task(spec, True))
     _execute(cache, pending, spec_of, jobs=jobs, scheduler=scheduler, progress=progress,
              on_task=on_task, objects=objects)
     label_columns = list(dict.fromkeys(k for s in scenarios for k in s.labels))
@@ -777,9 +786,10 @@ def run_sweep(
                 protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
                 n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
                 label_columns=label_columns, backend=backend, n_workers=n_workers,
-                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects))
-    result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
-                         meta=_sweep_meta(scenarios, cache, len(pending), opts))
+                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects),
+                twin=twin, led_fields=led_fields)
+    result = SweepResult(frame, summary, _effects(study, frame, summary),
+                         _sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:
         result.save(out)
     return result

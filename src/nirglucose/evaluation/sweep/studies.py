@@ -508,6 +508,7 @@ def resolve_scenarios(
     study: str | None,
     preset: str | None,
     base: Mapping[str, Any],
+    led_fields: Mapping[str, Any] | None = None,
 ) -> tuple[list[Scenario], str]:
     """The scenarios of one sweep and the preset every task starts from.
 
@@ -524,12 +525,18 @@ def resolve_scenarios(
         Preset (default ``paper``); for ``data-size`` a comma-separated list.
     base : mapping
         Overrides every scenario shares (``--set``).
+    led_fields : mapping, optional
+        Fields of every LED the ``wavelengths`` study chooses (a twin's per-LED values);
+        refused by the other studies, which keep the scenario's LEDs.
 
     Raises
     ------
     ConfigError
         Unknown study, ``vary`` combined with a study that does not take it, bad values.
     """
+    if led_fields and study != "wavelengths":
+        raise ConfigError(f"led_fields apply to the wavelengths study (it chooses the LEDs); "
+                          f"--study {study or 'grid'} keeps the scenario's")
     if study == "data-size":
         presets = None
         if preset is not None:
@@ -543,7 +550,7 @@ def resolve_scenarios(
         return study_scenarios(study, sizes, presets), "paper"
     if study == "wavelengths":  # the ranking's options come as --vary keys
         preset = WAVELENGTHS_PRESET if preset is None else preset
-        return wavelength_scenarios(preset, vary, base), preset
+        return wavelength_scenarios(preset, vary, base, led_fields), preset
     if study == FLEET_STUDY:
         if vary and set(vary) != {FLEET_KEY}:
             raise ConfigError(

@@ -67,6 +67,7 @@ def wavelength_scenarios(
     preset: str = WAVELENGTHS_PRESET,
     vary: Mapping[str, Sequence[Any]] | None = None,
     base: Mapping[str, Any] | None = None,
+    led_fields: Mapping[str, Any] | None = None,
 ) -> list:
     """The scenarios of the ``wavelengths`` study: the best designs by the bound.
 
@@ -79,6 +80,9 @@ def wavelength_scenarios(
         ``top_n``, one value for ``top_n``).
     base : mapping, optional
         Overrides every scenario shares (``--set``; not ``leds`` or ``detector``).
+    led_fields : mapping, optional
+        Fields every candidate LED takes, in the ranking and in the confirmed designs
+        (a device's twin's per-LED values, :meth:`nirglucose.twin.Twin.study_start`).
 
     Returns
     -------
@@ -113,7 +117,7 @@ def wavelength_scenarios(
     if len(top) != 1:
         raise ConfigError(f"--vary top_n takes one value, got {top}")
     ranking = rank_designs(preset, detectors=detectors, k_max=max(n_leds), top=top[0],
-                           overrides=base or None)
+                           overrides=base or None, led_fields=led_fields)
     ranking = ranking[ranking["n_leds"].isin(n_leds)]
     out = []
     for _, r in ranking.iterrows():
