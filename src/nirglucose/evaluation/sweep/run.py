@@ -91,6 +91,7 @@ from ..splits import effective_layout
 from .analysis import (
     SUMMARY_METRICS,
     ablation_effects,
+    mismatch_table,
     ranking_crossings,
     shift_effects,
     summarize_sweep,
@@ -102,7 +103,7 @@ from .studies import (
     DATA_SIZE_PRESETS,
     DATA_SIZE_SUBJECTS,
     DATA_SIZE_TEST_SUBJECTS,
-    MISMATCH_SUBJECT,
+    MISMATCH_SUBJECTS,
     STUDIES,
     STUDY_GRIDS,
     STUDY_MODELS,
@@ -110,6 +111,7 @@ from .studies import (
     grid_scenarios,
     parse_vary,
     resolve_scenarios,
+    study_model_params,
     study_scenarios,
 )
 from .wavelengths import wavelength_designs
@@ -590,6 +592,8 @@ def _effects(study: str | None, frame: pd.DataFrame, summary: pd.DataFrame) -> p
         return wavelength_designs(frame)
     if study == "fleet":
         return fleet_table(frame)
+    if study == "mismatch":
+        return mismatch_table(frame, MISMATCH_SUBJECTS)
     return None
 
 
@@ -619,6 +623,8 @@ def _sweep_meta(
         ),
         **{k: opts[k] for k in ("seeds", "models", "protocol", "n_splits", "repeats")},
         "estimators": opts["estimators"],  # rows given as estimator objects: fitted as given
+        # how each model's hyper-parameters were chosen, where the study re-tunes them
+        **({"tuning": opts["tuning"]} if opts["tuning"] else {}),
         **{k: opts[k] for k in ("n_subjects", "per_subject", "n_boot")},
         "version": __version__,
         "task_format": TASK_FORMAT,
@@ -657,8 +663,8 @@ def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
     if objects and any(sc.kind == "fleet" for sc in scenarios):
         raise ConfigError(f"the fleet study takes registered model names, not estimator "
                           f"objects ({', '.join(objects)}); run the objects in a grid study")
-    if study == "mismatch" and MISMATCH_SUBJECT not in labels:
-        labels = [MISMATCH_SUBJECT, *labels]  # the study's subject always runs
+    if study == "mismatch":  # the study's subjects always run
+        labels = [*(m for m in MISMATCH_SUBJECTS if m not in labels), *labels]
     return labels, objects
 
 
@@ -748,6 +754,8 @@ def run_sweep(
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
     models, objects = _sweep_models(models, study, scenarios, model_params)
+    model_params, tuning = study_model_params(
+        study, [m for m in models if m not in objects], model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
@@ -775,7 +783,8 @@ def run_sweep(
                 protocol=proto.splitter, n_splits=proto.n_splits, repeats=proto.repeats,
                 n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
                 label_columns=label_columns, backend=backend, n_workers=n_workers,
-                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects))
+                scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects),
+                tuning=tuning)
     result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
                          meta=_sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:
