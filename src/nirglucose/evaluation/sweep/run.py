@@ -44,7 +44,10 @@ Outputs (:meth:`SweepResult.save`)
     ``sweep.csv`` (one row per scenario × seed × model, the scenario's varied values
     as columns, then every metric of :data:`SWEEP_METRICS`), ``summary.csv`` (mean,
     SD and a 95 % t-interval over seeds per scenario × model), ``effects.csv``
-    (ablation or shift effects, when the study has them) and ``sweep_meta.json``.
+    (ablation or shift effects, the ``mismatch`` study's table across seeds
+    (:func:`~nirglucose.evaluation.sweep.analysis.mismatch_table`), when the study has
+    them) and ``sweep_meta.json`` (its ``tuning``: how each model's hyper-parameters were
+    chosen, where a study re-tunes them).
 """
 
 from __future__ import annotations
