@@ -41,11 +41,12 @@ from threadpoolctl import threadpool_limits
 from ..exceptions import DataError
 from ..fitted import require_fitted
 from ._base import SchemaJsonMixin, fit_input, predict_input
-from ._params import Integral, Interval, Real, ValidatedParamsMixin
+from ._params import Integral, Interval, Real, StrOptions, ValidatedParamsMixin
 from ._whitening import scale_of, zca_whitening
 from .registry import register
 
-__all__ = ["MeanReference", "GPReference", "GBRReference", "GP_RANDOM_STATE", "GP_NOISE_FLOOR"]
+__all__ = ["MeanReference", "GPReference", "GBRReference", "GP_RANDOM_STATE", "GP_NOISE_FLOOR",
+           "GP_KERNELS"]
 
 #: Seeds :func:`numpy.random.default_rng` takes: None, an integer >= 0 or a Generator
 #: (the GP's row subset and restarts).
@@ -64,6 +65,10 @@ GP_RANDOM_STATE: list[Any] = [None, Interval(Integral, 0, None, closed="left"), 
 #: CV RMSE from 38 to 14 mg/dL (the optimiser ended in another basin); with 1e-2 by
 #: under 1 %.
 GP_NOISE_FLOOR = 1e-2
+#: The GP's kernels (``kernel``): one length scale per input (``"ard"``), one shared by
+#: all inputs (``"isotropic"``), or whichever of the two has the higher Bayesian
+#: information criterion of its maximised marginal likelihood (``"bic"``).
+GP_KERNELS = ("ard", "isotropic", "bic")
 
 
 #: Rows per block of prediction: the GP's kernel rows and the trees' node indices are
@@ -197,9 +202,13 @@ class GPReference(_ReferenceBase):
     :func:`~nirglucose.models.tuning.search_space`). The white-noise variance is
     bounded below by ``noise_floor`` (:data:`GP_NOISE_FLOOR`): with few rows the
     marginal likelihood over-fits one length scale per input [4]_, and without the
-    floor its optimum jumped between basins when the inputs moved by 1e-9. Prediction
-    is the posterior mean, ``k(x*, X) @ alpha`` rescaled (Rasmussen & Williams Eq. 2.25),
-    computed from the stored state, so a loaded model predicts the same numbers.
+    floor its optimum jumped between basins when the inputs moved by 1e-9. For the
+    same reason ``kernel="bic"`` fits both one length scale per input and one shared
+    by all, and keeps the one with the higher ``log ML - k/2 ln n`` (k hyper-parameters,
+    n rows: Schwarz's criterion [6]_ with the kernel's hyper-parameters counted as
+    fitted parameters). Prediction is the posterior mean, ``k(x*, X) @ alpha``
+    rescaled (Rasmussen & Williams Eq. 2.25), computed from the stored state, so a
+    loaded model predicts the same numbers.
 
     Parameters
     ----------
@@ -215,6 +224,9 @@ class GPReference(_ReferenceBase):
     noise_floor : float
         Lower bound of the white-noise variance, a fraction of the training glucose
         variance (:data:`GP_NOISE_FLOOR`). [-]
+    kernel : {'ard', 'isotropic', 'bic'}
+        One length scale per input, one for all, or the one of the two the
+        information criterion prefers (:data:`GP_KERNELS`).
 
     Attributes
     ----------
@@ -227,7 +239,10 @@ class GPReference(_ReferenceBase):
     alpha_ : numpy.ndarray
         (m,) weights of the posterior mean (normalised-target units).
     length_scales_ : numpy.ndarray
-        (p,) fitted ARD length scales (standardised-input units). [-]
+        (p,) fitted length scales (standardised-input units; all equal for an
+        isotropic kernel). [-]
+    kernel_choice_ : str
+        The kernel fitted, ``"ard"`` or ``"isotropic"``.
     signal_variance_, noise_variance_ : float
         Fitted constant and white-noise variances (normalised-target units). [-]
     y_mean_, y_std_ : float
@@ -239,6 +254,8 @@ class GPReference(_ReferenceBase):
     .. [3] Pedregosa et al., JMLR 12, 2825-2830 (2011).
     .. [4] Cawley & Talbot, JMLR 11, 2079-2107 (2010).
     .. [5] ISO 15197:2013, sec. 6.3.3.
+    .. [6] G. Schwarz, "Estimating the dimension of a model", Ann. Statist. 6, 461-464
+       (1978), doi:10.1214/aos/1176344136.
 
     Examples
     --------
@@ -255,10 +272,12 @@ class GPReference(_ReferenceBase):
         "n_restarts_optimizer": [Interval(Integral, 0, None, closed="left")],
         "random_state": GP_RANDOM_STATE,
         "noise_floor": [Interval(Real, 0, 1, closed="neither")],
+        "kernel": [StrOptions(set(GP_KERNELS))],
     }
 
     _STATE = {
         "schema_": "json",
+        "kernel_choice_": "json",
         "x_mean_": (-1,),
         "x_scale_": (-1,),
         "X_train_": (-1, -1),
@@ -272,11 +291,12 @@ class GPReference(_ReferenceBase):
     _FITTED = "alpha_"
 
     def __init__(self, max_fit_rows: int = 1000, n_restarts_optimizer: int = 0, random_state=None,
-                 noise_floor: float = GP_NOISE_FLOOR):
+                 noise_floor: float = GP_NOISE_FLOOR, kernel: str = "ard"):
         self.max_fit_rows = max_fit_rows
         self.n_restarts_optimizer = n_restarts_optimizer
         self.random_state = random_state
         self.noise_floor = noise_floor
+        self.kernel = kernel
 
     def fit(self, X, y=None, groups=None):
         """Fit the kernel's hyper-parameters and the posterior on the training rows."""
@@ -303,28 +323,40 @@ class GPReference(_ReferenceBase):
         # in an over-fitted optimum (measured: test RMSE at the no-skill level on the
         # paper preset). Bounds wide enough that an input can be switched off (length
         # scale 1e5) or the fit become pure noise; the noise no lower than the floor.
-        kernel = C(1.0, (1e-3, 1e5)) * RBF(np.full(U.shape[1], 10.0), (1e-2, 1e5)) + WhiteKernel(
-            1.0, (float(self.noise_floor), 1e1)
-        )
-        gp = GaussianProcessRegressor(
-            kernel=kernel,
-            normalize_y=True,
-            n_restarts_optimizer=int(self.n_restarts_optimizer),
-            random_state=None if self.random_state is None else int(rng.integers(2**31 - 1)),
-        )
-        # One BLAS thread: the fitted kernel depends on the thread count (1 against 2
-        # threads: predictions 0.5 mg/dL apart on 1,002 rows), and on a shared 2-core
-        # machine one thread was faster (40 rows 0.16 against 7.6 s; 1,002 rows 43
-        # against 89 s), as for the linear models.
-        with warnings.catch_warnings(), threadpool_limits(limits=1, user_api="blas"):
-            # a length scale at its bound is an input the GP switched off: expected
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            gp.fit(Z, y)
+        seed = None if self.random_state is None else int(rng.integers(2**31 - 1))
+        kinds = ("ard", "isotropic") if self.kernel == "bic" else (str(self.kernel),)
+        best, best_score = None, -np.inf
+        for kind in kinds:
+            ls = np.full(U.shape[1], 10.0) if kind == "ard" else 10.0
+            kernel = C(1.0, (1e-3, 1e5)) * RBF(ls, (1e-2, 1e5)) + WhiteKernel(
+                1.0, (float(self.noise_floor), 1e1)
+            )
+            gp = GaussianProcessRegressor(
+                kernel=kernel,
+                normalize_y=True,
+                n_restarts_optimizer=int(self.n_restarts_optimizer),
+                random_state=seed,
+            )
+            # One BLAS thread: the fitted kernel depends on the thread count (1 against 2
+            # threads: predictions 0.5 mg/dL apart on 1,002 rows), and on a shared 2-core
+            # machine one thread was faster (40 rows 0.16 against 7.6 s; 1,002 rows 43
+            # against 89 s), as for the linear models.
+            with warnings.catch_warnings(), threadpool_limits(limits=1, user_api="blas"):
+                # a length scale at its bound is an input the GP switched off: expected
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                gp.fit(Z, y)
+            # [6]: log ML - k/2 ln n, k the kernel's fitted hyper-parameters
+            score = gp.log_marginal_likelihood_value_ - 0.5 * len(gp.kernel_.theta) * np.log(
+                len(Z))
+            if best is None or score > best_score:
+                best, best_score, self.kernel_choice_ = gp, score, kind
+        gp = best
         k = gp.kernel_
         self.x_mean_, self.x_scale_ = mean, scale
         self.X_train_ = np.asarray(gp.X_train_, dtype=float)
         self.alpha_ = np.asarray(gp.alpha_, dtype=float).ravel()
-        self.length_scales_ = np.atleast_1d(np.asarray(k.k1.k2.length_scale, dtype=float))
+        ls = np.atleast_1d(np.asarray(k.k1.k2.length_scale, dtype=float))
+        self.length_scales_ = np.broadcast_to(ls, (U.shape[1],)).copy()
         self.signal_variance_ = float(k.k1.k1.constant_value)
         self.noise_variance_ = float(k.k2.noise_level)
         self.y_mean_ = float(np.ravel(gp._y_train_mean)[0])
@@ -334,6 +366,9 @@ class GPReference(_ReferenceBase):
 
     def _restore(self) -> None:
         self._restore_schema()
+        if self.kernel_choice_ not in GP_KERNELS[:2]:
+            raise DataError(f"model state 'kernel_choice_' is {self.kernel_choice_!r}, not one "
+                            f"of {', '.join(GP_KERNELS[:2])}; refit the model")
         for name in ("x_mean_", "x_scale_", "length_scales_"):
             self._check_width(name, len(getattr(self, name)))
         self._check_width("X_train_", self.X_train_.shape[1])

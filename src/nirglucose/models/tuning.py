@@ -185,7 +185,8 @@ SELF_TUNING: dict[str, str] = {
     "ebl": f"ridge penalty by {N_FOLDS}-fold subject-grouped inner CV over its tuning grid "
            f"({N_CONFIGS} penalties, 1e-6 to 1e5)",
     "pls": f"components by {N_FOLDS}-fold subject-grouped inner CV over 1-{N_CONFIGS}",
-    "gp": "kernel by marginal likelihood on the training rows (its own tuning)",
+    "gp": "kernel's hyper-parameters by marginal likelihood on the training rows, one length "
+          "scale per input or one for all by Schwarz's criterion (kernel='bic')",
     "mean": "nothing to tune",
     "oracle": "nothing to tune",
 }
@@ -196,9 +197,11 @@ def self_tuning_params(name: str) -> dict | None:
 
     EBL's ridge penalties are its tuning grid (:func:`search_space`, :data:`N_CONFIGS`
     values) scored by :data:`N_FOLDS` subject-grouped inner folds; PLS's components
-    1-:data:`N_CONFIGS` likewise; the GP, the no-skill mean and the oracle take their
-    defaults (the GP fits its kernel by marginal likelihood in every ``fit``). The
-    arguments replace a preset's tuned ones (:func:`preset_params`).
+    1-:data:`N_CONFIGS` likewise; the GP fits its kernel by marginal likelihood in every
+    ``fit`` and here also chooses between one length scale per input and one for all
+    (``kernel="bic"``: with few rows the per-input length scales over-fit); the
+    no-skill mean and the oracle take their defaults. The arguments replace a preset's
+    tuned ones (:func:`preset_params`).
 
     Returns
     -------
@@ -218,6 +221,8 @@ def self_tuning_params(name: str) -> dict | None:
         return {"alphas": alphas, "cv": N_FOLDS}
     if name == "pls":
         return {"n_components": None, "max_components": N_CONFIGS, "cv": N_FOLDS}
+    if name == "gp":
+        return {"kernel": "bic"}
     if name in SELF_TUNING:
         return {}
     return None
