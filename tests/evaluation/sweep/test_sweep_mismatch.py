@@ -76,9 +76,10 @@ def test_references_re_tune_on_each_dataset_and_given_parameters_win():
     assert len(params["ebl"]["alphas"]) == N_CONFIGS and params["ebl"]["cv"] == N_FOLDS
     assert 100.0 in params["ebl"]["alphas"]
     assert params["pls"] == {"n_components": 2} and how["pls"].startswith("as given")
-    assert "gp" not in params and how["gp"].startswith("re-tuned per dataset")
+    assert params["gp"] == {"kernel": "bic"} and how["gp"].startswith("re-tuned per dataset")
     assert how["gbr"].startswith("the preset's tuned")  # no inner selection: said so
     assert how["physics-inversion"].startswith("the preset's tuned")
+    assert how["mean"] == "nothing to tune"
     assert studies.study_model_params("noise-scale", ["ebl"], None) == ({}, {})
 
 

@@ -398,7 +398,7 @@ def study_model_params(
     tuple of (dict, dict)
         Model -> arguments (only models with any), and model -> how it was tuned
         (``mismatch`` only: ``"re-tuned per dataset: ..."``, ``"the preset's tuned
-        parameters"``, or ``"as given"``).
+        parameters"``, ``"nothing to tune"`` or ``"as given"``).
     """
     params = {k: dict(v) for k, v in (given or {}).items()}
     how: dict[str, str] = {}
@@ -410,6 +410,8 @@ def study_model_params(
             how[m] = "as given (model_params)"
         elif m in MISMATCH_SUBJECTS or own is None:
             how[m] = "the preset's tuned parameters (tuned on its own forward model's data)"
+        elif not own and m in ("mean", "oracle"):
+            how[m] = SELF_TUNING[m]
         else:
             how[m] = f"re-tuned per dataset: {SELF_TUNING[m]}"
             if own:
