@@ -409,7 +409,8 @@ def study_model_params(
         if m in params:
             how[m] = "as given (model_params)"
         elif m in MISMATCH_SUBJECTS or own is None:
-            how[m] = "the preset's tuned parameters (tuned on its own forward model's data)"
+            how[m] = ("the preset's tuned parameters where it has them (tuned on its own "
+                      "forward model's data), else its defaults")
         elif not own and m in ("mean", "oracle"):
             how[m] = SELF_TUNING[m]
         else:
