@@ -377,8 +377,7 @@ def _regime(preset: Any) -> str:
                 "magnitude (physical regime)")
     return (f"preset <code>{_esc(preset)}</code>, glucose's optical effect amplified "
             f"×{format_number(gain, style='general')} over its published magnitude "
-            "(amplified regime; at published magnitudes no estimator here beats no skill "
-            "by much)")
+            "(amplified regime: these numbers do not hold at published magnitudes)")
 
 
 def _who(model: str, assumed: Any) -> str:
