@@ -298,8 +298,8 @@ class GPReference(_ReferenceBase):
         self.noise_floor = noise_floor
         self.kernel = kernel
 
-    def fit(self, X, y=None, groups=None):
-        """Fit the kernel's hyper-parameters and the posterior on the training rows."""
+    def _fit_kernel(self, Z: np.ndarray, y: np.ndarray, kind: str, seed: int | None):
+        """scikit-learn's GP with kernel ``kind`` (``"ard"`` or ``"isotropic"``), fitted."""
         import warnings
 
         from sklearn.exceptions import ConvergenceWarning
@@ -307,6 +307,34 @@ class GPReference(_ReferenceBase):
         from sklearn.gaussian_process.kernels import RBF, WhiteKernel
         from sklearn.gaussian_process.kernels import ConstantKernel as C
 
+        # Starting point: a smooth, nearly linear fit (length scales of 10 on inputs
+        # standardised to unit variance, i.e. several times their spread) with all the
+        # target's variance as noise; starting from unit length scales the search stops
+        # in an over-fitted optimum (measured: test RMSE at the no-skill level on the
+        # paper preset). Bounds wide enough that an input can be switched off (length
+        # scale 1e5) or the fit become pure noise; the noise no lower than the floor.
+        ls = np.full(Z.shape[1], 10.0) if kind == "ard" else 10.0
+        kernel = C(1.0, (1e-3, 1e5)) * RBF(ls, (1e-2, 1e5)) + WhiteKernel(
+            1.0, (float(self.noise_floor), 1e1)
+        )
+        gp = GaussianProcessRegressor(
+            kernel=kernel,
+            normalize_y=True,
+            n_restarts_optimizer=int(self.n_restarts_optimizer),
+            random_state=seed,
+        )
+        # One BLAS thread: the fitted kernel depends on the thread count (1 against 2
+        # threads: predictions 0.5 mg/dL apart on 1,002 rows), and on a shared 2-core
+        # machine one thread was faster (40 rows 0.16 against 7.6 s; 1,002 rows 43
+        # against 89 s), as for the linear models.
+        with warnings.catch_warnings(), threadpool_limits(limits=1, user_api="blas"):
+            # a length scale at its bound is an input the GP switched off: expected
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            gp.fit(Z, y)
+        return gp
+
+    def fit(self, X, y=None, groups=None):
+        """Fit the kernel's hyper-parameters and the posterior on the training rows."""
         U, y = self._fit_inputs(X, y, groups)
         max_rows = int(self.max_fit_rows)
         rng = np.random.default_rng(self.random_state)
@@ -317,34 +345,11 @@ class GPReference(_ReferenceBase):
         scale = U.std(axis=0)
         scale[scale == 0] = 1.0  # a constant input carries nothing; keep it finite
         Z = (U - mean) / scale
-        # Starting point: a smooth, nearly linear fit (length scales of 10 on inputs
-        # standardised to unit variance, i.e. several times their spread) with all the
-        # target's variance as noise; starting from unit length scales the search stops
-        # in an over-fitted optimum (measured: test RMSE at the no-skill level on the
-        # paper preset). Bounds wide enough that an input can be switched off (length
-        # scale 1e5) or the fit become pure noise; the noise no lower than the floor.
         seed = None if self.random_state is None else int(rng.integers(2**31 - 1))
         kinds = ("ard", "isotropic") if self.kernel == "bic" else (str(self.kernel),)
         best, best_score = None, -np.inf
         for kind in kinds:
-            ls = np.full(U.shape[1], 10.0) if kind == "ard" else 10.0
-            kernel = C(1.0, (1e-3, 1e5)) * RBF(ls, (1e-2, 1e5)) + WhiteKernel(
-                1.0, (float(self.noise_floor), 1e1)
-            )
-            gp = GaussianProcessRegressor(
-                kernel=kernel,
-                normalize_y=True,
-                n_restarts_optimizer=int(self.n_restarts_optimizer),
-                random_state=seed,
-            )
-            # One BLAS thread: the fitted kernel depends on the thread count (1 against 2
-            # threads: predictions 0.5 mg/dL apart on 1,002 rows), and on a shared 2-core
-            # machine one thread was faster (40 rows 0.16 against 7.6 s; 1,002 rows 43
-            # against 89 s), as for the linear models.
-            with warnings.catch_warnings(), threadpool_limits(limits=1, user_api="blas"):
-                # a length scale at its bound is an input the GP switched off: expected
-                warnings.simplefilter("ignore", ConvergenceWarning)
-                gp.fit(Z, y)
+            gp = self._fit_kernel(Z, y, kind, seed)
             # [6]: log ML - k/2 ln n, k the kernel's fitted hyper-parameters
             score = gp.log_marginal_likelihood_value_ - 0.5 * len(gp.kernel_.theta) * np.log(
                 len(Z))

@@ -660,15 +660,18 @@ def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int]
 
 
 def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
-                  params: Mapping[str, Any] | None) -> tuple[list[str], dict[str, Any]]:
-    """The rows' labels (a study's subject first) and label -> estimator object."""
+                  params: Mapping[str, Any] | None
+                  ) -> tuple[list[str], dict[str, Any], dict[str, Any], dict[str, str]]:
+    """The rows' labels (a study's subjects first), label -> estimator object, and the
+    models' parameters and tuning notes (:func:`~.studies.study_model_params`)."""
     labels, objects = resolve_rows(models, STUDY_MODELS.get(study, DEFAULT_MODELS), params)
     if objects and any(sc.kind == "fleet" for sc in scenarios):
         raise ConfigError(f"the fleet study takes registered model names, not estimator "
                           f"objects ({', '.join(objects)}); run the objects in a grid study")
     if study == "mismatch":  # the study's subjects always run
         labels = [*(m for m in MISMATCH_SUBJECTS if m not in labels), *labels]
-    return labels, objects
+    own, tuning = study_model_params(study, [m for m in labels if m not in objects], params)
+    return labels, objects, own, tuning
 
 
 def run_sweep(
@@ -756,9 +759,7 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base)
-    models, objects = _sweep_models(models, study, scenarios, model_params)
-    model_params, tuning = study_model_params(
-        study, [m for m in models if m not in objects], model_params)
+    models, objects, model_params, tuning = _sweep_models(models, study, scenarios, model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
