@@ -223,7 +223,8 @@ class GPReference(_ReferenceBase):
         so the same seed gives the same state whatever the machine's core count.
     noise_floor : float
         Lower bound of the white-noise variance, a fraction of the training glucose
-        variance (:data:`GP_NOISE_FLOOR`). [-]
+        variance (:data:`GP_NOISE_FLOOR`: below a self-test reference's label error
+        [5]_). [-]
     kernel : {'ard', 'isotropic', 'bic'}
         One length scale per input, one for all, or the one of the two the
         information criterion prefers (:data:`GP_KERNELS`).
