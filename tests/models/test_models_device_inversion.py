@@ -226,3 +226,21 @@ def test_skill_weight():
     assert skill_weight(y, 2 * y - mean, mean) == 0.5
     assert skill_weight(y, 2 * mean - y, mean) == 0.0  # anti-correlated: the mean
     assert skill_weight(y, mean, mean) == 0.0
+
+
+def test_rte_lut_table_solver_is_the_one_named(paper, fitted, monkeypatch):
+    # The mismatch study fills the rte-lut table with the diffusion solver, on the data's
+    # side and on this estimator's (lut_solver): the same kind of table for both.
+    import nirglucose.models.device_inversion as di
+
+    seen = []
+    monkeypatch.setattr(di, "ForwardModel", lambda cfg, model: seen.append((cfg, model)))
+    monkeypatch.setattr(di, "LearnedGlucoseForward", lambda fm, mean, response: fm)
+    for solver in ("diffusion", "monte-carlo"):
+        m = make_model("device-inversion", forward_model="rte-lut", lut_solver=solver)
+        m.schema_, m.led_fwhm_nm_ = fitted.schema_, fitted.led_fwhm_nm_
+        m.glucose_mean_, m.glucose_response_ = fitted.glucose_mean_, fitted.glucose_response_
+        m._build_forward()
+        assert seen[-1][1] == "rte-lut" and seen[-1][0].optics.lut_solver == solver
+    with pytest.raises(ConfigError, match="'lut_solver' parameter of DeviceInversion"):
+        DeviceInversion(lut_solver="mc").fit(paper[0])

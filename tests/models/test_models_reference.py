@@ -139,6 +139,8 @@ def test_gbr_whitening_gives_skill_where_raw_trees_have_none(tmp_path):
     ("model", "params"),
     [
         ("gp", {"max_fit_rows": 0}),
+        ("gp", {"noise_floor": 0.0}),
+        ("gp", {"kernel": "matern"}),
         ("gbr", {"learning_rate": 2.0}),
         ("gbr", {"max_depth": 0}),
         ("gbr", {"whiten_inputs": "yes"}),
@@ -245,5 +247,59 @@ def test_large_inputs_are_predicted_in_blocks(monkeypatch, name):
         return real(lambda u: blocks.append(len(u)) or fn(u), U)
 
     monkeypatch.setattr(reference, "_by_chunks", spy)
-    np.testing.assert_allclose(m.predict(ds), whole, rtol=1e-9)  # BLAS blocking
+    np.testing.assert_allclose(m.predict(ds), whole, rtol=1e-8)  # BLAS blocking: rounding
     assert blocks == [7] * (len(ds) // 7) + [len(ds) % 7]
+
+
+def _grouped_cv_rmse(make, frame, splits) -> float:
+    y = frame["glucose_mgdl"].to_numpy(float)
+    pred = np.empty(len(frame))
+    for s in splits:
+        pred[s.test] = make().fit(frame.iloc[s.train]).predict(frame.iloc[s.test])
+    return float(np.sqrt(np.mean((pred - y) ** 2)))
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore:ADC resolution not declared")
+def test_gp_cv_rmse_does_not_move_when_inputs_move_by_1e_9():
+    # Issue 39: on the mismatch study's rte-lut data (seed 0, 40 subjects, grouped 3-fold)
+    # the GP without a noise floor (1e-5) scored 38.2 mg/dL, and 14.6 or 14.4 with six
+    # physiological columns multiplied by 1 + 1e-9 N(0, 1): its optimiser ended in
+    # another basin. With the floor (GP_NOISE_FLOOR) the CV RMSE moves by <= 1 %.
+    from nirglucose.evaluation.splits import make_splits
+
+    ds = ng.simulate("paper", 40, 3, 0,
+                     overrides={"optics.model": "rte-lut", "optics.lut_solver": "diffusion"})
+    f = ds.frame
+    splits = make_splits(f["subject_id"].to_numpy(), "grouped-cv", n_splits=3, repeats=1, seed=0)
+    cols = ["age_yr", "bmi_kgm2", "skin_thickness_mm", "hydration_pct", "systolic_bp_mmhg",
+            "heart_rate_bpm"]
+
+    def make():
+        return GPReference(random_state=0)
+
+    base = _grouped_cv_rmse(make, f, splits)
+    for k in (1, 2, 3):
+        g = f.copy()
+        rng = np.random.default_rng(k)
+        for c in cols:
+            g[c] = g[c] * (1 + 1e-9 * rng.standard_normal(len(g)))
+        assert _grouped_cv_rmse(make, g, splits) == pytest.approx(base, rel=0.01)
+
+
+def test_gp_bic_keeps_per_input_length_scales_only_where_they_pay(tmp_path):
+    # Schwarz's criterion: on paper data one length scale per input pays (measured on
+    # the mismatch study's beer-lambert data, grouped 3-fold: 10.9 mg/dL against 58.8 with
+    # one shared scale); with the glucose labels shuffled (nothing to learn) the 17
+    # extra length scales do not, and the GP keeps one shared length scale (all equal).
+    train = ng.simulate("paper", n_subjects=40, per_subject=3, seed=0)
+    assert GPReference(random_state=0, kernel="bic").fit(train).kernel_choice_ == "ard"
+    y = np.random.default_rng(0).permutation(train.frame["glucose_mgdl"].to_numpy())
+    flat = GPReference(random_state=0, kernel="bic").fit(train, y)
+    assert flat.kernel_choice_ == "isotropic"
+    assert np.all(flat.length_scales_ == flat.length_scales_[0])
+    flat.save(tmp_path / "gp.json")
+    back = load_model(tmp_path / "gp.json")
+    assert back.kernel_choice_ == "isotropic"
+    test = ng.simulate("paper", n_subjects=5, per_subject=3, seed=1)
+    np.testing.assert_allclose(back.predict(test), flat.predict(test), rtol=1e-12)

@@ -92,3 +92,36 @@ def test_cli_report_rejects_a_missing_sweep_dir(synthetic_results, tmp_path, cap
     code = main(["report", str(synthetic_results), "--out", str(tmp_path / "r.html"),
                  "--sweep", str(tmp_path / "nope")])
     assert code == 2 and "holds no sweep.csv" in capsys.readouterr().err
+
+
+def test_mismatch_section_states_regime_seeds_and_privileged_rows(tmp_path):
+    from nirglucose.evaluation.sweep.analysis import mismatch_table
+
+    rows = []
+    for s in (0, 1, 2):
+        for made in ("beer-lambert", "diffusion"):
+            for assumed in ("beer-lambert", "diffusion"):
+                sc = f"data={made}:assumed={assumed}"
+                for m, v in (("physics-inversion", 3.0 if made == assumed else 30.0),
+                             ("device-inversion", 8.0 if made == assumed else 35.0),
+                             ("ebl", 40.0 + s), ("mean", 57.0), ("oracle", 1.0)):
+                    rows.append({"study": "mismatch", "scenario": sc, "data_model": made,
+                                 "assumed_model": assumed, "mismatched": made != assumed,
+                                 "seed": s, "model": m, "rmse_mgdl": v + s,
+                                 "rmse_ci_low": v + s - 5, "rmse_ci_high": v + s + 5,
+                                 "mard_pct": v / 2, "clarke_a_pct": 90.0})
+    f = pd.DataFrame(rows)
+    labels = ["data_model", "assumed_model", "mismatched"]
+    meta = {**_meta("mismatch", [], labels, list(f["scenario"].unique())), "seeds": [0, 1, 2],
+            "tuning": {"ebl": "re-tuned per dataset: ridge penalty by inner CV"}}
+    e = mismatch_table(f, ["physics-inversion", "device-inversion"])
+    SweepResult(f, summarize_sweep(f, labels), e, meta).save(tmp_path / "mm")
+    html = sweep_section(tmp_path / "mm")
+    start = html.index('id="sweep-mismatch"')
+    table = html[start:html.index("</table>", start)]
+    assert "amplified ×11" in html and "3 simulated datasets (seeds)" in html
+    assert "re-tuned per dataset" in html
+    # the privileged rows are marked as references, the deployable one is not
+    assert table.count("(privileged reference)") == 2 * 2 + 2  # the inversion's, the oracle's
+    assert "Device inversion (published tables) assuming <code>diffusion</code></td>" in table
+    assert "best re-tuned deployable reference" in html and "best model" not in html.lower()

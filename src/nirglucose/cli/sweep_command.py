@@ -118,22 +118,13 @@ def sweep(
     the twin's per-LED values to the LEDs it chooses)."""
     from ..evaluation.sweep.run import run_sweep
 
-    if twin is not None and study == "data-size":
-        raise UserError("--study data-size compares presets and --twin is one device: run "
-                        "data-size without --twin, or benchmark --twin at each --subjects")
-    start = twin_start(ctx, twin, twin_mode, seed, set_=None if study == "wear" else set_,
-                       own_leds=study != "wavelengths")
+    start = _twin_start(ctx, study, twin, twin_mode, seed, set_)
     if study == "wear":
         from .wear_command import wear_sweep
 
         return wear_sweep(out, vary, preset, seeds or 1, seed, models, subjects, folds,
                           resamples, set_, jobs=_jobs(jobs), scheduler=scheduler, twin=start)
     if study == "requirements":
-        if start is not None:
-            raise UserError("--study requirements searches designs at the published "
-                            "magnitudes from the study's device; it does not start from a "
-                            "twin yet: run it without --twin (design_bound(twin_scenario(...)) "
-                            "gives a twin's bound in Python)")
         return requirements_sweep(ctx, out, vary, preset, seed, models, subjects, per_subject,
                                   folds, resamples, _jobs(jobs), figures, set_)
     overrides = _parse_sets(set_)
@@ -161,6 +152,21 @@ def sweep(
             save_sweep_figures(out)
         extra.extend(res.meta["warnings"])
     _print_sweep(res, out)
+
+
+def _twin_start(ctx, study, twin, twin_mode, seed, set_):
+    """``--twin``'s start of the sweep (None without it), refused in one line for the
+    studies that cannot start from one device's twin."""
+    if twin is not None and study == "data-size":
+        raise UserError("--study data-size compares presets and --twin is one device: run "
+                        "data-size without --twin, or benchmark --twin at each --subjects")
+    if twin is not None and study == "requirements":
+        raise UserError("--study requirements searches designs at the published magnitudes "
+                        "from the study's device; it does not start from a twin yet: run it "
+                        "without --twin (design_bound(twin_scenario(...)) gives a twin's "
+                        "bound in Python)")
+    return twin_start(ctx, twin, twin_mode, seed, set_=None if study == "wear" else set_,
+                      own_leds=study != "wavelengths")
 
 
 def _check_sweep_args(seed, subjects, per_subject, calibration, study, vary, models, out):

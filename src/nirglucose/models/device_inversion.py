@@ -88,7 +88,7 @@ from ..dataset import Dataset
 from ..dataset.adc import quantisation_variance_ln
 from ..exceptions import DataError
 from ._inversion_solver import NUISANCES, ForwardModel
-from ._params import Integral, Interval, IntervalArray, Real
+from ._params import Integral, Interval, IntervalArray, Real, StrOptions
 from .inversion import ForwardModelInversion
 from .registry import register
 
@@ -346,6 +346,10 @@ class DeviceInversion(ForwardModelInversion):
         Subject-grouped folds of the training rows that learn :attr:`skill_weight_`
         (rows are the groups where no subject ids are given); 0 or 1: weight 1 (the
         posterior mode as it is). [-]
+    lut_solver : {'monte-carlo', 'diffusion'}
+        What fills the ``rte-lut`` model's table (``optics.lut_solver``: Monte Carlo,
+        about 2 CPU-hours per probe geometry and cached, or three-layer diffusion, about
+        40 s); read only with ``forward_model="rte-lut"``.
 
     Attributes
     ----------
@@ -372,6 +376,7 @@ glucose_mean_, glucose_var_
             IntervalArray(Real, 0, _MAX_FWHM_NM, closed="right"),
         ],
         "cv": [Interval(Integral, 0, None, closed="left")],
+        "lut_solver": [StrOptions({"monte-carlo", "diffusion"})],
     }
     _STATE: ClassVar[dict[str, Any]] = {
         **ForwardModelInversion._STATE,
@@ -388,10 +393,12 @@ glucose_mean_, glucose_var_
         max_iter: int = 30,
         led_fwhm_nm: Any = None,
         cv: int = 3,
+        lut_solver: str = "monte-carlo",
     ):
         super().__init__(forward_model, prior_scale, n_em, max_iter)
         self.led_fwhm_nm = led_fwhm_nm
         self.cv = cv
+        self.lut_solver = lut_solver
 
     def _assume(self, X) -> None:  # X is not read: the device's parts only
         wl = self.schema_.wavelengths_nm
@@ -407,6 +414,9 @@ glucose_mean_, glucose_var_
 
     def _build_forward(self) -> LearnedGlucoseForward:
         cfg = device_scenario(self.schema_.wavelengths_nm, self.led_fwhm_nm_)
+        if self.forward_model == "rte-lut":
+            optics = cfg.optics.model_copy(update={"lut_solver": self.lut_solver})
+            cfg = cfg.model_copy(update={"optics": optics})
         return LearnedGlucoseForward(
             ForwardModel(cfg, self.forward_model), self.glucose_mean_, self.glucose_response_
         )

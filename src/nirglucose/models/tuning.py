@@ -47,6 +47,8 @@ __all__ = [
     "lambda_curve",
     "best_positive_lambda",
     "TUNED_AS",
+    "self_tuning_params",
+    "SELF_TUNING",
 ]
 
 #: Simulation seeds of the tuning data: disjoint from the reported seeds 0-4.
@@ -171,6 +173,59 @@ def search_space(name: str) -> dict[str, tuple]:
     tuned = ("ebl, pls, gbr, physics-inversion, device-inversion, ebl+gp, "
              "physics-inversion+gp, every network")
     raise ConfigError(f"no tuning search space for model {name!r}{why}; tuned: {tuned}")
+
+
+#: Families that can choose their own hyper-parameters inside ``fit``, on the rows they
+#: are given only (so, inside an outer split, nested: subject-grouped inner folds of the
+#: training subjects), and why. Where a preset's tuned values do not apply (the
+#: ``mismatch`` study's data from another forward model than the tuning's), these
+#: re-tune each family per dataset with the tuning's budget (:data:`N_CONFIGS`
+#: candidates x :data:`N_FOLDS` subject-grouped folds).
+SELF_TUNING: dict[str, str] = {
+    "ebl": f"ridge penalty by {N_FOLDS}-fold subject-grouped inner CV over its tuning grid "
+           f"({N_CONFIGS} penalties, 1e-6 to 1e5)",
+    "pls": f"components by {N_FOLDS}-fold subject-grouped inner CV over 1-{N_CONFIGS}",
+    "gp": "kernel's hyper-parameters by marginal likelihood on the training rows, one length "
+          "scale per input or one for all by Schwarz's criterion (kernel='bic')",
+    "mean": "nothing to tune",
+    "oracle": "nothing to tune",
+}
+
+
+def self_tuning_params(name: str) -> dict | None:
+    """Constructor arguments with which family ``name`` re-tunes itself inside ``fit``.
+
+    EBL's ridge penalties are its tuning grid (:func:`search_space`, :data:`N_CONFIGS`
+    values) scored by :data:`N_FOLDS` subject-grouped inner folds; PLS's components
+    1-:data:`N_CONFIGS` likewise; the GP fits its kernel by marginal likelihood in every
+    ``fit`` and here also chooses between one length scale per input and one for all
+    (``kernel="bic"``: with few rows the per-input length scales over-fit); the
+    no-skill mean and the oracle take their defaults. The arguments replace a preset's
+    tuned ones (:func:`preset_params`).
+
+    Returns
+    -------
+    dict or None
+        The arguments, or None for a family without an inner selection
+        (:data:`SELF_TUNING` lists those with one).
+
+    Examples
+    --------
+    >>> self_tuning_params("pls")
+    {'n_components': None, 'max_components': 12, 'cv': 3}
+    >>> self_tuning_params("gbr") is None
+    True
+    """
+    if name == "ebl":
+        alphas = tuple(a for (a,) in search_space("ebl")["alphas"])
+        return {"alphas": alphas, "cv": N_FOLDS}
+    if name == "pls":
+        return {"n_components": None, "max_components": N_CONFIGS, "cv": N_FOLDS}
+    if name == "gp":
+        return {"kernel": "bic"}
+    if name in SELF_TUNING:
+        return {}
+    return None
 
 
 @lru_cache(maxsize=1)

@@ -22,9 +22,11 @@ import pandas as pd
 from matplotlib.figure import Figure
 from pydantic import BaseModel
 
-from ..config import ScenarioConfig
+from ..config import ScenarioConfig, resolve_config
 from ..evaluation.sweep.run import SweepResult, load_sweep, threshold_crossing
+from ..exceptions import ConfigError
 from ..formatting import MISSING, format_ci, format_number
+from ..models.registry import privileged_knowledge
 from ..plots.designs import plot_design_curve
 from ..plots.fleet import figure_fleet
 from ..plots.style import figure_bytes, model_label, save_figure
@@ -228,7 +230,10 @@ def sweep_section(sweep_dir: str | Path) -> str:
         parts += _crossing(res.summary, key)
     if "rmse_mgdl_mean" in res.summary:
         parts.append(_summary_table(res.summary, res.meta, key))
-    parts += _effects_tables(res.effects)
+    if res.meta.get("study") == "mismatch":
+        parts += _mismatch_tables(res.effects, res.meta)
+    else:
+        parts += _effects_tables(res.effects)
     for f in sweep_figures(res):
         parts.append(_figure_html(f))
     parts.append("</section>")
@@ -359,3 +364,106 @@ def _fleet_table(e: pd.DataFrame) -> list[str]:
             "interval]; <em>same-unit</em> trains on the test unit itself.</p>",
             _table(["tolerance scale", "variant", *[f"{_label(m)} RMSE" for m in models]],
                    rows, "sweep-fleet")]
+
+
+def _regime(preset: Any) -> str:
+    """Which glucose regime a preset's claims hold in (its ``glucose.signal_gain``)."""
+    try:
+        gain = float(resolve_config(str(preset)).glucose.signal_gain)
+    except ConfigError:  # a preset this version does not know: say so, claim nothing
+        return f"preset <code>{_esc(preset)}</code> (glucose signal gain unknown)"
+    if gain == 1.0:
+        return (f"preset <code>{_esc(preset)}</code>, glucose at its published optical "
+                "magnitude (physical regime)")
+    return (f"preset <code>{_esc(preset)}</code>, glucose's optical effect amplified "
+            f"×{format_number(gain, style='general')} over its published magnitude "
+            "(amplified regime: these numbers do not hold at published magnitudes)")
+
+
+def _who(model: str, assumed: Any) -> str:
+    """A row's name: the model, what it assumes, and whether it is privileged."""
+    name = _label(model)
+    if isinstance(assumed, str) and assumed:
+        name += f" assuming <code>{_esc(assumed)}</code>"
+    try:
+        priv = privileged_knowledge(model)
+    except ConfigError:  # an estimator object's label: it declares nothing
+        priv = None
+    return f"{name} <em>(privileged reference)</em>" if priv else name
+
+
+def _mismatch_tables(e: pd.DataFrame | None, m: dict[str, Any]) -> list[str]:
+    """The ``mismatch`` study: per data model, every row across seeds, and what it shows.
+
+    Built from ``effects.csv`` (:func:`~nirglucose.evaluation.sweep.analysis.mismatch_table`).
+    """
+    if e is None or not len(e) or "rmse_mean" not in e:
+        return []
+    n_seeds = len(m.get("seeds", []))
+    parts = [
+        "<h3>Model mismatch: the inversions against re-tuned references, across seeds</h3>",
+        f"<p>Claims hold in one regime: {_regime(m.get('preset'))}. Each number is over "
+        f"{n_seeds} simulated datasets (seeds), not one dataset's bootstrap: the mean "
+        "RMSE, its SD and range over seeds, and the paired difference from no skill "
+        "(the training mean; same seed, same folds) with a Student-t 95 % interval over "
+        "seeds. <em>Privileged</em> rows read the generating scenario (or the true "
+        "nuisances): references, never candidates.</p>",
+    ]
+    tuning = m.get("tuning") or {}
+    if tuning:
+        items = "".join(f"<li>{_label(k)}: {_esc(v)}</li>" for k, v in tuning.items())
+        parts.append(f"<p>How each model was tuned:</p><ul>{items}</ul>")
+    head = ["data made by", "model", "RMSE mg/dL, mean over seeds (SD) [min, max]",
+            "Δ vs no skill mg/dL [95 % CI over seeds]", "seeds below no skill",
+            "seeds worse than no skill beyond its CI"]
+    rows, sentences = [], []
+    for made, g in e.groupby("data_model", sort=False):
+        for _, r in g.iterrows():
+            rows.append([
+                _esc(made), _who(r["model"], r.get("assumed_model")),
+                f"{_num(r['rmse_mean'])} ({_num(r['rmse_sd'])}) "
+                f"[{_num(r['rmse_min'])}, {_num(r['rmse_max'])}]",
+                f"{_num(r['delta_no_skill'])} [{_num(r['delta_no_skill_ci_low'])}, "
+                f"{_num(r['delta_no_skill_ci_high'])}]",
+                f"{int(r['seeds_below_no_skill'])} / {int(r['n_seeds'])}",
+                f"{int(r['seeds_worse_beyond_ci'])} / {int(r['n_seeds'])}",
+            ])
+        sentences.append(_mismatch_sentence(str(made), g))
+    parts.append(_table(head, rows, "sweep-mismatch"))
+    parts.append("<ul>" + "".join(f"<li>{x}</li>" for x in sentences if x) + "</ul>")
+    return parts
+
+
+def _mismatch_sentence(made: str, g: pd.DataFrame) -> str:
+    """One data model's finding in words: each inversion matched and mismatched against
+    the best deployable reference and no skill (means over seeds)."""
+    def deployable(model: str) -> bool:
+        try:
+            return privileged_knowledge(model) is None
+        except ConfigError:  # an estimator object's label: it declares nothing
+            return True
+
+    refs = g[g["assumed_model"].isna() | (g["assumed_model"].astype(str) == "")]
+    no_skill = refs[refs["model"] == "mean"]
+    cands = refs[[deployable(x) and x != "mean" for x in refs["model"]]]
+    bits = []
+    for model, h in g[~g.index.isin(refs.index)].groupby("model", sort=False):
+        hit = h[h["assumed_model"] == made]
+        other = h[h["assumed_model"] != made]
+        kind = "deployable" if deployable(str(model)) else "privileged reference"
+        if len(hit):
+            txt = (f"{_label(str(model))} ({kind}) {_num(hit['rmse_mean'].iloc[0])} mg/dL "
+                   "assuming the right model")
+            if len(other):
+                txt += (f", {_num(other['rmse_mean'].min())}-{_num(other['rmse_mean'].max())} "
+                        "assuming another")
+            bits.append(txt)
+    if len(cands):
+        best = cands.loc[cands["rmse_mean"].idxmin()]
+        bits.append(f"the best re-tuned deployable reference, {_label(str(best['model']))}, "
+                    f"{_num(best['rmse_mean'])}")
+    if len(no_skill):
+        bits.append(f"no skill {_num(no_skill['rmse_mean'].iloc[0])}")
+    if not bits:
+        return ""
+    return f"Data made by <code>{_esc(made)}</code>: " + "; ".join(bits) + " (means over seeds)."

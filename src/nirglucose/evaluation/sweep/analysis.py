@@ -23,6 +23,8 @@ __all__ = [
     "shift_effects",
     "threshold_crossing",
     "ranking_crossings",
+    "mismatch_table",
+    "NO_SKILL_MODEL",
 ]
 
 #: Metrics :func:`summarize_sweep` aggregates over seeds by default.
@@ -327,3 +329,70 @@ def ranking_crossings(
                         }
                     )
     return pd.DataFrame(rows, columns=cols)
+
+
+#: The no-skill reference of :func:`mismatch_table` (the training mean).
+NO_SKILL_MODEL = "mean"
+
+
+def mismatch_table(frame: pd.DataFrame, subjects: Sequence[str] = ()) -> pd.DataFrame:
+    """The ``mismatch`` study across seeds: per data model, each inversion and reference.
+
+    Claims about mismatch rest on several simulated datasets (seeds), not on one
+    dataset's bootstrap: every row gives the mean, SD and range of the RMSE over seeds,
+    the paired difference from no skill (:data:`NO_SKILL_MODEL`, same seed and folds)
+    with its Student-t 95 % interval over seeds, in how many seeds the model scored
+    below no skill, and in how many it was worse than no skill beyond its own subject
+    bootstrap interval (``rmse_ci_low`` above no skill's RMSE).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``sweep.csv`` rows of the ``mismatch`` study (``data_model``,
+        ``assumed_model``, ``model``, ``seed``, ``rmse_mgdl``, ``rmse_ci_low``).
+    subjects : sequence of str
+        The estimators whose assumed forward model varies (one row per assumed model);
+        every other model's rows do not depend on it (one row per data model).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``data_model``, ``model``, ``assumed_model`` (empty for a reference),
+        ``matched`` (assumed = data model; None for a reference), ``n_seeds``,
+        ``rmse_mean``, ``rmse_sd``, ``rmse_min``, ``rmse_max`` [mg/dL],
+        ``delta_no_skill``, ``delta_no_skill_ci_low``, ``delta_no_skill_ci_high`` (RMSE
+        minus no skill's, mean over seeds) [mg/dL], ``seeds_below_no_skill``,
+        ``seeds_worse_beyond_ci``; empty without those columns.
+    """
+    need = {"data_model", "assumed_model", "model", "seed", "rmse_mgdl"}
+    if not need <= set(frame.columns) or frame.empty:
+        return pd.DataFrame()
+    f = frame.copy()
+    if "rmse_ci_low" not in f:
+        f["rmse_ci_low"] = np.nan
+    ref_rows = f[~f["model"].isin(subjects)]
+    # a reference's rows are one task per (data model, seed): keep one copy
+    ref_rows = ref_rows.drop_duplicates(["data_model", "model", "seed"])
+    ref_rows = ref_rows.assign(assumed_model="")
+    rows = pd.concat([f[f["model"].isin(subjects)], ref_rows], ignore_index=True)
+    base = (f[f["model"] == NO_SKILL_MODEL].drop_duplicates(["data_model", "seed"])
+            .set_index(["data_model", "seed"])["rmse_mgdl"])
+    out = []
+    for (made, model, assumed), g in rows.groupby(
+            ["data_model", "model", "assumed_model"], sort=False):
+        r = g["rmse_mgdl"].to_numpy(float)
+        ns = base.reindex(pd.MultiIndex.from_arrays(
+            [g["data_model"], g["seed"]])).to_numpy(float)
+        mean, sd, _, _ = _t_interval(r, 0.95)
+        d_mean, _, d_lo, d_hi = _t_interval(r - ns, 0.95)
+        out.append({
+            "data_model": made, "model": model, "assumed_model": assumed,
+            "matched": None if assumed == "" else bool(assumed == made),
+            "n_seeds": int(np.isfinite(r).sum()), "rmse_mean": mean, "rmse_sd": sd,
+            "rmse_min": float(np.nanmin(r)), "rmse_max": float(np.nanmax(r)),
+            "delta_no_skill": d_mean, "delta_no_skill_ci_low": d_lo,
+            "delta_no_skill_ci_high": d_hi,
+            "seeds_below_no_skill": int(np.sum(r < ns)),
+            "seeds_worse_beyond_ci": int(np.sum(g["rmse_ci_low"].to_numpy(float) > ns)),
+        })
+    return pd.DataFrame(out)

@@ -44,7 +44,10 @@ Outputs (:meth:`SweepResult.save`)
     ``sweep.csv`` (one row per scenario × seed × model, the scenario's varied values
     as columns, then every metric of :data:`SWEEP_METRICS`), ``summary.csv`` (mean,
     SD and a 95 % t-interval over seeds per scenario × model), ``effects.csv``
-    (ablation or shift effects, when the study has them) and ``sweep_meta.json``.
+    (ablation or shift effects, the ``mismatch`` study's table across seeds
+    (:func:`~nirglucose.evaluation.sweep.analysis.mismatch_table`), when the study has
+    them) and ``sweep_meta.json`` (its ``tuning``: how each model's hyper-parameters were
+    chosen, where a study re-tunes them).
 """
 
 from __future__ import annotations
@@ -91,6 +94,7 @@ from ..splits import effective_layout
 from .analysis import (
     SUMMARY_METRICS,
     ablation_effects,
+    mismatch_table,
     ranking_crossings,
     shift_effects,
     summarize_sweep,
@@ -102,7 +106,7 @@ from .studies import (
     DATA_SIZE_PRESETS,
     DATA_SIZE_SUBJECTS,
     DATA_SIZE_TEST_SUBJECTS,
-    MISMATCH_SUBJECT,
+    MISMATCH_SUBJECTS,
     STUDIES,
     STUDY_GRIDS,
     STUDY_MODELS,
@@ -110,6 +114,7 @@ from .studies import (
     grid_scenarios,
     parse_vary,
     resolve_scenarios,
+    study_model_params,
     study_scenarios,
 )
 from .wavelengths import wavelength_designs
@@ -591,6 +596,8 @@ def _effects(study: str | None, frame: pd.DataFrame, summary: pd.DataFrame) -> p
         return wavelength_designs(frame)
     if study == "fleet":
         return fleet_table(frame)
+    if study == "mismatch":
+        return mismatch_table(frame, MISMATCH_SUBJECTS)
     return None
 
 
@@ -620,6 +627,8 @@ def _sweep_meta(
         ),
         **{k: opts[k] for k in ("seeds", "models", "protocol", "n_splits", "repeats")},
         "estimators": opts["estimators"],  # rows given as estimator objects: fitted as given
+        # how each model's hyper-parameters were chosen, where the study re-tunes them
+        **({"tuning": opts["tuning"]} if opts["tuning"] else {}),
         **{k: opts[k] for k in ("n_subjects", "per_subject", "n_boot")},
         "version": __version__,
         "task_format": TASK_FORMAT,
@@ -655,15 +664,18 @@ def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int]
 
 
 def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
-                  params: Mapping[str, Any] | None) -> tuple[list[str], dict[str, Any]]:
-    """The rows' labels (a study's subject first) and label -> estimator object."""
+                  params: Mapping[str, Any] | None
+                  ) -> tuple[list[str], dict[str, Any], dict[str, Any], dict[str, str]]:
+    """The rows' labels (a study's subjects first), label -> estimator object, and the
+    models' parameters and tuning notes (:func:`~.studies.study_model_params`)."""
     labels, objects = resolve_rows(models, STUDY_MODELS.get(study, DEFAULT_MODELS), params)
     if objects and any(sc.kind == "fleet" for sc in scenarios):
         raise ConfigError(f"the fleet study takes registered model names, not estimator "
                           f"objects ({', '.join(objects)}); run the objects in a grid study")
-    if study == "mismatch" and MISMATCH_SUBJECT not in labels:
-        labels = [MISMATCH_SUBJECT, *labels]  # the study's subject always runs
-    return labels, objects
+    if study == "mismatch":  # the study's subjects always run
+        labels = [*(m for m in MISMATCH_SUBJECTS if m not in labels), *labels]
+    own, tuning = study_model_params(study, [m for m in labels if m not in objects], params)
+    return labels, objects, own, tuning
 
 
 def run_sweep(
@@ -759,7 +771,7 @@ def run_sweep(
     t_start = time.perf_counter()
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base, led_fields)
-    models, objects = _sweep_models(models, study, scenarios, model_params)
+    models, objects, model_params, tuning = _sweep_models(models, study, scenarios, model_params)
     proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
@@ -787,9 +799,9 @@ def run_sweep(
                 n_subjects=n_subjects, per_subject=per_subject, n_boot=proto.resamples,
                 label_columns=label_columns, backend=backend, n_workers=n_workers,
                 scheduler=scheduler, t_start=t_start, estimators=describe_entries(objects),
-                twin=twin, led_fields=led_fields)
-    result = SweepResult(frame, summary, _effects(study, frame, summary),
-                         _sweep_meta(scenarios, cache, len(pending), opts))
+                twin=twin, led_fields=led_fields, tuning=tuning)
+    result = SweepResult(frame=frame, summary=summary, effects=_effects(study, frame, summary),
+                         meta=_sweep_meta(scenarios, cache, len(pending), opts))
     if out is not None:
         result.save(out)
     return result

@@ -41,11 +41,16 @@ Studies (:data:`STUDIES`)
     ``mismatch``
         Model mismatch, the honest test of a physics model: data made by each forward
         model of :data:`~nirglucose.evaluation.sweep.studies.MISMATCH_FORWARD_MODELS`
-        (``optics.model``) and the forward-model estimator
-        (:data:`~nirglucose.evaluation.sweep.studies.MISMATCH_SUBJECT`) assuming each one
-        (its ``forward_model``), every pair; EBL, the GP and the oracle (default
-        models, :data:`~nirglucose.evaluation.sweep.studies.STUDY_MODELS`) for reference,
-        once per data model. The estimator always runs, besides ``models``.
+        (``optics.model``) and the forward-model estimators
+        (:data:`~nirglucose.evaluation.sweep.studies.MISMATCH_SUBJECTS`: the privileged
+        ``physics-inversion`` and the deployable ``device-inversion``) assuming each one
+        (their ``forward_model``), every pair; EBL, the GP, no skill and the oracle
+        (default models, :data:`~nirglucose.evaluation.sweep.studies.STUDY_MODELS`) for
+        reference, once per data model. The estimators always run, besides ``models``.
+        The preset's tuned hyper-parameters were tuned on its own forward model's data,
+        so every reference with an inner selection re-tunes itself on each task's
+        training subjects (nested; :func:`~nirglucose.models.tuning.self_tuning_params`,
+        :func:`study_model_params`); claims rest on several simulation seeds.
     ``wavelengths``
         LED sets: every subset of 1-6 candidate LEDs per detector ranked by the device
         bound (:func:`~nirglucose.design.search.rank_designs`), the best of each size
@@ -86,6 +91,7 @@ from ...config import (
 )
 from ...design.fleet import MAX_TOLERANCE_SCALE
 from ...exceptions import ConfigError, is_finite_number, unknown_name
+from ...models.tuning import SELF_TUNING, self_tuning_params
 from .fleet import FLEET_DEFAULTS, FLEET_TOLERANCE_SCALES, FLEET_VARIANTS
 from .scenarios import Scenario
 from .wavelengths import WAVELENGTHS_MODELS, WAVELENGTHS_PRESET, wavelength_scenarios
@@ -99,7 +105,9 @@ __all__ = [
     "DATA_SIZE_PRESETS",
     "MISMATCH_FORWARD_MODELS",
     "MISMATCH_SUBJECT",
+    "MISMATCH_SUBJECTS",
     "STUDY_MODELS",
+    "study_model_params",
     "FLEET_STUDY",
     "FLEET_KEY",
     "Scenario",
@@ -148,12 +156,16 @@ DATA_SIZE_PRESETS = ("paper", "wearable")
 #: three-layer diffusion solver, ``optics.lut_solver = "diffusion"``, about 40 s per
 #: geometry and cached, instead of the 2-CPU-hour Monte Carlo).
 MISMATCH_FORWARD_MODELS = ("beer-lambert", "diffusion", "rte-lut")
-#: The estimator whose assumed forward model the ``mismatch`` study varies (its
-#: ``forward_model`` parameter); the study always runs it.
-MISMATCH_SUBJECT = "physics-inversion"
+#: The estimators whose assumed forward model the ``mismatch`` study varies (their
+#: ``forward_model`` parameter); the study always runs them: the privileged inversion
+#: (it reads the generating scenario) and the deployable one (the device's parts and
+#: published tables only; its rte-lut table filled by the diffusion solver, as the data's).
+MISMATCH_SUBJECTS = ("physics-inversion", "device-inversion")
+#: The privileged one of :data:`MISMATCH_SUBJECTS`.
+MISMATCH_SUBJECT = MISMATCH_SUBJECTS[0]
 #: Default models of a study when none are given (others: the sweep's defaults).
 STUDY_MODELS: dict[str, tuple[str, ...]] = {
-    "mismatch": (MISMATCH_SUBJECT, "ebl", "gp", "oracle"),
+    "mismatch": (*MISMATCH_SUBJECTS, "ebl", "gp", "mean", "oracle"),
     "wavelengths": WAVELENGTHS_MODELS,
     FLEET_STUDY: ("ebl", "gp", "oracle"),
 }
@@ -375,12 +387,49 @@ def _fleet_scenarios(scales: Sequence[Any] | None) -> list[Scenario]:
     ]
 
 
+def study_model_params(
+    study: str | None, models: Sequence[str], given: Mapping[str, Mapping[str, Any]] | None
+) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
+    """The constructor arguments of a study's models, and how each was tuned.
+
+    In the ``mismatch`` study every model but :data:`MISMATCH_SUBJECTS` that can re-tune
+    itself (:func:`~nirglucose.models.tuning.self_tuning_params`) does so on each task's
+    training subjects, since the preset's tuned values come from its own forward
+    model's data; the caller's ``given`` arguments win. Other studies: ``given``.
+
+    Returns
+    -------
+    tuple of (dict, dict)
+        Model -> arguments (only models with any), and model -> how it was tuned
+        (``mismatch`` only: ``"re-tuned per dataset: ..."``, ``"the preset's tuned
+        parameters"``, ``"nothing to tune"`` or ``"as given"``).
+    """
+    params = {k: dict(v) for k, v in (given or {}).items()}
+    how: dict[str, str] = {}
+    if study != "mismatch":
+        return params, how
+    for m in models:
+        own = self_tuning_params(m)
+        if m in params:
+            how[m] = "as given (model_params)"
+        elif m in MISMATCH_SUBJECTS or own is None:
+            how[m] = ("the preset's tuned parameters where it has them (tuned on its own "
+                      "forward model's data), else its defaults")
+        elif not own and m in ("mean", "oracle"):
+            how[m] = SELF_TUNING[m]
+        else:
+            how[m] = f"re-tuned per dataset: {SELF_TUNING[m]}"
+            if own:
+                params[m] = own
+    return params, how
+
+
 def _mismatch_scenarios() -> list[Scenario]:
-    """Data from each forward model x the estimator assuming each one (every pair).
+    """Data from each forward model x the estimators assuming each one (every pair).
 
     Scenarios with the same data share their other models' tasks (a task is named by
     its specification, which the assumed model changes only for
-    :data:`MISMATCH_SUBJECT`), so EBL, the GP and the oracle run once per data model.
+    :data:`MISMATCH_SUBJECTS`), so the references run once per data model.
     """
     out = []
     for made in MISMATCH_FORWARD_MODELS:
@@ -390,7 +439,11 @@ def _mismatch_scenarios() -> list[Scenario]:
                     f"data={made}:assumed={assumed}",
                     {"data_model": made, "assumed_model": assumed, "mismatched": made != assumed},
                     {"optics.model": made, "optics.lut_solver": "diffusion"},
-                    model_params={MISMATCH_SUBJECT: {"forward_model": assumed}},
+                    model_params={
+                        "physics-inversion": {"forward_model": assumed},
+                        "device-inversion": {"forward_model": assumed,
+                                             "lut_solver": "diffusion"},
+                    },
                 )
             )
     return out
