@@ -55,3 +55,7 @@ def test_the_checker_sees_the_package_types(tmp_path):
     bad.write_text("import nirglucose as ng\n\nn: int = ng.simulate('paper')\n")
     out = _mypy(str(bad), cwd=ROOT)
     assert out.returncode == 1 and "Dataset" in out.stdout, out.stdout
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

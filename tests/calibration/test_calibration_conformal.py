@@ -155,6 +155,7 @@ def test_personal_calibration_refuses_bad_k(bench):
         run_benchmark(bench.dataset, ["mean"], protocol=Protocol(calibration=-1), )
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_network_carries_its_calibration(tmp_path):
     from nirglucose.models import make_model
 

@@ -163,3 +163,7 @@ def test_sweep_calibration_columns():
         row["later_rmse_mgdl"] - row["offset_rmse_mgdl"]
     )
     assert "coverage90_pct" in res.frame
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

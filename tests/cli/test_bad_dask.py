@@ -172,3 +172,7 @@ def test_a_live_scheduler_passes_the_check(remote):
     cluster, _ = remote
     check_scheduler(cluster.scheduler_address, timeout_s=5)
     check_scheduler("local")  # started by the run itself: nothing to check
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = [pytestmark, pytest.mark.slow]

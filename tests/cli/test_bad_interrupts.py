@@ -141,3 +141,7 @@ def test_a_signal_while_the_script_starts_is_one_line(tmp_path, sig, status, wor
     lines = [ln for ln in err.splitlines() if ln.strip() and not PROGRESS.match(ln)]
     assert len(lines) == 1 and lines[0].startswith(f"error: {word}"), err
     assert not (tmp_path / "d.csv").exists()
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = [pytestmark, pytest.mark.slow]

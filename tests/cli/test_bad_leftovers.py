@@ -47,3 +47,7 @@ def test_existing_out_kept_but_tasks_removed(cli, workdir, monkeypatch):
     code, _, err = cli(*BENCH)
     assert_one_line_error(code, err, contains=["a task failed"])
     assert listing(workdir) == {"res", "res/notes.txt"}
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

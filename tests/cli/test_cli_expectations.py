@@ -61,6 +61,7 @@ def test_jobs_above_cores_warns(cli, workdir, monkeypatch):
     assert "warning: --jobs 2 exceeds the 1 available cores" in err
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_progress_lines_when_not_a_terminal(cli, workdir):
     code, _, err = cli("benchmark", "--out", "res", "--subjects", 10, "--per-subject", 2,
                        "--models", "ebl", "--folds", 2, "--repeats", 1, "--resamples", 10)

@@ -44,3 +44,7 @@ def test_device_inversion_fits_the_csv_as_the_parquet(cli, files, tmp_path):
     from_csv, from_parquet = load_model(tmp_path / "csv.json"), load_model(tmp_path / "pq.json")
     np.testing.assert_array_equal(from_csv.predict(ds), from_parquet.predict(ds))
     assert (tmp_path / "csv.json").read_bytes() == (tmp_path / "pq.json").read_bytes()
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -131,6 +131,7 @@ def test_calibration_on_the_predicted_rows_is_warned(cli, device, tmp_path):
     assert "25 of the 25 readings predicted are also calibration readings" in err
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_benchmark_report_claim_no_significance_from_5_test_subjects(cli, device, tmp_path):
     out_dir = tmp_path / "bench"
     code, out, err = cli("benchmark", "--data", device, "--out", out_dir, "--models", "ebl,pls",

@@ -45,3 +45,7 @@ def test_the_wear_sweep_resumes(cli, tmp_path):  # noqa: F811
 def test_bad_wear_options_are_one_line(cli, tmp_path, args, says):  # noqa: F811
     code, _, err = cli(*args, "--out", tmp_path / "o")
     assert_one_line_error(code, err, contains=(says,))
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

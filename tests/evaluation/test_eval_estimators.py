@@ -203,6 +203,7 @@ def test_resolve_entries_forms():
     assert [e.label for e in resolve_entries(None, ["pls"])] == ["pls"]
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_sweep_takes_objects(tmp_path):
     kw = dict(seeds=1, n_subjects=16, per_subject=2, protocol="paper-split", n_boot=30)
     models = ["pls", ("ridge", make_pipeline(StandardScaler(), Ridge()))]

@@ -67,6 +67,7 @@ def test_a_protocol_beside_a_changed_keyword_is_refused():
         run_sweep({"noise_scale": [1.0]}, protocol=Protocol(seed=2), seeds=1, models=["pls"])
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_run_benchmark_takes_the_protocol_as_one_value():
     data = ng.simulate("paper", n_subjects=16, per_subject=2, seed=0)
     with pytest.warns(DeprecationWarning, match=r"removed in nirglucose 0\.3: give "

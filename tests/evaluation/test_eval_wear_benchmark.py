@@ -64,3 +64,7 @@ def test_the_standards_of_a_worn_monitor_are_computed_per_schedule(result):
     assert set(result.icgm["criterion"]) >= {"A", "B", "C"}
     day1 = st[(st["schedule"] == "day1-1") & (st["variant"] == "raw")].set_index("model")
     assert day1.loc["ebl", "mard_pct"] < day1.loc["mean", "mard_pct"]
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

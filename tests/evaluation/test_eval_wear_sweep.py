@@ -76,3 +76,7 @@ def test_cli_bad_scheduler_is_one_line(tmp_path, capsys):
                  "wear_days=1", "--preset", "paper", "--scheduler", "nohost:8786"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and err.count("\n") == 0 and "not an address" in err
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -131,3 +131,7 @@ def _python_trees(model, u):
             node = np.where(left < 0, node, nxt).astype(int)
         out += model.value_[t, node]
     return out
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -53,6 +53,7 @@ def test_repeats_are_scored_separately_and_averaged():
     assert both["rmse_mgdl"] == pytest.approx(expected)
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_rmse_interval_covers_the_true_value_at_about_the_nominal_rate():
     rng = np.random.default_rng(3)
     true_rmse = np.hypot(8.0, 6.0)  # subject effect and noise
@@ -111,6 +112,7 @@ def test_paired_test_finds_a_planted_difference():
     assert not row.loc[other, "significant"]
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_paired_test_false_positive_rate_under_the_null():
     rng = np.random.default_rng(6)
     rejections = 0

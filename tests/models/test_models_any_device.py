@@ -182,3 +182,7 @@ def test_measurement_transformer_is_the_one_boundary():
         MeasurementTransformer().fit(bad)
     with pytest.raises(DataError, match="no ADC columns"):
         MeasurementTransformer().fit(pd.DataFrame({"glucose_mgdl": [100.0]}))
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

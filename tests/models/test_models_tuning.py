@@ -103,6 +103,7 @@ def quiet_split():
     return rows(~held_out), rows(held_out)
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 @pytest.mark.parametrize("name", NETWORKS)
 def test_network_does_not_collapse_to_the_mean(quiet_split, name):
     # A network that predicts (nearly) the training mean on held-out subjects of a quiet
@@ -118,6 +119,7 @@ def test_network_does_not_collapse_to_the_mean(quiet_split, name):
     assert rmse < 0.75 * no_skill, f"{name}: RMSE {rmse:.1f} vs no-skill {no_skill:.1f} mg/dL"
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_linear_lookups_do_not_import_torch():
     import subprocess
     import sys

@@ -69,3 +69,7 @@ def test_small_untuned_fit_with_signal_still_learns_it(tmp_path):
     ds = _device_file(tmp_path, 0, signal=True)
     rmse, no_skill = _cv_and_no_skill(untuned_params("sdnn"), ds)
     assert rmse < 0.6 * no_skill
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = [pytestmark, pytest.mark.slow]

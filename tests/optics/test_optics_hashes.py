@@ -61,3 +61,7 @@ def test_a_changed_result_changes_its_hash():
     b = a.copy()
     b[3] = np.nextafter(b[3], 2.0)
     assert h(a) == h(a.copy()) != h(b)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -485,3 +485,7 @@ def test_a_default_monte_carlo_build_is_announced_as_a_warning(tiny, monkeypatch
         L.load_or_build_lut(RHO, T_EPI, directory=tmp_path, solver="diffusion")
     levels = [(r.levelname, "about 2 hours" in r.getMessage()) for r in caplog.records]
     assert levels == [("WARNING", True), ("INFO", False)]
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

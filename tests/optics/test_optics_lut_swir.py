@@ -225,3 +225,7 @@ def test_white_monte_carlo_matches_the_numpy_engine_at_swir_absorption():
     se = (1 - fresnel) * per_batch.std(ddof=1) * np.sqrt(run.n_batches) / run.n_photons / area
     assert r_ref > 0 and abs(r - r_ref) < 4 * np.hypot(se, se_ref)
     np.testing.assert_allclose((w @ ell)[1] / w.sum() / musp, p_ref[1], rtol=0.05)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = [pytestmark, pytest.mark.slow]

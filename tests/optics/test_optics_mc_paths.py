@@ -131,3 +131,7 @@ def test_three_layer_model_against_monte_carlo():
         assert abs(r_model / r_mc - 1.0) < 0.04 + 3 * se / r_mc
         np.testing.assert_allclose(p_model[1:], p_mc[1:], rtol=0.12)
         assert p_model[0] == pytest.approx(p_mc[0], rel=0.25)  # diffusion near the surface
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

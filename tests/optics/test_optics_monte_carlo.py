@@ -186,3 +186,7 @@ def test_bad_input_raises(kwargs, match):
 def test_layer_length_mismatch_raises():
     with pytest.raises(ConfigError, match="per layer"):
         mc_layers([1.0, 1.0], [10.0, 10.0, 10.0], 0.9, [0.1, 0.1], 1.4, n_photons=10, rng=0)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -245,3 +245,7 @@ def test_band_nodes_are_no_longer_clipped_at_1300_nm():
     water = (spectra.spectra["water"] * spectra.weights).sum()
     # the 1300 nm band's red tail climbs the 1450 nm water band: more than the centre
     assert water > float(absorption.water_mua_per_cm(1300.0))
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = [pytestmark, pytest.mark.slow]

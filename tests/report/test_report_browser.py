@@ -168,3 +168,7 @@ def test_figures_open_full_size_on_a_phone(driver, report):
     assert driver.execute_script(  # on a wide screen the figures fit the column again
         "const i = document.querySelector('figure .zoom img');"
         "return i.getBoundingClientRect().width <= i.parentElement.clientWidth + 1")
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = [pytestmark, pytest.mark.slow]

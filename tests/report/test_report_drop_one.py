@@ -6,6 +6,7 @@ import shutil
 from html.parser import HTMLParser
 
 import pandas as pd
+import pytest
 
 from nirglucose.evaluation.benchmark.drop_one import led_verdicts
 from nirglucose.report import build_report, load_results
@@ -93,3 +94,7 @@ def test_too_few_subjects_name_no_led():
     rows = [("ebl", 1050.0, 40.0, 30.0, 50.0)]
     (v,) = led_verdicts(_run(rows, n_subjects=8))
     assert v["withheld"] and v["row"] is None
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -125,3 +125,7 @@ def test_mismatch_section_states_regime_seeds_and_privileged_rows(tmp_path):
     assert table.count("(privileged reference)") == 2 * 2 + 2  # the inversion's, the oracle's
     assert "Device inversion (published tables) assuming <code>diffusion</code></td>" in table
     assert "best re-tuned deployable reference" in html and "best model" not in html.lower()
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

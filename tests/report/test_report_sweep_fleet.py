@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from nirglucose.evaluation.sweep.run import run_sweep
 from nirglucose.report.sweep import sweep_figures, sweep_section
 
@@ -15,3 +17,7 @@ def test_fleet_section_has_table_and_figure(tmp_path):
     names = [f.name for f in sweep_figures(out)]
     assert names == ["sweep_fleet"]
     assert html.count("<img") == 1
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

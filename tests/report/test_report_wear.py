@@ -44,3 +44,7 @@ def test_an_incomplete_run_is_one_line(worn, tmp_path):
     (tmp_path / "wear_schedules.csv").write_text((worn / "wear_schedules.csv").read_text())
     with pytest.raises(DataError, match="wear-benchmark"):
         build_wear_report(tmp_path, tmp_path / "r.html")
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

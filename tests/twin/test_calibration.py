@@ -47,3 +47,7 @@ def test_ranks_are_not_piled_at_the_ends(sbc):
         ranks = np.asarray(v["ranks"])
         ends = np.mean((ranks == 0) | (ranks == sbc["n_draws"]))
         assert ends < 0.25, (key, ends)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -129,3 +129,7 @@ def test_cli_twin_bad_twin_file_one_line(tmp_path, capsys):
     code = main(["simulate", "--twin", str(bad), "--out", str(tmp_path / "x.csv")])
     _, err = capsys.readouterr()
     assert code == 2 and err.startswith("error: twin file") and len(err.splitlines()) == 1
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

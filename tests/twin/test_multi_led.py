@@ -7,6 +7,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 
 import nirglucose as ng
 from nirglucose.twin import InferenceSettings, load_twin
@@ -39,3 +40,7 @@ def test_three_leds_with_references(tmp_path, monkeypatch):
     assert cfg.leds.wavelengths_nm == (850.0, 940.0, 1150.0) and cfg.hardware.adc_bits == 14
     sim = ng.simulate(ng.twin_scenario(tmp_path / "tw"), n_subjects=3, per_subject=2, seed=0)
     assert np.all(sim.frame[["adc_850", "adc_940", "adc_1150"]].to_numpy() <= 2 ** 14 - 1)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

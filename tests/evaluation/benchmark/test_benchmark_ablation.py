@@ -201,3 +201,7 @@ def test_drop_one_none_runs_no_refit(data, tmp_path):
                on_task=lambda spec, cached: seen.append(spec))
     assert res.drop_one.empty and len(res.metrics) == 1
     assert len(seen) == 2 and not any("drop_nm" in s for s in seen)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
 import nirglucose as ng
 from nirglucose.evaluation import Protocol
@@ -100,3 +101,7 @@ def test_report_section_renders_the_csv(tmp_path):
     assert html.count("<tr><td>") == len(t)
     (tmp_path / "r" / "inverse.csv").unlink()
     assert inverse_section([load_results(tmp_path / "r")]) == ""
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

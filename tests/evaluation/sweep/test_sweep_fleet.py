@@ -98,3 +98,7 @@ def test_fleet_table_interval_over_seeds():
     assert r["rmse_mgdl"] == 25.0
     assert r["rmse_ci_high"] == pytest.approx(25 + 12.7062 * 5.0, rel=1e-4)
     assert r["rmse_vs_same_unit"] == pytest.approx(25 / 11)
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

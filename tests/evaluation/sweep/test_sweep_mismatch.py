@@ -137,3 +137,7 @@ def test_no_reference_is_worse_than_no_skill_beyond_its_ci(monkeypatch, seed):
     assert set(e["model"]) == {"ebl", "gp", "mean"} and len(e) == 3 * 3
     refs = e[e["model"] != "mean"]
     assert (refs["seeds_worse_beyond_ci"] == 0).all(), refs.to_string()
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -192,3 +192,7 @@ def test_run_sweep_names_the_requirements_studys_own_entry_point():
 
     with pytest.raises(ConfigError, match="requirements_study"):
         study_scenarios("requirements")
+
+# Long-running (whole studies, end-to-end runs, Monte Carlo or every model): `make test-slow`,
+# which CI runs beside the fast `make test` (tests/test_slow_marks.py)
+pytestmark = pytest.mark.slow

@@ -31,6 +31,7 @@ def test_scenarios_are_the_best_designs_of_the_ranking():
     assert STUDY_MODELS["wavelengths"] == ("oracle", "ebl", "gp")
 
 
+@pytest.mark.slow  # make test-slow (CI runs it)
 def test_study_runs_end_to_end_resumes_and_reports(tmp_path):
     out = tmp_path / "sweep"
     res = run_sweep(dict(OPTIONS), study="wavelengths", out=out, **TINY)
