@@ -33,13 +33,14 @@ def ran(tmp_path_factory):
     out = tmp_path_factory.mktemp("req") / "out"
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(req, "requirements_study", functools.partial(req.requirements_study, **SMALL))
+        from contextlib import redirect_stdout
         from io import StringIO
 
-        from nirglucose.cli import _app
-
+        # the CLI's console writes to whatever sys.stdout is (setting its `file` would
+        # pin this buffer, or pytest's capture, for every later test of the process)
         buf = StringIO()
-        mp.setattr(_app.out_console, "file", buf)
-        rc = main(["sweep", "--study", "requirements", "--out", str(out), *TINY])
+        with redirect_stdout(buf):
+            rc = main(["sweep", "--study", "requirements", "--out", str(out), *TINY])
     assert rc == 0
     return out, buf.getvalue()
 

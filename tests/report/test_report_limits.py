@@ -325,7 +325,7 @@ def test_an_identical_figure_is_drawn_once(preset_results):
     from matplotlib.figure import Figure
 
     from nirglucose.report.figures import load_results
-    from nirglucose.report.figures.page import Page
+    from nirglucose.report.figures.page import Page, draw_pending
 
     def same():
         fig = Figure(figsize=(2, 2))
@@ -337,6 +337,7 @@ def test_an_identical_figure_is_drawn_once(preset_results):
     page.add("environment", "Environment on paper", "Ambient conditions.", same)
     page.add("environment_wearable", "Environment on wearable", "Ambient conditions.", same)
     page.add("physiology", "Physiology", "Physiology.", lambda: Figure(figsize=(3, 2)))
+    draw_pending(page)  # figures are drawn after every section numbered them
     assert [f.key for f in page.rendered] == ["environment", "physiology"]
     assert [f.number for f in page.rendered] == ["1", "2"]
     assert "The same figure for wearable" in page.rendered[0].caption

@@ -21,7 +21,7 @@ from ..exceptions import ConfigError, check_positive_int, check_seed
 from ..metrics.resampling import DEFAULT_N_BOOT
 from .splits import check_protocol
 
-__all__ = ["Protocol", "resolve_protocol", "protocol_of", "LEGACY_KEYWORDS"]
+__all__ = ["Protocol", "resolve_protocol", "protocol_of", "sweep_protocol", "LEGACY_KEYWORDS"]
 
 
 @dataclass(frozen=True)
@@ -171,3 +171,18 @@ def protocol_of(protocol: str | Protocol, legacy: Mapping[str, Any],
                       f"give protocol=Protocol({fields_}...)", DeprecationWarning,
                       stacklevel=3)
     return resolve_protocol(protocol, {LEGACY_KEYWORDS[k]: v for k, v in legacy.items()})
+
+
+def sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int],
+                   resamples: int, given: dict[str, Any]) -> Protocol:
+    """The protocol of every task of a sweep, checked with the cohort ``(n_subjects,
+    per_subject)``, ``resamples`` its default bootstrap size; a Protocol's seed must stay
+    0 (a sweep's are ``seeds``)."""
+    defaults = {**{f.name: f.default for f in fields(Protocol)}, "resamples": resamples}
+    proto = resolve_protocol(protocol, given, defaults)
+    for name, value in zip(("n_subjects", "per_subject"), sizes, strict=True):
+        check_positive_int(name, value)
+    if proto.seed != 0:
+        raise ConfigError(f"a sweep's seeds are its seeds argument ({seeds!r}); leave the "
+                          f"Protocol's seed at 0, got {proto.seed}")
+    return proto

@@ -57,7 +57,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -69,7 +69,7 @@ from ...api import simulate
 from ...config import resolve_config
 from ...dataset import Dataset
 from ...dataset.files import check_result_table
-from ...exceptions import ConfigError, DataError, check_positive_int
+from ...exceptions import ConfigError, DataError
 from ...metrics import summary
 from ...metrics.resampling import cluster_bootstrap_metrics
 from ...models.registry import get_model_class
@@ -89,7 +89,7 @@ from ..estimators import (
     predict_model,
     resolve_rows,
 )
-from ..protocol import Protocol, resolve_protocol
+from ..protocol import Protocol, sweep_protocol
 from ..splits import effective_layout
 from .analysis import (
     SUMMARY_METRICS,
@@ -649,20 +649,6 @@ def _sweep_meta(
     }
 
 
-def _sweep_protocol(protocol: str | Protocol, seeds: Any, sizes: tuple[int, int],
-                    given: dict[str, Any]) -> Protocol:
-    """The protocol of every task, checked with the cohort ``(n_subjects, per_subject)``;
-    a Protocol's seed must stay 0 (a sweep's are ``seeds``)."""
-    defaults = {**{f.name: f.default for f in fields(Protocol)}, "resamples": _DEFAULT_N_BOOT}
-    proto = resolve_protocol(protocol, given, defaults)  # the sweep's own resamples
-    for name, value in zip(("n_subjects", "per_subject"), sizes, strict=True):
-        check_positive_int(name, value)
-    if proto.seed != 0:
-        raise ConfigError(f"a sweep's seeds are its seeds argument ({seeds!r}); leave the "
-                          f"Protocol's seed at 0, got {proto.seed}")
-    return proto
-
-
 def _sweep_models(models: Any, study: str | None, scenarios: list[Scenario],
                   params: Mapping[str, Any] | None
                   ) -> tuple[list[str], dict[str, Any], dict[str, Any], dict[str, str]]:
@@ -772,7 +758,7 @@ def run_sweep(
     base = dict(overrides or {})
     scenarios, preset = resolve_scenarios(vary, study, preset, base, led_fields)
     models, objects, model_params, tuning = _sweep_models(models, study, scenarios, model_params)
-    proto = _sweep_protocol(protocol, seeds, (n_subjects, per_subject), dict(
+    proto = sweep_protocol(protocol, seeds, (n_subjects, per_subject), _DEFAULT_N_BOOT, dict(
         n_splits=n_splits, repeats=repeats, resamples=n_boot, calibration=calibration))
     seed_list = _resolve_seeds(seeds)
     backend, n_workers = resolve_backend(jobs, scheduler)
