@@ -3,8 +3,11 @@ Fit two estimators and compare their predictions
 ================================================
 
 Fit the Enhanced Beer–Lambert model (``ebl``: ridge on 56 physics features) and the
-physics-inversion estimator (``physics-inversion``: inverts the forward model) on the
-same subjects, and predict subjects neither has seen. Splits are by subject.
+deployable forward-model inversion (``device-inversion``: the device's parts over the
+published optics tables, glucose's response learned from the training rows) on the same
+subjects, and predict subjects neither has seen. Splits are by subject. Both read only
+the measured columns of a plain table, as they would a device's file
+(``physics-inversion``, a reference that reads the generating scenario, refuses one).
 """
 
 import matplotlib.pyplot as plt
@@ -19,7 +22,7 @@ test = frame[frame["subject_id"] >= 30]
 ref = test["glucose_mgdl"].to_numpy()
 
 predictions = {}
-for name in ("ebl", "physics-inversion"):
+for name in ("ebl", "device-inversion"):
     model = make_model(name).fit(train)  # measured columns only, never true_*
     predictions[name] = model.predict(test)  # [mg/dL]
     print(f"{name:>18}: RMSE {rmse(ref, predictions[name]):5.1f} mg/dL, "

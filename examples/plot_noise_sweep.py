@@ -20,7 +20,7 @@ for scale in scales:
     frame = ng.simulate(preset="paper", n_subjects=30, per_subject=3, seed=0,
                         overrides={"noise_scale": scale}).frame
     train, test = frame[frame["subject_id"] < 20], frame[frame["subject_id"] >= 20]
-    pred = make_model("physics-inversion").fit(train).predict(test)
+    pred = make_model("device-inversion").fit(train).predict(test)
     errors.append(rmse(test["glucose_mgdl"], pred))
     print(f"noise_scale {scale:5.2f}: RMSE {errors[-1]:5.1f} mg/dL")
 
@@ -29,5 +29,5 @@ for scale in scales:
 fig, ax = plt.subplots(figsize=(5, 3.5), layout="constrained")
 ax.plot(scales, errors, marker="o")
 ax.set(xscale="log", xlabel="noise_scale [-]", ylabel="RMSE [mg/dL]",
-       title="physics-inversion, paper preset")
+       title="device-inversion, paper preset")
 plt.show()

@@ -1,7 +1,7 @@
 """Designing a device: the bound each design allows (:mod:`.bound`, and the per-state
 form :mod:`.state_bound`), the search over LED sets ranked by it (:mod:`.search`), a
 fleet of units drawn from the parts' tolerances (:mod:`~nirglucose.design.fleet`), and
-what it takes to read glucose at published magnitudes (:mod:`.requirements`,
+what it takes to read glucose at published magnitudes (:mod:`nirglucose.design.requirements`,
 :mod:`.levers`, exposure limits :mod:`.exposure`, averaging :mod:`.averaging`; the
 study that confirms its designs by simulation is a sweep study,
 :mod:`nirglucose.evaluation.sweep.requirements`).
