@@ -341,3 +341,20 @@ def test_an_identical_figure_is_drawn_once(preset_results):
     assert [f.key for f in page.rendered] == ["environment", "physiology"]
     assert [f.number for f in page.rendered] == ["1", "2"]
     assert "The same figure for wearable" in page.rendered[0].caption
+
+
+def test_every_table_row_of_a_pinn_at_lambda_zero_says_physics_off(preset_report):
+    """Issue 39: a PINN tuned to λ = 0 is a plain network: the reproduced table and the
+    further metrics of that preset, and the distances table (only where it is off), say
+    so; the preset where it runs with physics does not."""
+    import html
+    import re
+
+    text = html.unescape(preset_report.read_text())
+    cells = re.findall(r"<td>([^<]*)</td>", text)
+    off_rows = [c for c in cells if c.endswith("(physics off)")]
+    assert off_rows, "no row says physics off"
+    assert any(c.endswith("(physics off on paper)") for c in cells)  # the distances table
+    wearable = text[text.index('id="extra-table-wearable"'):]
+    wearable = wearable[:wearable.index("</table>")]
+    assert "physics off" not in wearable

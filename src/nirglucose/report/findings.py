@@ -31,7 +31,7 @@ from ..evaluation.benchmark.subgroups import subgroup_findings
 from ..formatting import format_number
 from ..models.labels import knows
 from .markup import esc as _esc
-from .markup import preset_of
+from .markup import physics_off_models, preset_of
 
 if TYPE_CHECKING:
     from .figures import Results
@@ -170,8 +170,10 @@ def _not_better(beats: object) -> bool:
     return not bool(beats)
 
 
-def _distance_html(dist: pd.DataFrame) -> str:
-    """Competitors × presets: RMSE, mg/dL below no skill, % of its error removed, × oracle."""
+def _distance_html(dist: pd.DataFrame, off: Mapping[str, set[str]] | None = None) -> str:
+    """Competitors × presets: RMSE, mg/dL below no skill, % of its error removed, × oracle;
+    a PINN whose tuned physics weight is 0 on a preset (``off``: preset -> models) says
+    "physics off" there."""
     if not len(dist):
         return ""
     presets = list(dict.fromkeys(dist["preset"]))
@@ -195,6 +197,10 @@ def _distance_html(dist: pd.DataFrame) -> str:
                         "References, not competitors (privileged: they read what no device "
                         "measures)</td></tr>")
         name = label(m) + (f" — reference ({knows(knows_of[m])})" if m in knows_of else "")
+        where = [p for p in presets if m in (off or {}).get(p, ())]
+        if where:
+            name += " (physics off" + ("" if len(where) == len(presets)
+                                        else f" on {', '.join(where)}") + ")"
         cells = [f"<td>{_esc(name)}</td>"]
         for p in presets:
             r = dist[(dist["preset"] == p) & (dist["model"] == m)]
@@ -258,8 +264,9 @@ def findings_section(runs: Sequence[Results], *, n_boot: int = 2000,
     if not findings:
         return ""
     items = _grouped(findings)
+    off = {preset_of(r): physics_off_models(r.meta) for r in runs}
     return ('<section id="findings"><h2>Findings</h2><p class="sub">Computed from this '
             "run's results files: every number links (hover) to the file, row and column "
             "it was read from, and every sentence to the figure or table behind it.</p>"
-            f"{items}{_headline_html(data)}{_distance_html(dist)}"
+            f"{items}{_headline_html(data)}{_distance_html(dist, off)}"
             "</section>")

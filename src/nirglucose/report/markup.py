@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import html
 import re
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
@@ -16,7 +17,8 @@ from ..models.labels import label, row_privilege
 if TYPE_CHECKING:
     from .figures import Results
 
-__all__ = ["esc", "num", "pval", "markdown_to_html", "model_label", "preset_of",
+__all__ = ["esc", "num", "pval", "markdown_to_html", "model_label", "physics_off_models",
+           "preset_of",
            "user_data_md", "strip_ablation"]
 
 
@@ -109,20 +111,40 @@ def markdown_to_html(text: str, *, skip_tables: bool = False, skip_h1: bool = Fa
     return "\n".join(blocks)
 
 
-def model_label(model: str, metrics_row: pd.Series | None = None) -> str:
+def model_label(model: str, metrics_row: pd.Series | None = None,
+                physics_off: bool = False) -> str:
     """The model's label: the run's own (``metrics.csv``'s ``label``), else
     :func:`nirglucose.models.labels.label`; a privileged row (it reads the generating
     scenario or the true nuisances, :func:`~nirglucose.models.labels.row_privilege`)
-    says it is a reference.
+    says it is a reference, a PINN whose tuned physics weight is 0 that its physics is
+    off (:func:`physics_off_models`).
 
     >>> model_label("physics-inversion")
     'Physics inversion (forward model) — reference'
+    >>> model_label("rte-pinn", physics_off=True)
+    'RTE-inspired PINN (physics off)'
     """
     name = (metrics_row["label"] if metrics_row is not None
             and isinstance(metrics_row.get("label"), str) else label(model))
+    if physics_off:
+        name += " (physics off)"
     if model != "oracle" and row_privilege(str(model)) is not None:
         name += " — reference"
     return name
+
+
+def physics_off_models(meta: Mapping[str, Any]) -> set[str]:
+    """The run's PINNs whose tuned ``lambda_phys`` is 0 (``meta.json``'s
+    ``model_params``): plain networks, whose every row, sentence and figure says
+    "physics off" (issue 39).
+
+    >>> sorted(physics_off_models({"model_params": {"rte-pinn": {"lambda_phys": 0},
+    ...                                             "original-pinn": {"lambda_phys": 1}}}))
+    ['rte-pinn']
+    """
+    params = meta.get("model_params") or {}
+    return {str(m) for m, p in params.items()
+            if isinstance(p, dict) and p.get("lambda_phys") == 0 and "/" not in str(m)}
 
 
 def user_data_md(md: str) -> str:

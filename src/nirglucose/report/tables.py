@@ -14,7 +14,7 @@ from ..evaluation.reference import STUDY_TABLE
 from ..formatting import format_number
 from ..models.labels import knows, row_privilege
 from .markup import esc as _esc
-from .markup import markdown_to_html, preset_of, strip_ablation, user_data_md
+from .markup import markdown_to_html, physics_off_models, preset_of, strip_ablation, user_data_md
 from .markup import model_label as _model_label
 from .markup import num as _num
 from .markup import pval as _pval
@@ -95,10 +95,11 @@ def _reproduced_table(results: Results, *, full: bool = True, table_id: str | No
     per_mgdl = _per_mgdl(results)
     if per_mgdl != 1.0:  # a user's mmol/L file: its glucose columns in mmol/L (issue 43)
         head1 = head1.replace("[mg/dL]", "[mmol/L]")
+    off = physics_off_models(results.meta)
     for model in results.models:
         r = m.loc[model]
         s = study.get(model, {})
-        cells = [f"<td>{_esc(_model_label(model, r))}</td>"]
+        cells = [f"<td>{_esc(_model_label(model, r, model in off))}</td>"]
         for col, stem, scol, _, digits in columns:
             f = per_mgdl if col.endswith("_mgdl") else 1.0
             digits = digits + 1 if f != 1.0 else digits
@@ -206,9 +207,10 @@ def extra_table(results: Results) -> str:
     head = "<th>Model</th>" + "".join(
         f"<th>{_esc(h)}{mark if c in _ZONE_COLUMNS else ''}</th>" for c, h, _ in cols)
     rows = []
+    off = physics_off_models(results.meta)
     for model in results.models:
         r = m.loc[model]
-        rows.append(f"<tr><td>{_esc(_model_label(model, r))}</td>" + "".join(
+        rows.append(f"<tr><td>{_esc(_model_label(model, r, model in off))}</td>" + "".join(
             f"<td>{_num(r.get(c), d)}</td>" for c, _, d in cols) + "</tr>")
     return (f'<div class="scroll"><table id="extra-table-{_esc(preset_of(results))}">'
             f"<thead><tr>{head}</tr></thead>"
