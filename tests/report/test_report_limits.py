@@ -358,3 +358,21 @@ def test_every_table_row_of_a_pinn_at_lambda_zero_says_physics_off(preset_report
     wearable = text[text.index('id="extra-table-wearable"'):]
     wearable = wearable[:wearable.index("</table>")]
     assert "physics off" not in wearable
+
+
+def test_each_preset_is_separated_from_the_primary(tmp_path):
+    """Three presets: the findings say what separates the primary from each of the two
+    others (before, only from the second)."""
+    from report_fixtures import write_preset_results
+
+    from nirglucose.report.figures import load_results
+    from nirglucose.report.findings import computed_findings
+
+    for k, (name, lam) in enumerate((("paper", 0.0), ("wearable", 0.01), ("physical", 0.01))):
+        write_preset_results(tmp_path / name, name, lambda_phys=lam, seed=k)
+    runs = [load_results(tmp_path / n) for n in ("paper", "wearable", "physical")]
+    _, findings, _ = computed_findings(runs, n_boot=200)
+    separated = [f.text() for f in findings if f.topic == "presets"]
+    assert len(separated) == 2
+    assert separated[0].startswith("What separates paper from wearable")
+    assert separated[1].startswith("What separates paper from physical")

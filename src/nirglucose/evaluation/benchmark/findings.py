@@ -653,8 +653,8 @@ def compute_findings(runs: Sequence[RunData], *, n_boot: int = 2000, seed: int =
             for k, run in enumerate(runs):
                 anchor = ANCHOR_LEDS + ("" if k == 0 else f"_{run.preset}")
                 out.extend(drop_one_findings(run.preset, run.drop_one, anchor))
-    if len(runs) > 1:
-        sep = preset_separation(runs[0], runs[1])
+    for other in runs[1:]:  # each preset against the primary (paper, then the others)
+        sep = preset_separation(runs[0], other)
         if sep is not None:
             out.append(sep)
     out.extend(f for f in (_range_finding(r) for r in runs) if f is not None)
