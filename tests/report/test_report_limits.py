@@ -376,3 +376,16 @@ def test_each_preset_is_separated_from_the_primary(tmp_path):
     assert len(separated) == 2
     assert separated[0].startswith("What separates paper from wearable")
     assert separated[1].startswith("What separates paper from physical")
+
+
+@pytest.mark.parametrize(("best", "says"), [(56.7, True), (42.5, False)])
+def test_the_box_says_when_no_deployable_estimator_beats_the_mean(best, says):
+    """Published magnitudes: the best deployable (56.7) is no better than the training
+    mean (56.5), and the box says so in words; an amplified regime's (42.5) does not."""
+    from nirglucose.report.limits import _box
+
+    facts = {"preset": "physical", "gain": 1.0, "regime": "published magnitudes",
+             "physiology": "measured", "privileged": {}, "subjects": 80, "snapshots": 240,
+             "glucose": None, "models": ["Device inversion"], "best": "device-inversion",
+             "best_rmse": best, "oracle_rmse": 52.9, "no_skill_rmse": 56.5}
+    assert ("no deployable estimator beats the training mean" in _box(facts)) is says

@@ -169,7 +169,11 @@ def _box(f: dict[str, Any]) -> str:
     if f["no_skill_rmse"] is not None:
         res.append(f"no skill {_n(f['no_skill_rmse'])}")
     if res:
-        items.append(f"<li><b>RMSE</b> [mg/dL]: {'; '.join(res)}</li>")
+        worse = (f["best_rmse"] is not None and f["no_skill_rmse"] is not None
+                 and f["best_rmse"] >= f["no_skill_rmse"])
+        items.append(f"<li><b>RMSE</b> [mg/dL]: {'; '.join(res)}"
+                     + (": no deployable estimator beats the training mean here" if worse
+                        else "") + "</li>")
     items.append(f"<li><b>Models that ran</b> ({len(f['models'])}): "
                  f"{_esc(', '.join(f['models']))}</li>")
     return (f'<div class="limit" id="limits-{_esc(f["preset"])}"><h3>{_esc(f["preset"])}: '
