@@ -85,6 +85,14 @@ def test_study_scenarios():
     only_shot = next(s for s in abl if s.name == "only:shot")
     assert "noise.shot.enabled" not in only_shot.overrides
     assert sum(v is False for v in only_shot.overrides.values()) == len(NOISE_SOURCES) - 1
+    # water's temperature dependence is off by default: its rows switch it on to measure it
+    by_name = {s.name: s.overrides for s in abl}
+    key = "noise.water_temperature.enabled"
+    assert by_name["all-on"] == {key: True}
+    assert by_name["only:water_temperature"][key] is True
+    assert by_name["off:water_temperature"] == {key: False}
+    assert by_name["off:shot"] == {key: True, "noise.shot.enabled": False}
+    assert key not in by_name["only:shot"] or by_name["only:shot"][key] is False
     cohort = study_scenarios("cohort")
     assert [s.kind for s in cohort] == ["shift"] * 4
     assert [s.labels["test_domain"] for s in cohort] == ["I-III", "IV-VI", "20-25 degC",

@@ -89,6 +89,7 @@ from ...config import (
     parse_override,
     resolve_config,
 )
+from ...config.noise import DEFAULT_OFF_NOISE_SOURCES
 from ...design.fleet import MAX_TOLERANCE_SCALE
 from ...exceptions import ConfigError, is_finite_number, unknown_name
 from ...models.tuning import SELF_TUNING, self_tuning_params
@@ -450,23 +451,31 @@ def _mismatch_scenarios() -> list[Scenario]:
 
 
 def _ablation_scenarios() -> list[Scenario]:
-    """All sources on, all off, each source off alone and on alone."""
+    """All sources on, all off, each source off alone and on alone. A source off by
+    default (:data:`~nirglucose.config.noise.DEFAULT_OFF_NOISE_SOURCES`: water's
+    temperature dependence) is switched on where a row says it is on ("all-on", every
+    "off:" row but its own, its "only:" row), so its rows measure it."""
 
     def off(sources):
         return {f"noise.{s}.enabled": False for s in sources}
 
+    def on(sources):
+        return {f"noise.{s}.enabled": True for s in sources if s in DEFAULT_OFF_NOISE_SOURCES}
+
     out = [
-        Scenario("all-on", {"ablation": "all-on", "source": "all"}, {}),
+        Scenario("all-on", {"ablation": "all-on", "source": "all"}, on(NOISE_SOURCES)),
         Scenario("all-off", {"ablation": "all-off", "source": "none"}, off(NOISE_SOURCES)),
     ]
     out += [
-        Scenario(f"off:{s}", {"ablation": "off", "source": s}, off([s])) for s in NOISE_SOURCES
+        Scenario(f"off:{s}", {"ablation": "off", "source": s},
+                 {**on(o for o in NOISE_SOURCES if o != s), **off([s])})
+        for s in NOISE_SOURCES
     ]
     out += [
         Scenario(
             f"only:{s}",
             {"ablation": "only", "source": s},
-            off([o for o in NOISE_SOURCES if o != s]),
+            {**off([o for o in NOISE_SOURCES if o != s]), **on([s])},
         )
         for s in NOISE_SOURCES
     ]
