@@ -3,14 +3,10 @@ declared, intervals inside the meter's range, per-channel converters, one-line r
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 from cli_helpers import assert_one_line_error
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from real_files import one_led_mmoll_frame, two_converter_frame  # noqa: E402
+from real_files import one_led_mmoll_frame, two_converter_frame
 
 
 @pytest.fixture

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,9 +11,7 @@ import nirglucose as ng
 from nirglucose.dataset.adc import check_headroom, parse_channel_spec
 from nirglucose.dataset.schema import DeviceSchema
 from nirglucose.exceptions import DataError
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from real_files import two_converter_frame  # noqa: E402
+from real_files import two_converter_frame
 
 
 @pytest.fixture
