@@ -27,11 +27,11 @@ PER_SUBJECT = 3
 
 def _simulate(preset: str, overrides: dict | None = None):
     import nirglucose as ng
-    from nirglucose.simulation.simulator import _tables, block_ranges, simulate_block
+    from nirglucose.simulation.simulator import block_ranges, scenario_tables, simulate_block
 
     cfg = ng.resolve_config(preset, overrides or {})
     n_subjects = -(-N_SNAPSHOTS // PER_SUBJECT)
-    tables = _tables(cfg)
+    tables = scenario_tables(cfg)
     sizes, n_rows = [], 0
     start = time.process_time()
     for block, first, n_sub in block_ranges(n_subjects):
