@@ -6,6 +6,8 @@
   column; the people with diabetes sit higher in glucose *and* in both channels, while
   inside each group the channels carry no glucose at all: any pooled skill is the
   offset between the groups.
+* :func:`ac_coupled_ppg_frame`: a PPG sensor's file whose front end is AC-coupled: every
+  reading's code is the converter's bias point, mid-scale, give or take its noise.
 """
 
 from __future__ import annotations
@@ -39,3 +41,14 @@ def two_converter_frame(n_subjects: int = 40, per_subject: int = 3, seed: int = 
     return pd.DataFrame({"subject_id": sid, "diabetic": diabetic,
                          "glucose_mgdl": np.round(glucose), "adc_940": np.round(adc_940),
                          "adc_1050": np.round(adc_1050)})
+
+
+def ac_coupled_ppg_frame(n_subjects: int = 30, per_subject: int = 3, seed: int = 43
+                         ) -> pd.DataFrame:
+    """Two 12-bit channels (880, 940 nm) at mid-scale whatever the person or glucose."""
+    rng = np.random.default_rng(seed)
+    sid = np.repeat(np.arange(n_subjects), per_subject)
+    out = {"subject_id": sid, "glucose_mgdl": np.round(rng.uniform(70.0, 250.0, len(sid)))}
+    for nm in (880, 940):
+        out[f"adc_{nm}"] = np.round(2047.5 + rng.normal(0.0, 12.0, len(sid)))
+    return pd.DataFrame(out)

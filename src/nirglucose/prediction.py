@@ -22,6 +22,7 @@ import pandas as pd
 from .calibration.conformal import calibration_of, interval
 from .calibration.personal import apply_offset
 from .dataset import Dataset, load_dataset
+from .dataset.adc import check_dc_level
 from .dataset.columns import GLUCOSE_REPORTING_RANGE_MGDL, ID_COLUMNS
 from .dataset.files import (
     check_codes,
@@ -238,7 +239,9 @@ def _readings(data: Any, unit: str | None) -> tuple[Dataset, bool]:
 
 
 def check_model_codes(estimator: Any, ds: Dataset, *, csv: bool = False) -> None:
-    """Refuse ADC codes above the full scale of the device the model was fitted on.
+    """Refuse ADC codes above the full scale of the device the model was fitted on; warn
+    of a channel whose every reading sits at mid-scale (an AC-coupled front end,
+    :func:`~nirglucose.dataset.adc.check_dc_level`).
 
     Raises
     ------
@@ -248,6 +251,7 @@ def check_model_codes(estimator: Any, ds: Dataset, *, csv: bool = False) -> None
     schema = getattr(estimator, "schema_", None)
     if schema is not None and not schema.is_plain:
         check_codes(ds.frame, schema.adc_bits, csv=csv, full_scales=schema.code_full_scales())
+        check_dc_level(ds.frame, tuple(f"adc_{w}" for w in schema.labels), schema.full_scales)
 
 
 def _outside_training(estimator: Any, ds: Dataset) -> list[str]:

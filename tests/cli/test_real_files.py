@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from cli_helpers import assert_one_line_error
 
-from real_files import one_led_mmoll_frame, two_converter_frame
+from real_files import ac_coupled_ppg_frame, one_led_mmoll_frame, two_converter_frame
 
 
 @pytest.fixture
@@ -200,3 +200,63 @@ def test_an_empty_drop_one_says_why(cli, one_led, tmp_path):
 
     html = main_table(load_results(out_dir))  # the report's table in the file's unit too
     assert "RMSE [mmol/L]" in html and "RMSE [mg/dL]" not in html
+
+
+def test_an_ac_coupled_file_is_said_so_in_fit_predict_benchmark_and_report(cli, tmp_path):
+    from nirglucose.report import build_report
+
+    path = tmp_path / "ppg.csv"
+    ac_coupled_ppg_frame().to_csv(path, index=False)
+    model = tmp_path / "m.json"
+    code, out, err = cli("fit", "--model", "pls", "--data", path, "--out", model,
+                         "--adc-bits", "12", "--cv-folds", "3")
+    assert code == 0, err
+    said = [ln for ln in err.splitlines() if "every reading sits at mid-scale" in ln]
+    assert len(said) == 2 and all("AC-coupled" in ln for ln in said)
+    assert "no better than no skill" in err  # the truth about such codes
+    code, out, err = cli("predict", "--model", model, "--data", path, "--out",
+                         tmp_path / "p.csv")
+    assert code == 0, err
+    assert err.count("every reading sits at mid-scale") == 2
+    out_dir = tmp_path / "b"
+    code, out, err = cli("benchmark", "--data", path, "--out", out_dir, "--models",
+                         "pls,mean", "--adc-bits", "12", "--repeats", "1", "--resamples",
+                         "100", "--no-ablation", "--no-references", "--jobs", "1")
+    assert code == 0, err
+    assert err.count("every reading sits at mid-scale") == 2
+    html = build_report(out_dir, tmp_path / "r.html").read_text(encoding="utf-8")
+    limits = html[html.index('id="limits"'):html.index('id="contents"')
+                  if 'id="contents"' in html else None]
+    assert "your data: measured by your device" in limits
+    assert limits.count("AC-coupled front end") == 2
+    assert "no deployable estimator beats the training mean here" in limits
+    assert "the study's reported RMSE" not in html  # measured on other data
+
+
+def test_the_ac_check_leaves_simulated_devices_alone():
+    import warnings
+
+    import nirglucose as ng
+    from nirglucose.dataset.adc import check_dc_level
+
+    for preset in ("paper", "lab", "field", "physical"):
+        frame = ng.simulate(preset, 30, 3, 0).frame
+        cols = tuple(c for c in frame.columns if c.startswith("adc_")
+                     and not c.startswith("adc_ref"))
+        fs = float(2 ** ng.resolve_config(preset).hardware.adc_bits - 1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert check_dc_level(frame, cols, (fs,) * len(cols)) == [], preset
+
+
+def test_a_file_without_a_scenario_runs_the_deployable_models_by_default():
+    from nirglucose import Dataset, simulate
+    from nirglucose.evaluation.benchmark.run import default_models
+    from nirglucose.models import available_models, privileged_knowledge
+
+    sim = simulate("paper", 4, 2, 0)
+    assert default_models(sim) == available_models()
+    plain = default_models(Dataset(ac_coupled_ppg_frame()))
+    assert "oracle" not in plain and "physics-inversion" not in plain
+    assert plain == [m for m in available_models() if privileged_knowledge(m) is None]
+    assert {"ebl", "pls", "mean", "device-inversion"} <= set(plain)

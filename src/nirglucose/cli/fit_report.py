@@ -26,11 +26,13 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: str | None,
     """The file as a Dataset, its read notes printed, the ADC resolution resolved by
     the one policy (:mod:`nirglucose.dataset.adc`, one converter or one per channel) and
     recorded in its metadata; a declared channel whose codes never reach a quarter of
-    its full scale is warned about."""
+    its full scale, and a channel whose every reading sits at mid-scale (an AC-coupled
+    front end), are warned about. The warnings are kept in the metadata
+    (``file_warnings``), so the report of a benchmark on the file states them too."""
     import warnings
 
     from ..dataset import load_dataset
-    from ..dataset.adc import check_headroom
+    from ..dataset.adc import check_dc_level, check_headroom
     from ..dataset.files import check_codes
     from ..dataset.schema import DeviceSchema
 
@@ -49,8 +51,10 @@ def load_device_file(data: Path, glucose_unit: str | None, adc_bits: str | None,
             check_headroom(ds.frame, tuple(f"adc_{w}" for w in schema.labels),
                            schema.full_scales,
                            schema.channel_bits or (schema.adc_bits,) * schema.n_channels)
+        check_dc_level(ds.frame, tuple(f"adc_{w}" for w in schema.labels), schema.full_scales)
     for w in caught:
         _say(f"warning: {w.message}")
+    ds.metadata["file_warnings"] = list(dict.fromkeys(str(w.message) for w in caught))
     # one resolution from here on, recorded (per channel where the device mixes them)
     ds.metadata.update(schema.converter_metadata())
     if need_glucose:

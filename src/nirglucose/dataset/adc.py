@@ -23,7 +23,10 @@ from channel to its full-scale code where that is not 2^bits - 1
 (:func:`channel_converters`). A channel's reference codes ``adc_ref_<nm>`` share its
 converter. A declared converter whose codes never reach a quarter of its full scale is
 warned about (:func:`check_headroom`): a 10-bit channel read at 18 bits shifts its
-absorbance by log10(2^8) = 2.4.
+absorbance by log10(2^8) = 2.4. A channel whose every reading sits at mid-scale is warned
+about too (:func:`check_dc_level`): an AC-coupled front end (a PPG sensor's, which
+removes the DC level and biases the pulse at mid-scale) records the pulse, not the light
+level that absorbance reads.
 
 Examples
 --------
@@ -46,7 +49,8 @@ from .columns import CODE_COLUMN_RE, DEFAULT_ADC_BITS
 
 __all__ = ["AMBIGUOUS_BELOW_CODE", "HEADROOM_FRACTION", "resolve_adc_bits", "check_adc_bits",
            "check_channel_bits", "parse_channel_spec", "channel_converters",
-           "check_headroom", "quantisation_variance_ln"]
+           "check_headroom", "check_dc_level", "MIDSCALE_TOLERANCE", "AC_SPREAD_FRACTION",
+           "quantisation_variance_ln"]
 
 #: Codes at or below this fit a 10-bit ADC and every larger one: the resolution is
 #: ambiguous and must be declared. [ADC code]
@@ -57,6 +61,17 @@ AMBIGUOUS_BELOW_CODE = 2**10 - 1
 #: about: a quarter is 2 bits unused, more than an analog front end's usual design
 #: margin, and what a channel read with another converter's resolution shows. [-]
 HEADROOM_FRACTION = 0.25
+
+
+#: A channel whose median code lies within this fraction of full scale of mid-scale ...
+MIDSCALE_TOLERANCE = 0.005
+#: ... and whose central 90 % of readings span less than this fraction of full scale is
+#: taken for an AC-coupled (DC-removed) channel. A DC-coupled channel reads the light
+#: through each person's skin, which moves it far more: on the simulated presets the
+#: central 90 % of a channel's codes span 10-44 % of full scale (``lab``, cuvette-like,
+#: one nominal subject: about 2 %, but its medians sit 2-10 % off mid-scale), while
+#: an AC-coupled reading's mean is its bias point, mid-scale, whoever wears it. [-]
+AC_SPREAD_FRACTION = 0.05
 
 
 def check_adc_bits(bits: Any) -> int:
@@ -258,3 +273,51 @@ def check_headroom(frame: pd.DataFrame, columns: tuple[str, ...],
                 f"{need}, ...}}); read at {b} bits its absorbance is off by "
                 f"{np.log10((fs + 1) / 2 ** need):.1f}",
                 UserWarning, stacklevel=3)
+
+
+def check_dc_level(frame: pd.DataFrame, columns: tuple[str, ...],
+                   full_scales: tuple[float, ...]) -> list[str]:
+    """The channels whose every reading sits at mid-scale, one UserWarning each.
+
+    An AC-coupled front end (a PPG sensor that subtracts the DC level and biases the
+    pulsatile part at mid-scale) gives codes whose mean is the converter's bias point
+    whatever the tissue; their logarithm is not an absorbance, so a model of light
+    attenuation (and any model) can read no glucose from it. Flagged: the median within
+    :data:`MIDSCALE_TOLERANCE` of full scale of mid-scale and the central 90 % of the
+    readings within :data:`AC_SPREAD_FRACTION` of full scale.
+
+    Returns
+    -------
+    list of str
+        The flagged columns.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> frame = pd.DataFrame({"adc_940": [2046.0, 2049.0, 2047.0, 2050.0],
+    ...                       "adc_1050": [1500.0, 2600.0, 1900.0, 3100.0]})
+    >>> with warnings.catch_warnings(record=True):
+    ...     warnings.simplefilter("always")
+    ...     check_dc_level(frame, ("adc_940", "adc_1050"), (4095.0, 4095.0))
+    ['adc_940']
+    """
+    flagged = []
+    for col, fs in zip(columns, full_scales, strict=True):
+        if col not in frame.columns:
+            continue
+        v = pd.to_numeric(frame[col], errors="coerce").to_numpy(float)
+        v = v[np.isfinite(v)]
+        if len(v) < 2 or not fs > 0:
+            continue
+        p5, median, p95 = np.percentile(v, [5.0, 50.0, 95.0])
+        if (abs(median / fs - 0.5) <= MIDSCALE_TOLERANCE
+                and (p95 - p5) / fs <= AC_SPREAD_FRACTION):
+            flagged.append(col)
+            warnings.warn(
+                f"column {col!r}: every reading sits at mid-scale (median {median:,.0f} of "
+                f"{fs:,.0f}; 90 % within {100 * (p95 - p5) / fs:.1f} % of full scale): an "
+                "AC-coupled front end, which removes the light level? Its codes are not an "
+                "absorbance and no model can read glucose from them; give the DC-coupled "
+                f"reading (the front end's DC or ambient-cancelled output) as {col}",
+                UserWarning, stacklevel=3)
+    return flagged
