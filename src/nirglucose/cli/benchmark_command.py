@@ -360,8 +360,21 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
             oracle_reference=any(str(c).startswith("true_") for c in ds.frame.columns),
         )
     _print_benchmark(res, ds, out, unit)
+    if names is None and ds.config is None:
+        _say_privileged_left_out()
     if group_column_name is not None:
         report_benchmark_cohorts(res, ds, group_column_name, unit or "mg/dL")
+
+
+def _say_privileged_left_out() -> None:
+    """One note: which registered models a device's file (no scenario) does not run."""
+    from ..models.registry import available_models, privileged_knowledge
+
+    left = [n for n in available_models() if privileged_knowledge(n) is not None]
+    if left:
+        _say(f"note: the privileged references ({', '.join(left)}) did not run: they read "
+             "the generating scenario or the true_* columns, which a device's file does not "
+             "have; every other registered model did", err=False)
 
 
 def _one_led(ds) -> bool:

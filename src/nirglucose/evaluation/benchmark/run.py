@@ -92,7 +92,7 @@ from ...calibration.conformal import LEVELS
 from ...calibration.personal import personal_calibration
 from ...dataset import Dataset
 from ...exceptions import ConfigError, DataError, check_positive_int
-from ...models.registry import available_models, get_model_class, is_pinn
+from ...models.registry import available_models, get_model_class, is_pinn, privileged_knowledge
 from ...models.tuning import best_positive_lambda, preset_params
 from ..engine import executors, tasks
 from ..engine.progress import task_hooks
@@ -383,6 +383,17 @@ def _row_params(
     return list(variants), {n: variants[n][0] for n in variants}, params, pairs
 
 
+def default_models(dataset: Dataset) -> list[str]:
+    """The rows when no models are given: every registered model, less, on data that
+    carries no scenario (a device's own file), the privileged ones: they read the
+    generating scenario or the true_* columns, which such a file does not have
+    (:func:`~nirglucose.models.registry.privileged_knowledge`)."""
+    names = available_models()
+    if dataset.config is not None:
+        return names
+    return [n for n in names if privileged_knowledge(n) is None]
+
+
 def _oracle_rows(
     dataset: Dataset, names: list[str], oracle_reference: bool
 ) -> tuple[list[str], str | None]:
@@ -421,7 +432,7 @@ def _plan(
     opts: dict[str, Any],
 ) -> _Plan:
     """Resolve the rows, the oracle, the splits and every task's specification."""
-    names, objects = resolve_rows(models, available_models(), opts["model_params"])
+    names, objects = resolve_rows(models, default_models(dataset), opts["model_params"])
     if opts["references"]:  # the references last
         names += [m for m in REFERENCE_MODELS if m not in names]
     preset = getattr(dataset.config, "preset", None)
@@ -667,7 +678,8 @@ def run_benchmark(
     dataset : Dataset or pandas.DataFrame
         Snapshots with ``subject_id`` and ``glucose_mgdl``.
     models : sequence, comma-separated str or estimator, optional
-        Registry names (default: every registered model) and, as scikit-learn's
+        Registry names (default: every registered model; on data without a scenario,
+        a device's own file, every deployable one: :func:`default_models`) and, as scikit-learn's
         ``cross_validate`` takes, unfitted estimator objects (anything with ``fit``,
         ``predict`` and ``get_params``) or ``(label, estimator)`` pairs
         (:mod:`~nirglucose.evaluation.estimators`). An object's row is labelled by the
