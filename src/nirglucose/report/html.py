@@ -434,11 +434,11 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     middle.append(cohorts_section(runs))
     middle.append(hyperparameter_section(runs))
     middle.append(inverse_section(runs))
-    top, limits = [], ""
-    if not results.user_data:
-        computed = computed_findings(runs)
-        top = [findings_section(runs, subgroups=groups, computed=computed)]
-        limits = limits_section(runs, computed[0], computed[1])
+    computed = computed_findings(runs)
+    if results.user_data:  # the study's numbers were measured on other data
+        computed = (computed[0], [f for f in computed[1] if f.topic != "claims"], computed[2])
+    top = [findings_section(runs, subgroups=groups, computed=computed)]
+    limits = limits_section(runs, computed[0], computed[1])
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:],
                        limits=limits)

@@ -108,10 +108,15 @@ def limits_facts(res: Results, run: RunData) -> dict[str, Any]:
         return float(m.at[model, "rmse_mgdl"]) if model is not None and model in m.index \
             else None
 
+    ds = getattr(res, "dataset", None)
+    meta = getattr(ds, "metadata", None) or {}
     return {
         "preset": run.preset,
+        "user_data": bool(res.user_data),
+        "file_warnings": [str(w) for w in meta.get("file_warnings", ())],
         "gain": None if gain is None else float(gain),
-        "regime": regime(None if gain is None else float(gain), run.preset),
+        "regime": ("measured by your device" if res.user_data else
+                   regime(None if gain is None else float(gain), run.preset)),
         "physiology": _config_value(res, "device.physiology"),
         "privileged": {label(x): knows(k) for x in rows
                        if x != NO_SKILL and (k := privilege(run, x)) is not None},
@@ -131,7 +136,20 @@ def _n(v: float | None, digits: int = 1) -> str:
     return format_number(v, digits, thousands=True)
 
 
+def _device_items(f: dict[str, Any]) -> list[str]:
+    """The first lines of a device's file's box: what was measured, not simulated, and
+    the warnings its reading raised."""
+    items = ["<li><b>Glucose signal</b>: measured, not simulated — its size "
+             "is whatever the optics and the skin give; no oracle bound (no scenario)</li>",
+             "<li><b>Physiology</b>: only the file's own columns, as measured</li>"]
+    for w in f["file_warnings"]:
+        items.append(f"<li><b>Reading the file</b>: {_esc(w)}</li>")
+    return items
+
+
 def _box(f: dict[str, Any]) -> str:
+    if f.get("user_data"):
+        return _box_items(f, _device_items(f))
     items = []
     gain = f["gain"]
     items.append(
@@ -145,6 +163,13 @@ def _box(f: dict[str, Any]) -> str:
         "exact — the models see the true physiology, no instrument error" if phys == "exact"
         else "measured — with the instruments' errors" if phys == "measured"
         else "not recorded") + "</li>")
+    return _box_items(f, items)
+
+
+def _box_items(f: dict[str, Any], items: list[str]) -> str:
+    """The box's lines after the regime's: privileged rows, subjects, glucose range,
+    RMSE beside the references, the models that ran."""
+    items = list(items)
     priv = f["privileged"]
     items.append("<li><b>Privileged rows</b> (references, never ranked): " + (
         "; ".join(f"{_esc(k)} ({_esc(v)})" for k, v in priv.items()) if priv else "none")
@@ -204,9 +229,14 @@ def limits_section(runs: Sequence[Results], data: Sequence[RunData],
     answers = [f for f in findings if f.topic == "answer"]
     answer = ('<h3 id="answer">Does physics help?</h3><ul class="findings answer">'
               + "".join(finding_html(f) for f in answers) + "</ul>") if answers else ""
+    intro = ("Read this first. These results are your file's: every model was fitted and "
+             "scored on its readings, by subject-grouped cross-validation; what the file "
+             "does not say (the skin's optics, the true nuisances) no model here knew."
+             if all(r.user_data for r in runs) else
+             "Read this first. Each preset simulates glucose at a stated size against the "
+             "published magnitudes; privileged rows read the generating scenario or the true "
+             "nuisances, which no device measures, so they are references and never the best "
+             "model.")
     return ('<section id="limits"><h2>What these results rest on</h2>'
-            '<p class="sub">Read this first. Each preset simulates glucose at a stated size '
-            "against the published magnitudes; privileged rows read the generating scenario "
-            "or the true nuisances, which no device measures, so they are references and "
-            "never the best model.</p>"
+            f'<p class="sub">{intro}</p>'
             f'<div class="limits">{boxes}</div>{answer}</section>')

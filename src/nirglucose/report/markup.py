@@ -157,10 +157,17 @@ def user_data_md(md: str) -> str:
     return re.sub(r" ?Study: [^.]*?test n = \d+\.", "", md)
 
 
+#: How the report names the run of a device's own file (no preset, no scenario).
+USER_DATA = "your data"
+
+
 def preset_of(results: Results) -> str:
-    """The preset name of a run (its directory's name when none is recorded)."""
+    """The preset name of a run: ``your data`` for a device's file, else its directory's
+    name when none is recorded."""
     p = results.meta.get("preset")
-    return str(p) if p not in (None, "", "None") else results.directory.name or "run"
+    if p not in (None, "", "None"):
+        return str(p)
+    return USER_DATA if results.user_data else results.directory.name or "run"
 
 
 def strip_ablation(table_md: str) -> str:
