@@ -18,10 +18,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from test_simulate_golden import frame_hash
 
 import nirglucose as ng
 from nirglucose.simulation import wear
-from test_simulate_golden import frame_hash
 
 #: preset -> SHA-256 (``frame_hash``) of its wear frame: 7 subjects, 2 days, a reading
 #: every 30 min, seed 3.
