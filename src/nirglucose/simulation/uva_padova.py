@@ -21,12 +21,14 @@ stomach and gut contents in mg.
 
 Integration: classical fourth-order Runge–Kutta with a fixed 1-minute step, written with
 NumPy element-wise operations (and :mod:`nirglucose.portable` for ``tanh``), vectorised
-over subjects. :func:`scipy.integrate.solve_ivp` would adapt its steps to each problem
-(so a subject's trajectory would depend on which subjects share its array) and sums its
-stages with ``np.dot`` (BLAS, whose kernel and hence last bits depend on the CPU); a fixed
-step keeps every subject's bits independent of its neighbours and of the CPU. The
-fastest rate of either model is below 1.3 /min (``kabs``, ``m1 + m30``), so λh < 1.3,
-inside RK4's stability region (abs(λh) < 2.78) with a local error of order (λh)^5/120;
+over subjects (:func:`integrate_reference`); :func:`integrate` runs the same operations
+compiled (:mod:`.kernels.uva_padova_rk4`), to the same bits.
+:func:`scipy.integrate.solve_ivp` would adapt its steps to each problem (so a subject's
+trajectory would depend on which subjects share its array) and sums its stages with
+``np.dot`` (BLAS, whose kernel and hence last bits depend on the CPU); a fixed step
+keeps every subject's bits independent of its neighbours and of the CPU. The fastest
+rate of either model is below 1.3 /min (``kabs``, ``m1 + m30``), so λh < 1.3, inside
+RK4's stability region (abs(λh) < 2.78) with a local error of order (λh)^5/120;
 ``tests/simulation/test_uva_padova.py`` checks the trajectories against ``solve_ivp``
 (LSODA, rtol 1e-8).
 

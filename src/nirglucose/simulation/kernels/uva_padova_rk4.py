@@ -20,6 +20,10 @@ and its dose terms are recomputed) and whether any subject's insulin sensitivity
 (then every subject's factor is re-read). Both depend on the inputs alone, so
 :func:`meal_steps` and :func:`sensitivity_columns` find them first and each subject is
 then integrated on its own.
+
+The functions are compiled separately (numba's ``inline="always"`` quadrupled the compile
+time, about 5 s without it on a fresh machine, for no gain: LLVM inlines them anyway) and
+cached beside this file (``cache=True``).
 """
 
 from __future__ import annotations
@@ -76,22 +80,22 @@ def sensitivity_columns(sens):  # pragma: no cover - compiled
     return col
 
 
-@njit(cache=True, inline="always")
-def _max0(v):
+@njit(cache=True)
+def _max0(v):  # pragma: no cover - compiled
     """``np.maximum(v, 0.0)``: v if positive or NaN, else +0.0 (also for -0.0)."""
     return v if (v > 0.0 or v != v) else 0.0
 
 
-@njit(cache=True, inline="always")
-def _terms(dose, b, d):
+@njit(cache=True)
+def _terms(dose, b, d):  # pragma: no cover - compiled
     """``uva_padova._emptying_terms`` of one subject: (D > 0, b D, d D, a, c)."""
     has = dose > 0
     safe = dose if has else 1.0
     return has, b * safe, d * safe, 5.0 / (2.0 * safe * (1.0 - b)), 5.0 / (2.0 * safe * d)
 
 
-@njit(cache=True, inline="always")
-def _gut_and_flows(x, q, vmx, xx, production, terms, out):
+@njit(cache=True)
+def _gut_and_flows(x, q, vmx, xx, production, terms, out):  # pragma: no cover - compiled
     """Rows 0-4 of either right-hand side (``uva_padova._gut``, ``_kempt``,
     ``_glucose_flows``) into ``out``; ``xx`` the remote insulin action X, ``production``
     EGP before its floor at 0.
@@ -116,8 +120,8 @@ def _gut_and_flows(x, q, vmx, xx, production, terms, out):
     return dgp
 
 
-@njit(cache=True, inline="always")
-def _rhs_2007(x, q, vmx, kp3, terms, out):
+@njit(cache=True)
+def _rhs_2007(x, q, vmx, kp3, terms, out):  # pragma: no cover - compiled
     """:func:`~nirglucose.simulation.uva_padova.rhs_2007` of one subject into ``out``."""
     gp, il, ip, i1, id_, xx, y, ipo = x[3], x[5], x[6], x[7], x[8], x[9], x[10], x[11]
     vg, kp4, vi, gamma, m6, m5, m1 = q[_E], q[_E + 1], q[_E + 2], q[_E + 3], q[_E + 4], \
@@ -141,8 +145,8 @@ def _rhs_2007(x, q, vmx, kp3, terms, out):
     out[11] = -gamma * ipo + spo
 
 
-@njit(cache=True, inline="always")
-def _rhs_type1(x, q, vmx, kp3, terms, out):
+@njit(cache=True)
+def _rhs_type1(x, q, vmx, kp3, terms, out):  # pragma: no cover - compiled
     """:func:`~nirglucose.simulation.uva_padova.rhs_type1` of one subject into ``out``
     (``u`` the basal delivery ``u2ss``)."""
     gp, ip, xx, i1, id_, il, isc1, isc2 = x[3], x[5], x[6], x[7], x[8], x[9], x[10], x[11]
@@ -160,16 +164,16 @@ def _rhs_type1(x, q, vmx, kp3, terms, out):
     out[11] = kd * isc1 - ka2 * isc2
 
 
-@njit(cache=True, inline="always")
-def _rhs(type1, x, q, vmx, kp3, terms, out):
+@njit(cache=True)
+def _rhs(type1, x, q, vmx, kp3, terms, out):  # pragma: no cover - compiled
     if type1:
         _rhs_type1(x, q, vmx, kp3, terms, out)
     else:
         _rhs_2007(x, q, vmx, kp3, terms, out)
 
 
-@njit(cache=True, inline="always")
-def _rk4_step(type1, x, q, vmx, kp3, terms, h, ks, xs):
+@njit(cache=True)
+def _rk4_step(type1, x, q, vmx, kp3, terms, h, ks, xs):  # pragma: no cover - compiled
     """One RK4 step of ``x`` in place, as the NumPy loop: stages x + (h/2) k1, x + (h/2)
     k2, x + h k3, then x + (h/6) (k1 + 2 k2 + 2 k3 + k4) summed left to right."""
     half = 0.5 * h
