@@ -46,7 +46,7 @@ HEAVY_LIBRARIES: dict[str, str] = {
     "torch": "PyTorch: the networks only; about a second to import",
     "safetensors": "the networks' weight files only",
     "matplotlib": "figures only",
-    "numba": "the compiled optics kernels only",
+    "numba": "the compiled kernels only (optics; the UVA/Padova RK4)",
     "dask": "sweeps on a cluster only",
     "distributed": "sweeps on a cluster only",
     "onnx": "an optional extra (export-onnx)",
