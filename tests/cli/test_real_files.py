@@ -260,3 +260,13 @@ def test_a_file_without_a_scenario_runs_the_deployable_models_by_default():
     assert "oracle" not in plain and "physics-inversion" not in plain
     assert plain == [m for m in available_models() if privileged_knowledge(m) is None]
     assert {"ebl", "pls", "mean", "device-inversion"} <= set(plain)
+
+
+def test_a_twin_of_an_ac_coupled_file_is_refused_in_one_line(cli, tmp_path):
+    path = tmp_path / "ppg.csv"
+    ac_coupled_ppg_frame().to_csv(path, index=False)
+    code, _, err = cli("twin", "--data", path, "--adc-bits", "12", "--out",
+                       tmp_path / "twin.json")
+    assert_one_line_error(code, err, contains=("adc_880, adc_940", "AC-coupled",
+                                               "DC-coupled readings"))
+    assert not (tmp_path / "twin.json").exists()

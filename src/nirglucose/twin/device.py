@@ -170,6 +170,7 @@ def device_of(ds: Dataset, adc_bits: int | None = None) -> TwinDevice:
         if col not in frame.columns:
             raise DataError(f"the file has no {col!r} column ({why}); add it "
                             "(docs/user_data.md, 'The device file')")
+    _refuse_ac_coupled(frame, schema)
     counts = frame.groupby("subject_id", sort=False).size().to_numpy()
     per = int(np.median(counts))
     if len(counts) < MIN_TWIN_SUBJECTS or per < MIN_TWIN_READINGS:
@@ -190,6 +191,25 @@ def device_of(ds: Dataset, adc_bits: int | None = None) -> TwinDevice:
         n_subjects=len(counts), per_subject=per,
         time_sd_h=0.0 if times is None else _time_sd_h(frame, times),
     )
+
+
+def _refuse_ac_coupled(frame: pd.DataFrame, schema) -> None:
+    """Refuse, in one line, channels whose every reading sits at mid-scale: an AC-coupled
+    front end records no light level, which is what a twin fits
+    (:func:`~nirglucose.dataset.adc.check_dc_level`)."""
+    import warnings
+
+    from ..dataset.adc import check_dc_level
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the refusal below says it
+        flagged = check_dc_level(frame, tuple(f"adc_{w}" for w in schema.labels),
+                                 schema.full_scales)
+    if flagged:
+        raise DataError(
+            f"{', '.join(flagged)}: every reading sits at mid-scale (an AC-coupled front end, "
+            "which removes the light level?): a twin fits the light each LED reads through "
+            "the skin, and these codes carry none; give the DC-coupled readings")
 
 
 def _time_sd_h(frame: pd.DataFrame, column: str) -> float:
