@@ -1,0 +1,7 @@
+"""Compiled (numba) kernels of the simulator's layers, implementation details only.
+
+hardware_kernel (the hardware layer's element-wise chain, LED power to ADC code, in one
+pass). The physics, units and citations live in the NumPy functions of
+:mod:`nirglucose.simulation.hardware`, which stay the reference: a test holds each kernel
+equal to them bit for bit. Imported lazily by their callers (they import numba).
+"""
