@@ -12,12 +12,14 @@ and a stable hash of the stream name. Hence
 
 from __future__ import annotations
 
+import functools
 import zlib
 
 import numpy as np
+import pandas as pd
 from scipy.special import ndtr, ndtri
 
-__all__ = ["BLOCK_SUBJECTS", "RandomStreams", "SubjectStreams", "truncated_normal"]
+__all__ = ["BLOCK_SUBJECTS", "RandomStreams", "SubjectStreams", "categories", "truncated_normal"]
 
 #: Subjects per random block (a chunk holds whole blocks).
 BLOCK_SUBJECTS = 4096
@@ -32,9 +34,20 @@ class _Counted:
 
     def __getattr__(self, name: str):
         method = getattr(self._gen, name)
+        standard = self._gen.standard_normal if name == "normal" else None
 
         def draw(*args, size=None, **kwargs):
-            out = method(*args, size=size, **kwargs)
+            if standard is not None and not args and not kwargs:
+                # N(0, 1): NumPy's normal returns 0.0 + 1.0 z of the same ziggurat draw z
+                # (random_normal: loc + scale z), which is z + 0.0 bit for bit (-0.0
+                # becomes +0.0); without the multiply-add's extra cost per variate
+                out = standard(size=size)
+                if isinstance(out, np.ndarray):
+                    out += 0.0
+                else:
+                    out = out + 0.0
+            else:
+                out = method(*args, size=size, **kwargs)
             self._owner.n_variates += int(np.size(out))
             return out
 
@@ -177,3 +190,17 @@ def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None):
     np.maximum(out, low, out=out)
     np.minimum(out, high, out=out)
     return out
+
+
+@functools.lru_cache(maxsize=32)
+def categories(names: tuple[str, ...]) -> pd.CategoricalDtype:
+    """The categorical dtype of a drawn label column (``pd.Categorical.from_codes(codes,
+    dtype=categories(names))``), built once per set of names: building it validates
+    the names, which costs more than the column (the same dtype either way).
+
+    Examples
+    --------
+    >>> categories(("sun", "led")) is categories(("sun", "led"))
+    True
+    """
+    return pd.CategoricalDtype(list(names))
