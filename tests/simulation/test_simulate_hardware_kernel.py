@@ -69,9 +69,9 @@ def test_compiled_hardware_layer_returns_the_reference_arrays():
     cfg = ng.resolve_config("paper", {"device.monitor_photodiode": False})
     tables = simulator.scenario_tables(cfg)
     outs = []
+    orig = hardware.apply_hardware
     for compiled in (False, True):
         seen = {}
-        orig = hardware.apply_hardware
 
         def layer(*args, _seen=seen, _c=compiled, **kwargs):
             _seen.update(orig(*args, compiled=_c))
