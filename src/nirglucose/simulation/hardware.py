@@ -387,10 +387,27 @@ def _apply_hardware_compiled(cfg, fraction, temps: dict, subject_index, streams)
     }
 
 
+#: :func:`_front_end_constants` of the scenarios seen last, by identity (each entry holds
+#: its scenario, a frozen model, so the identity stays its own while cached).
+_CONSTANTS: dict = {}
+
+
 def _front_end_constants(cfg, n_led: int, read: bool, monitor: bool):
     """The kernels' scalars (:class:`~nirglucose.simulation.kernels.hardware_kernel.
     FrontEnd`) and per-LED rows (P0, responsivity, ageing, flicker x factor, read-noise SD
-    x scale), each computed as the NumPy reference computes it."""
+    x scale), each computed as the NumPy reference computes it; once per scenario."""
+    key = (id(cfg), n_led, read, monitor)
+    hit = _CONSTANTS.get(key)
+    if hit is not None and hit[0] is cfg:
+        return hit[1]
+    if len(_CONSTANTS) >= 64:
+        _CONSTANTS.clear()
+    _CONSTANTS[key] = (cfg, _compute_front_end_constants(cfg, n_led, read, monitor))
+    return _CONSTANTS[key][1]
+
+
+def _compute_front_end_constants(cfg, n_led: int, read: bool, monitor: bool):
+    """:func:`_front_end_constants`, computed."""
     from .kernels.hardware_kernel import FrontEnd
 
     hw = cfg.hardware

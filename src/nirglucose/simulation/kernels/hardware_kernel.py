@@ -157,9 +157,12 @@ def reading_voltages(fraction, led_c, age_h, board_c, board_cal_c, subject_index
     """
     n, n_led = fraction.shape
     z_flicker, z_ambient, z_shot, z_johnson, z_read, z_mon_shot, z_mon_johnson = z
+    dark_cal = np.empty(board_cal_c.shape[0])  # once per subject, not per reading
+    for s in range(board_cal_c.shape[0]):
+        dark_cal[s] = _dark(k, board_cal_c[s])
     for i in range(n):
         dark_now = _dark(k, board_c[i])
-        dark_res = k.f_dark * (dark_now - _dark(k, board_cal_c[subject_index[i]]))
+        dark_res = k.f_dark * (dark_now - dark_cal[subject_index[i]])
         i_amb = k.f_ambient * ambient_a[i]
         amb = i_amb * k.ambient_keep * ambient_flicker[i]
         johnson = _johnson_sd(k, board_c[i])
