@@ -11,7 +11,10 @@ multiply-add nor reorders without ``fastmath``; so the codes, voltages and power
 the NumPy reference's bit for bit (a test holds them so). The physics, units and
 citations live in :mod:`nirglucose.simulation.hardware`.
 
-The random draws are made by the caller, in the reference's order, and passed in.
+The random draws are made by the caller, in the reference's order, and passed in. The
+kernels use numba's ``error_model="numpy"``: a division by zero gives inf or NaN, as in
+NumPy (and the caller then raises), instead of raising inside the loop; so the loops
+carry no check per value.
 """
 
 from __future__ import annotations
@@ -97,7 +100,7 @@ def _quantise(rounded, full):
     return np.int64(c)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def convert(voltage_v, offset_lsb, k, out):  # pragma: no cover - compiled
     """:func:`~nirglucose.simulation.hardware.adc_convert` of 1-D arrays into ``out``
     (int64), clip(rint(V / Vref FS + INL + offset), 0, FS); returns False where a code is
@@ -142,7 +145,7 @@ def _fast_code(k, voltage_v, offset_lsb):
     return rounded, (0.0 <= x) & (x <= math.pi) & (abs(code - rounded) < 0.5 - tol)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def reading_voltages(fraction, led_c, age_h, board_c, board_cal_c, subject_index, ambient_a,
                      ambient_flicker, z, led, k, signal_v, voltage_v, power_w, offset_lsb,
                      monitor_v):  # pragma: no cover - compiled
@@ -185,7 +188,7 @@ def reading_voltages(fraction, led_c, age_h, board_c, board_cal_c, subject_index
                                    + johnson * z_mon_johnson[i, j]) * k.gain
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def reference_voltages(led_cal_c, age_cal_h, board_cal_c, z_flicker, z_shot, z_johnson, led, k,
                        voltage_v, offset_lsb):  # pragma: no cover - compiled
     """Each subject's start-up reference voltage [V] and offset [LSB], (n_sub, n_led);

@@ -28,7 +28,7 @@ def _at(mode, group, i):
     return group[i]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def probabilities(u, a, b, group, mode, p_low, p_high, out):  # pragma: no cover - compiled
     """``out[i] = clip(a + u[i] (b - a), p_low, p_high)`` with a, b taken by ``mode``."""
     for i in range(u.shape[0]):
@@ -41,7 +41,7 @@ def probabilities(u, a, b, group, mode, p_low, p_high, out):  # pragma: no cover
         out[i] = p
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def scale_and_clip(z, sd, mean, group, mode, low, high):  # pragma: no cover - compiled
     """In place, ``z[i] = clip(z[i] sd + mean, low, high)`` with the mean taken by
     ``mode``."""
