@@ -49,3 +49,4 @@ def test_truncated_normal_through_a_stream_is_unchanged_by_the_kernels():
     b = _random._truncated_normal_scalar_sd(u, np.asarray(120.0), 15.0, 60.0, 400.0, 1000,
                                             compiled=False)
     assert a.tobytes() == b.tobytes()
+
