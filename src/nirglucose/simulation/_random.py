@@ -12,12 +12,14 @@ and a stable hash of the stream name. Hence
 
 from __future__ import annotations
 
+import functools
 import zlib
 
 import numpy as np
+import pandas as pd
 from scipy.special import ndtr, ndtri
 
-__all__ = ["BLOCK_SUBJECTS", "RandomStreams", "SubjectStreams", "truncated_normal"]
+__all__ = ["BLOCK_SUBJECTS", "RandomStreams", "SubjectStreams", "categories", "truncated_normal"]
 
 #: Subjects per random block (a chunk holds whole blocks).
 BLOCK_SUBJECTS = 4096
@@ -32,9 +34,20 @@ class _Counted:
 
     def __getattr__(self, name: str):
         method = getattr(self._gen, name)
+        standard = self._gen.standard_normal if name == "normal" else None
 
         def draw(*args, size=None, **kwargs):
-            out = method(*args, size=size, **kwargs)
+            if standard is not None and not args and not kwargs:
+                # N(0, 1): NumPy's normal returns 0.0 + 1.0 z of the same ziggurat draw z
+                # (random_normal: loc + scale z), which is z + 0.0 bit for bit (-0.0
+                # becomes +0.0); without the multiply-add's extra cost per variate
+                out = standard(size=size)
+                if isinstance(out, np.ndarray):
+                    out += 0.0
+                else:
+                    out = out + 0.0
+            else:
+                out = method(*args, size=size, **kwargs)
             self._owner.n_variates += int(np.size(out))
             return out
 
@@ -145,9 +158,13 @@ def truncated_normal(
 _P_EDGE = 1e-15
 
 
-def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None):
+def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None, *, compiled=True):
     """:func:`truncated_normal` for one SD (the common case), in place: the same
-    operations in the same order, so the same values to the last bit."""
+    operations in the same order, so the same values to the last bit. ``compiled``: the
+    passes around ``ndtri`` compiled (:mod:`nirglucose.simulation.kernels.random_kernel`),
+    the same bits; False: the NumPy form below, the reference."""
+    if compiled and sd > 0:
+        return _truncated_normal_compiled(u, mean, sd, low, high, size, group)
     if sd <= 0:
         out = np.array(np.broadcast_to(mean if group is None else mean[group], (size,)),
                        dtype=float)
@@ -176,4 +193,44 @@ def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None):
         out += mean if group is None else mean[group]
     np.maximum(out, low, out=out)
     np.minimum(out, high, out=out)
+    return out
+
+
+@functools.lru_cache(maxsize=32)
+def categories(names: tuple[str, ...]) -> pd.CategoricalDtype:
+    """The categorical dtype of a drawn label column (``pd.Categorical.from_codes(codes,
+    dtype=categories(names))``), built once per set of names: building it validates
+    the names, which costs more than the column (the same dtype either way).
+
+    Examples
+    --------
+    >>> categories(("sun", "led")) is categories(("sun", "led"))
+    True
+    """
+    return pd.CategoricalDtype(list(names))
+
+
+def _truncated_normal_compiled(u, mean, sd, low, high, size, group):
+    """:func:`_truncated_normal_scalar_sd` (``sd > 0``) with its passes before and after
+    ``ndtri`` compiled; a and b (the normal CDF at the limits) as the reference computes
+    them."""
+    from .kernels import random_kernel as rk
+
+    if mean.ndim == 0:
+        a = np.array([float(ndtr((low - mean) / sd))])
+        b = np.array([float(ndtr((high - mean) / sd))])
+        means, mode = np.array([float(mean)]), 0
+    else:
+        a = np.subtract(low, mean)
+        a /= sd
+        ndtr(a, out=a)
+        b = np.subtract(high, mean)
+        b /= sd
+        ndtr(b, out=b)
+        means, mode = np.ascontiguousarray(mean, dtype=np.float64), 1 if group is None else 2
+    index = np.empty(0, np.int64) if group is None else np.asarray(group, dtype=np.int64)
+    out = np.empty(size)
+    rk.probabilities(u, a, b, index, mode, _P_EDGE, 1 - _P_EDGE, out)
+    ndtri(out, out=out)
+    rk.scale_and_clip(out, float(sd), means, index, mode, float(low), float(high))
     return out

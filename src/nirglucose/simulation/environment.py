@@ -14,7 +14,7 @@ import pandas as pd
 
 from .. import portable as pm
 from ..config import EnvironmentConfig, ScenarioConfig
-from ._random import RandomStreams, truncated_normal
+from ._random import RandomStreams, categories, truncated_normal
 
 __all__ = [
     "LIGHT_SOURCES",
@@ -156,7 +156,7 @@ def sample_environment(
         "humidity_pct": humidity_pct,
         "pressure_mbar": pressure_mbar,
         "ambient_lux": ambient_lux,
-        "light_source": pd.Categorical.from_codes(source_idx, categories=names),
+        "light_source": pd.Categorical.from_codes(source_idx, dtype=categories(tuple(names))),
     }
 
 

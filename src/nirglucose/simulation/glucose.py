@@ -21,7 +21,7 @@ import pandas as pd
 
 from .. import portable as pm
 from ..config import ScenarioConfig
-from ._random import RandomStreams
+from ._random import RandomStreams, categories
 
 __all__ = [
     "DIABETES_STATUSES",
@@ -106,7 +106,8 @@ def sample_glucose(
     glucose = reflect_into_range(raw, *g.range_mgdl)
     return {
         "glucose_mgdl": glucose,
-        "diabetes_status": pd.Categorical.from_codes(status_codes[rep], categories=names),
+        "diabetes_status": pd.Categorical.from_codes(status_codes[rep],
+                                                   dtype=categories(tuple(names))),
         "true_hours_since_meal": hours_since_meal,
         "true_stress": stressed.astype(np.int64),
         "true_hour_of_day": hour,

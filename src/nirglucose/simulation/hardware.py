@@ -229,6 +229,10 @@ def adc_inl_lsb(code, full_scale: int, inl_peak_lsb: float) -> np.ndarray:
     return inl_peak_lsb * pm.sin(np.pi * np.asarray(code, dtype=float) / full_scale)
 
 
+_NOT_FINITE = ("the simulated ADC input is not finite: the noise settings drive the "
+               "simulation outside its physical range; lower noise_scale or noise.*.scale")
+
+
 def adc_convert(voltage_v, vref_v: float, bits: int, inl_peak_lsb: float, offset_lsb) -> np.ndarray:
     """Convert voltages to integer codes: round(V / Vref FS + INL + offset), clipped.
 
@@ -259,14 +263,12 @@ def adc_convert(voltage_v, vref_v: float, bits: int, inl_peak_lsb: float, offset
     ideal = np.asarray(voltage_v, dtype=float) / vref_v * full
     code = ideal + adc_inl_lsb(ideal, full, inl_peak_lsb) + np.asarray(offset_lsb)
     if not np.all(np.isfinite(code)):  # NaN would cast to -2^63 (issue 20)
-        raise ConfigError(
-            "the simulated ADC input is not finite: the noise settings drive the simulation "
-            "outside its physical range; lower noise_scale or noise.*.scale"
-        )
+        raise ConfigError(_NOT_FINITE)
     return np.clip(np.rint(code), 0, full).astype(np.int64)
 
 
-def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, streams) -> dict:
+def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, streams, *,
+                   compiled: bool = True) -> dict:
     """Hardware layer entry: ADC codes of each measurement and of the start-up reference.
 
     Parameters
@@ -285,6 +287,10 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         Row -> subject within the block, (n,).
     streams : RandomStreams
         Random generators of the block.
+    compiled : bool
+        True (the default): the same operations in one compiled pass
+        (:mod:`nirglucose.simulation.kernels.hardware_kernel`), the same draws, the same
+        bits; False: the NumPy composition below, the reference.
 
     Returns
     -------
@@ -294,6 +300,9 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         measurement), ``signal_v`` (n, n_led) the
         noise-free analog voltage, ``detected_power_w`` (n, n_led).
     """
+    if compiled:
+        return _apply_hardware_compiled(cfg, detected_fraction_led, temps, subject_index,
+                                        streams)
     hw = cfg.hardware
     n_sub = int(subject_index.max()) + 1 if len(subject_index) else 0
     p0 = np.asarray(cfg.leds.power_mw)[None, :] * 1e-3
@@ -324,6 +333,110 @@ def apply_hardware(cfg, detected_fraction_led, temps: dict, subject_index, strea
         "voltage_v": voltage,
         "detected_power_w": detected_power_w,
     }
+
+
+def _apply_hardware_compiled(cfg, fraction, temps: dict, subject_index, streams) -> dict:
+    """:func:`apply_hardware` through the compiled kernels: the reference's draws, in its
+    order, then one pass over the readings and one over the start-up references."""
+    from .kernels import hardware_kernel as hk
+
+    n, n_led = np.shape(fraction)
+    n_sub = int(subject_index.max()) + 1 if len(subject_index) else 0
+    monitor = bool(cfg.device.monitor_photodiode)
+    read_sd = np.asarray([e.read_noise_lsb for e in cfg.leds.emitters])
+    read = bool(np.any(read_sd > 0))
+
+    def normal(name, rows):
+        return streams(name).normal(size=(rows, n_led))
+
+    z_flicker, z_flicker_cal = normal("led_flicker", n), normal("led_flicker.cal", n_sub)
+    z = [normal(name, n) for name in ("ambient_light", "shot", "johnson")]
+    z_read = normal("read_noise", n) if read else z[1]
+    z_cal = [normal(name, n_sub) for name in ("shot.cal", "johnson.cal")]
+    z_mon = [normal(name, n) for name in ("monitor.shot", "monitor.johnson")] if monitor else z[1:]
+    k, led = _front_end_constants(cfg, n_led, read, monitor)
+    f64 = np.float64
+    signal_v, voltage_v, power_w, offset, monitor_v = (
+        np.empty((n, n_led) if m else (0, n_led)) for m in (1, 1, 1, 1, monitor))
+    hk.reading_voltages(
+        np.asarray(fraction, f64), temps["led_c"], np.asarray(temps["age_h"], f64),
+        np.asarray(temps["board_c"], f64), np.asarray(temps["board_cal_c"], f64),
+        subject_index, np.asarray(temps["ambient_a"], f64),
+        np.asarray(temps["ambient_flicker"], f64), (z_flicker, *z, z_read, *z_mon), led, k,
+        signal_v, voltage_v, power_w, offset, monitor_v)
+    v_ref, offset_ref = np.empty((n_sub, n_led)), np.empty((n_sub, n_led))
+    hk.reference_voltages(np.asarray(temps["led_cal_c"], f64), np.asarray(temps["age_cal_h"], f64),
+                          np.asarray(temps["board_cal_c"], f64), z_flicker_cal, *z_cal, led, k,
+                          v_ref, offset_ref)
+    adc, ref = np.empty((n, n_led), np.int64), np.empty((n_sub, n_led), np.int64)
+    ok = hk.convert(voltage_v.ravel(), offset.ravel(), k, adc.ravel())
+    ok &= hk.convert(v_ref.ravel(), offset_ref.ravel(), k, ref.ravel())
+    if monitor:  # the monitor's offset: the row's, without the read noise
+        adc_monitor = np.empty((n, n_led), np.int64)
+        offset_mon = np.repeat(k.offset_per_c * (np.asarray(temps["board_c"], f64)
+                                                  - LED_REFERENCE_TEMPERATURE_C), n_led)
+        ok &= hk.convert(monitor_v.ravel(), offset_mon, k, adc_monitor.ravel())
+    if not ok:
+        raise ConfigError(_NOT_FINITE)
+    return {
+        "adc": adc,
+        "adc_ref": adc_monitor if monitor else ref[subject_index],
+        "signal_v": signal_v,
+        "voltage_v": voltage_v,
+        "detected_power_w": power_w,
+    }
+
+
+#: :func:`_front_end_constants` of the scenarios seen last, by identity (each entry holds
+#: its scenario, a frozen model, so the identity stays its own while cached).
+_CONSTANTS: dict = {}
+
+
+def _front_end_constants(cfg, n_led: int, read: bool, monitor: bool):
+    """The kernels' scalars (:class:`~nirglucose.simulation.kernels.hardware_kernel.
+    FrontEnd`) and per-LED rows (P0, responsivity, ageing, flicker x factor, read-noise SD
+    x scale), each computed as the NumPy reference computes it; once per scenario."""
+    key = (id(cfg), n_led, read, monitor)
+    hit = _CONSTANTS.get(key)
+    if hit is not None and hit[0] is cfg:
+        return hit[1]
+    if len(_CONSTANTS) >= 64:
+        _CONSTANTS.clear()
+    _CONSTANTS[key] = (cfg, _compute_front_end_constants(cfg, n_led, read, monitor))
+    return _CONSTANTS[key][1]
+
+
+def _compute_front_end_constants(cfg, n_led: int, read: bool, monitor: bool):
+    """:func:`_front_end_constants`, computed."""
+    from .kernels.hardware_kernel import FrontEnd
+
+    hw = cfg.hardware
+    ageing = hw.led_ageing_per_1000h * cfg.noise_factor("led_ageing")
+    if any(e.ageing_per_1000h is not None for e in cfg.leds.emitters):
+        ageing = (np.asarray(cfg.leds.ageings(hw.led_ageing_per_1000h))[None, :]
+                  * cfg.noise_factor("led_ageing"))
+    rel = hw.led_flicker_rel
+    if any(e.flicker_rel is not None for e in cfg.leds.emitters):
+        rel = np.asarray(cfg.leds.flicker_rels(hw.led_flicker_rel))[None, :]
+    rows = (np.asarray(cfg.leds.power_mw)[None, :] * 1e-3,
+            np.asarray(cfg.leds.responsivity_a_per_w)[None, :], ageing,
+            rel * cfg.noise_factor("led_flicker"),
+            cfg.noise_scale * np.asarray([e.read_noise_lsb for e in cfg.leds.emitters])[None, :])
+    led = np.ascontiguousarray(np.vstack([np.broadcast_to(np.asarray(r, dtype=np.float64),
+                                                          (1, n_led)) for r in rows]))
+    k = FrontEnd(
+        hw.led_thermal_coeff_per_c * cfg.noise_factor("led_thermal_drift"),
+        hw.dark_current_25c_na * 1e-9, float(hw.dark_current_per_c),
+        cfg.noise_factor("dark_current"), cfg.noise_factor("ambient_light"),
+        1.0 - hw.ambient_rejection, cfg.noise_factor("shot"), 2.0 * ELEMENTARY_CHARGE_C,
+        float(hw.bandwidth_hz), cfg.noise_factor("johnson"), 4.0 * BOLTZMANN_J_PER_K,
+        float(johnson_resistance_ohm(cfg)), float(hw.tia_gain_ohm),
+        cfg.noise_factor("adc_offset_drift") * cfg.hardware.adc_offset_drift_lsb_per_c,
+        float(hw.adc_vref_v), float(2**hw.adc_bits - 1),
+        cfg.noise_factor("adc_inl") * hw.adc_inl_lsb, float(hw.reference_transmission),
+        float(read), float(monitor),
+    )
+    return FrontEnd(*(float(x) for x in k)), led
 
 
 def _dark_currents_a(cfg, temps: dict, subject_index):

@@ -50,11 +50,14 @@ def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams)
     out = {}
     draws = rng.normal(size=(len(_TRUTH), n))
     for i, (col, true_col) in enumerate(_TRUTH.items()):
-        value = truth[true_col] + f * getattr(m, col) * draws[i]
+        # truth + f sd z, in place in the draw's row (+ and x commute exactly)
+        value = draws[i]
+        value *= f * getattr(m, col)
+        value += truth[true_col]
         # An instrument reports within its display range (PHYSIOLOGICAL_RANGES); only
         # errors scaled far beyond the instruments' (noise_scale >> 1) reach its ends.
         lo, hi, _ = PHYSIOLOGICAL_RANGES[col]
-        out[col] = np.clip(value, lo, hi)
+        out[col] = np.clip(value, lo, hi, out=value)
     if not exact:
         out["age_yr"] = np.floor(out["age_yr"])  # recorded in whole years
     off = rng.random(size=n) < f * m.fitzpatrick_misclass

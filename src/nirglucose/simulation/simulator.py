@@ -451,10 +451,33 @@ def _fraction_per_gain(cfg, tables, state, melanin, thickness_mm, shift_nm) -> n
     return out
 
 
+def row_mean(x: np.ndarray) -> np.ndarray:
+    """``x.mean(axis=1)`` of a 2-D float array, bit for bit, as a sum of its columns.
+
+    For fewer than 8 columns NumPy sums each row in order from +0.0, (((0 + x0) + x1) +
+    ...), then divides by the count (a test holds the two equal); summed column by
+    column that is about five times faster than NumPy's reduction over short rows. Other
+    widths go to ``mean``.
+
+    Examples
+    --------
+    >>> row_mean(np.array([[1.0, 2.0, 4.0], [-0.0, -0.0, -0.0]]))
+    array([2.33333333, 0.        ])
+    """
+    k = x.shape[1]
+    if not 0 < k < 8 or x.dtype != np.float64:
+        return x.mean(axis=1)
+    out = np.add(x[:, 0], 0.0)
+    for j in range(1, k):
+        out += x[:, j]
+    out /= k
+    return out
+
+
 def _hidden(glucose: dict, temps: dict) -> dict:
     """The scalar ``true_*`` columns of the glucose and hardware layers."""
     return {
-        "true_led_temperature_c": temps["led_c"].mean(axis=1),
+        "true_led_temperature_c": row_mean(temps["led_c"]),
         "true_board_temperature_c": temps["board_c"],
         "true_hours_since_meal": glucose["true_hours_since_meal"],
         "true_stress": glucose["true_stress"],

@@ -85,7 +85,10 @@ def _node_spectra(tab, der, led, p):
             tab[9, led, p], der[9, led, p])
 
 
-@njit(cache=True, nogil=True)
+# error_model="numpy": a division by zero gives inf or NaN, as in NumPy, instead of
+# raising, so the loops carry no check per value and vectorise (no divisor here is zero;
+# the values are the same bits either way)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin, skin_cm,
             tab, der, weight_geometry, x_disp_per_mm, k_scat_per_mm, rho_cm, epi_cm,
             blood_sub_ratio, water_sub, out_t):  # pragma: no cover - compiled
