@@ -228,6 +228,7 @@ def test_an_ac_coupled_file_is_said_so_in_fit_predict_benchmark_and_report(cli, 
     limits = html[html.index('id="limits"'):html.index('id="contents"')
                   if 'id="contents"' in html else None]
     assert "your data: measured by your device" in limits
+    assert "Physiology</b>: none in the file" in limits
     assert limits.count("AC-coupled front end") == 2
     assert "no deployable estimator beats the training mean here" in limits
     assert "the study's reported RMSE" not in html  # measured on other data

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Final
 
 from ..config.presets import PAPER_SIGNAL_GAIN, WEARABLE_SIGNAL_GAIN
+from ..dataset.columns import PMF_COLUMNS
 from ..evaluation.benchmark.findings import (
     HYPO_MGDL,
     NO_SKILL,
@@ -114,6 +115,8 @@ def limits_facts(res: Results, run: RunData) -> dict[str, Any]:
         "preset": run.preset,
         "user_data": bool(res.user_data),
         "file_warnings": [str(w) for w in meta.get("file_warnings", ())],
+        "file_physiology": ([c for c in PMF_COLUMNS if c in ds.frame.columns]
+                            if ds is not None else []),
         "gain": None if gain is None else float(gain),
         "regime": ("measured by your device" if res.user_data else
                    regime(None if gain is None else float(gain), run.preset)),
@@ -141,7 +144,9 @@ def _device_items(f: dict[str, Any]) -> list[str]:
     the warnings its reading raised."""
     items = ["<li><b>Glucose signal</b>: measured, not simulated — its size "
              "is whatever the optics and the skin give; no oracle bound (no scenario)</li>",
-             "<li><b>Physiology</b>: only the file's own columns, as measured</li>"]
+             "<li><b>Physiology</b>: " + (
+                 f"the file's own columns, as measured ({_esc(', '.join(phys))})" if
+                 (phys := f["file_physiology"]) else "none in the file") + "</li>"]
     for w in f["file_warnings"]:
         items.append(f"<li><b>Reading the file</b>: {_esc(w)}</li>")
     return items
