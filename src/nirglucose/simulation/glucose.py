@@ -21,7 +21,7 @@ import pandas as pd
 
 from .. import portable as pm
 from ..config import ScenarioConfig
-from ._random import RandomStreams, categories
+from ._random import RandomStreams, categorical, categories
 
 __all__ = [
     "DIABETES_STATUSES",
@@ -81,7 +81,7 @@ def sample_glucose(
     rng = streams("glucose")
     names = list(g.status_probs)
     probs = np.array([g.status_probs[k] for k in names])
-    status_idx = rng.choice(len(names), p=probs, size=n_subjects)
+    status_idx = categorical(rng, probs, n_subjects)
     status_codes = status_idx
     fasting_mean = np.array([g.fasting_mgdl[k][0] for k in names])[status_idx]
     fasting_sd = np.array([g.fasting_mgdl[k][1] for k in names])[status_idx]

@@ -20,7 +20,7 @@ import numpy as np
 from .. import portable as pm
 from ..config import ScenarioConfig
 from ..constants import FITZPATRICK_MELANIN_FRACTION_RANGES
-from ._random import RandomStreams, truncated_normal
+from ._random import RandomStreams, categorical, truncated_normal
 
 __all__ = [
     "melanin_fraction_from_fitzpatrick",
@@ -133,7 +133,7 @@ def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
     age = age_mid + v * (rng.uniform(*p.age_yr, size=n) - age_mid)
     bmi = truncated_normal(rng, p.bmi_kgm2_mean, v * p.bmi_kgm2_sd, *p.bmi_kgm2, size=n)
     if v > 0:
-        fitz = 1 + rng.choice(6, p=np.asarray(p.fitzpatrick_probs), size=n)
+        fitz = 1 + categorical(rng, p.fitzpatrick_probs, n)
     else:
         fitz = np.full(n, p.nominal_fitzpatrick_type)
         rng.random(size=n)  # keep the stream's consumption independent of the scale

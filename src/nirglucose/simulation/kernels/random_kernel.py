@@ -7,6 +7,8 @@ makes about ten passes over the values (and gathers a, b and the mean by group);
 two kernels make one pass before SciPy's ``ndtri`` and one after, the same operations in
 the same order per value, so the same bits (a test holds them equal to the NumPy form,
 which stays the reference).
+:func:`count_at_or_below` is the look-up of the categorical draw
+(:func:`nirglucose.simulation._random.categorical`).
 
 ``mode``: 0, a, b and the mean are one value (index 0); 1, one per value; 2, one per
 group, value i taking ``group[i]``.
@@ -16,7 +18,7 @@ from __future__ import annotations
 
 from numba import njit
 
-__all__ = ["probabilities", "scale_and_clip"]
+__all__ = ["count_at_or_below", "probabilities", "scale_and_clip"]
 
 
 @njit(cache=True, inline="always")
@@ -52,3 +54,18 @@ def scale_and_clip(z, sd, mean, group, mode, low, high):  # pragma: no cover - c
         if x > high:
             x = high
         z[i] = x
+
+
+@njit(cache=True, nogil=True)
+def count_at_or_below(u, cdf, out):  # pragma: no cover - compiled
+    """``out[i]`` = the number of ``cdf`` values at or below ``u[i]``: for a sorted
+    ``cdf``, ``cdf.searchsorted(u, side="right")`` (a test holds them equal), in one pass
+    with no binary search (a categorical draw has a handful of categories)."""
+    k = cdf.shape[0]
+    for i in range(u.shape[0]):
+        x = u[i]
+        c = 0
+        for j in range(k):
+            if cdf[j] <= x:
+                c += 1
+        out[i] = c
