@@ -84,9 +84,41 @@ class RandomStreams:
     def __call__(self, name: str) -> _Counted:
         if name not in self._cache:
             key = zlib.crc32(name.encode("utf-8"))
-            ss = np.random.SeedSequence(self.seed, spawn_key=(self.block, key))
+            ss = _block_seed(self.seed, self.block, key)
             self._cache[name] = _Counted(np.random.Generator(np.random.PCG64(ss)), self)
         return self._cache[name]
+
+
+class _SeedWords:
+    """A seed sequence that is its words: what ``PCG64`` takes from a
+    :class:`numpy.random.SeedSequence` (``generate_state(4, np.uint64)``), computed
+    before (:func:`_block_seed`)."""
+
+    __slots__ = ("words",)
+
+    def __init__(self, words: np.ndarray) -> None:
+        self.words = words
+
+    def generate_state(self, n_words: int, dtype=np.uint32) -> np.ndarray:
+        if n_words != 4 or np.dtype(dtype) != np.uint64:
+            raise ValueError("a block stream's seed holds 4 uint64 words only")
+        return self.words.copy()
+
+
+np.random.bit_generator.ISeedSequence.register(_SeedWords)
+
+
+def _block_seed(seed: int, block: int, key: int):
+    """``SeedSequence(seed, spawn_key=(block, key))`` as ``PCG64`` seeds from it: where
+    all three fit 32 bits, its 4 state words from the compiled hash (the same words, a
+    test holds them equal; about a tenth of the cost of building the SeedSequence and
+    drawing them from it, which a block pays for each of its 19 streams); else the
+    SeedSequence itself."""
+    if 0 <= seed < 2**32 and 0 <= block < 2**32 and 0 <= key < 2**32:
+        from .kernels.random_kernel import seed_sequence_state
+
+        return _SeedWords(seed_sequence_state(seed, block, key))
+    return np.random.SeedSequence(seed, spawn_key=(block, key))
 
 
 class SubjectStreams(RandomStreams):
