@@ -14,7 +14,7 @@ import pandas as pd
 
 from .. import portable as pm
 from ..config import EnvironmentConfig, ScenarioConfig
-from ._random import RandomStreams, categories, truncated_normal
+from ._random import RandomStreams, categorical, categories, truncated_normal
 
 __all__ = [
     "LIGHT_SOURCES",
@@ -150,7 +150,7 @@ def sample_environment(
     ambient_lux = pm.power(10.0, rng.uniform(log_lo, log_hi, size=n))
     names = list(cfg.light_source_probs)
     probs = np.array([cfg.light_source_probs[k] for k in names])
-    source_idx = rng.choice(len(names), p=probs, size=n)
+    source_idx = categorical(rng, probs, n)
     return {
         "temperature_c": temperature_c,
         "humidity_pct": humidity_pct,

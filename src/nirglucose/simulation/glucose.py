@@ -21,7 +21,7 @@ import pandas as pd
 
 from .. import portable as pm
 from ..config import ScenarioConfig
-from ._random import RandomStreams, categories
+from ._random import RandomStreams, categorical, categories
 
 __all__ = [
     "DIABETES_STATUSES",
@@ -74,14 +74,20 @@ def reflect_into_range(x: np.ndarray, low: float, high: float) -> np.ndarray:
 
 
 def sample_glucose(
-    cfg: ScenarioConfig, n_subjects: int, per_subject: int, streams: RandomStreams
+    cfg: ScenarioConfig, n_subjects: int, per_subject: int, streams: RandomStreams,
+    *, compiled: bool = True,
 ) -> dict:
-    """Draw statuses (per subject) and glucose snapshots (per measurement)."""
+    """Draw statuses (per subject) and glucose snapshots (per measurement).
+
+    ``compiled``: the same draws, then one compiled pass with the same operations in the
+    same order (:mod:`nirglucose.simulation.kernels.glucose_kernel`: the same bits);
+    False: the NumPy form, the reference.
+    """
     g = cfg.glucose
     rng = streams("glucose")
     names = list(g.status_probs)
     probs = np.array([g.status_probs[k] for k in names])
-    status_idx = rng.choice(len(names), p=probs, size=n_subjects)
+    status_idx = categorical(rng, probs, n_subjects)
     status_codes = status_idx
     fasting_mean = np.array([g.fasting_mgdl[k][0] for k in names])[status_idx]
     fasting_sd = np.array([g.fasting_mgdl[k][1] for k in names])[status_idx]
@@ -91,19 +97,30 @@ def sample_glucose(
     rep = np.repeat(np.arange(n_subjects), per_subject)
     hours_since_meal = rng.uniform(*g.hours_since_meal_h, size=n)
     meal_size = rng.lognormal(0.0, g.meal_size_log_sd, size=n)
-    peak = np.array([g.meal_peak_mgdl[k] for k in names])[status_idx][rep]
+    peak_by_status = np.array([g.meal_peak_mgdl[k] for k in names], dtype=float)
     stressed = rng.random(size=n) < g.stress_prob
-    stress_rise = np.where(stressed, rng.uniform(*g.stress_mgdl, size=n), 0.0)
+    stress_u = rng.uniform(*g.stress_mgdl, size=n)
     hour = rng.uniform(0.0, 24.0, size=n)  # hour of day
-    dawn = np.array([g.dawn_mgdl[k] for k in names])[status_idx][rep]
-    dawn_rise = dawn * dawn_profile(hour, g.dawn_peak_hour, g.dawn_width_h)
-    raw = (
-        baseline[rep]
-        + peak * meal_size * meal_excursion(hours_since_meal, g.meal_peak_h)
-        + stress_rise
-        + dawn_rise
-    )
-    glucose = reflect_into_range(raw, *g.range_mgdl)
+    dawn_by_status = np.array([g.dawn_mgdl[k] for k in names], dtype=float)
+    if compiled:
+        from .kernels.glucose_kernel import snapshots
+
+        glucose = np.empty(n)
+        snapshots(baseline, status_idx, rep, peak_by_status, dawn_by_status,
+                  hours_since_meal, meal_size, stressed, stress_u, hour,
+                  tuple(float(x) for x in (g.meal_peak_h, g.dawn_peak_hour, g.dawn_width_h,
+                                           *g.range_mgdl)), glucose)
+    else:
+        peak = peak_by_status[status_idx][rep]
+        dawn_rise = dawn_by_status[status_idx][rep] * dawn_profile(
+            hour, g.dawn_peak_hour, g.dawn_width_h)
+        raw = (
+            baseline[rep]
+            + peak * meal_size * meal_excursion(hours_since_meal, g.meal_peak_h)
+            + np.where(stressed, stress_u, 0.0)
+            + dawn_rise
+        )
+        glucose = reflect_into_range(raw, *g.range_mgdl)
     return {
         "glucose_mgdl": glucose,
         "diabetes_status": pd.Categorical.from_codes(status_codes[rep],

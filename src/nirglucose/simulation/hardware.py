@@ -91,9 +91,10 @@ def led_temperatures_c(cfg, ambient_c, skin_c, first_rows, streams) -> dict:
     hw = cfg.hardware
     n, n_sub, n_led = len(ambient_c), len(first_rows), len(cfg.leds.emitters)
     f_thermal = cfg.noise_factor("led_thermal_drift")
-    heat = hw.led_self_heating_c + f_thermal * hw.led_self_heating_sd_c * streams(
-        "led_thermal_drift"
-    ).normal(size=(n + n_sub, n_led))
+    # heating + f sd z, in place in the draws (+ and x commute exactly)
+    heat = streams("led_thermal_drift").normal(size=(n + n_sub, n_led))
+    heat *= f_thermal * hw.led_self_heating_sd_c
+    heat += hw.led_self_heating_c
     board_c = board_temperature_c(ambient_c, skin_c, hw.board_skin_weight)
     return {
         "led_c": ambient_c[:, None] + heat[:n],

@@ -20,7 +20,7 @@ import numpy as np
 from .. import portable as pm
 from ..config import ScenarioConfig
 from ..constants import FITZPATRICK_MELANIN_FRACTION_RANGES
-from ._random import RandomStreams, truncated_normal
+from ._random import RandomStreams, categorical, truncated_normal
 
 __all__ = [
     "melanin_fraction_from_fitzpatrick",
@@ -133,7 +133,7 @@ def sample_traits(cfg: ScenarioConfig, n: int, streams: RandomStreams) -> dict:
     age = age_mid + v * (rng.uniform(*p.age_yr, size=n) - age_mid)
     bmi = truncated_normal(rng, p.bmi_kgm2_mean, v * p.bmi_kgm2_sd, *p.bmi_kgm2, size=n)
     if v > 0:
-        fitz = 1 + rng.choice(6, p=np.asarray(p.fitzpatrick_probs), size=n)
+        fitz = 1 + categorical(rng, p.fitzpatrick_probs, n)
     else:
         fitz = np.full(n, p.nominal_fitzpatrick_type)
         rng.random(size=n)  # keep the stream's consumption independent of the scale
@@ -179,13 +179,20 @@ def sample_state(
     glucose: dict,
     n_rows: int,
     streams: RandomStreams,
+    *,
+    compiled: bool = True,
 ) -> dict:
     """Draw the per-measurement state, given repeated traits, environment and glucose.
 
     The ``physiology.state`` stream is drawn in a fixed order (hydration, systolic BP,
     heart rate, respiration, skin temperature, saturation, blood volume), then the
-    ``pulsation`` stream; the helpers below keep that order.
+    ``pulsation`` stream; the helpers below keep that order. ``compiled``: the same
+    draws, then one compiled pass with the same operations in the same order
+    (:mod:`nirglucose.simulation.kernels.physiology_kernel`: the same bits); False: the
+    NumPy form below, the reference.
     """
+    if compiled:
+        return _sample_state_compiled(cfg, traits, env, glucose, n_rows, streams)
     p = cfg.physiology
     v = p.variation_scale
     rng = streams("physiology.state")
@@ -211,6 +218,52 @@ def sample_state(
         "true_saturation": saturation,
         "true_blood_fraction": np.clip(blood, *p.blood_fraction_limits),
     }
+
+
+_STATE_COLUMNS = ("true_hydration_pct", "true_water_fraction", "true_systolic_bp_mmhg",
+                  "true_heart_rate_bpm", "true_resp_rate_bpm", "true_skin_temp_c",
+                  "true_saturation", "true_blood_fraction")
+
+
+def _sample_state_compiled(cfg, traits: dict, env: dict, glucose: dict, n_rows: int,
+                           streams: RandomStreams) -> dict:
+    """:func:`sample_state` through the compiled pass: the reference's draws (the seven
+    ``physiology.state`` normals of a reading row by row: one ``(7, n)`` draw is the same
+    variates in the same order), then :func:`~nirglucose.simulation.kernels.
+    physiology_kernel.state`."""
+    from .kernels import physiology_kernel as pk
+
+    z = streams("physiology.state").normal(size=(7, n_rows))
+    phase = streams("pulsation").uniform(0.0, 2.0 * np.pi, size=(2, n_rows))
+    base = np.empty((5, n_rows))
+    for i, k in enumerate(("_hydration_base", "_sbp_base", "_hr_base", "_rr_base",
+                           "_log_blood_base")):
+        base[i] = traits[k]
+    out = np.empty((len(_STATE_COLUMNS), n_rows))
+    pk.state(base, np.ascontiguousarray(glucose["true_stress"], dtype=np.int64),
+             np.ascontiguousarray(env["true_ambient_temperature_c"], dtype=np.float64),
+             np.ascontiguousarray(env["true_pressure_mbar"], dtype=np.float64), z, phase,
+             _state_constants(cfg), out)
+    return dict(zip(_STATE_COLUMNS, out, strict=True))
+
+
+def _state_constants(cfg) -> tuple:
+    """The scalars of the compiled state pass, each as the NumPy form computes it (the
+    draws' factors v x SD as Python floats, as the reference's left-to-right products)."""
+    p = cfg.physiology
+    v = p.variation_scale
+    e = cfg.environment
+    return tuple(float(x) for x in (
+        v * p.hydration_pct_sd_state, p.hydration_pct_limit, p.water_fraction_nominal,
+        v * p.systolic_bp_mmhg_sd_state, p.stress_systolic_mmhg, *p.systolic_bp_mmhg,
+        v * p.heart_rate_bpm_sd_state, p.stress_heart_rate_bpm, *p.heart_rate_bpm,
+        v * p.resp_rate_bpm_sd_state, *p.resp_rate_bpm,
+        p.skin_temp_c_neutral, p.skin_temp_per_ambient, p.skin_temp_ambient_ref_c,
+        v * p.skin_temp_c_sd_state, p.saturation_mean, v * p.saturation_sd,
+        *p.saturation_limits, v * p.blood_fraction_log_sd_state, p.perfusion_per_c,
+        p.perfusion_per_mmhg, p.perfusion_ref_systolic_mmhg, e.perfusion_per_mbar,
+        e.perfusion_reference_mbar, cfg.noise_factor("pulsation"), p.pulse_depth,
+        p.resp_depth, *p.blood_fraction_limits))
 
 
 def _hydration_pct(p, v: float, traits: dict, rng, n_rows: int) -> np.ndarray:

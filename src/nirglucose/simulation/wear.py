@@ -49,7 +49,7 @@ from ..exceptions import ConfigError
 from . import contact, diurnal, environment, physiology, therapy
 from . import meal_scenario as meals
 from . import uva_padova as uva
-from ._random import BLOCK_SUBJECTS, RandomStreams, SubjectStreams
+from ._random import BLOCK_SUBJECTS, RandomStreams, SubjectStreams, categorical
 from .glucose import reflect_into_range
 from .interstitial import ISF_LAG_MIN, interstitial_glucose_mgdl
 from .partitioned import prepare_partitioned_dir
@@ -162,7 +162,7 @@ def subject_profiles(cfg: ScenarioConfig, seed: int, first: int, n: int, n_subje
         start = block * BLOCK_SUBJECTS
         size = min(BLOCK_SUBJECTS, n_subjects - start)
         streams = RandomStreams(seed, block)
-        code = streams("glucose").choice(len(names), p=probs, size=size)
+        code = categorical(streams("glucose"), probs, size)
         tr = physiology.sample_traits(cfg, size, streams)
         lo, hi = max(first, start) - start, min(last, start + size) - start
         codes.append(code[lo:hi])
