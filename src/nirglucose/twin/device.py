@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import warnings
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -23,6 +24,7 @@ import pandas as pd
 
 from .._version import __version__
 from ..dataset import Dataset
+from ..dataset.adc import check_dc_level
 from ..dataset.columns import PPG_COLUMNS
 from ..dataset.schema import DeviceSchema
 from ..exceptions import DataError
@@ -197,10 +199,6 @@ def _refuse_ac_coupled(frame: pd.DataFrame, schema) -> None:
     """Refuse, in one line, channels whose every reading sits at mid-scale: an AC-coupled
     front end records no light level, which is what a twin fits
     (:func:`~nirglucose.dataset.adc.check_dc_level`)."""
-    import warnings
-
-    from ..dataset.adc import check_dc_level
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the refusal below says it
         flagged = check_dc_level(frame, tuple(f"adc_{w}" for w in schema.labels),
