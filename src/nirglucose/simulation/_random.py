@@ -29,30 +29,52 @@ BLOCK_SUBJECTS = 4096
 
 
 class _Counted:
-    """A Generator proxy that counts the variates it draws."""
+    """A Generator proxy that counts the variates it draws.
+
+    The block's draws (``normal``, ``random``, ``uniform``, ``beta``, ``lognormal``) are
+    methods of the class, the rest through ``__getattr__``: a block makes about 45
+    draws, and a closure built per draw costs more than some of them."""
+
+    __slots__ = ("_gen", "_owner")
 
     def __init__(self, gen: np.random.Generator, owner: RandomStreams) -> None:
         self._gen = gen
         self._owner = owner
 
+    def _count(self, out):
+        self._owner.n_variates += out.size if isinstance(out, np.ndarray) else int(np.size(out))
+        return out
+
+    def normal(self, *args, size=None, **kwargs):
+        if args or kwargs:
+            return self._count(self._gen.normal(*args, size=size, **kwargs))
+        # N(0, 1): NumPy's normal returns 0.0 + 1.0 z of the same ziggurat draw z
+        # (random_normal: loc + scale z), which is z + 0.0 bit for bit (-0.0 becomes
+        # +0.0); without the multiply-add's extra cost per variate
+        out = self._gen.standard_normal(size=size)
+        if isinstance(out, np.ndarray):
+            out += 0.0
+        else:
+            out = out + 0.0
+        return self._count(out)
+
+    def random(self, *args, size=None, **kwargs):
+        return self._count(self._gen.random(*args, size=size, **kwargs))
+
+    def uniform(self, *args, size=None, **kwargs):
+        return self._count(self._gen.uniform(*args, size=size, **kwargs))
+
+    def beta(self, *args, size=None, **kwargs):
+        return self._count(self._gen.beta(*args, size=size, **kwargs))
+
+    def lognormal(self, *args, size=None, **kwargs):
+        return self._count(self._gen.lognormal(*args, size=size, **kwargs))
+
     def __getattr__(self, name: str):
         method = getattr(self._gen, name)
-        standard = self._gen.standard_normal if name == "normal" else None
 
         def draw(*args, size=None, **kwargs):
-            if standard is not None and not args and not kwargs:
-                # N(0, 1): NumPy's normal returns 0.0 + 1.0 z of the same ziggurat draw z
-                # (random_normal: loc + scale z), which is z + 0.0 bit for bit (-0.0
-                # becomes +0.0); without the multiply-add's extra cost per variate
-                out = standard(size=size)
-                if isinstance(out, np.ndarray):
-                    out += 0.0
-                else:
-                    out = out + 0.0
-            else:
-                out = method(*args, size=size, **kwargs)
-            self._owner.n_variates += int(np.size(out))
-            return out
+            return self._count(method(*args, size=size, **kwargs))
 
         return draw
 
