@@ -107,7 +107,7 @@ def compressed_thickness_mm(thickness_mm, pressure, compression: float, f_contac
 
 def apply_contact(
     cfg: ScenarioConfig, phys: dict, env: dict, measured: dict, streams: RandomStreams,
-    placement: tuple[np.ndarray, np.ndarray] | None = None,
+    placement: tuple[np.ndarray, np.ndarray] | None = None, *, compiled: bool = True,
 ) -> dict:
     """Contact layer entry: pressure, coupling, blood and thickness under the probe.
 
@@ -116,23 +116,32 @@ def apply_contact(
     at the RH sensor's reading, so only the curve at the sensor's error remains.
     ``placement`` (optional): each reading's pressure and coupling draw, as
     :func:`sample_contact` returns them, where they persist over several readings (a
-    worn device between re-seatings); drawn per reading when omitted.
+    worn device between re-seatings); drawn per reading when omitted. ``compiled``: the
+    passes after the draws in one compiled pass (:mod:`.kernels.contact_kernel`, the
+    same bits) where every input is a float64 vector; False: the NumPy form below, the
+    reference.
     """
     n = len(phys["true_blood_fraction"])
     f_contact = cfg.noise_factor("contact_pressure")
     pressure, coupling_z = sample_contact(cfg, n, streams) if placement is None else placement
     rh_range = cfg.environment.humidity_pct
+    c = cfg.contact
+    f_humidity = cfg.noise_factor("humidity_coupling")
+    inputs = (pressure, coupling_z, env["true_humidity_pct"], phys["true_blood_fraction"],
+              phys["true_skin_thickness_mm"])
+    if compiled and all(isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 1
+                        and len(x) == n for x in inputs):
+        return _apply_contact_compiled(cfg, inputs, measured, f_contact, f_humidity)
     wet = humidity_wetness(env["true_humidity_pct"], rh_range)
     if cfg.device.humidity_compensation:
         wet = wet - humidity_wetness(measured["humidity_pct"], rh_range)
-    c = cfg.contact
     coupling = coupling_factor(
         coupling_z,
         wet,
         c.coupling_sd,
         cfg.environment.humidity_coupling_loss,
         f_contact,
-        cfg.noise_factor("humidity_coupling"),
+        f_humidity,
     )
     return {
         "true_contact_pressure": pressure,
@@ -143,4 +152,32 @@ def apply_contact(
         "true_skin_thickness_probe_mm": compressed_thickness_mm(
             phys["true_skin_thickness_mm"], pressure, c.compression, f_contact
         ),
+    }
+
+
+def _apply_contact_compiled(cfg, inputs, measured, f_contact, f_humidity) -> dict:
+    """:func:`apply_contact` after its draws in one compiled pass: the scalar factors
+    formed as the reference's expressions form them (left to right)."""
+    from .kernels.contact_kernel import contact as kernel
+
+    pressure, coupling_z, humidity, blood, thickness = inputs
+    lo, hi = cfg.environment.humidity_pct
+    c = cfg.contact
+    compensate = bool(cfg.device.humidity_compensation)
+    measured_h = (np.ascontiguousarray(measured["humidity_pct"], dtype=np.float64)
+                  if compensate else humidity)
+    k = np.array([lo, hi - lo, f_contact * c.coupling_sd,
+                  f_humidity * cfg.environment.humidity_coupling_loss,
+                  -f_contact * c.blanching, -f_contact * c.compression], dtype=np.float64)
+    n = len(pressure)
+    coupling, blood_out, thickness_out = np.empty(n), np.empty(n), np.empty(n)
+    kernel(np.ascontiguousarray(pressure), np.ascontiguousarray(coupling_z),
+           np.ascontiguousarray(humidity), measured_h, np.ascontiguousarray(blood),
+           np.ascontiguousarray(thickness), k, compensate, coupling, blood_out,
+           thickness_out)
+    return {
+        "true_contact_pressure": pressure,
+        "true_coupling": coupling,
+        "true_blood_fraction_detected": blood_out,
+        "true_skin_thickness_probe_mm": thickness_out,
     }
