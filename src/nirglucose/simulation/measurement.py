@@ -35,13 +35,19 @@ _TRUTH = {
 }
 
 
-def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams) -> dict:
+def measure_physiology(
+    cfg: ScenarioConfig, truth: dict, streams: RandomStreams, *, compiled: bool = True
+) -> dict:
     """Return the measured physiological vector (:data:`PMF_COLUMNS`) from the truth.
 
     With ``device.physiology = "exact"`` every column equals its truth (age not
     rounded, Fitzpatrick type not misclassified); the random draws are made either way,
-    so no other stream changes.
+    so no other stream changes. ``compiled``: each column in one compiled pass
+    (:mod:`.kernels.measurement_kernel`, the same bits) where its truth is a float64
+    vector; False: the NumPy form below, the reference.
     """
+    from .kernels import measurement_kernel as mk  # numba, deferred until a block runs
+
     m = cfg.measurement
     exact = cfg.device.physiology == "exact"
     f = 0.0 if exact else cfg.noise_factor("pmf_measurement")
@@ -52,11 +58,16 @@ def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams)
     for i, (col, true_col) in enumerate(_TRUTH.items()):
         # truth + f sd z, in place in the draw's row (+ and x commute exactly)
         value = draws[i]
-        value *= f * getattr(m, col)
-        value += truth[true_col]
         # An instrument reports within its display range (PHYSIOLOGICAL_RANGES); only
         # errors scaled far beyond the instruments' (noise_scale >> 1) reach its ends.
         lo, hi, _ = PHYSIOLOGICAL_RANGES[col]
+        t = truth[true_col]
+        if compiled and isinstance(t, np.ndarray) and t.dtype == np.float64 and t.ndim == 1:
+            mk.measured_row(value, f * getattr(m, col), t, float(lo), float(hi))
+            out[col] = value
+            continue
+        value *= f * getattr(m, col)
+        value += t
         out[col] = np.clip(value, lo, hi, out=value)
     if not exact:
         out["age_yr"] = np.floor(out["age_yr"])  # recorded in whole years
@@ -68,7 +79,8 @@ def measure_physiology(cfg: ScenarioConfig, truth: dict, streams: RandomStreams)
 
 
 def measure_ppg(
-    cfg: ScenarioConfig, blood_fraction: np.ndarray, saturation: np.ndarray, streams: RandomStreams
+    cfg: ScenarioConfig, blood_fraction: np.ndarray, saturation: np.ndarray,
+    streams: RandomStreams, *, compiled: bool = True,
 ) -> dict:
     """Perfusion and oxygen saturation as a PPG front end would report them.
 
@@ -90,6 +102,9 @@ def measure_ppg(
         Dermal oxygen saturation, (n,). [-]
     streams : RandomStreams
         Random generators of the block (stream ``ppg``).
+    compiled : bool
+        After the draws, one compiled pass (:mod:`.kernels.measurement_kernel`, the same
+        bits) where both inputs are float64 vectors; False: the NumPy form, the reference.
 
     Returns
     -------
@@ -99,6 +114,14 @@ def measure_ppg(
     f = 0.0 if cfg.device.physiology == "exact" else cfg.noise_factor("pmf_measurement")
     z = streams("ppg").normal(size=(2, len(blood_fraction)))
     d = cfg.device
+    from .kernels import measurement_kernel as mk  # numba, deferred until a block runs
+
+    if compiled and all(isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 1
+                        for x in (blood_fraction, saturation)):
+        blood_pct, spo2_pct = np.empty(len(blood_fraction)), np.empty(len(blood_fraction))
+        mk.ppg(blood_fraction, saturation, z, f * d.blood_volume_error_rel,
+               f * d.spo2_error_pct, blood_pct, spo2_pct)
+        return {"blood_volume_pct": blood_pct, "spo2_pct": spo2_pct}
     blood_pct = np.minimum(
         100.0 * np.asarray(blood_fraction) * pm.exp(f * d.blood_volume_error_rel * z[0]), 100.0
     )
