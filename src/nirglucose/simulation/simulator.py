@@ -289,12 +289,15 @@ def simulate_block(
     traits = physiology.sample_traits(cfg, n_sub, streams)
     readings = Readings(
         ids={
-            "subject_id": (first_subject + rep).astype(np.int64),
-            "measurement_id": (first_subject * per_subject + np.arange(n)).astype(np.int64),
+            "subject_id": (first_subject + rep).astype(np.int64, copy=False),
+            "measurement_id": (first_subject * per_subject
+                               + np.arange(n)).astype(np.int64, copy=False),
         },
         subject_index=rep,
         startup=np.arange(0, n, per_subject),
-        traits={k: v[rep] for k, v in traits.items()},
+        # each subject's traits per reading: v[rep], as a repeat (the same values, no
+        # index look-up)
+        traits={k: v.repeat(per_subject) for k, v in traits.items()},
         glucose=glucose,
         env=env,
         led_ages=lambda st: hardware.led_ages_h(cfg, rep, n_sub, st),
