@@ -105,8 +105,11 @@ def ambient_at_probe(cfg: ScenarioConfig, env: dict) -> tuple[np.ndarray, np.nda
     names = tuple(LIGHT_SOURCES)
     table = np.array([LIGHT_SOURCES[k] for k in names])
     light = env["true_light_source"]
-    idx = np.array([names.index(c) for c in light.categories], dtype=int)[light.codes]
-    w_per_lux, resp_amb, flicker = (table[idx, j] for j in range(3))
+    # each category's row, then each reading's by its code: one 1-D take a column (the
+    # same values as table[idx, j] with idx each reading's row, a third of the time)
+    rows = table[[names.index(c) for c in light.categories]]
+    codes = light.codes
+    w_per_lux, resp_amb, flicker = (rows[:, j].take(codes) for j in range(3))
     current_a = ambient_photocurrent_a(
         env["true_ambient_lux"],
         w_per_lux,
