@@ -37,6 +37,7 @@ $(BIN)/python:
 
 $(STAMP): $(BIN)/python pyproject.toml requirements.lock
 	$(BIN)/python -m pip install -q -c requirements.lock -e ".[dev]"
+	$(BIN)/python -m nirglucose.simulation.kernels  # numba's cache, as pip's .pyc files
 	touch $(STAMP)
 
 install: $(STAMP)

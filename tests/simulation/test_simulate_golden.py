@@ -140,6 +140,9 @@ print(json.dumps({{"np_exp": np_exp, "blas": blas,
 """
 
 
+# fresh interpreters compiling every kernel for other CPUs (about 15 s each once the
+# simulator's layers were compiled): `make test-slow`, which CI runs too
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="CPU flags read from /proc")
 @pytest.mark.parametrize("env_name", list(ENVIRONMENTS))
 def test_same_bytes_under_every_kernel_and_instruction_set(env_name):

@@ -56,6 +56,8 @@ print(json.dumps({{p: frame_hash(golden_wear_frame(p)) for p in GOLDEN}}))
 """
 
 
+# a fresh interpreter compiling every kernel for another CPU: `make test-slow` (CI runs it)
+@pytest.mark.slow
 def test_same_wear_bytes_with_numba_generating_for_a_generic_cpu():
     env = {k: v for k, v in os.environ.items()
            if k not in ("OPENBLAS_CORETYPE", "NPY_DISABLE_CPU_FEATURES")}
