@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import nirglucose as ng
+from kernel_checks import assert_same_block, block_with
 from nirglucose.exceptions import ConfigError
 from nirglucose.simulation import hardware, simulator
 from nirglucose.simulation.kernels import hardware_kernel as hk
@@ -38,31 +39,12 @@ CASES = {
 }
 
 
-def _block(cfg, compiled: bool):
-    """One block's columns and variate count with the compiled or the NumPy layer."""
-    orig = hardware.apply_hardware
-
-    def layer(*args, **kwargs):
-        return orig(*args, compiled=compiled)
-
-    hardware.apply_hardware = layer
-    try:
-        return simulator.simulate_block(cfg, 3, 1, 700, 700, 3)
-    finally:
-        hardware.apply_hardware = orig
-
-
 @pytest.mark.parametrize("case", list(CASES))
-def test_compiled_hardware_layer_equals_the_numpy_reference(case):
+def test_compiled_hardware_layer_equals_the_numpy_reference(case, monkeypatch):
     preset, overrides = CASES[case]
     cfg = ng.resolve_config(preset, overrides)
-    (want, n_want), (got, n_got) = _block(cfg, False), _block(cfg, True)
-    assert n_got == n_want  # the same draws
-    assert list(got) == list(want)
-    for col in want:
-        a, b = np.asarray(want[col]), np.asarray(got[col])
-        if a.dtype.kind in "fiu":
-            assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), col
+    assert_same_block(*(block_with(hardware, "apply_hardware", compiled, cfg, 3, 1, 700, 700,
+                                   monkeypatch) for compiled in (False, True)))
 
 
 def test_compiled_hardware_layer_returns_the_reference_arrays():
@@ -123,8 +105,8 @@ def test_kernel_conversion_flags_non_finite_codes():
 
 
 @pytest.mark.parametrize("compiled", [False, True])
-def test_both_layers_refuse_a_non_finite_adc_input(compiled):
+def test_both_layers_refuse_a_non_finite_adc_input(compiled, monkeypatch):
     # noise 40 x drives the analog chain out of range (issue 20): a ConfigError either way
     cfg = ng.resolve_config("paper", {"noise_scale": 40.0})
     with pytest.raises(ConfigError, match="not finite"):
-        _block(cfg, compiled)
+        block_with(hardware, "apply_hardware", compiled, cfg, 3, 1, 700, 700, monkeypatch)

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import nirglucose as ng
-from nirglucose.simulation import physiology, simulator
+from kernel_checks import assert_same_block, block_with
+from nirglucose.simulation import physiology
 
 CASES = {
     "paper": ("paper", {}),
@@ -27,31 +28,12 @@ CASES = {
 }
 
 
-def _block(cfg, compiled: bool):
-    """One block's columns and variate count with the compiled or the NumPy state."""
-    orig = physiology.sample_state
-
-    def layer(*args, **kwargs):
-        return orig(*args, compiled=compiled)
-
-    physiology.sample_state = layer
-    try:
-        return simulator.simulate_block(cfg, 5, 2, 900, 900, 3)
-    finally:
-        physiology.sample_state = orig
-
-
 @pytest.mark.parametrize("case", list(CASES))
-def test_compiled_state_equals_the_numpy_reference(case):
+def test_compiled_state_equals_the_numpy_reference(case, monkeypatch):
     preset, overrides = CASES[case]
     cfg = ng.resolve_config(preset, overrides)
-    (want, n_want), (got, n_got) = _block(cfg, False), _block(cfg, True)
-    assert n_got == n_want  # the same draws
-    assert list(got) == list(want)
-    for col in want:
-        a, b = np.asarray(want[col]), np.asarray(got[col])
-        if a.dtype.kind in "fiu":
-            assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), col
+    assert_same_block(*(block_with(physiology, "sample_state", compiled, cfg, 5, 2, 900, 900,
+                                   monkeypatch) for compiled in (False, True)))
 
 
 def test_the_state_kernel_clips_as_numpy_does():
