@@ -438,6 +438,9 @@ def build_report(results_dir: str | Path, out_path: str | Path, *,
     if results.user_data:  # the study's numbers were measured on other data
         computed = (computed[0], [f for f in computed[1] if f.topic != "claims"], computed[2])
     top = [findings_section(runs, subgroups=groups, computed=computed)]
+    if results.user_data and results.meta.get("significance_withheld"):
+        # too few test subjects for any comparison: the limits box says so, no findings
+        top, computed = [], (computed[0], [], computed[2])
     limits = limits_section(runs, computed[0], computed[1])
     page = render_html(results, figures, extra_sections=[sweep_section(d) for d in sweep_dirs],
                        middle_sections=middle, top_sections=top, peers=runs[1:],

@@ -114,6 +114,7 @@ def limits_facts(res: Results, run: RunData) -> dict[str, Any]:
     return {
         "preset": run.preset,
         "user_data": bool(res.user_data),
+        "withheld": res.meta.get("significance_withheld"),
         "file_warnings": [str(w) for w in meta.get("file_warnings", ())],
         "file_physiology": ([c for c in PMF_COLUMNS if c in ds.frame.columns]
                             if ds is not None else []),
@@ -192,7 +193,9 @@ def _box_items(f: dict[str, Any], items: list[str]) -> str:
         items.append(f"<li><b>Glucose range</b>: {_n(g['min'], 0)}–{_n(g['max'], 0)} mg/dL; "
                      f"{hypo}</li>")
     res = []
-    if f["best"] is not None:
+    if f["best"] is not None and f.get("withheld"):
+        res.append(f"lowest deployable {_esc(label(f['best']))} {_n(f['best_rmse'])}")
+    elif f["best"] is not None:
         res.append(f"best deployable {_esc(label(f['best']))} {_n(f['best_rmse'])}")
     if f["oracle_rmse"] is not None:
         res.append(f"oracle {_n(f['oracle_rmse'])}")
@@ -204,6 +207,8 @@ def _box_items(f: dict[str, Any], items: list[str]) -> str:
         items.append(f"<li><b>RMSE</b> [mg/dL]: {'; '.join(res)}"
                      + (": no deployable estimator beats the training mean here" if worse
                         else "") + "</li>")
+    if f.get("withheld"):
+        items.append(f"<li><b>Significance</b>: {_esc(f['withheld'])}</li>")
     items.append(f"<li><b>Models that ran</b> ({len(f['models'])}): "
                  f"{_esc(', '.join(f['models']))}</li>")
     return (f'<div class="limit" id="limits-{_esc(f["preset"])}"><h3>{_esc(f["preset"])}: '
@@ -234,8 +239,8 @@ def limits_section(runs: Sequence[Results], data: Sequence[RunData],
     answers = [f for f in findings if f.topic == "answer"]
     answer = ('<h3 id="answer">Does physics help?</h3><ul class="findings answer">'
               + "".join(finding_html(f) for f in answers) + "</ul>") if answers else ""
-    intro = ("Read this first. These results are your file's: every model was fitted and "
-             "scored on its readings, by subject-grouped cross-validation; what the file "
+    intro = ("Read this first. These results are your file's: every model was fitted on "
+             "some of its people and scored on the others; what the file "
              "does not say (the skin's optics, the true nuisances) no model here knew."
              if all(r.user_data for r in runs) else
              "Read this first. Each preset simulates glucose at a stated size against the "
