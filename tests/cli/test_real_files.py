@@ -271,3 +271,15 @@ def test_a_twin_of_an_ac_coupled_file_is_refused_in_one_line(cli, tmp_path):
     assert_one_line_error(code, err, contains=("adc_880, adc_940", "AC-coupled",
                                                "DC-coupled readings"))
     assert not (tmp_path / "twin.json").exists()
+
+
+def test_the_note_names_exactly_the_models_a_file_without_a_scenario_leaves_out(capsys):
+    from nirglucose import Dataset
+    from nirglucose.cli.benchmark_command import _say_privileged_left_out
+    from nirglucose.models import available_models, privileged_knowledge
+
+    _say_privileged_left_out(Dataset(ac_coupled_ppg_frame()))
+    said = capsys.readouterr()
+    line = (said.out + said.err).strip()
+    left = [m for m in available_models() if privileged_knowledge(m) is not None]
+    assert line.startswith("note: the privileged references (" + ", ".join(left) + ")")

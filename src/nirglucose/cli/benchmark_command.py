@@ -361,16 +361,19 @@ def _benchmark_one(ds, names, protocol, folds, repeats, seed, out, jobs, resampl
         )
     _print_benchmark(res, ds, out, unit)
     if names is None and ds.config is None:
-        _say_privileged_left_out()
+        _say_privileged_left_out(ds)
     if group_column_name is not None:
         report_benchmark_cohorts(res, ds, group_column_name, unit or "mg/dL")
 
 
-def _say_privileged_left_out() -> None:
-    """One note: which registered models a device's file (no scenario) does not run."""
-    from ..models.registry import available_models, privileged_knowledge
+def _say_privileged_left_out(ds) -> None:
+    """One note: which registered models a device's file (no scenario) does not run, the
+    ones :func:`~nirglucose.evaluation.benchmark.run.default_models` leaves out."""
+    from ..evaluation.benchmark.run import default_models
+    from ..models.registry import available_models
 
-    left = [n for n in available_models() if privileged_knowledge(n) is not None]
+    kept = set(default_models(ds))
+    left = [n for n in available_models() if n not in kept]
     if left:
         _say(f"note: the privileged references ({', '.join(left)}) did not run: they read "
              "the generating scenario or the true_* columns, which a device's file does not "
