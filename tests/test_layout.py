@@ -83,8 +83,8 @@ MAX_UNDERSCORE_IMPORTS = 139
 #: under ``nirglucose`` (``""``: the package's ``__init__``); a new subpackage fails
 #: :func:`test_every_module_has_a_layer` until it is placed here.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_version", "exceptions", "constants", "portable", "resources", "formatting", "data",
-     "_renamed"),
+    ("_version", "exceptions", "constants", "portable", "vector_exp", "resources", "formatting",
+     "data", "_renamed"),
     ("config",),
     ("dataset", "optics", "metrics"),  # the data boundary, the physics, the scores
     ("simulation", "fitted"),  # the simulator; the estimators' side of the schema
