@@ -7,9 +7,10 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 
 from nirglucose import portable
-from nirglucose.vector_exp import exp, exp_into, exp_table
+from nirglucose.vector_exp import exp, exp1, exp_into, exp_table
 
 #: sha256 of glibc 2.36's ``__exp_data.tab`` (256 little-endian uint64), read from the
 #: loaded libm with gdb (``x/256gx ((char*)&__exp_data)+112``) on the development machine;
@@ -57,3 +58,17 @@ def test_the_work_arrays_may_be_longer_and_shapes_are_kept():
     grid = x[:100].reshape(10, 10)
     assert exp(grid).shape == (10, 10)
     assert _bits_equal(exp(grid), portable.exp(grid)) == 0
+
+
+@njit(cache=True)
+def _exp1_each(x, out):
+    for i in range(x.shape[0]):
+        out[i] = exp1(x[i])
+
+
+def test_the_one_value_form_equals_the_c_library():
+    x = np.concatenate([np.random.default_rng(3).uniform(-745.2, 709.8, 200_000),
+                        [0.0, 2.0 ** -60, 600.0, -800.0, np.inf, -np.inf]])
+    out = np.empty_like(x)
+    _exp1_each(x, out)
+    assert _bits_equal(out, portable.exp(x)) == 0

@@ -6,7 +6,8 @@ offset, rounding, saturation) as about 60 NumPy passes over (readings x LEDs) ar
 This module does the same operations, in the same order per element, in one compiled
 pass with no temporaries. Every step is an IEEE 754 basic operation (+ - x / sqrt,
 correctly rounded: the same bits on every CPU) or the C library's ``exp`` / ``sin``
-through :mod:`math` (what :mod:`nirglucose.portable` calls), and numba neither fuses a
+(``exp`` its algorithm inline, :func:`nirglucose.vector_exp.exp1`; ``sin`` through
+:mod:`math`, what :mod:`nirglucose.portable` calls), and numba neither fuses a
 multiply-add nor reorders without ``fastmath``; so the codes, voltages and powers equal
 the NumPy reference's bit for bit (a test holds them so). The physics, units and
 citations live in :mod:`nirglucose.simulation.hardware`.
@@ -24,6 +25,8 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
+
+from ...vector_exp import exp1
 
 __all__ = ["FrontEnd", "convert", "reading_voltages", "reference_voltages"]
 
@@ -57,7 +60,7 @@ def _led_power(p0, thermal, ageing, led_c, age_h, flicker):
 @njit(cache=True, inline="always")
 def _dark(k, board_c):
     """:func:`~nirglucose.simulation.hardware.dark_current_a`. [A]"""
-    return k.i25 * math.exp(k.dark_per_c * (board_c - 25.0))
+    return k.i25 * exp1(k.dark_per_c * (board_c - 25.0))
 
 
 @njit(cache=True, inline="always")

@@ -4,9 +4,9 @@
 hydration, blood pressure, heart and respiration rate, skin temperature, saturation and
 dermal blood volume as about forty NumPy passes over (readings,) arrays. :func:`state`
 does the same operations, in the same order per value, in one compiled pass: + - x / are
-IEEE 754 basic operations (correctly rounded, the same bits on every CPU), ``tanh``,
-``sin`` and ``exp`` are the C library's through :mod:`math` (what
-:mod:`nirglucose.portable` calls), and numba neither fuses a multiply-add nor reorders
+IEEE 754 basic operations (correctly rounded, the same bits on every CPU), ``tanh``
+and ``sin`` are the C library's through :mod:`math` (what :mod:`nirglucose.portable`
+calls) and ``exp`` its algorithm inline (:func:`nirglucose.vector_exp.exp1`), and numba neither fuses a multiply-add nor reorders
 without ``fastmath``; so the values equal the NumPy reference's bit for bit (a test holds
 them so). The physics, units and citations live in
 :mod:`nirglucose.simulation.physiology`, which stays the reference; the caller makes the
@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from ...vector_exp import exp1
 
 __all__ = ["state"]
 
@@ -66,4 +68,4 @@ def state(base, stress, ambient_c, pressure_mbar, z, phase, k, out):  # pragma: 
         out[4, i] = rr
         out[5, i] = skin
         out[6, i] = _clip(sat_mean + c_sat * z[5, i], sat_lo, sat_hi)
-        out[7, i] = _clip(math.exp(log_blood) * modulation, blood_lo, blood_hi)
+        out[7, i] = _clip(exp1(log_blood) * modulation, blood_lo, blood_hi)
