@@ -26,6 +26,12 @@ def test_table_is_glibcs():
     assert hashlib.sha256(table.astype("<u8").tobytes()).hexdigest() == GLIBC_TABLE_SHA256
 
 
+def _c_exp(x):
+    """The C library's exp (:mod:`nirglucose.portable`), overflow to inf without a warning."""
+    with np.errstate(over="ignore"):
+        return portable.exp(x)
+
+
 def _bits_equal(a, b) -> int:
     """How many values differ in their bits."""
     return int((np.asarray(a).view(np.int64) != np.asarray(b).view(np.int64)).sum())
@@ -35,7 +41,7 @@ def _bits_equal(a, b) -> int:
                                        (-1e-15, 1e-15)])
 def test_equals_the_c_library(low, high):
     x = np.random.default_rng(7).uniform(low, high, 250_000)
-    assert _bits_equal(exp(x), portable.exp(x)) == 0
+    assert _bits_equal(exp(x), _c_exp(x)) == 0
 
 
 def test_equals_the_c_library_at_the_edges():
@@ -46,7 +52,7 @@ def test_equals_the_c_library_at_the_edges():
     x = np.array(edges + [np.nextafter(v, d) for v in (tiny, -tiny, 512.0, -512.0)
                           for d in (-np.inf, np.inf)])
     y = exp(x)
-    assert _bits_equal(y, portable.exp(x)) == 0
+    assert _bits_equal(y, _c_exp(x)) == 0
     assert math.isnan(exp(np.array([np.nan]))[0])
 
 
@@ -54,10 +60,10 @@ def test_the_work_arrays_may_be_longer_and_shapes_are_kept():
     x = np.linspace(-5.0, 5.0, 101)
     out = np.empty(101)
     exp_into(x, out, np.empty(200), np.empty(200), np.empty(200, np.int64))
-    assert _bits_equal(out, portable.exp(x)) == 0
+    assert _bits_equal(out, _c_exp(x)) == 0
     grid = x[:100].reshape(10, 10)
     assert exp(grid).shape == (10, 10)
-    assert _bits_equal(exp(grid), portable.exp(grid)) == 0
+    assert _bits_equal(exp(grid), _c_exp(grid)) == 0
 
 
 @njit(cache=True)
@@ -71,4 +77,4 @@ def test_the_one_value_form_equals_the_c_library():
                         [0.0, 2.0 ** -60, 600.0, -800.0, np.inf, -np.inf]])
     out = np.empty_like(x)
     _exp1_each(x, out)
-    assert _bits_equal(out, portable.exp(x)) == 0
+    assert _bits_equal(out, _c_exp(x)) == 0
