@@ -2,15 +2,21 @@
 
 :func:`nirglucose.simulation._random.truncated_normal` with one SD runs its passes before
 and after SciPy's ``ndtri`` compiled (:mod:`nirglucose.simulation.kernels.random_kernel`);
-``compiled=False`` is the NumPy form, the reference.
+``compiled=False`` is the NumPy form, the reference. The compiled inverse normal CDF
+(:func:`~nirglucose.simulation.kernels.random_kernel.ndtri`) equals SciPy's bit for bit.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from numba import njit
+from scipy.special import ndtri as scipy_ndtri
 
 from nirglucose.simulation import _random
+from nirglucose.simulation.kernels import random_kernel as rk
 
 N = 30_000
 _RNG = np.random.default_rng(12)
@@ -50,3 +56,51 @@ def test_truncated_normal_through_a_stream_is_unchanged_by_the_kernels():
                                             compiled=False)
     assert a.tobytes() == b.tobytes()
 
+
+@njit
+def _ndtri_each(y, out):  # pragma: no cover - compiled
+    for i in range(y.shape[0]):
+        out[i] = rk.ndtri(y[i])
+
+
+def _assert_ndtri_is_scipys(y):
+    got = np.empty_like(y)
+    _ndtri_each(y, got)
+    want = scipy_ndtri(y)
+    differ = got.view(np.uint64) != want.view(np.uint64)
+    assert not differ.any(), (y[differ][:5], got[differ][:5], want[differ][:5])
+
+
+def _neighbours(x, n):
+    """x and the n doubles either side of it."""
+    out = [x]
+    below = above = x
+    for _ in range(n):
+        below, above = np.nextafter(below, -np.inf), np.nextafter(above, np.inf)
+        out += [below, above]
+    return out
+
+
+def test_ndtri_equals_scipys_on_a_million_uniforms():
+    rng = np.random.default_rng(20)
+    _assert_ndtri_is_scipys(rng.random(1_000_000))
+    # the tails, log-uniform down to 1e-300 and up to 1 - 1e-16
+    _assert_ndtri_is_scipys(np.exp(rng.uniform(math.log(1e-300), math.log(0.14), 200_000)))
+    _assert_ndtri_is_scipys(1.0 - np.exp(rng.uniform(math.log(1e-16), math.log(0.14),
+                                                     200_000)))
+
+
+def test_ndtri_equals_scipys_at_the_edges():
+    e = math.exp(-2.0)  # where the central approximation hands over to the tails
+    tail_split = math.exp(-32.0)  # sqrt(-2 log y) = 8: the tail's P1/Q1 to P2/Q2
+    split_neighbours = _neighbours(tail_split, 300)
+    t = [math.sqrt(-2.0 * math.log(y)) for y in split_neighbours]
+    assert min(t) < 8.0 <= max(t)  # both of the tail's approximations are reached
+    y = np.array([
+        0.0, -0.0, 1.0, 0.5, 5e-324, 1e-300, 1e-15, 1 - 1e-15, _random._P_EDGE,
+        1 - _random._P_EDGE, 2.2250738585072014e-308, np.nextafter(1.0, 0.0),
+        *_neighbours(e, 3), *_neighbours(1 - e, 3), *split_neighbours,
+        # outside [0, 1] and NaN: NaN as SciPy gives it (a NaN input's sign flipped)
+        -1e-300, np.nextafter(1.0, 2.0), 2.0, np.inf, -np.inf, np.nan, -np.nan,
+    ])
+    _assert_ndtri_is_scipys(y)

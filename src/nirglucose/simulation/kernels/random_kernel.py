@@ -6,7 +6,9 @@ normal CDF at the limits (inverse-CDF sampling, Devroye 1986, ch. 2). Its NumPy 
 makes about ten passes over the values (and gathers a, b and the mean by group); these
 two kernels make one pass before SciPy's ``ndtri`` and one after, the same operations in
 the same order per value, so the same bits (a test holds them equal to the NumPy form,
-which stays the reference).
+which stays the reference). :func:`ndtri` is the Cephes algorithm that SciPy's ``ndtri``
+runs, with the same operations in the same order, so the same bits (a test holds them
+equal).
 :func:`count_at_or_below` is the look-up of the categorical draw
 (:func:`nirglucose.simulation._random.categorical`); :func:`seed_sequence_state` a block
 stream's seed words (:class:`nirglucose.simulation._random.RandomStreams`).
@@ -17,10 +19,14 @@ group, value i taking ``group[i]``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-__all__ = ["count_at_or_below", "probabilities", "scale_and_clip", "seed_sequence_state"]
+__all__ = [
+    "count_at_or_below", "ndtri", "probabilities", "scale_and_clip", "seed_sequence_state",
+]
 
 
 @njit(cache=True, inline="always")
@@ -56,6 +62,109 @@ def scale_and_clip(z, sd, mean, group, mode, low, high):  # pragma: no cover - c
         if x > high:
             x = high
         z[i] = x
+
+
+#: The inverse normal CDF's coefficients and constants: Cephes' ndtri.c (S. L. Moshier,
+#: Cephes Math Library Release 2.1, 1989), as SciPy 1.17 carries them (xsf,
+#: ``include/xsf/cephes/ndtri.h``; ``SQRT2PI`` from ``cephes/const.h``), highest power
+#: first; the Q tables omit their leading coefficient 1. P0/Q0: x / sqrt(2 pi) = w + w^3
+#: P0(w^2) / Q0(w^2), w = y - 1/2, for exp(-2) < y < 1 - exp(-2); P1/Q1 and P2/Q2: the tail,
+#: x = t - log(t) / t - P(1/t) / (t Q(1/t)), t = sqrt(-2 log y), for t < 8 (y > exp(-32))
+#: and t >= 8.
+_NDTRI_P0 = (-5.99633501014107895267e1, 9.80010754185999661536e1, -5.66762857469070293439e1,
+             1.39312609387279679503e1, -1.23916583867381258016e0)
+_NDTRI_Q0 = (1.95448858338141759834e0, 4.67627912898881538453e0, 8.63602421390890590575e1,
+             -2.25462687854119370527e2, 2.00260212380060660359e2, -8.20372256168333339912e1,
+             1.59056225126211695515e1, -1.18331621121330003142e0)
+_NDTRI_P1 = (4.05544892305962419923e0, 3.15251094599893866154e1, 5.71628192246421288162e1,
+             4.40805073893200834700e1, 1.46849561928858024014e1, 2.18663306850790267539e0,
+             -1.40256079171354495875e-1, -3.50424626827848203418e-2,
+             -8.57456785154685413611e-4)
+_NDTRI_Q1 = (1.57799883256466749731e1, 4.53907635128879210584e1, 4.13172038254672030440e1,
+             1.50425385692907503408e1, 2.50464946208309415979e0, -1.42182922854787788574e-1,
+             -3.80806407691578277194e-2, -9.33259480895457427372e-4)
+_NDTRI_P2 = (3.23774891776946035970e0, 6.91522889068984211695e0, 3.93881025292474443415e0,
+             1.33303460815807542389e0, 2.01485389549179081538e-1, 1.23716634817820021358e-2,
+             3.01581553508235416007e-4, 2.65806974686737550832e-6, 6.23974539184983293730e-9)
+_NDTRI_Q2 = (6.02427039364742014255e0, 3.67983563856160859403e0, 1.37702099489081330271e0,
+             2.16236993594496635890e-1, 1.34204006088543189037e-2, 3.28014464682127739104e-4,
+             2.89247864745380683936e-6, 6.79019408009981274425e-9)
+_SQRT_2PI = 2.506628274631000502415765284811045253007
+_EXP_M2 = 0.13533528323661269189  # exp(-2), Cephes' literal
+_TAIL_SPLIT = 8.0  # t = sqrt(-2 log y) where the tail's P1/Q1 hands over to P2/Q2
+
+
+@njit(cache=True, inline="always")
+def _polevl(x, coef):
+    """Cephes' ``polevl``: Horner's rule from the highest power, ``ans = ans x + c``."""
+    ans = coef[0]
+    for k in range(1, len(coef)):
+        ans = ans * x + coef[k]
+    return ans
+
+
+@njit(cache=True, inline="always")
+def _p1evl(x, coef):
+    """Cephes' ``p1evl``: :func:`_polevl` with a leading coefficient 1 not stored."""
+    ans = x + coef[0]
+    for k in range(1, len(coef)):
+        ans = ans * x + coef[k]
+    return ans
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def ndtri(y0):  # pragma: no cover - compiled
+    """The inverse of the standard normal CDF, ``scipy.special.ndtri`` bit for bit.
+
+    Parameters
+    ----------
+    y0 : float
+        A probability [-].
+
+    Returns
+    -------
+    float
+        x with Phi(x) = y0 [-]: -inf at 0, inf at 1, NaN outside [0, 1].
+
+    Notes
+    -----
+    Cephes' ndtri (S. L. Moshier, Cephes Math Library Release 2.1, 1989; the algorithm
+    and coefficients SciPy 1.17's ``scipy.special.ndtri`` runs, from its xsf headers,
+    ``cephes/ndtri.h`` and ``cephes/polevl.h``): a rational approximation in
+    w = y - 1/2 for exp(-2) < y < 1 - exp(-2), else in 1/t with t = sqrt(-2 log y) on
+    the nearer tail. The same IEEE 754 operations in the same order as SciPy's compiled
+    loop (its disassembly shows no fused multiply-add; numba fuses none without
+    ``fastmath``), ``log`` the C library's (the one SciPy calls) and ``sqrt`` correctly
+    rounded: so the same bits (a test holds them equal; a NaN input comes out as the
+    NaN SciPy gives, sign flipped by the tail's negation as there).
+    """
+    if y0 == 0.0:
+        return -np.inf
+    if y0 == 1.0:
+        return np.inf
+    if y0 < 0.0 or y0 > 1.0:
+        return np.nan
+    negate = True
+    y = y0
+    if y > 1.0 - _EXP_M2:
+        y = 1.0 - y
+        negate = False
+    if y > _EXP_M2:
+        y = y - 0.5
+        y2 = y * y
+        x = y + y * (y2 * _polevl(y2, _NDTRI_P0) / _p1evl(y2, _NDTRI_Q0))
+        return x * _SQRT_2PI
+    x = math.sqrt(-2.0 * math.log(y))
+    x0 = x - math.log(x) / x
+    z = 1.0 / x
+    if x < _TAIL_SPLIT:
+        x1 = z * _polevl(z, _NDTRI_P1) / _p1evl(z, _NDTRI_Q1)
+    else:
+        x1 = z * _polevl(z, _NDTRI_P2) / _p1evl(z, _NDTRI_Q2)
+    x = x0 - x1
+    if negate:
+        x = -x
+    return x
 
 
 @njit(cache=True, nogil=True)
