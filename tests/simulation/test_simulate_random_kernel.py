@@ -1,9 +1,9 @@
-"""The truncated normal's compiled passes equal its NumPy form bit for bit.
+"""The truncated normal's compiled pass equals its NumPy form bit for bit.
 
-:func:`nirglucose.simulation._random.truncated_normal` with one SD runs its passes before
-and after SciPy's ``ndtri`` compiled (:mod:`nirglucose.simulation.kernels.random_kernel`);
-``compiled=False`` is the NumPy form, the reference. The compiled inverse normal CDF
-(:func:`~nirglucose.simulation.kernels.random_kernel.ndtri`) equals SciPy's bit for bit.
+:func:`nirglucose.simulation._random.truncated_normal` with one SD runs one compiled pass
+(:mod:`nirglucose.simulation.kernels.random_kernel`), its inverse normal CDF
+(:func:`~nirglucose.simulation.kernels.random_kernel.ndtri`) held equal to SciPy's
+``ndtri`` bit for bit; ``compiled=False`` is the NumPy form, the reference.
 """
 
 from __future__ import annotations
@@ -104,3 +104,42 @@ def test_ndtri_equals_scipys_at_the_edges():
         -1e-300, np.nextafter(1.0, 2.0), 2.0, np.inf, -np.inf, np.nan, -np.nan,
     ])
     _assert_ndtri_is_scipys(y)
+
+
+def _cdf_limits(rng, n):
+    """n pairs a <= b of normal CDF values: from the far lower tail, the middle and the
+    far upper tail, so that a + u (b - a) falls below 1e-15 and above 1 - 1e-15 too."""
+    def draw():
+        tiny = np.exp(rng.uniform(math.log(1e-30), math.log(1e-3), n))
+        pick = rng.integers(0, 3, n)
+        return np.choose(pick, [tiny, rng.random(n), 1.0 - tiny])
+
+    v, w = draw(), draw()
+    return np.minimum(v, w), np.maximum(v, w)
+
+
+@pytest.mark.parametrize("mode", [0, 1, 2])
+def test_fused_kernel_equals_the_three_passes(mode):
+    """``mode`` 0: one a, b and mean; 1: one per value; 2: one per group (the module
+    docstring of :mod:`nirglucose.simulation.kernels.random_kernel`)."""
+    n = 30_000
+    rng = np.random.default_rng(30 + mode)
+    u = rng.random(n)
+    n_par = {0: 1, 1: n, 2: n // 4}[mode]
+    group = rng.integers(0, n_par, n) if mode == 2 else np.empty(0, np.int64)
+    sd, low, high = 1.5, -2.0, 2.5
+    if mode == 0:  # values in 0.25 + 1.5 (-2.05, 2.33): clipped at both limits too
+        mean, a, b = np.array([0.25]), np.array([0.02]), np.array([0.99])
+    else:
+        mean, (a, b) = rng.uniform(-3.0, 3.0, n_par), _cdf_limits(rng, n_par)
+    p_low, p_high = _random._P_EDGE, 1 - _random._P_EDGE
+    want = np.empty(n)
+    rk.probabilities(u, a, b, group, mode, p_low, p_high, want)
+    clipped = (want == p_low).any() and (want == p_high).any()
+    scipy_ndtri(want, out=want)
+    rk.scale_and_clip(want, sd, mean, group, mode, low, high)
+    got = np.empty(n)
+    rk.truncated_normal(u, a, b, group, mode, p_low, p_high, sd, mean, low, high, got)
+    assert got.tobytes() == want.tobytes()
+    assert (got == low).any() and (got == high).any() and ((got > low) & (got < high)).any()
+    assert clipped or mode == 0

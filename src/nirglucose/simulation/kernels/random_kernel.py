@@ -1,14 +1,16 @@
-"""Compiled passes of the truncated normal draw around its inverse normal CDF.
+"""Compiled truncated normal draw, its inverse normal CDF included.
 
 :func:`nirglucose.simulation._random.truncated_normal` maps uniforms u to
 mean + sd ndtri(clip(a + u (b - a), E, 1 - E)), clipped to [low, high], with a and b the
 normal CDF at the limits (inverse-CDF sampling, Devroye 1986, ch. 2). Its NumPy form
-makes about ten passes over the values (and gathers a, b and the mean by group); these
-two kernels make one pass before SciPy's ``ndtri`` and one after, the same operations in
-the same order per value, so the same bits (a test holds them equal to the NumPy form,
-which stays the reference). :func:`ndtri` is the Cephes algorithm that SciPy's ``ndtri``
-runs, with the same operations in the same order, so the same bits (a test holds them
-equal).
+makes about ten passes over the values (and gathers a, b and the mean by group);
+:func:`truncated_normal` makes one, the same operations in the same order per value, with
+:func:`ndtri` the Cephes algorithm that SciPy's ``ndtri`` runs, written with the same
+operations in the same order: so the same bits (tests hold :func:`ndtri` equal to
+``scipy.special.ndtri`` and the draw equal to the NumPy form, which stays the reference).
+:func:`probabilities` and :func:`scale_and_clip` are its parts before and after the
+inverse CDF as passes of their own (with SciPy's ``ndtri`` between them, the former
+compiled form, which a test holds :func:`truncated_normal` equal to).
 :func:`count_at_or_below` is the look-up of the categorical draw
 (:func:`nirglucose.simulation._random.categorical`); :func:`seed_sequence_state` a block
 stream's seed words (:class:`nirglucose.simulation._random.RandomStreams`).
@@ -26,6 +28,7 @@ from numba import njit
 
 __all__ = [
     "count_at_or_below", "ndtri", "probabilities", "scale_and_clip", "seed_sequence_state",
+    "truncated_normal",
 ]
 
 
@@ -165,6 +168,28 @@ def ndtri(y0):  # pragma: no cover - compiled
     if negate:
         x = -x
     return x
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def truncated_normal(u, a, b, group, mode, p_low, p_high, sd, mean, low,
+                     high, out):  # pragma: no cover - compiled
+    """``out[i] = clip(ndtri(clip(a + u[i] (b - a), p_low, p_high)) sd + mean, low,
+    high)`` with a, b and the mean taken by ``mode``: :func:`probabilities`,
+    :func:`ndtri` and :func:`scale_and_clip` per value in one pass (the same operations
+    in the same order, so the same bits as the three passes)."""
+    for i in range(u.shape[0]):
+        g = _at(mode, group, i)
+        p = u[i] * (b[g] - a[g]) + a[g]
+        if p < p_low:
+            p = p_low
+        if p > p_high:
+            p = p_high
+        x = ndtri(p) * sd + mean[g]
+        if x < low:
+            x = low
+        if x > high:
+            x = high
+        out[i] = x
 
 
 @njit(cache=True, nogil=True)
