@@ -1,16 +1,22 @@
-"""The truncated normal's compiled passes equal its NumPy form bit for bit.
+"""The truncated normal's compiled pass equals its NumPy form bit for bit.
 
-:func:`nirglucose.simulation._random.truncated_normal` with one SD runs its passes before
-and after SciPy's ``ndtri`` compiled (:mod:`nirglucose.simulation.kernels.random_kernel`);
-``compiled=False`` is the NumPy form, the reference.
+:func:`nirglucose.simulation._random.truncated_normal` with one SD runs one compiled pass
+(:mod:`nirglucose.simulation.kernels.random_kernel`), its inverse normal CDF
+(:func:`~nirglucose.simulation.kernels.random_kernel.ndtri`) held equal to SciPy's
+``ndtri`` bit for bit; ``compiled=False`` is the NumPy form, the reference.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from numba import njit
+from scipy.special import ndtri as scipy_ndtri
 
 from nirglucose.simulation import _random
+from nirglucose.simulation.kernels import random_kernel as rk
 
 N = 30_000
 _RNG = np.random.default_rng(12)
@@ -50,3 +56,93 @@ def test_truncated_normal_through_a_stream_is_unchanged_by_the_kernels():
                                             compiled=False)
     assert a.tobytes() == b.tobytes()
 
+
+@njit
+def _ndtri_each(y, out):  # pragma: no cover - compiled
+    for i in range(y.shape[0]):
+        out[i] = rk.ndtri(y[i])
+
+
+def _assert_ndtri_is_scipys(y):
+    """Value by value (:func:`rk.ndtri`) and by blocks (:func:`rk.ndtri_into`, its
+    vectorised central part), SciPy's bits."""
+    want = scipy_ndtri(y)
+    for each in (_ndtri_each, rk.ndtri_into):
+        got = np.empty_like(y)
+        each(y, got)
+        differ = got.view(np.uint64) != want.view(np.uint64)
+        assert not differ.any(), (each, y[differ][:5], got[differ][:5], want[differ][:5])
+
+
+def _neighbours(x, n):
+    """x and the n doubles either side of it."""
+    out = [x]
+    below = above = x
+    for _ in range(n):
+        below, above = np.nextafter(below, -np.inf), np.nextafter(above, np.inf)
+        out += [below, above]
+    return out
+
+
+def test_ndtri_equals_scipys_on_a_million_uniforms():
+    rng = np.random.default_rng(20)
+    _assert_ndtri_is_scipys(rng.random(1_000_000))
+    # the tails, log-uniform down to 1e-300 and up to 1 - 1e-16
+    _assert_ndtri_is_scipys(np.exp(rng.uniform(math.log(1e-300), math.log(0.14), 200_000)))
+    _assert_ndtri_is_scipys(1.0 - np.exp(rng.uniform(math.log(1e-16), math.log(0.14),
+                                                     200_000)))
+
+
+def test_ndtri_equals_scipys_at_the_edges():
+    e = math.exp(-2.0)  # where the central approximation hands over to the tails
+    tail_split = math.exp(-32.0)  # sqrt(-2 log y) = 8: the tail's P1/Q1 to P2/Q2
+    split_neighbours = _neighbours(tail_split, 300)
+    t = [math.sqrt(-2.0 * math.log(y)) for y in split_neighbours]
+    assert min(t) < 8.0 <= max(t)  # both of the tail's approximations are reached
+    y = np.array([
+        0.0, -0.0, 1.0, 0.5, 5e-324, 1e-300, 1e-15, 1 - 1e-15, _random._P_EDGE,
+        1 - _random._P_EDGE, 2.2250738585072014e-308, np.nextafter(1.0, 0.0),
+        *_neighbours(e, 3), *_neighbours(1 - e, 3), *split_neighbours,
+        # outside [0, 1] and NaN: NaN as SciPy gives it (a NaN input's sign flipped)
+        -1e-300, np.nextafter(1.0, 2.0), 2.0, np.inf, -np.inf, np.nan, -np.nan,
+    ])
+    _assert_ndtri_is_scipys(y)
+
+
+def _cdf_limits(rng, n):
+    """n pairs a <= b of normal CDF values: from the far lower tail, the middle and the
+    far upper tail, so that a + u (b - a) falls below 1e-15 and above 1 - 1e-15 too."""
+    def draw():
+        tiny = np.exp(rng.uniform(math.log(1e-30), math.log(1e-3), n))
+        pick = rng.integers(0, 3, n)
+        return np.choose(pick, [tiny, rng.random(n), 1.0 - tiny])
+
+    v, w = draw(), draw()
+    return np.minimum(v, w), np.maximum(v, w)
+
+
+@pytest.mark.parametrize("mode", [0, 1, 2])
+def test_fused_kernel_equals_the_three_passes(mode):
+    """``mode`` 0: one a, b and mean; 1: one per value; 2: one per group (the module
+    docstring of :mod:`nirglucose.simulation.kernels.random_kernel`)."""
+    n = 30_000
+    rng = np.random.default_rng(30 + mode)
+    u = rng.random(n)
+    n_par = {0: 1, 1: n, 2: n // 4}[mode]
+    group = rng.integers(0, n_par, n) if mode == 2 else np.empty(0, np.int64)
+    sd, low, high = 1.5, -2.0, 2.5
+    if mode == 0:  # values in 0.25 + 1.5 (-2.05, 2.33): clipped at both limits too
+        mean, a, b = np.array([0.25]), np.array([0.02]), np.array([0.99])
+    else:
+        mean, (a, b) = rng.uniform(-3.0, 3.0, n_par), _cdf_limits(rng, n_par)
+    p_low, p_high = _random._P_EDGE, 1 - _random._P_EDGE
+    want = np.empty(n)
+    rk.probabilities(u, a, b, group, mode, p_low, p_high, want)
+    clipped = (want == p_low).any() and (want == p_high).any()
+    scipy_ndtri(want, out=want)
+    rk.scale_and_clip(want, sd, mean, group, mode, low, high)
+    got = np.empty(n)
+    rk.truncated_normal(u, a, b, group, mode, p_low, p_high, sd, mean, low, high, got)
+    assert got.tobytes() == want.tobytes()
+    assert (got == low).any() and (got == high).any() and ((got > low) & (got < high)).any()
+    assert clipped or mode == 0

@@ -217,8 +217,8 @@ _P_EDGE = 1e-15
 
 def _truncated_normal_scalar_sd(u, mean, sd, low, high, size, group=None, *, compiled=True):
     """:func:`truncated_normal` for one SD (the common case), in place: the same
-    operations in the same order, so the same values to the last bit. ``compiled``: the
-    passes around ``ndtri`` compiled (:mod:`nirglucose.simulation.kernels.random_kernel`),
+    operations in the same order, so the same values to the last bit. ``compiled``: one
+    compiled pass, ``ndtri`` included (:mod:`nirglucose.simulation.kernels.random_kernel`),
     the same bits; False: the NumPy form below, the reference."""
     if compiled and sd > 0:
         return _truncated_normal_compiled(u, mean, sd, low, high, size, group)
@@ -302,9 +302,10 @@ def categories(names: tuple[str, ...]) -> pd.CategoricalDtype:
 
 
 def _truncated_normal_compiled(u, mean, sd, low, high, size, group):
-    """:func:`_truncated_normal_scalar_sd` (``sd > 0``) with its passes before and after
-    ``ndtri`` compiled; a and b (the normal CDF at the limits) as the reference computes
-    them."""
+    """:func:`_truncated_normal_scalar_sd` (``sd > 0``) in one compiled pass per value
+    (:func:`nirglucose.simulation.kernels.random_kernel.truncated_normal`, its ``ndtri``
+    SciPy's bit for bit); a and b (the normal CDF at the limits) as the reference
+    computes them."""
     from .kernels import random_kernel as rk
 
     if mean.ndim == 0:
@@ -321,7 +322,6 @@ def _truncated_normal_compiled(u, mean, sd, low, high, size, group):
         means, mode = np.ascontiguousarray(mean, dtype=np.float64), 1 if group is None else 2
     index = np.empty(0, np.int64) if group is None else np.asarray(group, dtype=np.int64)
     out = np.empty(size)
-    rk.probabilities(u, a, b, index, mode, _P_EDGE, 1 - _P_EDGE, out)
-    ndtri(out, out=out)
-    rk.scale_and_clip(out, float(sd), means, index, mode, float(low), float(high))
+    rk.truncated_normal(u, a, b, index, mode, _P_EDGE, 1 - _P_EDGE, float(sd), means,
+                        float(low), float(high), out)
     return out

@@ -1,12 +1,18 @@
-"""Compiled passes of the truncated normal draw around its inverse normal CDF.
+"""Compiled truncated normal draw, its inverse normal CDF included.
 
 :func:`nirglucose.simulation._random.truncated_normal` maps uniforms u to
 mean + sd ndtri(clip(a + u (b - a), E, 1 - E)), clipped to [low, high], with a and b the
 normal CDF at the limits (inverse-CDF sampling, Devroye 1986, ch. 2). Its NumPy form
-makes about ten passes over the values (and gathers a, b and the mean by group); these
-two kernels make one pass before SciPy's ``ndtri`` and one after, the same operations in
-the same order per value, so the same bits (a test holds them equal to the NumPy form,
-which stays the reference).
+makes about ten passes over the values (and gathers a, b and the mean by group);
+:func:`truncated_normal` makes one, by blocks that stay in the L1 cache, the same
+operations in the same order per value, with :func:`ndtri` the Cephes algorithm that
+SciPy's ``ndtri`` runs, written with the same operations in the same order (and, by
+blocks, vectorised but for the C library's ``log``): so the same bits (tests hold
+:func:`ndtri` and :func:`ndtri_into` equal to ``scipy.special.ndtri`` and the draw equal
+to the NumPy form, which stays the reference).
+:func:`probabilities` and :func:`scale_and_clip` are its parts before and after the
+inverse CDF as passes of their own (with SciPy's ``ndtri`` between them, the former
+compiled form, which a test holds :func:`truncated_normal` equal to).
 :func:`count_at_or_below` is the look-up of the categorical draw
 (:func:`nirglucose.simulation._random.categorical`); :func:`seed_sequence_state` a block
 stream's seed words (:class:`nirglucose.simulation._random.RandomStreams`).
@@ -17,10 +23,15 @@ group, value i taking ``group[i]``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-__all__ = ["count_at_or_below", "probabilities", "scale_and_clip", "seed_sequence_state"]
+__all__ = [
+    "count_at_or_below", "ndtri", "ndtri_into", "probabilities", "scale_and_clip",
+    "seed_sequence_state", "truncated_normal",
+]
 
 
 @njit(cache=True, inline="always")
@@ -56,6 +67,209 @@ def scale_and_clip(z, sd, mean, group, mode, low, high):  # pragma: no cover - c
         if x > high:
             x = high
         z[i] = x
+
+
+#: The inverse normal CDF's coefficients and constants: Cephes' ndtri.c (S. L. Moshier,
+#: Cephes Math Library Release 2.1, 1989), as SciPy 1.17 carries them (xsf,
+#: ``include/xsf/cephes/ndtri.h``; ``SQRT2PI`` from ``cephes/const.h``), highest power
+#: first; the Q tables omit their leading coefficient 1. P0/Q0: x / sqrt(2 pi) = w + w^3
+#: P0(w^2) / Q0(w^2), w = y - 1/2, for exp(-2) < y < 1 - exp(-2); P1/Q1 and P2/Q2: the tail,
+#: x = t - log(t) / t - P(1/t) / (t Q(1/t)), t = sqrt(-2 log y), for t < 8 (y > exp(-32))
+#: and t >= 8.
+_NDTRI_P0 = (-5.99633501014107895267e1, 9.80010754185999661536e1, -5.66762857469070293439e1,
+             1.39312609387279679503e1, -1.23916583867381258016e0)
+_NDTRI_Q0 = (1.95448858338141759834e0, 4.67627912898881538453e0, 8.63602421390890590575e1,
+             -2.25462687854119370527e2, 2.00260212380060660359e2, -8.20372256168333339912e1,
+             1.59056225126211695515e1, -1.18331621121330003142e0)
+_NDTRI_P1 = (4.05544892305962419923e0, 3.15251094599893866154e1, 5.71628192246421288162e1,
+             4.40805073893200834700e1, 1.46849561928858024014e1, 2.18663306850790267539e0,
+             -1.40256079171354495875e-1, -3.50424626827848203418e-2,
+             -8.57456785154685413611e-4)
+_NDTRI_Q1 = (1.57799883256466749731e1, 4.53907635128879210584e1, 4.13172038254672030440e1,
+             1.50425385692907503408e1, 2.50464946208309415979e0, -1.42182922854787788574e-1,
+             -3.80806407691578277194e-2, -9.33259480895457427372e-4)
+_NDTRI_P2 = (3.23774891776946035970e0, 6.91522889068984211695e0, 3.93881025292474443415e0,
+             1.33303460815807542389e0, 2.01485389549179081538e-1, 1.23716634817820021358e-2,
+             3.01581553508235416007e-4, 2.65806974686737550832e-6, 6.23974539184983293730e-9)
+_NDTRI_Q2 = (6.02427039364742014255e0, 3.67983563856160859403e0, 1.37702099489081330271e0,
+             2.16236993594496635890e-1, 1.34204006088543189037e-2, 3.28014464682127739104e-4,
+             2.89247864745380683936e-6, 6.79019408009981274425e-9)
+_SQRT_2PI = 2.506628274631000502415765284811045253007
+_EXP_M2 = 0.13533528323661269189  # exp(-2), Cephes' literal
+_TAIL_SPLIT = 8.0  # t = sqrt(-2 log y) where the tail's P1/Q1 hands over to P2/Q2
+
+
+@njit(cache=True, inline="always")
+def _polevl(x, coef):
+    """Cephes' ``polevl``: Horner's rule from the highest power, ``ans = ans x + c``."""
+    ans = coef[0]
+    for k in range(1, len(coef)):
+        ans = ans * x + coef[k]
+    return ans
+
+
+@njit(cache=True, inline="always")
+def _p1evl(x, coef):
+    """Cephes' ``p1evl``: :func:`_polevl` with a leading coefficient 1 not stored."""
+    ans = x + coef[0]
+    for k in range(1, len(coef)):
+        ans = ans * x + coef[k]
+    return ans
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _ndtri_central(y):
+    """:func:`ndtri` for exp(-2) < y <= 1 - exp(-2): sqrt(2 pi) (w + w^3 P0(w^2) /
+    Q0(w^2)), w = y - 1/2 (Cephes' ndtri.c)."""
+    y = y - 0.5
+    y2 = y * y
+    x = y + y * (y2 * _polevl(y2, _NDTRI_P0) / _p1evl(y2, _NDTRI_Q0))
+    return x * _SQRT_2PI
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _ndtri_tail(x, log_x):
+    """:func:`ndtri`'s lower tail (y <= exp(-2)) after its logs: x - log(x) / x -
+    P(1/x) / (x Q(1/x)), x = sqrt(-2 log y), ``log_x`` = log(x), P/Q = P1/Q1 for x < 8
+    (y > exp(-32)), P2/Q2 beyond (Cephes' ndtri.c)."""
+    x0 = x - log_x / x
+    z = 1.0 / x
+    if x < _TAIL_SPLIT:
+        x1 = z * _polevl(z, _NDTRI_P1) / _p1evl(z, _NDTRI_Q1)
+    else:
+        x1 = z * _polevl(z, _NDTRI_P2) / _p1evl(z, _NDTRI_Q2)
+    return x0 - x1
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def ndtri(y0):  # pragma: no cover - compiled
+    """The inverse of the standard normal CDF, ``scipy.special.ndtri`` bit for bit.
+
+    Parameters
+    ----------
+    y0 : float
+        A probability [-].
+
+    Returns
+    -------
+    float
+        x with Phi(x) = y0 [-]: -inf at 0, inf at 1, NaN outside [0, 1].
+
+    Notes
+    -----
+    Cephes' ndtri (S. L. Moshier, Cephes Math Library Release 2.1, 1989; the algorithm
+    and coefficients SciPy 1.17's ``scipy.special.ndtri`` runs, from its xsf headers,
+    ``cephes/ndtri.h`` and ``cephes/polevl.h``): a rational approximation in
+    w = y - 1/2 for exp(-2) < y < 1 - exp(-2), else in 1/t with t = sqrt(-2 log y) on
+    the nearer tail. The same IEEE 754 operations in the same order as SciPy's compiled
+    loop (its disassembly shows no fused multiply-add; numba fuses none without
+    ``fastmath``), ``log`` the C library's (the one SciPy calls) and ``sqrt`` correctly
+    rounded: so the same bits (a test holds them equal; a NaN input comes out as the
+    NaN SciPy gives, sign flipped by the tail's negation as there).
+    """
+    if y0 == 0.0:
+        return -np.inf
+    if y0 == 1.0:
+        return np.inf
+    if y0 < 0.0 or y0 > 1.0:
+        return np.nan
+    negate = True
+    y = y0
+    if y > 1.0 - _EXP_M2:
+        y = 1.0 - y
+        negate = False
+    if y > _EXP_M2:
+        return _ndtri_central(y)
+    x = math.sqrt(-2.0 * math.log(y))
+    x = _ndtri_tail(x, math.log(x))
+    if negate:
+        x = -x
+    return x
+
+
+#: Values per block of :func:`ndtri_into` and :func:`truncated_normal`: their scratch
+#: arrays (:func:`_scratch`, about 40 bytes a value) stay in the L1 cache. [-]
+_BLOCK = 512
+
+
+@njit(cache=True, inline="always")
+def _scratch():
+    """:func:`_ndtri_block`'s work arrays: a value's class (0: central, 1: tail, 2: the
+    rest), the tail's and the rest's positions, and three values per tail value."""
+    return (np.empty(_BLOCK, np.int8), np.empty((2, _BLOCK), np.int64),
+            np.empty((3, _BLOCK)))
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _ndtri_block(y, out, scratch):
+    """``out[j] = ndtri(y[j])`` for a block of at most :data:`_BLOCK` values.
+
+    :func:`ndtri`'s steps regrouped so that the compiler vectorises all but the C
+    library's ``log`` (each value still gets the same IEEE 754 operations in the same
+    order, so the same bits): the central approximation for every value (one branch-free
+    loop); the tail values' positions gathered (no branch to mispredict); their two
+    ``log`` and the ``sqrt`` between them value by value; the rest of their tail
+    formula, both of its approximations computed and one kept, in one loop; last,
+    :func:`ndtri` itself for the rest (0, 1, out of [0, 1], NaN).
+    """
+    kind, where, work = scratch
+    m = y.shape[0]
+    hi = 1.0 - _EXP_M2
+    for j in range(m):
+        y0 = y[j]
+        yf = 1.0 - y0 if y0 > hi else y0
+        kind[j] = 0 if yf > _EXP_M2 else (1 if yf > 0.0 else 2)
+        out[j] = _ndtri_central(yf)
+    n_tail = n_rest = 0
+    for j in range(m):
+        where[0, n_tail] = j
+        n_tail += kind[j] == 1
+        where[1, n_rest] = j
+        n_rest += kind[j] == 2
+    for t in range(n_tail):
+        y0 = y[where[0, t]]
+        x = math.sqrt(-2.0 * math.log(1.0 - y0 if y0 > hi else y0))
+        work[0, t] = x
+        work[1, t] = math.log(x)
+        work[2, t] = y0 > hi  # 1: the upper tail, not negated
+    for t in range(n_tail):
+        x = _ndtri_tail(work[0, t], work[1, t])
+        work[0, t] = x if work[2, t] != 0.0 else -x
+    for t in range(n_tail):
+        out[where[0, t]] = work[0, t]
+    for t in range(n_rest):
+        out[where[1, t]] = ndtri(y[where[1, t]])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def ndtri_into(y, out):  # pragma: no cover - compiled
+    """``out[i] = ndtri(y[i])``: :func:`ndtri` over an array, by blocks of
+    :data:`_BLOCK` (:func:`_ndtri_block`)."""
+    scratch = _scratch()
+    for start in range(0, y.shape[0], _BLOCK):
+        stop = min(start + _BLOCK, y.shape[0])
+        _ndtri_block(y[start:stop], out[start:stop], scratch)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def truncated_normal(u, a, b, group, mode, p_low, p_high, sd, mean, low,
+                     high, out):  # pragma: no cover - compiled
+    """``out[i] = clip(ndtri(clip(a + u[i] (b - a), p_low, p_high)) sd + mean, low,
+    high)`` with a, b and the mean taken by ``mode``: :func:`probabilities`,
+    :func:`ndtri` and :func:`scale_and_clip` by blocks of :data:`_BLOCK` values (the
+    same operations in the same order per value, so the same bits as the three passes)."""
+    p = np.empty(_BLOCK)
+    scratch = _scratch()
+    for start in range(0, u.shape[0], _BLOCK):
+        stop = min(start + _BLOCK, u.shape[0])
+        # mode 1: the block's own a, b and means; mode 2: its group indices into them
+        a_s, b_s, mean_s = (a[start:stop], b[start:stop], mean[start:stop]) if mode == 1 \
+            else (a, b, mean)
+        group_s = group[start:stop] if mode == 2 else group
+        probabilities(u[start:stop], a_s, b_s, group_s, mode, p_low, p_high, p)
+        z = out[start:stop]
+        _ndtri_block(p[:stop - start], z, scratch)
+        scale_and_clip(z, sd, mean_s, group_s, mode, low, high)
 
 
 @njit(cache=True, nogil=True)
