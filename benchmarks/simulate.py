@@ -2,8 +2,9 @@
 
 rng_floor_ratio = simulator CPU time / CPU time to draw, in the same process, as many random
 variates (standard normals, in arrays of the same sizes) as the simulator consumed; each
-the fastest of ``ROUNDS`` runs (as ``timeit`` reports), since one run of each swings by
-about 10 % on a shared machine.
+the fastest of ``ROUNDS`` runs (as ``timeit`` reports), the two run in turn so that both
+see the machine in the same states, since one run of either swings by 10-20 % on a
+shared machine.
 Peak memory is measured in a fresh subprocess that builds the whole 1M-row dataset.
 
 Prints one JSON object on its last line.
@@ -25,7 +26,7 @@ import numpy as np  # noqa: E402
 
 N_SNAPSHOTS = int(os.environ.get("NIRGLUCOSE_BENCH_SNAPSHOTS", 1_000_000))
 PER_SUBJECT = 3
-ROUNDS = int(os.environ.get("NIRGLUCOSE_BENCH_ROUNDS", 3))
+ROUNDS = int(os.environ.get("NIRGLUCOSE_BENCH_ROUNDS", 5))
 
 
 def _simulate(preset: str, overrides: dict | None = None):
@@ -69,11 +70,13 @@ def main() -> dict:
         ("paper", "paper", None),
         ("paper_diffusion", "paper", {"optics.model": "diffusion"}),
     ):
-        _simulate(preset, over)  # warm caches (tables, imports)
-        runs = [_simulate(preset, over) for _ in range(ROUNDS)]
-        elapsed = min(r[0] for r in runs)
-        _, n_rows, sizes = runs[0]
-        floor = min(_rng_floor(sizes) for _ in range(ROUNDS))
+        _, n_rows, sizes = _simulate(preset, over)  # warm caches (tables, imports)
+        # simulator and floor in turn, so both see the machine in the same states
+        times, floors = [], []
+        for _ in range(ROUNDS):
+            times.append(_simulate(preset, over)[0])
+            floors.append(_rng_floor(sizes))
+        elapsed, floor = min(times), min(floors)
         result[label] = {
             "rounds": ROUNDS,
             "seconds": round(elapsed, 3),

@@ -83,7 +83,7 @@ MAX_UNDERSCORE_IMPORTS = 139
 #: under ``nirglucose`` (``""``: the package's ``__init__``); a new subpackage fails
 #: :func:`test_every_module_has_a_layer` until it is placed here.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_version", "exceptions", "constants", "portable", "vector_exp", "resources", "formatting",
+    ("_version", "exceptions", "constants", "portable", "libm", "resources", "formatting",
      "data", "_renamed"),
     ("config",),
     ("dataset", "optics", "metrics"),  # the data boundary, the physics, the scores

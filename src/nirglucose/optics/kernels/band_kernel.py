@@ -32,7 +32,7 @@ from numba import njit
 
 from ... import portable as pm
 from ...exceptions import ConfigError
-from ...vector_exp import exp_into
+from ...libm import exp_into
 from ..lut import interpolate as lut_mod
 from ..tissue import SUBCUTIS, BandSpectra
 
@@ -111,7 +111,7 @@ def _kernel(blood, sat, water, fat_sub, glucose_mm, water_dt_c, shift_t, melanin
     musp_s, epi, arg, e = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     work_r, work_t, work_k = np.empty(n), np.empty(n), np.empty(n, np.int64)
     # Node by node, in loops free of calls (which the compiler vectorises) around two
-    # exponentials of the row (the C library's exp, vectorised: vector_exp.exp_into).
+    # exponentials of the row (the C library's exp, vectorised: libm.exp_into).
     for led in range(n_led):
         sh_l = shift_t[led]
         out_l = out_t[led]

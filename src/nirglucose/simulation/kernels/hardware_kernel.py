@@ -6,7 +6,7 @@ offset, rounding, saturation) as about 60 NumPy passes over (readings x LEDs) ar
 This module does the same operations, in the same order per element, in one compiled
 pass with no temporaries. Every step is an IEEE 754 basic operation (+ - x / sqrt,
 correctly rounded: the same bits on every CPU) or the C library's ``exp`` / ``sin``
-(``exp`` its algorithm inline, :func:`nirglucose.vector_exp.exp1`; ``sin`` through
+(``exp`` its algorithm inline, :func:`nirglucose.libm.exp1`; ``sin`` through
 :mod:`math`, what :mod:`nirglucose.portable` calls), and numba neither fuses a
 multiply-add nor reorders without ``fastmath``; so the codes, voltages and powers equal
 the NumPy reference's bit for bit (a test holds them so). The physics, units and
@@ -26,7 +26,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ...vector_exp import exp1
+from ...libm import exp1
 
 __all__ = ["FrontEnd", "convert", "reading_voltages", "reference_voltages"]
 

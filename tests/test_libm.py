@@ -1,4 +1,4 @@
-"""nirglucose.vector_exp: the C library's exp, vectorised, the same bits."""
+"""nirglucose.libm: the C library's exp, vectorised, the same bits."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 from numba import njit
 
 from nirglucose import portable
-from nirglucose.vector_exp import exp, exp1, exp_into, exp_table
+from nirglucose.libm import exp, exp1, exp_into, exp_table
 
 #: sha256 of glibc 2.36's ``__exp_data.tab`` (256 little-endian uint64), read from the
 #: loaded libm with gdb (``x/256gx ((char*)&__exp_data)+112``) on the development machine;

@@ -1,4 +1,6 @@
-"""The C library's ``exp``, written out so a compiled loop vectorises it: the same bits.
+"""The C library's elementary functions written out in numba: the same bits, inlined.
+
+Today ``exp`` (:func:`exp_into` for arrays, vectorised; :func:`exp1` for one value).
 
 The simulator's optics take two exponentials per snapshot, LED and band node (the share
 of light in the dermis and the attenuation, :mod:`nirglucose.optics.kernels.band_kernel`).
@@ -21,7 +23,7 @@ fast path (|x| < 2^-54, |x| >= 512, inf, NaN) glibc takes special cases: :func:`
 hands those values to the C library itself.
 
 A test holds :func:`exp_into` equal to :func:`math.exp` on a million arguments and the
-edges (``tests/test_vector_exp.py``); the NumPy paths that the compiled kernels are
+edges (``tests/test_libm.py``); the NumPy paths that the compiled kernels are
 held to keep calling :mod:`nirglucose.portable`.
 
 References
