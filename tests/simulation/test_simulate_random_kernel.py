@@ -1,9 +1,10 @@
 """The truncated normal's compiled pass equals its NumPy form bit for bit.
 
 :func:`nirglucose.simulation._random.truncated_normal` with one SD runs one compiled pass
-(:mod:`nirglucose.simulation.kernels.random_kernel`), its inverse normal CDF
+(:mod:`nirglucose.simulation.kernels.random_kernel`), its normal CDF
+(:func:`~nirglucose.simulation.kernels.random_kernel.ndtr`) and inverse
 (:func:`~nirglucose.simulation.kernels.random_kernel.ndtri`) held equal to SciPy's
-``ndtri`` bit for bit; ``compiled=False`` is the NumPy form, the reference.
+``ndtr`` and ``ndtri`` bit for bit; ``compiled=False`` is the NumPy form, the reference.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from numba import njit
+from scipy.special import ndtr as scipy_ndtr
 from scipy.special import ndtri as scipy_ndtri
 
 from nirglucose.simulation import _random
@@ -107,6 +109,51 @@ def test_ndtri_equals_scipys_at_the_edges():
         -1e-300, np.nextafter(1.0, 2.0), 2.0, np.inf, -np.inf, np.nan, -np.nan,
     ])
     _assert_ndtri_is_scipys(y)
+
+
+@njit
+def _ndtr_each(t, out):  # pragma: no cover - compiled
+    for i in range(t.shape[0]):
+        out[i] = rk.ndtr(t[i])
+
+
+def _assert_ndtr_is_scipys(t):
+    """Value by value (:func:`rk.ndtr`) and by blocks (:func:`rk.ndtr_into`, its
+    branches as choices), SciPy's bits."""
+    want = scipy_ndtr(t)
+    for each in (_ndtr_each, rk.ndtr_into):
+        got = np.empty_like(t)
+        each(t, got)
+        differ = got.view(np.uint64) != want.view(np.uint64)
+        assert not differ.any(), (each, t[differ][:5], got[differ][:5], want[differ][:5])
+
+
+def test_ndtr_equals_scipys_on_a_million_values():
+    rng = np.random.default_rng(21)
+    _assert_ndtr_is_scipys(rng.uniform(-40.0, 40.0, 500_000))
+    _assert_ndtr_is_scipys(rng.uniform(-3.0, 3.0, 500_000))
+
+
+def test_ndtr_equals_scipys_at_the_edges():
+    # the thresholds in x = a / sqrt(2) (a M_SQRT1_2): erf to erfc at |x| = 1, erfc's
+    # P/Q to R/S at |x| = 8, erfc's underflow to 0 at x^2 = MAXLOG (a about -37.68; just
+    # above it, subnormal results); each with its neighbours, so both sides are reached
+    split = [x / rk._SQRT1_2 for x in (1.0, 8.0, math.sqrt(rk._MAXLOG))]
+    t = [v for x in split for s in (1.0, -1.0) for v in _neighbours(s * x, 40)]
+    x = np.abs(np.array(t) * rk._SQRT1_2)
+    for edge in (1.0, 8.0):
+        assert (x < edge).any() and (x >= edge).any()
+    assert (-x * x < -rk._MAXLOG).any() and (-x * x >= -rk._MAXLOG).any()
+    cdf = scipy_ndtr(np.array(t))
+    assert (cdf == 0.0).any() and ((cdf > 0.0) & (cdf < 2.2250738585072014e-308)).any()
+    t += list(np.linspace(-38.6, -37.0, 4001))
+    t += [
+        0.0, -0.0, np.inf, -np.inf, np.nan, -np.nan, 5e-324, -5e-324, 1e-300, -1e-300,
+        2.2250738585072014e-308, -2.2250738585072014e-308, 1e300, -1e300, 1.7976931348623157e308,
+        -1.7976931348623157e308, *_neighbours(0.0, 3), *_neighbours(38.5, 3),
+        *_neighbours(-38.5, 3), *_neighbours(-37.519379347, 3),  # Cephes' UTHRESH
+    ]
+    _assert_ndtr_is_scipys(np.array(t))
 
 
 def _cdf_limits(rng, n):

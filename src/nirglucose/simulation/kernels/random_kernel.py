@@ -28,8 +28,11 @@ import math
 import numpy as np
 from numba import njit
 
+from ...libm import exp1, exp_into
+
 __all__ = [
-    "count_at_or_below", "ndtri", "ndtri_into", "probabilities", "scale_and_clip",
+    "count_at_or_below", "ndtr", "ndtr_into", "ndtri", "ndtri_into", "probabilities",
+    "scale_and_clip",
     "seed_sequence_state", "truncated_normal",
 ]
 
@@ -249,6 +252,161 @@ def ndtri_into(y, out):  # pragma: no cover - compiled
     for start in range(0, y.shape[0], _BLOCK):
         stop = min(start + _BLOCK, y.shape[0])
         _ndtri_block(y[start:stop], out[start:stop], scratch)
+
+
+#: The normal CDF's coefficients and constants: Cephes' ndtr.c (S. L. Moshier, Cephes Math
+#: Library Release 2.2, 1992), as SciPy 1.17 carries them (xsf, ``include/xsf/cephes/
+#: ndtr.h``; ``MAXLOG`` from ``cephes/const.h``; the bits read back from SciPy's compiled
+#: ``_special_ufuncs`` module equal these), highest power first; the Q tables omit their
+#: leading coefficient 1. T/U: erf(x) = x T(x^2) / U(x^2) for |x| <= 1; P/Q and R/S:
+#: erfc(x) = exp(-x^2) P(x) / Q(x) for 1 <= x < 8 and R(x) / S(x) for x >= 8.
+_NDTR_T = (9.60497373987051638749e0, 9.00260197203842689217e1, 2.23200534594684319226e3,
+           7.00332514112805075473e3, 5.55923013010394962768e4)
+_NDTR_U = (3.35617141647503099647e1, 5.21357949780152679795e2, 4.59432382970980127987e3,
+           2.26290000613890934246e4, 4.92673942608635921086e4)
+_NDTR_P = (2.46196981473530512524e-10, 5.64189564831068821977e-1, 7.46321056442269912687e0,
+           4.86371970985681366614e1, 1.96520832956077098242e2, 5.26445194995477358631e2,
+           9.34528527171957607540e2, 1.02755188689515710272e3, 5.57535335369399327526e2)
+_NDTR_Q = (1.32281951154744992508e1, 8.67072140885989742329e1, 3.54937778887819891062e2,
+           9.75708501743205489753e2, 1.82390916687909736289e3, 2.24633760818710981792e3,
+           1.65666309194161350182e3, 5.57535340817727675546e2)
+_NDTR_R = (5.64189583547755073984e-1, 1.27536670759978104416e0, 5.01905042251180477414e0,
+           6.16021097993053585195e0, 7.40974269950448939160e0, 2.97886665372100240670e0)
+_NDTR_S = (2.26052863220117276590e0, 9.39603524938001434673e0, 1.20489539808096656605e1,
+           1.70814450747565897222e1, 9.60896809063285878198e0, 3.36907645100081516050e0)
+#: erfc's four polynomials as two of nine coefficients each, for :func:`_ndtr_block`'s
+#: coefficient-by-coefficient choice: R/S padded with leading zeros (0 x + 0 = 0 and
+#: 0 x + 1 = 1 exactly for finite x, so Horner's rule then runs Cephes' steps), the
+#: monic Q and S with their 1 written out (1 x + c = x + c: ``p1evl``'s first step).
+_ERFC_NUM = (_NDTR_P, (0.0, 0.0, 0.0) + _NDTR_R)
+_ERFC_DEN = ((1.0,) + _NDTR_Q, (0.0, 0.0, 1.0) + _NDTR_S)
+_SQRT1_2 = 7.07106781186547524401e-1  # M_SQRT1_2
+_MAXLOG = 7.09782712893383996843e2  # Cephes' MAXLOG: log(DBL_MAX)
+_ERFC_SPLIT = 8.0  # erfc's P/Q hands over to R/S
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _erf_small(x):
+    """Cephes' erf for |x| <= 1: x T(x^2) / U(x^2) (ndtr.c)."""
+    z = x * x
+    return x * _polevl(z, _NDTR_T) / _p1evl(z, _NDTR_U)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _erfc_large(x):
+    """Cephes' erfc for 1 <= x (ndtr.c): exp(-x^2) P(x) / Q(x) below 8, R(x) / S(x)
+    above, 0 where -x^2 < -MAXLOG; ``exp`` the C library's (:func:`nirglucose.libm.exp1`,
+    the same bits)."""
+    z = -x * x
+    if z < -_MAXLOG:
+        return 0.0
+    z = exp1(z)
+    if x < _ERFC_SPLIT:
+        p = _polevl(x, _NDTR_P)
+        q = _p1evl(x, _NDTR_Q)
+    else:
+        p = _polevl(x, _NDTR_R)
+        q = _p1evl(x, _NDTR_S)
+    y = (z * p) / q
+    return y if y != 0.0 else 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def ndtr(a):  # pragma: no cover - compiled
+    """The standard normal CDF, ``scipy.special.ndtr`` bit for bit.
+
+    Parameters
+    ----------
+    a : float
+        The argument [-].
+
+    Returns
+    -------
+    float
+        Phi(a) [-]: 0 at -inf, 1 at inf, NaN (the quiet NaN 0x7ff8...) at NaN.
+
+    Notes
+    -----
+    Cephes' ndtr (S. L. Moshier, Cephes Math Library Release 2.2, 1992; the algorithm
+    and coefficients SciPy 1.17's ``scipy.special.ndtr`` runs, ``xsf::cephes::ndtr``
+    from its xsf headers, ``cephes/ndtr.h`` and ``cephes/polevl.h``): with
+    x = a / sqrt(2) (a times M_SQRT1_2), 1/2 + erf(x) / 2 for |x| < 1, else
+    erfc(|x|) / 2, taken from 1 for x > 0. The same IEEE 754 operations in the same order
+    as SciPy's compiled ``xsf::ndtr(double)`` (its disassembly: no fused multiply-add,
+    ``erf`` inlined, ``exp`` the C library's through the PLT), ``exp`` the C library's
+    bits (:func:`nirglucose.libm.exp1`): so the same bits (a test holds them equal).
+    SciPy's erf for x < 0 is -erf(-x), which is x T(x^2) / U(x^2) to the bit (rounding is
+    symmetric in sign).
+    """
+    if a != a:
+        return np.nan
+    x = a * _SQRT1_2
+    z = abs(x)
+    if z < 1.0:
+        return 0.5 + 0.5 * _erf_small(x)
+    y = 0.5 * _erfc_large(z)
+    if x > 0.0:
+        y = 1.0 - y
+    return y
+
+
+@njit(cache=True, inline="always")
+def _ndtr_scratch():
+    """:func:`_ndtr_block`'s work arrays: the exponent's argument and value, and
+    :func:`nirglucose.libm.exp_into`'s three."""
+    return np.empty((4, _BLOCK)), np.empty(_BLOCK, np.int64)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _ndtr_block(t, out, scratch):
+    """``out[j] = ndtr(t[j])`` for a block of at most :data:`_BLOCK` values (``out`` may
+    be ``t``).
+
+    :func:`ndtr`'s branches as choices, so that the compiler vectorises the loops: the
+    exponent's argument -x^2 where erfc needs it (-1 elsewhere, which keeps
+    :func:`nirglucose.libm.exp_into` on its vectorised path); the exponentials
+    (:func:`nirglucose.libm.exp_into`, the C library's bits); then per value both erf's
+    and erfc's formulas, erfc's coefficients chosen one by one (:data:`_ERFC_NUM`,
+    :data:`_ERFC_DEN`), and the one :func:`ndtr` takes kept. Each value gets the same
+    IEEE 754 operations as in :func:`ndtr`, so the same bits.
+    """
+    work, k = scratch
+    m = t.shape[0]
+    for j in range(m):
+        z = abs(t[j] * _SQRT1_2)
+        e = -z * z
+        work[0, j] = e if z >= 1.0 and e >= -_MAXLOG else -1.0
+    exp_into(work[0, :m], work[1, :m], work[2, :m], work[3, :m], k[:m])
+    for j in range(m):
+        a = t[j]
+        x = a * _SQRT1_2
+        z = abs(x)
+        c = 0.5 + 0.5 * _erf_small(x)
+        small = z < _ERFC_SPLIT
+        p = _ERFC_NUM[0][0] if small else _ERFC_NUM[1][0]
+        q = 1.0 if small else 0.0
+        for i in range(1, 9):
+            p = p * z + (_ERFC_NUM[0][i] if small else _ERFC_NUM[1][i])
+            q = q * z + (_ERFC_DEN[0][i] if small else _ERFC_DEN[1][i])
+        y = (work[1, j] * p) / q
+        if -z * z < -_MAXLOG:
+            y = 0.0
+        y = 0.5 * y
+        if x > 0.0:
+            y = 1.0 - y
+        if z < 1.0:
+            y = c
+        out[j] = y if a == a else np.nan
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def ndtr_into(t, out):  # pragma: no cover - compiled
+    """``out[i] = ndtr(t[i])``: :func:`ndtr` over an array (``out`` may be ``t``), by
+    blocks of :data:`_BLOCK` (:func:`_ndtr_block`)."""
+    scratch = _ndtr_scratch()
+    for start in range(0, t.shape[0], _BLOCK):
+        stop = min(start + _BLOCK, t.shape[0])
+        _ndtr_block(t[start:stop], out[start:stop], scratch)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
