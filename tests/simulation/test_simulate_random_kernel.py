@@ -33,6 +33,13 @@ CASES = {
     "mean at the upper limit": (np.asarray(1.0), 3.0, 0.5, 1.0, None),
     "far tails (clipped probabilities)": (_RNG.uniform(-50, 50, N), 0.5, -1.0, 1.0, None),
     "tiny range": (np.asarray(0.0), 1.0, -1e-12, 1e-12, None),
+    # a and b in every branch of ndtr: (limit - mean) / sd over (-70, 70), both tails
+    # (0 below about -38.5, 1 above about 8.3) included
+    "CDF tails, mean per value": (_RNG.uniform(-60, 60, N), 1.0, -10.0, 10.0, None),
+    "CDF tails, mean per group": (_RNG.uniform(-60, 60, N // 3), 1.0, -10.0, 10.0, _GROUP),
+    "CDF lower tails, one mean": (np.asarray(0.0), 1.0, -39.0, 0.5, None),
+    "CDF upper tails, one mean": (np.asarray(0.0), 1.0, -2.0, 12.0, None),
+    "CDF both tails, one mean": (np.asarray(1.0), 0.25, -7.0, 40.0, None),
 }
 
 

@@ -303,25 +303,17 @@ def categories(names: tuple[str, ...]) -> pd.CategoricalDtype:
 
 def _truncated_normal_compiled(u, mean, sd, low, high, size, group):
     """:func:`_truncated_normal_scalar_sd` (``sd > 0``) in one compiled pass per value
-    (:func:`nirglucose.simulation.kernels.random_kernel.truncated_normal`, its ``ndtri``
-    SciPy's bit for bit); a and b (the normal CDF at the limits) as the reference
-    computes them."""
+    (:func:`nirglucose.simulation.kernels.random_kernel.truncated_normal_limits`, its
+    ``ndtr`` and ``ndtri`` SciPy's bit for bit), a and b (the normal CDF at the limits)
+    included, from the same operations as the reference's."""
     from .kernels import random_kernel as rk
 
     if mean.ndim == 0:
-        a = np.array([float(ndtr((low - mean) / sd))])
-        b = np.array([float(ndtr((high - mean) / sd))])
         means, mode = np.array([float(mean)]), 0
     else:
-        a = np.subtract(low, mean)
-        a /= sd
-        ndtr(a, out=a)
-        b = np.subtract(high, mean)
-        b /= sd
-        ndtr(b, out=b)
         means, mode = np.ascontiguousarray(mean, dtype=np.float64), 1 if group is None else 2
     index = np.empty(0, np.int64) if group is None else np.asarray(group, dtype=np.int64)
     out = np.empty(size)
-    rk.truncated_normal(u, a, b, index, mode, _P_EDGE, 1 - _P_EDGE, float(sd), means,
-                        float(low), float(high), out)
+    rk.truncated_normal_limits(u, index, mode, _P_EDGE, 1 - _P_EDGE, float(sd), means,
+                               float(low), float(high), out)
     return out

@@ -1,4 +1,4 @@
-"""Compiled truncated normal draw, its inverse normal CDF included.
+"""Compiled truncated normal draw, its normal CDF and inverse included.
 
 :func:`nirglucose.simulation._random.truncated_normal` maps uniforms u to
 mean + sd ndtri(clip(a + u (b - a), E, 1 - E)), clipped to [low, high], with a and b the
@@ -10,6 +10,10 @@ SciPy's ``ndtri`` runs, written with the same operations in the same order (and,
 blocks, vectorised but for the C library's ``log``): so the same bits (tests hold
 :func:`ndtri` and :func:`ndtri_into` equal to ``scipy.special.ndtri`` and the draw equal
 to the NumPy form, which stays the reference).
+:func:`truncated_normal_limits` computes a and b too, with :func:`ndtr` (Cephes'
+algorithm that SciPy's ``ndtr`` runs, the same way: a test holds :func:`ndtr` and
+:func:`ndtr_into` equal to ``scipy.special.ndtr``), per value within each block or
+once per mean, where the NumPy form takes a pass of SciPy's ``ndtr`` for each limit.
 :func:`probabilities` and :func:`scale_and_clip` are its parts before and after the
 inverse CDF as passes of their own (with SciPy's ``ndtri`` between them, the former
 compiled form, which a test holds :func:`truncated_normal` equal to).
@@ -33,7 +37,7 @@ from ...libm import exp1, exp_into
 __all__ = [
     "count_at_or_below", "ndtr", "ndtr_into", "ndtri", "ndtri_into", "probabilities",
     "scale_and_clip",
-    "seed_sequence_state", "truncated_normal",
+    "seed_sequence_state", "truncated_normal", "truncated_normal_limits",
 ]
 
 
@@ -409,6 +413,16 @@ def ndtr_into(t, out):  # pragma: no cover - compiled
         _ndtr_block(t[start:stop], out[start:stop], scratch)
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _draw_block(u, a, b, group, mode, p_low, p_high, sd, mean, low, high, p, z,
+                scratch):
+    """:func:`truncated_normal` for one block: ``z[j]`` from ``u[j]``, with a, b, the
+    mean and the group indices those of the block (mode 1) or all (modes 0 and 2)."""
+    probabilities(u, a, b, group, mode, p_low, p_high, p)
+    _ndtri_block(p[:u.shape[0]], z, scratch)
+    scale_and_clip(z, sd, mean, group, mode, low, high)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def truncated_normal(u, a, b, group, mode, p_low, p_high, sd, mean, low,
                      high, out):  # pragma: no cover - compiled
@@ -424,10 +438,46 @@ def truncated_normal(u, a, b, group, mode, p_low, p_high, sd, mean, low,
         a_s, b_s, mean_s = (a[start:stop], b[start:stop], mean[start:stop]) if mode == 1 \
             else (a, b, mean)
         group_s = group[start:stop] if mode == 2 else group
-        probabilities(u[start:stop], a_s, b_s, group_s, mode, p_low, p_high, p)
-        z = out[start:stop]
-        _ndtri_block(p[:stop - start], z, scratch)
-        scale_and_clip(z, sd, mean_s, group_s, mode, low, high)
+        _draw_block(u[start:stop], a_s, b_s, group_s, mode, p_low, p_high, sd, mean_s, low,
+                    high, p, out[start:stop], scratch)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _cdf_at(limit, mean, sd, out, scratch):
+    """``out[j] = ndtr((limit - mean[j]) / sd)`` for a block of at most :data:`_BLOCK`
+    values: the NumPy form's ``np.subtract(limit, mean); a /= sd``, then
+    :func:`_ndtr_block` in place."""
+    for j in range(mean.shape[0]):
+        out[j] = (limit - mean[j]) / sd
+    _ndtr_block(out, out, scratch)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def truncated_normal_limits(u, group, mode, p_low, p_high, sd, mean, low, high,
+                            out):  # pragma: no cover - compiled
+    """:func:`truncated_normal` with a and b computed here: a = ndtr((low - mean) / sd)
+    and b = ndtr((high - mean) / sd) (:func:`ndtr`, SciPy's bits), per value within
+    each block (mode 1) or once per mean before the draw (modes 0 and 2)."""
+    p = np.empty(_BLOCK)
+    scratch, cdf_scratch = _scratch(), _ndtr_scratch()
+    n_par = _BLOCK if mode == 1 else mean.shape[0]
+    a, b = np.empty(n_par), np.empty(n_par)
+    if mode != 1:
+        for start in range(0, n_par, _BLOCK):
+            stop = min(start + _BLOCK, n_par)
+            _cdf_at(low, mean[start:stop], sd, a[start:stop], cdf_scratch)
+            _cdf_at(high, mean[start:stop], sd, b[start:stop], cdf_scratch)
+    for start in range(0, u.shape[0], _BLOCK):
+        stop = min(start + _BLOCK, u.shape[0])
+        a_s, b_s, mean_s = a, b, mean
+        if mode == 1:  # the block's own means, a and b
+            mean_s = mean[start:stop]
+            a_s, b_s = a[:stop - start], b[:stop - start]
+            _cdf_at(low, mean_s, sd, a_s, cdf_scratch)
+            _cdf_at(high, mean_s, sd, b_s, cdf_scratch)
+        group_s = group[start:stop] if mode == 2 else group
+        _draw_block(u[start:stop], a_s, b_s, group_s, mode, p_low, p_high, sd, mean_s, low,
+                    high, p, out[start:stop], scratch)
 
 
 @njit(cache=True, nogil=True)
