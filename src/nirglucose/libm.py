@@ -24,7 +24,9 @@ hands those values to the C library itself.
 
 A test holds :func:`exp_into` equal to :func:`math.exp` on a million arguments and the
 edges (``tests/test_libm.py``); the NumPy paths that the compiled kernels are
-held to keep calling :mod:`nirglucose.portable`.
+held to keep calling :mod:`nirglucose.portable`. (Numba's on-disk cache keys a kernel
+by its own file only: after editing this module, delete the ``__pycache__/*.nbi`` and
+``*.nbc`` files of the kernels that inline it, or they keep the old code.)
 
 References
 ----------
