@@ -26,7 +26,7 @@ import numpy as np  # noqa: E402
 
 N_SNAPSHOTS = int(os.environ.get("NIRGLUCOSE_BENCH_SNAPSHOTS", 1_000_000))
 PER_SUBJECT = 3
-ROUNDS = int(os.environ.get("NIRGLUCOSE_BENCH_ROUNDS", 5))
+ROUNDS = int(os.environ.get("NIRGLUCOSE_BENCH_ROUNDS", 7))
 
 
 def _simulate(preset: str, overrides: dict | None = None):
