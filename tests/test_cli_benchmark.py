@@ -155,6 +155,7 @@ def test_missing_parent_and_data_with_set_exit_2(tmp_path, capsys):
     assert "--set" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # two presets benchmarked and reported end to end: 20 s
 def test_two_presets_write_one_directory_each_and_one_report(tmp_path, capsys):
     out = tmp_path / "results"
     argv = [*BASE, "--preset", "paper,lab", "--no-ablation", "--out", str(out)]

@@ -8,6 +8,8 @@ global RNG) differs. The same command with another ``--seed`` must change the fi
 state of every seeded model, except those declared below, so the test can fail.
 The printed cross-validation (``--cv-folds``) runs after the file is written and does not
 touch it, so it is switched off here (it multiplied each fit's cost by six).
+Marked ``slow`` (``make test-slow``, which CI runs too): every registered model fitted
+twice end to end, about a minute of CPU, a quarter of the fast suite's margin.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from nirglucose.models.registry import MODELS, get_model_class
 
 #: This tree's package sources, for the PYTHONPATH of the subprocess.
 SRC = str(Path(__file__).resolve().parents[1] / "src")
+pytestmark = pytest.mark.slow
 SEED, OTHER_SEED = 3, 4
 #: Seeded models whose fit on this data does not depend on the seed, and why. Any other
 #: model that takes ``random_state`` must fit differently with another seed.
