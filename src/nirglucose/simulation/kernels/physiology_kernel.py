@@ -6,9 +6,9 @@ dermal blood volume as about forty NumPy passes over (readings,) arrays. :func:`
 does the same operations, in the same order per value, in one compiled pass: + - x / are
 IEEE 754 basic operations (correctly rounded, the same bits on every CPU), ``tanh``
 and ``sin`` are the C library's through :mod:`math` (what :mod:`nirglucose.portable`
-calls) and ``exp`` its algorithm inline (:func:`nirglucose.libm.exp1`), and numba neither fuses a multiply-add nor reorders
-without ``fastmath``; so the values equal the NumPy reference's bit for bit (a test holds
-them so). The physics, units and citations live in
+calls) and ``exp`` its algorithm inline (:func:`nirglucose.libm.exp1`), and numba
+neither fuses a multiply-add nor reorders without ``fastmath``; so the values equal the
+NumPy reference's bit for bit (a test holds them so). The physics, units and citations live in
 :mod:`nirglucose.simulation.physiology`, which stays the reference; the caller makes the
 draws, in the reference's streams and counts.
 """
