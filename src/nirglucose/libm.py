@@ -19,7 +19,7 @@ degree-5 polynomial, and the same eight fused multiply-adds (each one IEEE 754 o
 correctly rounded: LLVM's ``llvm.fma`` is one instruction on an FMA CPU and a correctly
 rounded library call elsewhere, so every x86-64 CPU gets these bits, which is more than
 the C library itself gives: a CPU without FMA runs glibc's other build). Outside the
-fast path (|x| < 2^-54, |x| >= 512, inf, NaN) glibc takes special cases: :func:`exp_into`
+fast path (abs(x) < 2^-54, abs(x) >= 512, inf, NaN) glibc takes special cases: :func:`exp_into`
 hands those values to the C library itself.
 
 A test holds :func:`exp_into` equal to :func:`math.exp` on a million arguments and the
@@ -60,14 +60,14 @@ _INVLN2N = float.fromhex("0x1.71547652b82fep7")
 _SHIFT = float.fromhex("0x1.8p52")
 _NEGLN2HIN = float.fromhex("-0x1.62e42fefa0000p-8")
 _NEGLN2LON = float.fromhex("-0x1.cf79abc9e3b3ap-47")
-#: exp(r) - 1 - r ~ C2 r^2 + C3 r^3 + C4 r^4 + C5 r^5 on |r| <= ln 2 / 2N ([1]_, ``poly``).
+#: exp(r) - 1 - r ~ C2 r^2 + C3 r^3 + C4 r^4 + C5 r^5 on abs(r) <= ln 2 / 2N ([1]_, ``poly``).
 _C2 = float.fromhex("0x1.ffffffffffdbdp-2")
 _C3 = float.fromhex("0x1.555555555543cp-3")
 _C4 = float.fromhex("0x1.55555cf172b91p-5")
 _C5 = float.fromhex("0x1.1111167a4d017p-7")
 #: The bits of the shift, as an integer: k = bits(x N/ln2 + shift) - this.
 _SHIFT_BITS = int(np.float64(_SHIFT).view(np.int64))
-#: The fast path's exponent field range: 2^-54 <= |x| < 512 ([1]_: ``abstop - top12(0x1p-54)
+#: The fast path's exponent field range: 2^-54 <= abs(x) < 512 ([1]_: ``abstop - top12(0x1p-54)
 #: < top12(512) - top12(0x1p-54)``).
 _TOP_LOW, _TOP_SPAN = 0x3C9, 0x3F
 
@@ -135,7 +135,7 @@ def _double(typingctx, i):
 
 @njit(cache=True, inline="always")
 def _on_path(x):
-    """Whether ``__exp_fma`` [1]_ takes its fast path: 2^-54 <= |x| < 512."""
+    """Whether ``__exp_fma`` [1]_ takes its fast path: 2^-54 <= abs(x) < 512."""
     top = (_bits(x) >> 52) & 0x7FF
     return (top >= _TOP_LOW) & (top < _TOP_LOW + _TOP_SPAN)
 
@@ -191,7 +191,7 @@ def exp_into(x, out, r, tail, k):  # pragma: no cover - compiled
     once). Three loops free of calls and branches, which LLVM vectorises (a table
     look-up between them, which it would not: gathers): x = k ln2/N + r; 2^(k/N) from
     the table; then exp(r) - 1 and the product, each step as ``__exp_fma`` [1]_ does it.
-    Values off the fast path (|x| < 2^-54, |x| >= 512, inf, NaN) are computed as if
+    Values off the fast path (abs(x) < 2^-54, abs(x) >= 512, inf, NaN) are computed as if
     x were 0 and then replaced by the C library's own ``exp`` (:mod:`math`).
     """
     n = x.shape[0]

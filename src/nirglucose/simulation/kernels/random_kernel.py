@@ -262,7 +262,7 @@ def ndtri_into(y, out):  # pragma: no cover - compiled
 #: Library Release 2.2, 1992), as SciPy 1.17 carries them (xsf, ``include/xsf/cephes/
 #: ndtr.h``; ``MAXLOG`` from ``cephes/const.h``; the bits read back from SciPy's compiled
 #: ``_special_ufuncs`` module equal these), highest power first; the Q tables omit their
-#: leading coefficient 1. T/U: erf(x) = x T(x^2) / U(x^2) for |x| <= 1; P/Q and R/S:
+#: leading coefficient 1. T/U: erf(x) = x T(x^2) / U(x^2) for abs(x) <= 1; P/Q and R/S:
 #: erfc(x) = exp(-x^2) P(x) / Q(x) for 1 <= x < 8 and R(x) / S(x) for x >= 8.
 _NDTR_T = (9.60497373987051638749e0, 9.00260197203842689217e1, 2.23200534594684319226e3,
            7.00332514112805075473e3, 5.55923013010394962768e4)
@@ -291,7 +291,7 @@ _ERFC_SPLIT = 8.0  # erfc's P/Q hands over to R/S
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _erf_small(x):
-    """Cephes' erf for |x| <= 1: x T(x^2) / U(x^2) (ndtr.c)."""
+    """Cephes' erf for abs(x) <= 1: x T(x^2) / U(x^2) (ndtr.c)."""
     z = x * x
     return x * _polevl(z, _NDTR_T) / _p1evl(z, _NDTR_U)
 
@@ -334,8 +334,8 @@ def ndtr(a):  # pragma: no cover - compiled
     Cephes' ndtr (S. L. Moshier, Cephes Math Library Release 2.2, 1992; the algorithm
     and coefficients SciPy 1.17's ``scipy.special.ndtr`` runs, ``xsf::cephes::ndtr``
     from its xsf headers, ``cephes/ndtr.h`` and ``cephes/polevl.h``): with
-    x = a / sqrt(2) (a times M_SQRT1_2), 1/2 + erf(x) / 2 for |x| < 1, else
-    erfc(|x|) / 2, taken from 1 for x > 0. The same IEEE 754 operations in the same order
+    x = a / sqrt(2) (a times M_SQRT1_2), 1/2 + erf(x) / 2 for abs(x) < 1, else
+    erfc(abs(x)) / 2, taken from 1 for x > 0. The same IEEE 754 operations in the same order
     as SciPy's compiled ``xsf::ndtr(double)`` (its disassembly: no fused multiply-add,
     ``erf`` inlined, ``exp`` the C library's through the PLT), ``exp`` the C library's
     bits (:func:`nirglucose.libm.exp1`): so the same bits (a test holds them equal).
