@@ -49,7 +49,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["exp", "exp1", "exp_into", "exp_table"]
+__all__ = ["exp", "exp1", "exp_into", "exp_table", "float_bits", "from_bits"]
 
 #: log2 of the table's size N (``EXP_TABLE_BITS`` of [1]_).
 TABLE_BITS = 7
@@ -116,8 +116,8 @@ def _fma(typingctx, a, b, c):
 
 
 @intrinsic
-def _bits(typingctx, x):
-    """The bits of a double as an int64."""
+def float_bits(typingctx, x):
+    """The IEEE 754 bits of a float64 as an int64 (a bitcast: free, and vectorisable)."""
     def codegen(context, builder, signature, args):
         return builder.bitcast(args[0], ir.IntType(64))
 
@@ -125,8 +125,8 @@ def _bits(typingctx, x):
 
 
 @intrinsic
-def _double(typingctx, i):
-    """The double whose bits an int64 holds."""
+def from_bits(typingctx, i):
+    """The float64 with the given IEEE 754 bits (a bitcast)."""
     def codegen(context, builder, signature, args):
         return builder.bitcast(args[0], ir.DoubleType())
 
@@ -136,7 +136,7 @@ def _double(typingctx, i):
 @njit(cache=True, inline="always")
 def _on_path(x):
     """Whether ``__exp_fma`` [1]_ takes its fast path: 2^-54 <= abs(x) < 512."""
-    top = (_bits(x) >> 52) & 0x7FF
+    top = (float_bits(x) >> 52) & 0x7FF
     return (top >= _TOP_LOW) & (top < _TOP_LOW + _TOP_SPAN)
 
 
@@ -145,7 +145,7 @@ def _reduce(x):
     """``(k, r)``: x = k ln2/N + r, k = round(x N / ln 2) read from the shift's bits and r
     in two fused steps (ln2/N in a high and a low part)."""
     kd = _fma(x, _INVLN2N, _SHIFT)
-    k = _bits(kd) - _SHIFT_BITS
+    k = float_bits(kd) - _SHIFT_BITS
     kd = kd - _SHIFT
     r = _fma(kd, _NEGLN2HIN, x)
     return k, _fma(kd, _NEGLN2LON, r)
@@ -155,7 +155,7 @@ def _reduce(x):
 def _scale_bits(k):
     """``(tail, bits of scale)``: 2^(k/N) = scale (1 + tail), from the table."""
     j = 2 * (k & (_N - 1))
-    return _double(_TABLE[j]), _TABLE[j + 1] + (k << (52 - TABLE_BITS))
+    return from_bits(_TABLE[j]), _TABLE[j + 1] + (k << (52 - TABLE_BITS))
 
 
 @njit(cache=True, inline="always")
@@ -166,7 +166,7 @@ def _finish(r, tail, scale_bits):
     r2 = r * r
     tmp = _fma(r2, p23, r + tail)
     tmp = _fma(r2 * r2, p45, tmp)
-    scale = _double(scale_bits)
+    scale = from_bits(scale_bits)
     return _fma(scale, tmp, scale)
 
 

@@ -72,15 +72,20 @@ def _ndtri_each(y, out):  # pragma: no cover - compiled
         out[i] = rk.ndtri(y[i])
 
 
+def _assert_as_scipys(x, scipy_fn, forms):
+    """Each compiled form (value by value, by blocks) gives SciPy's bits on ``x``."""
+    want = scipy_fn(x)
+    for each in forms:
+        got = np.empty_like(x)
+        each(x, got)
+        differ = got.view(np.uint64) != want.view(np.uint64)
+        assert not differ.any(), (each, x[differ][:5], got[differ][:5], want[differ][:5])
+
+
 def _assert_ndtri_is_scipys(y):
     """Value by value (:func:`rk.ndtri`) and by blocks (:func:`rk.ndtri_into`, its
     vectorised central part), SciPy's bits."""
-    want = scipy_ndtri(y)
-    for each in (_ndtri_each, rk.ndtri_into):
-        got = np.empty_like(y)
-        each(y, got)
-        differ = got.view(np.uint64) != want.view(np.uint64)
-        assert not differ.any(), (each, y[differ][:5], got[differ][:5], want[differ][:5])
+    _assert_as_scipys(y, scipy_ndtri, (_ndtri_each, rk.ndtri_into))
 
 
 def _neighbours(x, n):
@@ -127,12 +132,7 @@ def _ndtr_each(t, out):  # pragma: no cover - compiled
 def _assert_ndtr_is_scipys(t):
     """Value by value (:func:`rk.ndtr`) and by blocks (:func:`rk.ndtr_into`, its
     branches as choices), SciPy's bits."""
-    want = scipy_ndtr(t)
-    for each in (_ndtr_each, rk.ndtr_into):
-        got = np.empty_like(t)
-        each(t, got)
-        differ = got.view(np.uint64) != want.view(np.uint64)
-        assert not differ.any(), (each, t[differ][:5], got[differ][:5], want[differ][:5])
+    _assert_as_scipys(t, scipy_ndtr, (_ndtr_each, rk.ndtr_into))
 
 
 def test_ndtr_equals_scipys_on_a_million_values():

@@ -33,6 +33,8 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
+from ...libm import float_bits, from_bits
+
 __all__ = ["KERNEL_AXES", "node_reflectance"]
 
 #: Coordinates of the node table's axes, in order, that the kernel hard-codes:
@@ -56,24 +58,6 @@ _SIGNATURE = types.int64(
     _R64, _R64, _R64, _R64, _R64, _R64,  # mua_d, mua_s, mua_e, ln t, mus'_s, mus'_d
     types.Array(types.float64, 1, "C"),  # out
 )
-
-
-@intrinsic
-def _bits(typingctx, x):
-    """The IEEE 754 bits of a float64 as an int64 (a bitcast: free, and vectorisable)."""
-    def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.IntType(64))
-
-    return types.int64(types.float64), codegen
-
-
-@intrinsic
-def _from_bits(typingctx, x):
-    """The float64 with the given IEEE 754 bits (a bitcast)."""
-    def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.DoubleType())
-
-    return types.float64(types.int64), codegen
 
 
 @intrinsic
@@ -123,7 +107,7 @@ def _exp(x):
     for d in (39916800.0, 3628800.0, 362880.0, 40320.0, 5040.0, 720.0, 120.0, 24.0, 6.0,
               2.0, 1.0, 1.0):
         p = p * r + 1.0 / d
-    return p * _from_bits((_bits(k_round) - _bits(_ROUND) + 1023) << 52)
+    return p * from_bits((float_bits(k_round) - float_bits(_ROUND) + 1023) << 52)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -134,9 +118,9 @@ def _log(x):
     to s^19 (truncation below 3e-16). Within 5e-16 of math.log. Zero, negative, NaN,
     infinite and subnormal x give NaN or |ln x| > 700, never a value inside a table.
     """
-    b = _bits(x)
-    e = _from_bits((b >> 52) | 0x4330000000000000) - (_TWO52 + 1023.0)
-    m = _from_bits((b & 0x000FFFFFFFFFFFFF) | 0x3FF0000000000000)  # [1, 2)
+    b = float_bits(x)
+    e = from_bits((b >> 52) | 0x4330000000000000) - (_TWO52 + 1023.0)
+    m = from_bits((b & 0x000FFFFFFFFFFFFF) | 0x3FF0000000000000)  # [1, 2)
     big = np.float64(m > 1.4142135623730951)  # then halve m, and count one more 2
     m = m * (1.0 - 0.5 * big)
     e = e + big
